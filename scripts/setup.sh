@@ -1,0 +1,141 @@
+#!/usr/bin/env bash
+# Installs everything dormant needs to build and test, on Debian 12 or 13, as root.
+# Idempotent: a second run checks, prints what it found, and changes nothing.
+#
+#   Debian >= 13: apt's libembree-dev (Embree 4.3).
+#   Debian 12:    a git-ignored prefix .deps/embree4/{include,lib} holding the headers from
+#                 Debian 13's libembree-dev .deb (fetched with a private apt configuration; the
+#                 system's stays untouched) and the official Embree 4.4 runtime with its TBB
+#                 from PyPI's embreex==4.4.0.post1 wheel. See docs/embree.md for why.
+#   Elsewhere:    set EMBREE_DIR to an Embree 4 prefix (include/embree4, lib/libembree4.so).
+set -euo pipefail
+
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+prefix="$root/.deps/embree4"
+embreex_version="4.4.0.post1"
+
+say() { printf 'setup: %s\n' "$*"; }
+die() { printf 'setup: error: %s\n' "$*" >&2; exit 1; }
+
+as_root() {
+    if [ "$(id -u)" -eq 0 ]; then "$@"
+    elif command -v sudo >/dev/null 2>&1; then sudo "$@"
+    else die "need root to run: $* (run this script as root)"; fi
+}
+
+# --- apt packages ------------------------------------------------------------------------
+apt_packages=(build-essential pkg-config libclang-dev python3 python3-pip ca-certificates)
+apt_updated=0
+apt_install() {
+    local missing=()
+    for p in "$@"; do
+        dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+    done
+    if [ ${#missing[@]} -eq 0 ]; then
+        say "apt packages present: $*"
+        return
+    fi
+    if [ $apt_updated -eq 0 ]; then
+        as_root apt-get update -qq
+        apt_updated=1
+    fi
+    say "installing apt packages: ${missing[*]}"
+    as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "${missing[@]}"
+}
+
+if ! command -v dpkg-query >/dev/null 2>&1; then
+    die "this script supports Debian 12/13 only; on other systems install libclang, pkg-config and
+Embree 4 yourself and set EMBREE_DIR to its prefix (include/embree4/rtcore.h, lib/libembree4.so)"
+fi
+# python3/pip come from the image on some machines (pyenv); only install Debian's when absent.
+command -v python3 >/dev/null 2>&1 && python3 -m pip --version >/dev/null 2>&1 \
+    && apt_packages=(build-essential pkg-config libclang-dev ca-certificates)
+apt_install "${apt_packages[@]}"
+
+# --- Embree 4 ------------------------------------------------------------------------------
+if [ -n "${EMBREE_DIR:-}" ]; then
+    [ -f "$EMBREE_DIR/include/embree4/rtcore.h" ] || die "EMBREE_DIR=$EMBREE_DIR has no include/embree4/rtcore.h"
+    say "using EMBREE_DIR=$EMBREE_DIR; nothing to install"
+    exit 0
+fi
+
+. /etc/os-release
+debian_major=${VERSION_ID%%.*}
+[ "${ID:-}" = debian ] || die "unsupported distribution '${ID:-unknown}': install Embree 4 and set EMBREE_DIR"
+
+if [ "$debian_major" -ge 13 ]; then
+    apt_install libembree-dev
+    say "Embree 4 from Debian $debian_major's libembree-dev"
+    exit 0
+fi
+[ "$debian_major" -eq 12 ] || die "Debian $VERSION_ID has no usable Embree 4: install it and set EMBREE_DIR"
+
+# Debian 12: project-local prefix.
+if [ -f "$prefix/include/embree4/rtcore.h" ] && [ -e "$prefix/lib/libembree4.so" ] \
+    && [ -f "$prefix/.complete" ]; then
+    say "Embree 4 prefix present: $prefix ($(cat "$prefix/.complete"))"
+    exit 0
+fi
+
+work=$(mktemp -d "${TMPDIR:-/tmp}/dormant-setup.XXXXXX")
+trap 'rm -rf "$work"' EXIT
+stage="$work/prefix"
+mkdir -p "$stage/include" "$stage/lib"
+
+# Headers: Debian 13's libembree-dev, through a private apt configuration. The mirror is the
+# one this machine's own Debian sources already use.
+mirror=""
+for f in /etc/apt/sources.list.d/*.sources; do
+    [ -f "$f" ] || continue
+    mirror=$(awk '/^URIs:/{u=$2} /^Suites:/{ if ($0 ~ /bookworm( |$)/) { print u; exit } }' "$f")
+    [ -n "$mirror" ] && break
+done
+if [ -z "$mirror" ] && [ -f /etc/apt/sources.list ]; then
+    mirror=$(awk '$1=="deb" && $0 ~ / bookworm / {for(i=2;i<=NF;i++) if ($i ~ /^[a-z]+:\/\//) {print $i; exit}}' /etc/apt/sources.list)
+fi
+[ -n "$mirror" ] || die "could not find this machine's Debian mirror in /etc/apt/sources.list*"
+keyring=/usr/share/keyrings/debian-archive-keyring.gpg
+[ -f "$keyring" ] || apt_install debian-archive-keyring
+
+apt_dir="$work/apt"
+mkdir -p "$apt_dir/lists/partial" "$apt_dir/cache/archives/partial"
+echo "deb [signed-by=$keyring] $mirror trixie main" > "$apt_dir/sources.list"
+apt_opts=(-o "Dir::Etc::SourceList=$apt_dir/sources.list" -o "Dir::Etc::SourceParts=/dev/null"
+          -o "Dir::State::Lists=$apt_dir/lists" -o "Dir::Cache=$apt_dir/cache"
+          -o "Debug::NoLocking=1" -o "APT::Sandbox::User=root")
+say "fetching Debian 13 libembree-dev (headers only) from $mirror"
+apt-get "${apt_opts[@]}" update -qq >/dev/null
+(cd "$work" && apt-get "${apt_opts[@]}" download -qq libembree-dev >/dev/null)
+deb=$(ls "$work"/libembree-dev_*.deb 2>/dev/null | head -n1)
+[ -n "$deb" ] || die "apt-get download libembree-dev from trixie produced no .deb"
+dpkg-deb -x "$deb" "$work/deb"
+[ -f "$work/deb/usr/include/embree4/rtcore.h" ] || die "$deb has no usr/include/embree4/rtcore.h"
+cp -r "$work/deb/usr/include/embree4" "$stage/include/"
+header_version=$(basename "$deb" | sed -E 's/^libembree-dev_([^_]+)_.*/\1/')
+
+# Runtime: the official Embree 4.4 build inside PyPI's embreex wheel.
+say "fetching embreex==$embreex_version wheel (official Embree 4.4 runtime + TBB)"
+python3 -m pip download -q --no-deps --only-binary=:all: --platform manylinux_2_28_x86_64 \
+    --python-version 3.11 -d "$work/wheel" "embreex==$embreex_version"
+wheel=$(ls "$work"/wheel/embreex-*.whl | head -n1)
+python3 - "$wheel" "$stage/lib" <<'PY'
+import os, sys, zipfile
+wheel, dest = sys.argv[1], sys.argv[2]
+with zipfile.ZipFile(wheel) as z:
+    for name in z.namelist():
+        if name.startswith("embreex.libs/") and ".so" in name:
+            target = os.path.join(dest, os.path.basename(name))
+            with z.open(name) as src, open(target, "wb") as out:
+                out.write(src.read())
+            os.chmod(target, 0o755)
+PY
+lib=$(cd "$stage/lib" && ls libembree4-*.so.4 2>/dev/null | head -n1)
+[ -n "$lib" ] || die "the embreex wheel has no embreex.libs/libembree4-*.so.4"
+ln -sf "$lib" "$stage/lib/libembree4.so"
+ln -sf "$lib" "$stage/lib/libembree4.so.4"
+
+echo "headers $header_version (Debian 13 libembree-dev), library embreex $embreex_version ($lib)" > "$stage/.complete"
+rm -rf "$prefix"
+mkdir -p "$(dirname "$prefix")"
+mv "$stage" "$prefix"
+say "installed Embree 4 into $prefix: $(cat "$prefix/.complete")"

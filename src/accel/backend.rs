@@ -1,0 +1,64 @@
+use std::fmt;
+use std::str::FromStr;
+
+use super::{AccelError, Accelerator};
+
+/// The accelerator implementations dormant can be built with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Backend {
+    /// Intel Embree 4 (feature `embree`).
+    Embree,
+}
+
+impl Backend {
+    pub const ALL: &'static [Backend] = &[Backend::Embree];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Backend::Embree => "embree",
+        }
+    }
+
+    pub fn is_compiled(self) -> bool {
+        match self {
+            Backend::Embree => cfg!(feature = "embree"),
+        }
+    }
+
+    /// The backends this build can use, preferred first.
+    pub fn compiled() -> Vec<Backend> {
+        Self::ALL.iter().copied().filter(|b| b.is_compiled()).collect()
+    }
+}
+
+impl fmt::Display for Backend {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for Backend {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Self::ALL
+            .iter()
+            .copied()
+            .find(|b| b.name() == s)
+            .ok_or_else(|| format!("unknown backend '{s}' (expected one of: embree)"))
+    }
+}
+
+/// Creates an empty accelerator of the given backend. `threads` bounds the backend's own
+/// worker pool (Embree's TBB); `None` lets it use every core.
+pub fn create(backend: Backend, threads: Option<usize>) -> Result<Box<dyn Accelerator>, AccelError> {
+    match backend {
+        #[cfg(feature = "embree")]
+        Backend::Embree => Ok(Box::new(super::embree::EmbreeAccel::new(threads)?)),
+        #[cfg(not(feature = "embree"))]
+        Backend::Embree => {
+            let _ = threads;
+            Err(AccelError::BackendUnavailable("embree"))
+        }
+    }
+}

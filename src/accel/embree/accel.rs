@@ -1,0 +1,212 @@
+use std::sync::Arc;
+
+use glam::{Affine3A, Mat3, Vec3};
+
+use super::{BuildQuality, Device, FrozenScene, InstanceGeometry, Scene, SceneFlags, TriangleGeometry};
+use crate::accel::{
+    AccelError, Accelerator, Backend, CommitReport, Hit, HitObject, InstanceId, PrototypeId, SceneQuery,
+    StaticId,
+};
+use crate::geometry::{Ray, TriangleMesh};
+
+/// Geometry id of the static scene's instance in the top level; instance `i` is `i + 1`.
+const STATIC_SLOT: u32 = 0;
+
+struct InstanceSlot {
+    /// Object-to-world normal transform: Embree reports instanced normals in object space.
+    normal_matrix: Mat3,
+}
+
+/// The Embree backend: a top-level scene of instances, one of which is the static scene.
+///
+/// - Prototypes are frozen one-mesh scenes shared by their instances.
+/// - The static scene (environment plus baked islands) is a DYNAMIC scene owned by an identity
+///   instance at top-level id 0, so adding a baked mesh commits it incrementally and the
+///   per-frame top-level rebuild never touches its triangles.
+/// - The top level is rebuilt at LOW quality each commit; it holds only instances.
+pub struct EmbreeAccel {
+    device: Device,
+    prototypes: Vec<Arc<FrozenScene>>,
+    top: Scene,
+    instances: Vec<Option<InstanceSlot>>,
+    free_instances: Vec<u32>,
+    static_triangles: Vec<Option<usize>>,
+    free_statics: Vec<u32>,
+    pending: CommitReport,
+}
+
+impl EmbreeAccel {
+    pub fn new(threads: Option<usize>) -> Result<Self, AccelError> {
+        Self::with_device(Device::new(threads)?)
+    }
+
+    pub fn with_device(device: Device) -> Result<Self, AccelError> {
+        let static_scene =
+            Scene::new(&device, SceneFlags { dynamic: true, ..SceneFlags::default() }, BuildQuality::Medium)?;
+        let mut top =
+            Scene::new(&device, SceneFlags { dynamic: true, ..SceneFlags::default() }, BuildQuality::Low)?;
+        top.attach_by_id(InstanceGeometry::owning(&device, static_scene, &Affine3A::IDENTITY)?, STATIC_SLOT)?;
+        Ok(Self {
+            device,
+            prototypes: Vec::new(),
+            top,
+            instances: Vec::new(),
+            free_instances: Vec::new(),
+            static_triangles: Vec::new(),
+            free_statics: Vec::new(),
+            pending: CommitReport::default(),
+        })
+    }
+
+    pub fn device(&self) -> &Device {
+        &self.device
+    }
+
+    fn static_scene(&mut self) -> Result<&mut Scene, AccelError> {
+        let inst = self.top.instance_mut(STATIC_SLOT)?;
+        Ok(inst.child_mut().expect("the static slot owns its scene"))
+    }
+
+    fn triangle_geometry(&self, mesh: &TriangleMesh) -> Result<(TriangleGeometry, usize), AccelError> {
+        mesh.validate()?;
+        let skipped = (0..mesh.triangle_count()).filter(|&i| !mesh.triangle_is_valid(i)).count();
+        Ok((TriangleGeometry::new(&self.device, &mesh.positions, &mesh.indices)?, skipped))
+    }
+
+    fn slot(&self, id: InstanceId) -> Result<&InstanceSlot, AccelError> {
+        self.instances
+            .get(id.0 as usize)
+            .and_then(Option::as_ref)
+            .ok_or(AccelError::UnknownId { kind: "instance", id: id.0 })
+    }
+}
+
+fn checked_transform(id: u32, transform: &Affine3A) -> Result<Mat3, AccelError> {
+    let m = Mat3::from(transform.matrix3);
+    let det = m.determinant();
+    if !transform.is_finite() || !det.is_finite() || det == 0.0 {
+        return Err(AccelError::InvalidTransform { instance: id });
+    }
+    Ok(m.inverse().transpose())
+}
+
+impl Accelerator for EmbreeAccel {
+    fn backend(&self) -> Backend {
+        Backend::Embree
+    }
+
+    fn add_prototype(&mut self, mesh: &TriangleMesh) -> Result<PrototypeId, AccelError> {
+        let (geometry, skipped) = self.triangle_geometry(mesh)?;
+        let mut scene = Scene::new(&self.device, SceneFlags::default(), BuildQuality::High)?;
+        scene.attach(geometry)?;
+        self.prototypes.push(scene.freeze()?);
+        self.pending.built_triangles += mesh.triangle_count();
+        self.pending.skipped_triangles += skipped;
+        Ok(PrototypeId(self.prototypes.len() as u32 - 1))
+    }
+
+    fn add_static(&mut self, mesh: &TriangleMesh) -> Result<StaticId, AccelError> {
+        let (geometry, skipped) = self.triangle_geometry(mesh)?;
+        let id = self.free_statics.pop().unwrap_or(self.static_triangles.len() as u32);
+        self.static_scene()?.attach_by_id(geometry, id)?;
+        if id as usize == self.static_triangles.len() {
+            self.static_triangles.push(None);
+        }
+        self.static_triangles[id as usize] = Some(mesh.triangle_count());
+        self.pending.built_triangles += mesh.triangle_count();
+        self.pending.skipped_triangles += skipped;
+        Ok(StaticId(id))
+    }
+
+    fn remove_static(&mut self, id: StaticId) -> Result<(), AccelError> {
+        let known = self.static_triangles.get(id.0 as usize).is_some_and(Option::is_some);
+        if !known {
+            return Err(AccelError::UnknownId { kind: "static", id: id.0 });
+        }
+        self.static_scene()?.detach(id.0)?;
+        self.static_triangles[id.0 as usize] = None;
+        self.free_statics.push(id.0);
+        Ok(())
+    }
+
+    fn add_instance(
+        &mut self,
+        prototype: PrototypeId,
+        transform: Affine3A,
+    ) -> Result<InstanceId, AccelError> {
+        let proto = self
+            .prototypes
+            .get(prototype.0 as usize)
+            .ok_or(AccelError::UnknownId { kind: "prototype", id: prototype.0 })?
+            .clone();
+        let id = self.free_instances.pop().unwrap_or(self.instances.len() as u32);
+        let normal_matrix = checked_transform(id, &transform)?;
+        let geometry = InstanceGeometry::new(&self.device, &proto, &transform)?;
+        self.top.attach_by_id(geometry, id + 1)?;
+        if id as usize == self.instances.len() {
+            self.instances.push(None);
+        }
+        self.instances[id as usize] = Some(InstanceSlot { normal_matrix });
+        Ok(InstanceId(id))
+    }
+
+    fn set_instance_transform(&mut self, id: InstanceId, transform: Affine3A) -> Result<(), AccelError> {
+        self.slot(id)?;
+        let normal_matrix = checked_transform(id.0, &transform)?;
+        self.top.instance_mut(id.0 + 1)?.set_transform(&transform)?;
+        self.instances[id.0 as usize] = Some(InstanceSlot { normal_matrix });
+        Ok(())
+    }
+
+    fn remove_instance(&mut self, id: InstanceId) -> Result<(), AccelError> {
+        self.slot(id)?;
+        self.top.detach(id.0 + 1)?;
+        self.instances[id.0 as usize] = None;
+        self.free_instances.push(id.0);
+        Ok(())
+    }
+
+    fn commit(&mut self) -> Result<CommitReport, AccelError> {
+        self.top.commit()?;
+        let mut report = std::mem::take(&mut self.pending);
+        report.instances = self.top.geometry_count() - 1;
+        Ok(report)
+    }
+
+    fn query(&self) -> Result<&dyn SceneQuery, AccelError> {
+        if self.top.is_dirty() {
+            Err(AccelError::NotCommitted)
+        } else {
+            Ok(self)
+        }
+    }
+}
+
+impl EmbreeAccel {
+    fn to_hit(&self, h: super::EmbreeHit) -> Hit {
+        let ng = Vec3::from_array(h.ng);
+        let (object, ng) = match h.inst_id {
+            Some(STATIC_SLOT) | None => (HitObject::Static(StaticId(h.geom_id)), ng),
+            Some(slot) => {
+                let id = slot - 1;
+                let m = self.instances[id as usize].as_ref().map_or(Mat3::IDENTITY, |s| s.normal_matrix);
+                (HitObject::Instance(InstanceId(id)), m * ng)
+            }
+        };
+        Hit { t: h.t, u: h.u, v: h.v, ng: ng.normalize_or_zero(), object, prim: h.prim_id }
+    }
+}
+
+impl SceneQuery for EmbreeAccel {
+    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        let view = self.top.view()?;
+        view.intersect1(ray.origin.to_array(), ray.dir.to_array(), ray.t_min, ray.t_max)
+            .map(|h| self.to_hit(h))
+    }
+
+    fn intersect_p(&self, ray: &Ray) -> bool {
+        self.top.view().is_some_and(|view| {
+            view.occluded1(ray.origin.to_array(), ray.dir.to_array(), ray.t_min, ray.t_max)
+        })
+    }
+}

@@ -1,0 +1,22 @@
+//! Embree 4: the safe wrapper over `embree4-sys` ([`Device`], [`Scene`], [`TriangleGeometry`],
+//! [`InstanceGeometry`]) and the [`EmbreeAccel`] backend built on it.
+//!
+//! All of dormant's `unsafe` for Embree lives in this folder. The wrapper's rules:
+//! - every handle is reference-counted by Embree and released on drop (RAII);
+//! - errors reported through Embree's error callback come back as [`EmbreeError`], never
+//!   aborts;
+//! - ray queries need a committed scene, which the type system enforces: queries go through
+//!   [`SceneView`], which only a scene without staged changes hands out, and mutation needs
+//!   `&mut Scene`.
+
+mod accel;
+mod device;
+mod error;
+mod geometry;
+mod scene;
+
+pub use accel::EmbreeAccel;
+pub use device::{Device, Version};
+pub use error::EmbreeError;
+pub use geometry::{InstanceGeometry, TriangleGeometry};
+pub use scene::{BuildQuality, EmbreeHit, FrozenScene, Geometry, Scene, SceneFlags, SceneView};

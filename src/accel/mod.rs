@@ -1,0 +1,98 @@
+//! Ray-scene intersection: one interface, [`Accelerator`], implemented by every backend.
+//!
+//! The scene an accelerator holds has two levels:
+//! - **prototypes**: one bottom-level structure per mesh, shared by every instance of it;
+//! - **static geometry**: world-space triangle meshes (the environment and baked islands);
+//! - **instances**: a prototype plus an affine transform, one per awake body.
+//!
+//! Changes are staged and become visible to rays at [`Accelerator::commit`]. Queries go through
+//! [`Accelerator::query`], which fails while changes are uncommitted, so no ray ever sees a
+//! half-updated scene. Nothing outside this module knows which backend it talks to.
+
+mod backend;
+#[cfg(feature = "embree")]
+pub mod embree;
+mod hit;
+
+pub use backend::{create, Backend};
+pub use hit::{Hit, HitObject};
+
+use glam::Affine3A;
+
+use crate::geometry::{MeshError, Ray, TriangleMesh};
+
+/// Identifies a prototype mesh registered with [`Accelerator::add_prototype`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct PrototypeId(pub u32);
+
+/// Identifies an instance in the top level.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct InstanceId(pub u32);
+
+/// Identifies a world-space mesh in the static scene.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct StaticId(pub u32);
+
+#[derive(Debug, thiserror::Error)]
+pub enum AccelError {
+    #[error("the scene has uncommitted changes; call commit() before tracing rays")]
+    NotCommitted,
+    #[error("unknown {kind} id {id}")]
+    UnknownId { kind: &'static str, id: u32 },
+    #[error("invalid mesh: {0}")]
+    Mesh(#[from] MeshError),
+    #[error("transform of instance {instance} is not finite or not invertible")]
+    InvalidTransform { instance: u32 },
+    #[error("backend '{0}' is not compiled into this build")]
+    BackendUnavailable(&'static str),
+    #[cfg(feature = "embree")]
+    #[error(transparent)]
+    Embree(#[from] embree::EmbreeError),
+}
+
+/// What a commit did, for the per-stage counters.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CommitReport {
+    /// Triangles the commit (re)built into acceleration structures.
+    pub built_triangles: usize,
+    /// Instances in the top level after the commit.
+    pub instances: usize,
+    /// Triangles skipped because they were degenerate or not finite.
+    pub skipped_triangles: usize,
+}
+
+/// Closest-hit and any-hit queries on a committed scene. Safe to call from many threads.
+pub trait SceneQuery: Sync {
+    /// Closest hit along `ray` within `[t_min, t_max]`.
+    fn intersect(&self, ray: &Ray) -> Option<Hit>;
+    /// Whether anything blocks `ray` within `[t_min, t_max]` (shadow and occlusion rays).
+    fn intersect_p(&self, ray: &Ray) -> bool;
+}
+
+/// A two-level ray tracing scene: prototypes, static geometry and instances.
+pub trait Accelerator: Send + Sync {
+    fn backend(&self) -> Backend;
+
+    /// Registers a mesh (object space) that instances can refer to.
+    fn add_prototype(&mut self, mesh: &TriangleMesh) -> Result<PrototypeId, AccelError>;
+
+    /// Adds a world-space mesh to the static scene.
+    fn add_static(&mut self, mesh: &TriangleMesh) -> Result<StaticId, AccelError>;
+
+    /// Removes a mesh from the static scene.
+    fn remove_static(&mut self, id: StaticId) -> Result<(), AccelError>;
+
+    /// Adds an instance of `prototype` placed by `transform` (object to world).
+    fn add_instance(&mut self, prototype: PrototypeId, transform: Affine3A)
+        -> Result<InstanceId, AccelError>;
+
+    fn set_instance_transform(&mut self, id: InstanceId, transform: Affine3A) -> Result<(), AccelError>;
+
+    fn remove_instance(&mut self, id: InstanceId) -> Result<(), AccelError>;
+
+    /// Makes all staged changes visible to rays.
+    fn commit(&mut self) -> Result<CommitReport, AccelError>;
+
+    /// The committed scene; [`AccelError::NotCommitted`] while changes are staged.
+    fn query(&self) -> Result<&dyn SceneQuery, AccelError>;
+}

@@ -1,0 +1,57 @@
+use serde::Serialize;
+
+use super::CliError;
+use crate::accel::Backend;
+
+/// What `dormant info` prints.
+#[derive(Debug, Serialize)]
+pub struct InfoReport {
+    pub dormant_version: &'static str,
+    pub backends: Vec<Backend>,
+    pub embree: Option<EmbreeInfo>,
+}
+
+#[derive(Debug, Serialize)]
+pub struct EmbreeInfo {
+    /// Version of the library loaded at run time.
+    pub library_version: String,
+    /// Version of the headers the bindings were generated from.
+    pub header_version: String,
+    /// Where the build found the headers.
+    pub header_origin: &'static str,
+    pub include_dir: &'static str,
+}
+
+impl InfoReport {
+    pub fn collect(threads: Option<usize>) -> Result<Self, CliError> {
+        Ok(Self {
+            dormant_version: env!("CARGO_PKG_VERSION"),
+            backends: Backend::compiled(),
+            embree: embree_info(threads)?,
+        })
+    }
+}
+
+#[cfg(feature = "embree")]
+fn embree_info(threads: Option<usize>) -> Result<Option<EmbreeInfo>, CliError> {
+    use crate::accel::embree::{Device, Version};
+    let device = Device::new(threads).map_err(|e| CliError::Runtime(e.to_string()))?;
+    Ok(Some(EmbreeInfo {
+        library_version: device.library_version().to_string(),
+        header_version: Version::header().to_string(),
+        header_origin: embree4_sys::HEADER_ORIGIN,
+        include_dir: embree4_sys::HEADER_INCLUDE_DIR,
+    }))
+}
+
+#[cfg(not(feature = "embree"))]
+fn embree_info(_threads: Option<usize>) -> Result<Option<EmbreeInfo>, CliError> {
+    Ok(None)
+}
+
+pub(super) fn run(threads: Option<usize>) -> Result<(), CliError> {
+    let report = InfoReport::collect(threads)?;
+    let json = serde_json::to_string_pretty(&report).expect("info report serialises");
+    println!("{json}");
+    Ok(())
+}

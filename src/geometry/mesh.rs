@@ -1,0 +1,87 @@
+use glam::{Affine3A, Vec2, Vec3};
+
+use super::Aabb;
+
+/// Problems with mesh data. Callers add the file and element names.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum MeshError {
+    #[error("triangle {triangle} references vertex {index}, but the mesh has {vertices} vertices")]
+    IndexOutOfRange { triangle: usize, index: u32, vertices: usize },
+    #[error("{attribute} has {found} entries, expected one per vertex ({vertices})")]
+    AttributeLength { attribute: &'static str, found: usize, vertices: usize },
+}
+
+/// An indexed triangle mesh in its own object space. Normals and UVs are optional per-vertex
+/// attributes.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct TriangleMesh {
+    pub positions: Vec<Vec3>,
+    pub indices: Vec<[u32; 3]>,
+    pub normals: Option<Vec<Vec3>>,
+    pub uvs: Option<Vec<Vec2>>,
+}
+
+impl TriangleMesh {
+    pub fn new(positions: Vec<Vec3>, indices: Vec<[u32; 3]>) -> Self {
+        Self { positions, indices, normals: None, uvs: None }
+    }
+
+    /// Checks that indices and attributes are consistent. Does not reject degenerate or
+    /// non-finite triangles: accelerators skip those and count them.
+    pub fn validate(&self) -> Result<(), MeshError> {
+        let n = self.positions.len();
+        for (t, tri) in self.indices.iter().enumerate() {
+            if let Some(&index) = tri.iter().find(|&&i| i as usize >= n) {
+                return Err(MeshError::IndexOutOfRange { triangle: t, index, vertices: n });
+            }
+        }
+        if let Some(normals) = &self.normals {
+            if normals.len() != n {
+                return Err(MeshError::AttributeLength {
+                    attribute: "normals",
+                    found: normals.len(),
+                    vertices: n,
+                });
+            }
+        }
+        if let Some(uvs) = &self.uvs {
+            if uvs.len() != n {
+                return Err(MeshError::AttributeLength { attribute: "uvs", found: uvs.len(), vertices: n });
+            }
+        }
+        Ok(())
+    }
+
+    pub fn triangle_count(&self) -> usize {
+        self.indices.len()
+    }
+
+    pub fn triangle(&self, i: usize) -> [Vec3; 3] {
+        let [a, b, c] = self.indices[i];
+        [self.positions[a as usize], self.positions[b as usize], self.positions[c as usize]]
+    }
+
+    /// A triangle is usable when its vertices are finite and it has non-zero area.
+    pub fn triangle_is_valid(&self, i: usize) -> bool {
+        let [a, b, c] = self.triangle(i);
+        a.is_finite() && b.is_finite() && c.is_finite() && (b - a).cross(c - a).length_squared() > 0.0
+    }
+
+    pub fn bounds(&self) -> Aabb {
+        Aabb::from_points(self.positions.iter().copied().filter(|p| p.is_finite()))
+    }
+
+    /// A copy with positions and normals moved by `xf` (used to bake instances into world space).
+    pub fn transformed(&self, xf: &Affine3A) -> Self {
+        let normal_matrix = glam::Mat3::from(xf.matrix3).inverse().transpose();
+        Self {
+            positions: self.positions.iter().map(|&p| xf.transform_point3(p)).collect(),
+            indices: self.indices.clone(),
+            normals: self
+                .normals
+                .as_ref()
+                .map(|ns| ns.iter().map(|&n| (normal_matrix * n).normalize_or_zero()).collect()),
+            uvs: self.uvs.clone(),
+        }
+    }
+}

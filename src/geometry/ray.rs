@@ -1,0 +1,25 @@
+use glam::Vec3;
+
+/// A ray `origin + t * dir` restricted to `t_min <= t <= t_max`. `dir` need not be normalised;
+/// `t` is measured in units of `dir`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ray {
+    pub origin: Vec3,
+    pub dir: Vec3,
+    pub t_min: f32,
+    pub t_max: f32,
+}
+
+impl Ray {
+    pub fn new(origin: Vec3, dir: Vec3) -> Self {
+        Self { origin, dir, t_min: 0.0, t_max: f32::INFINITY }
+    }
+
+    pub fn segment(origin: Vec3, dir: Vec3, t_min: f32, t_max: f32) -> Self {
+        Self { origin, dir, t_min, t_max }
+    }
+
+    pub fn at(&self, t: f32) -> Vec3 {
+        self.origin + t * self.dir
+    }
+}

@@ -1,0 +1,44 @@
+//! Turning a committed scene into pixels: camera rays, shading, tiles over rayon, the film and
+//! image output. Talks to geometry only through [`crate::accel::SceneQuery`].
+
+mod camera;
+mod film;
+mod integrator;
+mod render_scene;
+mod sampler;
+mod tiles;
+
+pub use camera::PinholeCamera;
+pub use film::{write_png_atomic, Film};
+pub use integrator::{DirectLighting, Integrator};
+pub use render_scene::{RenderScene, SurfaceHit};
+pub use sampler::PixelSampler;
+pub use tiles::{render_frame, RenderSettings, RenderStats};
+
+use std::path::PathBuf;
+
+use crate::accel::AccelError;
+
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    #[error("image size {width}x{height} is invalid: both sides must be between 1 and 16384")]
+    InvalidSize { width: u32, height: u32 },
+    #[error("samples per pixel must be at least 1")]
+    InvalidSpp,
+    #[error("cannot write {path}: {source}")]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("cannot encode {path}: {source}")]
+    Encode {
+        path: PathBuf,
+        #[source]
+        source: image::ImageError,
+    },
+    #[error("scene '{scene}': {what}")]
+    Scene { scene: String, what: String },
+    #[error(transparent)]
+    Accel(#[from] AccelError),
+}

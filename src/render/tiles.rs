@@ -1,0 +1,97 @@
+use std::time::Instant;
+
+use glam::{Vec2, Vec3};
+use rayon::prelude::*;
+
+use super::integrator::dims;
+use super::{Film, Integrator, PinholeCamera, PixelSampler, RenderError, RenderScene};
+use crate::accel::SceneQuery;
+
+/// Side of the square tiles rayon distributes.
+const TILE: u32 = 16;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RenderSettings {
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
+    /// Frame number: seeds the sampler so consecutive frames decorrelate.
+    pub frame: u32,
+}
+
+impl RenderSettings {
+    pub fn validate(&self) -> Result<(), RenderError> {
+        let side_ok = |s: u32| (1..=16384).contains(&s);
+        if !side_ok(self.width) || !side_ok(self.height) {
+            return Err(RenderError::InvalidSize { width: self.width, height: self.height });
+        }
+        if self.spp == 0 {
+            return Err(RenderError::InvalidSpp);
+        }
+        Ok(())
+    }
+}
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct RenderStats {
+    pub rays: u64,
+    pub seconds: f64,
+}
+
+impl RenderStats {
+    pub fn mrays_per_second(&self) -> f64 {
+        self.rays as f64 / self.seconds.max(1e-9) / 1e6
+    }
+}
+
+/// Renders one frame with `integrator`, tiles spread over the current rayon pool. Each
+/// pixel's samples depend only on (pixel, frame, index), so the image is identical whatever
+/// the thread count or tile order.
+pub fn render_frame(
+    scene: &RenderScene,
+    query: &dyn SceneQuery,
+    integrator: &dyn Integrator,
+    settings: &RenderSettings,
+) -> Result<(Film, RenderStats), RenderError> {
+    settings.validate()?;
+    let start = Instant::now();
+    let (w, h) = (settings.width, settings.height);
+    let camera = PinholeCamera::new(&scene.camera, w, h);
+    let tiles_x = w.div_ceil(TILE);
+    let tiles: Vec<(u32, u32)> =
+        (0..tiles_x * h.div_ceil(TILE)).map(|t| ((t % tiles_x) * TILE, (t / tiles_x) * TILE)).collect();
+    let rendered: Vec<(u32, u32, Vec<Vec3>, u64)> = tiles
+        .par_iter()
+        .map(|&(x0, y0)| {
+            let (x1, y1) = ((x0 + TILE).min(w), (y0 + TILE).min(h));
+            let mut rays = 0u64;
+            let mut pixels = Vec::with_capacity(((x1 - x0) * (y1 - y0)) as usize);
+            for y in y0..y1 {
+                for x in x0..x1 {
+                    let sampler = PixelSampler::new(x, y, settings.frame);
+                    let mut sum = Vec3::ZERO;
+                    for i in 0..settings.spp {
+                        // Box reconstruction: samples uniform over the pixel's area.
+                        let jitter =
+                            if settings.spp == 1 { Vec2::splat(0.5) } else { sampler.get_2d(i, dims::PIXEL) };
+                        let ray = camera.ray(x as f32 + jitter.x, y as f32 + jitter.y);
+                        sum += integrator.li(scene, query, &ray, &sampler, i, &mut rays);
+                    }
+                    pixels.push(sum / settings.spp as f32);
+                }
+            }
+            (x0, y0, pixels, rays)
+        })
+        .collect();
+    let mut film = Film::new(w, h);
+    let mut rays = 0;
+    for (x0, y0, pixels, tile_rays) in rendered {
+        let tw = (x0 + TILE).min(w) - x0;
+        for (i, p) in pixels.into_iter().enumerate() {
+            let (x, y) = (x0 + i as u32 % tw, y0 + i as u32 / tw);
+            film.pixels[(y * w + x) as usize] = p;
+        }
+        rays += tile_rays;
+    }
+    Ok((film, RenderStats { rays, seconds: start.elapsed().as_secs_f64() }))
+}

@@ -1,0 +1,8 @@
+//! Scene descriptions: plain data saying what is in a scene (meshes, materials, bodies,
+//! camera, lights). Nothing here builds physics, acceleration or render objects.
+
+mod builtin;
+mod description;
+
+pub use builtin::default_scene;
+pub use description::{Body, Camera, Material, Prototype, SceneDescription, Sky, StaticMesh, Sun};
