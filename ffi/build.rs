@@ -19,7 +19,7 @@ struct Embree {
     origin: &'static str,
 }
 
-const HOW_TO_FIX: &str = "Embree 4 was not found. Run `scripts/setup.sh` as root (Debian 12/13), \
+const HOW_TO_FIX: &str = "To fix: run `scripts/setup.sh` as root (Debian 12/13), \
 or set EMBREE_DIR to an Embree 4 prefix containing include/embree4/rtcore.h and \
 lib/libembree4.so, or build without Embree: `cargo build --no-default-features`.";
 
@@ -66,7 +66,7 @@ fn find() -> Embree {
             return found;
         }
     }
-    panic!("{HOW_TO_FIX}");
+    panic!("Embree 4 was not found (looked at EMBREE_DIR, .deps/embree4, pkg-config embree4, /usr, /usr/local). {HOW_TO_FIX}");
 }
 
 /// Reads `#define NAME value` from rtcore_config.h so a wrong major version fails with a clear
@@ -96,6 +96,12 @@ fn main() {
             embree.origin
         ),
         None => panic!("{} has no RTC_VERSION_MAJOR. {HOW_TO_FIX}", config_h.display()),
+    }
+
+    // Build options that change struct layouts, as cfgs for the ABI tests.
+    println!("cargo:rustc-check-cfg=cfg(embree_instance_array)");
+    if config.lines().any(|l| l.split_whitespace().eq(["#define", "RTC_GEOMETRY_INSTANCE_ARRAY"])) {
+        println!("cargo:rustc-cfg=embree_instance_array");
     }
 
     let bindings = bindgen::Builder::default()

@@ -36,11 +36,11 @@ apt_install() {
         return
     fi
     if [ $apt_updated -eq 0 ]; then
-        as_root apt-get update -qq
+        as_root apt-get update -qq >/dev/null
         apt_updated=1
     fi
     say "installing apt packages: ${missing[*]}"
-    as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "${missing[@]}"
+    as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 }
 
 if ! command -v dpkg-query >/dev/null 2>&1; then

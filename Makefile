@@ -1,0 +1,37 @@
+# dormant: build, demo and test entry points. Every target installs what it needs through
+# scripts/setup.sh first (idempotent; needs root on a fresh Debian 12/13 machine).
+
+CARGO ?= cargo
+RELEASE_BIN := target/release/dormant
+
+.PHONY: setup build demo test test-no-embree lint fmt bench clean
+
+setup:
+	bash scripts/setup.sh
+
+build: setup
+	$(CARGO) build --release --workspace
+
+# Renders the built-in default scene into out/demo/.
+demo: build
+	$(RELEASE_BIN) render --out out/demo
+
+# The whole workspace's tests in release mode, then the pure-Rust build without Embree.
+test: setup
+	$(CARGO) test --release --workspace
+	$(MAKE) test-no-embree
+
+test-no-embree:
+	$(CARGO) test --release -p dormant --no-default-features
+
+lint:
+	$(CARGO) fmt --all --check
+	$(CARGO) clippy --workspace --all-targets -- -D warnings
+	$(CARGO) clippy -p dormant --no-default-features --all-targets -- -D warnings
+
+fmt:
+	$(CARGO) fmt --all
+
+clean:
+	$(CARGO) clean
+	rm -rf out

@@ -1,0 +1,91 @@
+//! The `dormant` binary end to end: the default render, `info`, and bad output paths.
+
+use std::path::Path;
+use std::process::Command;
+
+fn dormant() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_dormant"))
+}
+
+fn png_is_not_uniform(path: &Path) -> bool {
+    let img = image::open(path).unwrap().to_rgb8();
+    let first = *img.get_pixel(0, 0);
+    img.pixels().any(|p| *p != first)
+}
+
+#[test]
+fn default_scene_renders_a_non_uniform_png() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("demo");
+    let status = dormant()
+        .args(["render", "--size", "160x90", "--spp", "2", "--quiet", "--out"])
+        .arg(&out)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let png = out.join("frame_0000.png");
+    assert!(png.is_file());
+    assert!(png_is_not_uniform(&png));
+    let leftovers: Vec<_> = std::fs::read_dir(&out)
+        .unwrap()
+        .filter_map(Result::ok)
+        .filter(|e| e.file_name().to_string_lossy().ends_with(".tmp"))
+        .collect();
+    assert!(leftovers.is_empty());
+}
+
+#[cfg(feature = "embree")]
+#[test]
+fn info_reports_embree_4_library_and_header() {
+    let output = dormant().arg("info").output().unwrap();
+    assert!(output.status.success());
+    let info: serde_json::Value = serde_json::from_slice(&output.stdout).unwrap();
+    let lib = info["embree"]["library_version"].as_str().unwrap();
+    let header = info["embree"]["header_version"].as_str().unwrap();
+    assert!(lib.starts_with("4."), "{lib}");
+    assert_eq!(lib.split('.').next(), header.split('.').next());
+    assert!(info["backends"].as_array().unwrap().iter().any(|b| b == "embree"));
+}
+
+#[test]
+fn unwritable_output_directory_fails_cleanly() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("not-a-dir");
+    std::fs::write(&file, b"").unwrap();
+    let output = dormant()
+        .args(["render", "--size", "8x8", "--spp", "1", "--out"])
+        .arg(file.join("sub"))
+        .output()
+        .unwrap();
+    assert_eq!(output.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(stderr.contains("not-a-dir"), "{stderr}");
+}
+
+#[test]
+fn failed_frame_write_leaves_no_partial_file() {
+    let dir = tempfile::tempdir().unwrap();
+    // The frame's path is taken by a directory, so the final rename fails.
+    std::fs::create_dir_all(dir.path().join("frame_0000.png")).unwrap();
+    let output =
+        dormant().args(["render", "--size", "8x8", "--spp", "1", "--out"]).arg(dir.path()).output().unwrap();
+    assert_eq!(output.status.code(), Some(1));
+    let names: Vec<String> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(names, vec!["frame_0000.png".to_string()], "left behind: {names:?}");
+}
+
+#[test]
+fn usage_errors_exit_2() {
+    for args in [
+        &["render", "--size", "0x5"][..],
+        &["render", "--spp", "0"],
+        &["render", "--backend", "optix"],
+        &["frobnicate"],
+    ] {
+        let output = dormant().args(args).output().unwrap();
+        assert_eq!(output.status.code(), Some(2), "{args:?}: {}", String::from_utf8_lossy(&output.stderr));
+    }
+}

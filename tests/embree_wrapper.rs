@@ -1,0 +1,196 @@
+//! The safe Embree wrapper against the real library: hits, instancing, attach/detach,
+//! recommit, errors and the committed-scene rule.
+#![cfg(feature = "embree")]
+
+use std::sync::Arc;
+
+use dormant::accel::embree::{
+    BuildQuality, Device, EmbreeError, Geometry, InstanceGeometry, Scene, SceneFlags, TriangleGeometry,
+    Version,
+};
+use glam::{Affine3A, Quat, Vec3};
+
+fn device() -> Device {
+    Device::new(Some(2)).expect("Embree device")
+}
+
+fn unit_triangle(device: &Device) -> TriangleGeometry {
+    let p = [Vec3::ZERO, Vec3::X, Vec3::Y];
+    TriangleGeometry::new(device, &p, &[[0, 1, 2]]).unwrap()
+}
+
+fn scene(device: &Device) -> Scene {
+    Scene::new(device, SceneFlags::default(), BuildQuality::Medium).unwrap()
+}
+
+#[test]
+fn library_version_is_4x_and_not_older_than_headers() {
+    let d = device();
+    assert_eq!(d.library_version().major, 4);
+    assert_eq!(Version::header().major, 4);
+    assert!(d.library_version() >= Version::header());
+}
+
+#[test]
+fn known_triangle_hit_has_expected_t_u_v_and_prim() {
+    let d = device();
+    let mut s = scene(&d);
+    // Two triangles, so the hit's primID must be 1.
+    let p = [
+        Vec3::ZERO,
+        Vec3::X,
+        Vec3::Y,
+        Vec3::new(5.0, 0.0, 0.0),
+        Vec3::new(6.0, 0.0, 0.0),
+        Vec3::new(5.0, 1.0, 0.0),
+    ];
+    s.attach(TriangleGeometry::new(&d, &p, &[[0, 1, 2], [3, 4, 5]]).unwrap()).unwrap();
+    s.commit().unwrap();
+    let hit = s.view().unwrap().intersect1([5.2, 0.3, -3.0], [0.0, 0.0, 1.0], 0.0, f32::INFINITY).unwrap();
+    assert_eq!((hit.geom_id, hit.prim_id, hit.inst_id), (0, 1, None));
+    assert!((hit.t - 3.0).abs() < 1e-6);
+    assert!((hit.u - 0.2).abs() < 1e-5 && (hit.v - 0.3).abs() < 1e-5, "u={} v={}", hit.u, hit.v);
+    // Ng = (p1-p0) x (p2-p0) = +z.
+    assert!(hit.ng[2] > 0.0);
+    assert!(s.view().unwrap().occluded1([5.2, 0.3, -3.0], [0.0, 0.0, 1.0], 0.0, 10.0));
+    assert!(!s.view().unwrap().occluded1([5.2, 0.3, -3.0], [0.0, 0.0, 1.0], 0.0, 2.9));
+    assert!(s.view().unwrap().intersect1([5.2, 0.3, -3.0], [0.0, 0.0, -1.0], 0.0, f32::INFINITY).is_none());
+}
+
+#[test]
+fn instanced_hit_reports_instance_id() {
+    let d = device();
+    let mut proto = scene(&d);
+    proto.attach(unit_triangle(&d)).unwrap();
+    let proto = proto.freeze().unwrap();
+    let mut top = scene(&d);
+    let xf = Affine3A::from_translation(Vec3::new(10.0, 0.0, 0.0));
+    top.attach_by_id(InstanceGeometry::new(&d, &proto, &Affine3A::IDENTITY).unwrap(), 3).unwrap();
+    top.attach_by_id(InstanceGeometry::new(&d, &proto, &xf).unwrap(), 7).unwrap();
+    top.commit().unwrap();
+    let hit =
+        top.view().unwrap().intersect1([10.25, 0.25, 1.0], [0.0, 0.0, -1.0], 0.0, f32::INFINITY).unwrap();
+    assert_eq!((hit.inst_id, hit.geom_id, hit.prim_id), (Some(7), 0, 0));
+    assert!((hit.t - 1.0).abs() < 1e-6);
+}
+
+#[test]
+fn changes_need_a_commit_before_rays() {
+    let d = device();
+    let mut s = scene(&d);
+    assert!(s.view().is_none(), "a new scene is not committed");
+    s.attach(unit_triangle(&d)).unwrap();
+    assert!(s.view().is_none());
+    s.commit().unwrap();
+    assert!(s.view().is_some());
+}
+
+#[test]
+fn detach_reattach_and_recommit() {
+    let d = device();
+    let mut s =
+        Scene::new(&d, SceneFlags { dynamic: true, ..Default::default() }, BuildQuality::Low).unwrap();
+    let id = s.attach(unit_triangle(&d)).unwrap();
+    s.commit().unwrap();
+    let ray = ([0.25, 0.25, 1.0], [0.0, 0.0, -1.0]);
+    assert!(s.view().unwrap().intersect1(ray.0, ray.1, 0.0, f32::INFINITY).is_some());
+
+    let geometry = s.detach(id).unwrap();
+    assert!(s.view().is_none());
+    s.commit().unwrap();
+    assert!(s.view().unwrap().intersect1(ray.0, ray.1, 0.0, f32::INFINITY).is_none());
+
+    s.attach_by_id(geometry, 42).unwrap();
+    s.commit().unwrap();
+    let hit = s.view().unwrap().intersect1(ray.0, ray.1, 0.0, f32::INFINITY).unwrap();
+    assert_eq!(hit.geom_id, 42);
+}
+
+#[test]
+fn one_geometry_in_two_scenes() {
+    let d = device();
+    let g = unit_triangle(&d);
+    let (mut a, mut b) = (scene(&d), scene(&d));
+    a.attach(g.clone()).unwrap();
+    b.attach(g).unwrap();
+    a.commit().unwrap();
+    b.commit().unwrap();
+    for s in [&a, &b] {
+        assert!(s.view().unwrap().occluded1([0.25, 0.25, 1.0], [0.0, 0.0, -1.0], 0.0, 2.0));
+    }
+}
+
+#[test]
+fn shared_buffers_are_traced() {
+    let d = device();
+    let vertices: Arc<[[f32; 4]]> =
+        Arc::from(vec![[0.0, 0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0]]);
+    let indices: Arc<[[u32; 3]]> = Arc::from(vec![[0u32, 1, 2]]);
+    let g = TriangleGeometry::new_shared(&d, vertices, indices).unwrap();
+    let mut s = scene(&d);
+    s.attach(g).unwrap();
+    s.commit().unwrap();
+    let hit = s.view().unwrap().intersect1([0.5, 0.25, -2.0], [0.0, 0.0, 1.0], 0.0, f32::INFINITY).unwrap();
+    assert!((hit.t - 2.0).abs() < 1e-6);
+}
+
+#[test]
+fn invalid_call_is_a_rust_error() {
+    let d = device();
+    let mut s = scene(&d);
+    // Embree itself rejects the unknown geometry id; the wrapper surfaces its message.
+    match s.detach(12345) {
+        Err(EmbreeError::Api { code, message }) => {
+            assert!(code.starts_with("RTC_ERROR_"), "{code}");
+            assert!(!message.is_empty());
+        }
+        Err(other) => panic!("expected an Embree API error, got {other}"),
+        Ok(_) => panic!("detaching an unknown id succeeded"),
+    }
+    // The device stays usable after an error.
+    s.attach(unit_triangle(&d)).unwrap();
+    s.commit().unwrap();
+}
+
+#[test]
+fn bad_device_config_is_a_rust_error() {
+    assert!(Device::with_config("threads=not_a_number").is_err());
+}
+
+#[test]
+fn owned_child_scene_changes_reach_the_parent() {
+    let d = device();
+    let child =
+        Scene::new(&d, SceneFlags { dynamic: true, ..Default::default() }, BuildQuality::Medium).unwrap();
+    let mut top = scene(&d);
+    top.attach_by_id(InstanceGeometry::owning(&d, child, &Affine3A::IDENTITY).unwrap(), 0).unwrap();
+    top.commit().unwrap();
+    let ray = ([0.25, 0.25, 1.0], [0.0, 0.0, -1.0]);
+    assert!(top.view().unwrap().intersect1(ray.0, ray.1, 0.0, f32::INFINITY).is_none());
+
+    let inst = top.instance_mut(0).unwrap();
+    inst.child_mut().unwrap().attach_by_id(unit_triangle(&d), 5).unwrap();
+    assert!(top.view().is_none(), "changing the child stages a change in the parent");
+    top.commit().unwrap();
+    let hit = top.view().unwrap().intersect1(ray.0, ray.1, 0.0, f32::INFINITY).unwrap();
+    assert_eq!((hit.inst_id, hit.geom_id), (Some(0), 5));
+}
+
+#[test]
+fn instance_transform_updates_and_rejects_nan() {
+    let d = device();
+    let mut proto = scene(&d);
+    proto.attach(unit_triangle(&d)).unwrap();
+    let proto = proto.freeze().unwrap();
+    let mut top = scene(&d);
+    top.attach_by_id(InstanceGeometry::new(&d, &proto, &Affine3A::IDENTITY).unwrap(), 0).unwrap();
+    top.commit().unwrap();
+    let moved = Affine3A::from_rotation_translation(Quat::from_rotation_z(0.3), Vec3::new(0.0, 0.0, -4.0));
+    top.instance_mut(0).unwrap().set_transform(&moved).unwrap();
+    top.commit().unwrap();
+    let hit = top.view().unwrap().intersect1([0.1, 0.3, 1.0], [0.0, 0.0, -1.0], 0.0, f32::INFINITY).unwrap();
+    assert!((hit.t - 5.0).abs() < 1e-5);
+    let nan = Affine3A::from_translation(Vec3::new(f32::NAN, 0.0, 0.0));
+    assert_eq!(top.instance_mut(0).unwrap().set_transform(&nan), Err(EmbreeError::NonFiniteTransform));
+    assert!(matches!(top.geometry(0), Some(Geometry::Instance(_))));
+}
