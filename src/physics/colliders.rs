@@ -1,0 +1,160 @@
+//! Collision shapes: the static environment as one triangle mesh; each dynamic prototype as
+//! an exact primitive, a convex hull, or (for concave meshes) a convex decomposition, built
+//! once per prototype and shared by every body that uses it.
+
+use rapier3d::prelude::SharedShape;
+
+use super::body::to_rapier_vec;
+use super::PhysicsError;
+use crate::geometry::TriangleMesh;
+use crate::scene::file::{prototype_mesh, ColliderKind, PrototypeDef, SceneFile, ShapeKind};
+
+/// A hull this much smaller in volume than the mesh it wraps marks the mesh as concave.
+const CONCAVITY_RATIO: f32 = 0.85;
+
+/// How a prototype's collider was made (reported by the simulation).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+pub enum ColliderChoice {
+    Primitive,
+    ConvexHull,
+    ConvexDecomposition { parts: usize },
+}
+
+/// A prototype ready to instantiate: shared shape plus material.
+#[derive(Clone)]
+pub(crate) struct PrototypeShape {
+    pub shape: SharedShape,
+    pub choice: ColliderChoice,
+    pub density: f32,
+    pub friction: f32,
+    pub restitution: f32,
+    /// Radius of a sphere about the local origin that contains the shape.
+    pub bounding_radius: f32,
+}
+
+pub(crate) fn prototype_shape(file: &SceneFile, index: usize) -> Result<PrototypeShape, PhysicsError> {
+    let p: &PrototypeDef = &file.description.prototypes[index];
+    let field = |f: &str| format!("prototypes[{index}].{f}");
+    let fail = |f: &str, message: String| PhysicsError::Collider {
+        file: file.path.display().to_string(),
+        field: field(f),
+        message,
+    };
+    let (shape, choice) = match p.shape {
+        ShapeKind::Box => {
+            let h = p.half_extents.unwrap_or([0.5; 3]);
+            (SharedShape::cuboid(h[0], h[1], h[2]), ColliderChoice::Primitive)
+        }
+        ShapeKind::Sphere => (SharedShape::ball(p.radius.unwrap_or(0.5)), ColliderChoice::Primitive),
+        ShapeKind::Capsule => (
+            SharedShape::capsule_y(p.half_height.unwrap_or(0.5), p.radius.unwrap_or(0.5)),
+            ColliderChoice::Primitive,
+        ),
+        ShapeKind::Cylinder => (
+            SharedShape::cylinder(p.half_height.unwrap_or(0.5), p.radius.unwrap_or(0.5)),
+            ColliderChoice::Primitive,
+        ),
+        ShapeKind::Gltf => {
+            let mesh = prototype_mesh(file, index)?;
+            mesh_shape(&mesh, p.collider).map_err(|m| fail("gltf", m))?
+        }
+    };
+    let aabb = shape.compute_local_aabb();
+    let bounding_radius = aabb.mins.length().max(aabb.maxs.length());
+    Ok(PrototypeShape {
+        shape,
+        choice,
+        density: p.density,
+        friction: p.friction,
+        restitution: p.restitution,
+        bounding_radius,
+    })
+}
+
+/// A convex hull, or a convex decomposition when the mesh is concave (or when asked).
+fn mesh_shape(mesh: &TriangleMesh, kind: ColliderKind) -> Result<(SharedShape, ColliderChoice), String> {
+    let points: Vec<_> = mesh.positions.iter().filter(|p| p.is_finite()).map(|&p| to_rapier_vec(p)).collect();
+    let flat = || format!("the {} points have no volume (flat or degenerate mesh)", points.len());
+    let hull = SharedShape::convex_hull(&points).ok_or_else(flat)?;
+    let hull_volume = hull.mass_properties(1.0).mass();
+    if hull_volume.is_nan() || hull_volume <= 0.0 {
+        return Err(flat());
+    }
+    let decompose = match kind {
+        ColliderKind::ConvexHull => false,
+        ColliderKind::ConvexDecomposition => true,
+        ColliderKind::Auto => {
+            let mesh_volume = closed_mesh_volume(mesh);
+            // An open or inconsistently wound mesh has no meaningful volume: keep the hull.
+            mesh_volume > 0.0 && mesh_volume < CONCAVITY_RATIO * hull_volume
+        }
+    };
+    if !decompose {
+        return Ok((hull, ColliderChoice::ConvexHull));
+    }
+    let indices: Vec<[u32; 3]> =
+        (0..mesh.triangle_count()).filter(|&i| mesh.triangle_is_valid(i)).map(|i| mesh.indices[i]).collect();
+    let vertices: Vec<_> = mesh.positions.iter().map(|&p| to_rapier_vec(p)).collect();
+    let shape = SharedShape::convex_decomposition(&vertices, &indices);
+    let parts = shape.as_compound().map_or(1, |c| c.shapes().len());
+    Ok((shape, ColliderChoice::ConvexDecomposition { parts }))
+}
+
+/// Signed volume by the divergence theorem; positive for a closed outward-wound mesh.
+fn closed_mesh_volume(mesh: &TriangleMesh) -> f32 {
+    (0..mesh.triangle_count())
+        .map(|i| {
+            let [a, b, c] = mesh.triangle(i);
+            a.dot(b.cross(c)) / 6.0
+        })
+        .sum()
+}
+
+/// The environment as a Rapier triangle mesh, skipping degenerate triangles.
+pub(crate) fn environment_shape(mesh: &TriangleMesh, file: &SceneFile) -> Result<SharedShape, PhysicsError> {
+    let vertices: Vec<_> = mesh
+        .positions
+        .iter()
+        .map(|&p| to_rapier_vec(if p.is_finite() { p } else { glam::Vec3::ZERO }))
+        .collect();
+    let indices: Vec<[u32; 3]> =
+        (0..mesh.triangle_count()).filter(|&i| mesh.triangle_is_valid(i)).map(|i| mesh.indices[i]).collect();
+    SharedShape::trimesh(vertices, indices).map_err(|e| PhysicsError::Collider {
+        file: file.path.display().to_string(),
+        field: "environment".into(),
+        message: format!("cannot build a triangle-mesh collider: {e:?}"),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::primitives;
+
+    #[test]
+    fn a_box_mesh_gets_a_hull() {
+        let (_, choice) = mesh_shape(&primitives::cuboid(glam::Vec3::ONE), ColliderKind::Auto).unwrap();
+        assert_eq!(choice, ColliderChoice::ConvexHull);
+    }
+
+    #[test]
+    fn an_l_shaped_mesh_is_decomposed() {
+        // Two boxes forming an L: the hull is much larger than the solid.
+        let a = primitives::cuboid(glam::Vec3::new(1.0, 0.25, 0.25));
+        let b = primitives::cuboid(glam::Vec3::new(0.25, 1.0, 0.25))
+            .transformed(&glam::Affine3A::from_translation(glam::Vec3::new(-0.75, 1.25, 0.0)));
+        let mut l = a.clone();
+        let base = l.positions.len() as u32;
+        l.positions.extend_from_slice(&b.positions);
+        l.indices.extend(b.indices.iter().map(|t| t.map(|i| i + base)));
+        l.normals = None;
+        l.uvs = None;
+        let (_, choice) = mesh_shape(&l, ColliderKind::Auto).unwrap();
+        assert!(matches!(choice, ColliderChoice::ConvexDecomposition { .. }), "{choice:?}");
+    }
+
+    #[test]
+    fn a_flat_mesh_is_an_error() {
+        assert!(mesh_shape(&primitives::ground_plane(1.0, 0.0, 1), ColliderKind::Auto).is_err());
+    }
+}

@@ -1,0 +1,27 @@
+//! Physics: Rapier worlds built from scene files, stepping with spawners, kinematic paths
+//! and scripted disturbances, the island tracker that turns Rapier's sleep state into
+//! `Slept`/`Woke` events with stable ids, trajectories (recording and replay), island
+//! statistics and the physics benchmark. Rapier's types stay inside this module; everything
+//! public speaks glam.
+
+mod bench;
+mod body;
+mod colliders;
+mod error;
+mod island;
+mod kinematic;
+mod simulate;
+mod simulation;
+mod spawn;
+mod stats;
+mod trajectory;
+
+pub use bench::{bench, PhysicsBenchOptions, PhysicsBenchReport};
+pub use body::{BodyId, BodyInfo, BodyKind, BodyPose, BodyState};
+pub use colliders::ColliderChoice;
+pub use error::PhysicsError;
+pub use island::{IslandCounters, IslandEvent, IslandId, IslandTracker, SleepObservation};
+pub use simulate::{simulate, SimulateOptions};
+pub use simulation::{FrameRecord, Simulation, SimulationCounters};
+pub use stats::IslandStats;
+pub use trajectory::{Replay, ReplayFrame, Trajectory, TrajectoryError};

@@ -1,0 +1,70 @@
+//! Running a whole scene into a [`Trajectory`].
+
+use super::simulation::Simulation;
+use super::trajectory::Trajectory;
+use super::PhysicsError;
+use crate::scene::file::{fnv1a64_extend, SceneFile};
+
+/// Overrides a command line can apply to a scene before simulating it.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct SimulateOptions {
+    /// Total dynamic objects, spread over the spawners in proportion to their counts.
+    pub count: Option<u32>,
+    /// Frames to simulate instead of `scene.frames`.
+    pub frames: Option<u32>,
+}
+
+impl SimulateOptions {
+    /// The scene as it will be simulated: overrides applied and folded into
+    /// [`SceneFile::source_hash`], which is the hash a trajectory of it carries.
+    pub fn effective_scene(&self, file: &SceneFile) -> Result<SceneFile, PhysicsError> {
+        let mut file = file.clone();
+        if let Some(count) = self.count {
+            if count == 0 {
+                return Err(PhysicsError::Option { option: "--count", message: "must be at least 1".into() });
+            }
+            file = file.with_total_count(count)?;
+        }
+        if let Some(frames) = self.frames {
+            if frames == 0 {
+                return Err(PhysicsError::Option {
+                    option: "--frames",
+                    message: "must be at least 1".into(),
+                });
+            }
+            file.description.scene.frames = frames;
+            file.source_hash = fnv1a64_extend(file.source_hash, b"frames");
+            file.source_hash = fnv1a64_extend(file.source_hash, &frames.to_le_bytes());
+        }
+        Ok(file)
+    }
+}
+
+/// Simulates `file` with `options` and records every frame.
+pub fn simulate(file: &SceneFile, options: &SimulateOptions) -> Result<Trajectory, PhysicsError> {
+    let file = options.effective_scene(file)?;
+    let mut sim = Simulation::new(&file)?;
+    let frames = file.description.scene.frames;
+    let mut records = Vec::with_capacity(frames as usize);
+    for f in 0..frames {
+        records.push(sim.step());
+        if (f + 1) % 100 == 0 || f + 1 == frames {
+            let (present, asleep) = sim.dynamic_counts();
+            tracing::info!(
+                frame = f + 1,
+                frames,
+                bodies = present,
+                asleep,
+                step_ms = 1e3 * sim.counters().step_seconds / sim.counters().frames as f64,
+                "simulating"
+            );
+        }
+    }
+    Ok(Trajectory {
+        scene_hash: file.source_hash,
+        timestep: file.description.physics.timestep,
+        prototypes: file.description.prototypes.iter().map(|p| p.name.clone()).collect(),
+        bodies: sim.bodies().to_vec(),
+        frames: records,
+    })
+}

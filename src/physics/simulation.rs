@@ -1,0 +1,358 @@
+//! The simulation: a Rapier world built from a scene file, stepped frame by frame. Each
+//! frame spawns due objects, applies scripted disturbances, moves kinematic bodies along
+//! their paths, steps Rapier `substeps` times, removes bodies below the kill plane, and
+//! feeds every body's sleep state to the [`IslandTracker`].
+//!
+//! Rapier runs single-threaded (dormant builds it without its `parallel` feature), and
+//! nothing here iterates a hash map, so a scene and seed always give the same frames.
+
+use std::time::Instant;
+
+use glam::Vec3;
+use rapier3d::prelude::{
+    ColliderBuilder, IntegrationParameters, PhysicsWorld, RigidBodyBuilder, RigidBodyHandle,
+};
+
+use super::body::{
+    from_rapier_pose, from_rapier_vec, to_rapier_pose, to_rapier_vec, BodyId, BodyInfo, BodyKind, BodyPose,
+    BodyState,
+};
+use super::colliders::{environment_shape, prototype_shape, ColliderChoice, PrototypeShape};
+use super::island::{IslandEvent, IslandTracker, SleepObservation};
+use super::kinematic::KinematicPath;
+use super::spawn::{spawn_schedule, SpawnOrder};
+use super::PhysicsError;
+use crate::scene::file::{environment_mesh, DisturbanceDef, DisturbanceKind, SceneFile};
+
+/// What one frame changed: every body's state, the poses that must be stored (bodies
+/// awake at the end of the frame, and bodies that fell asleep during it; a sleeping body
+/// keeps its last pose), and the island events.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FrameRecord {
+    pub states: Vec<BodyState>,
+    pub poses: Vec<(BodyId, BodyPose)>,
+    pub events: Vec<IslandEvent>,
+}
+
+/// Per-stage wall-clock counters, in seconds, and work counts.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct SimulationCounters {
+    pub frames: u64,
+    pub rapier_steps: u64,
+    pub spawned: u64,
+    pub removed_below_kill_plane: u64,
+    pub disturbances: u64,
+    pub setup_seconds: f64,
+    pub spawn_seconds: f64,
+    pub step_seconds: f64,
+    pub islands_seconds: f64,
+}
+
+/// A scene being simulated.
+pub struct Simulation {
+    world: PhysicsWorld,
+    prototypes: Vec<PrototypeShape>,
+    bodies: Vec<BodyInfo>,
+    handles: Vec<Option<RigidBodyHandle>>,
+    states: Vec<BodyState>,
+    spawns: Vec<SpawnOrder>,
+    next_spawn: usize,
+    first_spawned: u32,
+    kinematics: Vec<(BodyId, KinematicPath)>,
+    disturbances: Vec<DisturbanceDef>,
+    tracker: IslandTracker,
+    frame: u32,
+    timestep: f32,
+    substeps: u32,
+    kill_plane_y: f32,
+    sleep: (f32, f32, f32),
+    damping: (f32, f32),
+    counters: SimulationCounters,
+}
+
+impl Simulation {
+    /// Builds the world: environment collider, prototype shapes (once each), kinematic
+    /// bodies, and the full spawn schedule. No object is spawned before the first frame.
+    pub fn new(file: &SceneFile) -> Result<Self, PhysicsError> {
+        let t0 = Instant::now();
+        let d = &file.description;
+        let p = &d.physics;
+        let mut world = PhysicsWorld::new();
+        world.gravity = to_rapier_vec(Vec3::from_array(p.gravity));
+        world.integration_parameters =
+            IntegrationParameters { dt: p.timestep / p.substeps as f32, ..IntegrationParameters::default() };
+        world.integration_parameters.num_solver_iterations = p.solver_iterations as usize;
+
+        let env = environment_mesh(file)?;
+        let env_shape = environment_shape(&env, file)?;
+        world.insert(
+            RigidBodyBuilder::fixed(),
+            ColliderBuilder::new(env_shape).friction(d.environment.friction),
+        );
+
+        let prototypes =
+            (0..d.prototypes.len()).map(|i| prototype_shape(file, i)).collect::<Result<Vec<_>, _>>()?;
+
+        let mut bodies = Vec::new();
+        let mut handles = Vec::new();
+        let mut kinematics = Vec::new();
+        for k in &d.kinematics {
+            let prototype =
+                d.prototypes.iter().position(|p| p.name == k.prototype).expect("validated reference");
+            let path = KinematicPath::new(&k.keyframes, k.looped);
+            let id = BodyId(bodies.len() as u32);
+            let shape = &prototypes[prototype];
+            let (handle, _) = world.insert(
+                RigidBodyBuilder::kinematic_position_based()
+                    .pose(to_rapier_pose(path.pose_at(0.0)))
+                    .user_data(id.0 as u128),
+                ColliderBuilder::new(shape.shape.clone())
+                    .friction(shape.friction)
+                    .restitution(shape.restitution),
+            );
+            bodies.push(BodyInfo { prototype: prototype as u32, kind: BodyKind::Kinematic, spawn_frame: 0 });
+            handles.push(Some(handle));
+            kinematics.push((id, path));
+        }
+        let first_spawned = bodies.len() as u32;
+        let spawns = spawn_schedule(file, &prototypes);
+        for order in &spawns {
+            bodies.push(BodyInfo {
+                prototype: order.prototype,
+                kind: BodyKind::Dynamic,
+                spawn_frame: order.frame,
+            });
+            handles.push(None);
+        }
+        let mut disturbances = d.disturbances.clone();
+        disturbances.sort_by_key(|d| d.frame);
+        let mut states = vec![BodyState::Absent; bodies.len()];
+        for (id, _) in &kinematics {
+            states[id.0 as usize] = BodyState::Awake;
+        }
+        let counters =
+            SimulationCounters { setup_seconds: t0.elapsed().as_secs_f64(), ..SimulationCounters::default() };
+        Ok(Self {
+            world,
+            prototypes,
+            bodies,
+            handles,
+            states,
+            spawns,
+            next_spawn: 0,
+            first_spawned,
+            kinematics,
+            disturbances,
+            tracker: IslandTracker::new(),
+            frame: 0,
+            timestep: p.timestep,
+            substeps: p.substeps,
+            kill_plane_y: p.kill_plane_y,
+            sleep: (p.sleep_linear_threshold, p.sleep_angular_threshold, p.sleep_time),
+            damping: (p.linear_damping, p.angular_damping),
+            counters,
+        })
+    }
+
+    /// Every body the simulation will ever have, indexed by [`BodyId`].
+    pub fn bodies(&self) -> &[BodyInfo] {
+        &self.bodies
+    }
+
+    /// How each prototype's collider was built.
+    pub fn collider_choices(&self) -> Vec<ColliderChoice> {
+        self.prototypes.iter().map(|p| p.choice).collect()
+    }
+
+    /// The next frame to simulate (= frames simulated so far).
+    pub fn frame(&self) -> u32 {
+        self.frame
+    }
+
+    /// Seconds of simulated time per frame.
+    pub fn timestep(&self) -> f32 {
+        self.timestep
+    }
+
+    pub fn state(&self, body: BodyId) -> BodyState {
+        self.states[body.0 as usize]
+    }
+
+    pub fn pose(&self, body: BodyId) -> Option<BodyPose> {
+        let handle = self.handles.get(body.0 as usize).copied().flatten()?;
+        Some(from_rapier_pose(self.world.bodies[handle].position()))
+    }
+
+    pub fn tracker(&self) -> &IslandTracker {
+        &self.tracker
+    }
+
+    pub fn counters(&self) -> &SimulationCounters {
+        &self.counters
+    }
+
+    /// Number of dynamic bodies in the world and how many of them sleep.
+    pub fn dynamic_counts(&self) -> (usize, usize) {
+        let alive = self.first_spawned as usize..self.bodies.len();
+        let present = self.states[alive.clone()].iter().filter(|s| **s != BodyState::Absent).count();
+        let asleep = self.states[alive].iter().filter(|s| **s == BodyState::Asleep).count();
+        (present, asleep)
+    }
+
+    /// Gives `body` a linear impulse (waking its island). False when the body is not in the
+    /// world.
+    pub fn apply_impulse(&mut self, body: BodyId, impulse: Vec3) -> bool {
+        match self.handles.get(body.0 as usize).copied().flatten() {
+            Some(h) => {
+                self.world.bodies[h].apply_impulse(to_rapier_vec(impulse), true);
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// Wakes every body (used to measure the cost of a world with nothing asleep).
+    pub fn wake_all(&mut self) {
+        self.world.wake_up_all(true);
+    }
+
+    /// Simulates one frame and returns what changed.
+    pub fn step(&mut self) -> FrameRecord {
+        let frame = self.frame;
+        let t0 = Instant::now();
+        self.spawn_due(frame);
+        self.disturb(frame);
+        let t1 = Instant::now();
+        let sub_dt = self.timestep / self.substeps as f32;
+        for s in 0..self.substeps {
+            let t_end = frame as f32 * self.timestep + (s + 1) as f32 * sub_dt;
+            for (id, path) in &self.kinematics {
+                if let Some(h) = self.handles[id.0 as usize] {
+                    self.world.bodies[h].set_next_kinematic_position(to_rapier_pose(path.pose_at(t_end)));
+                }
+            }
+            self.world.step();
+            self.counters.rapier_steps += 1;
+        }
+        let t2 = Instant::now();
+        self.remove_fallen();
+        let record = self.observe();
+        let t3 = Instant::now();
+        self.counters.spawn_seconds += (t1 - t0).as_secs_f64();
+        self.counters.step_seconds += (t2 - t1).as_secs_f64();
+        self.counters.islands_seconds += (t3 - t2).as_secs_f64();
+        self.counters.frames += 1;
+        self.frame += 1;
+        record
+    }
+
+    fn spawn_due(&mut self, frame: u32) {
+        let (lin, ang, time) = self.sleep;
+        while let Some(order) = self.spawns.get(self.next_spawn).filter(|o| o.frame <= frame) {
+            let id = BodyId(self.first_spawned + self.next_spawn as u32);
+            let shape = &self.prototypes[order.prototype as usize];
+            let (handle, _) = self.world.insert(
+                RigidBodyBuilder::dynamic()
+                    .pose(to_rapier_pose(order.pose))
+                    .linvel(to_rapier_vec(order.velocity))
+                    .linear_damping(self.damping.0)
+                    .angular_damping(self.damping.1)
+                    .user_data(id.0 as u128),
+                ColliderBuilder::new(shape.shape.clone())
+                    .density(shape.density)
+                    .friction(shape.friction)
+                    .restitution(shape.restitution),
+            );
+            let activation = self.world.bodies[handle].activation_mut();
+            activation.normalized_linear_threshold = lin;
+            activation.angular_threshold = ang;
+            activation.time_until_sleep = time;
+            self.handles[id.0 as usize] = Some(handle);
+            self.states[id.0 as usize] = BodyState::Awake;
+            self.next_spawn += 1;
+            self.counters.spawned += 1;
+        }
+    }
+
+    fn disturb(&mut self, frame: u32) {
+        let start = self.disturbances.partition_point(|d| d.frame < frame);
+        let end = self.disturbances.partition_point(|d| d.frame <= frame);
+        for i in start..end {
+            let d = self.disturbances[i].clone();
+            let centre = Vec3::from_array(d.center);
+            self.counters.disturbances += 1;
+            for id in self.first_spawned as usize..self.bodies.len() {
+                let Some(h) = self.handles[id] else { continue };
+                let rb = &mut self.world.bodies[h];
+                let offset = from_rapier_vec(rb.translation()) - centre;
+                let distance = offset.length();
+                if distance > d.radius {
+                    continue;
+                }
+                let impulse = match d.kind {
+                    DisturbanceKind::Impulse => Vec3::from_array(d.impulse.unwrap_or_default()),
+                    DisturbanceKind::Explosion => {
+                        let dv = d.strength.unwrap_or(0.0) * (1.0 - distance / d.radius);
+                        offset.try_normalize().unwrap_or(Vec3::Y) * dv * rb.mass()
+                    }
+                };
+                rb.apply_impulse(to_rapier_vec(impulse), true);
+            }
+        }
+    }
+
+    fn remove_fallen(&mut self) {
+        for id in self.first_spawned as usize..self.bodies.len() {
+            let Some(h) = self.handles[id] else { continue };
+            let y = self.world.bodies[h].translation().y;
+            // A NaN height means the body blew up: it leaves the world too.
+            if y.is_nan() || y < self.kill_plane_y {
+                self.world.remove_body(h);
+                self.handles[id] = None;
+                self.counters.removed_below_kill_plane += 1;
+            }
+        }
+    }
+
+    fn observe(&mut self) -> FrameRecord {
+        let mut observations = Vec::with_capacity(self.bodies.len());
+        let mut poses = Vec::new();
+        let mut states = Vec::with_capacity(self.bodies.len());
+        for (i, handle) in self.handles.iter().enumerate() {
+            let id = BodyId(i as u32);
+            let previous = self.states[i];
+            let state = match handle {
+                None => BodyState::Absent,
+                Some(h) => {
+                    let rb = &self.world.bodies[*h];
+                    let pose = from_rapier_pose(rb.position());
+                    let dynamic = self.bodies[i].kind == BodyKind::Dynamic;
+                    let asleep = dynamic && rb.is_sleeping();
+                    let group = if asleep {
+                        // Rapier sleeps and wakes whole persistent islands, so its island of a
+                        // sleeping body is exactly the sleeping group. Should it ever not know
+                        // the body, the body sleeps alone (keys above u32 cannot collide).
+                        Some(
+                            self.world
+                                .islands
+                                .persistent_island_of(&self.world.bodies, *h)
+                                .map_or(u64::from(u32::MAX) + 1 + i as u64, u64::from),
+                        )
+                    } else {
+                        None
+                    };
+                    observations.push(SleepObservation { body: id, group, pose });
+                    let state = if asleep { BodyState::Asleep } else { BodyState::Awake };
+                    if state == BodyState::Awake || previous != BodyState::Asleep {
+                        poses.push((id, pose));
+                    }
+                    state
+                }
+            };
+            states.push(state);
+        }
+        let events = self.tracker.update(&observations);
+        self.states.clone_from(&states);
+        FrameRecord { states, poses, events }
+    }
+}

@@ -1,0 +1,226 @@
+//! Turning a scene file's environment and prototypes into plain triangle meshes: built-in
+//! generators (a Sponza-like atrium, a courtyard, a ground) and glTF files. Used by physics
+//! for colliders and by the renderer for drawing; builds no physics or render objects.
+
+use std::f32::consts::PI;
+
+use glam::{Affine3A, Quat, Vec3};
+
+use super::parse::SceneFile;
+use super::schema::{GeneratorKind, PrototypeDef, ShapeKind};
+use super::SceneError;
+use crate::geometry::{primitives, TriangleMesh};
+use crate::scene::gltf::load_gltf_mesh;
+
+/// The static environment in world space (scale and offset applied).
+pub fn environment_mesh(file: &SceneFile) -> Result<TriangleMesh, SceneError> {
+    let env = &file.description.environment;
+    let mesh = match (&env.gltf, env.generator) {
+        (Some(path), _) => load_gltf_mesh(&file.resolve(path)).map_err(|source| SceneError::Asset {
+            file: file.path.clone(),
+            line: file.line_of("environment.gltf"),
+            field: "environment.gltf".into(),
+            source: Box::new(source),
+        })?,
+        (None, Some(kind)) => generate(kind),
+        (None, None) => return Err(file.error("environment", "no `gltf` and no `generator`")),
+    };
+    let xf = Affine3A::from_scale_rotation_translation(
+        Vec3::splat(env.scale),
+        Quat::IDENTITY,
+        Vec3::from_array(env.offset),
+    );
+    Ok(mesh.transformed(&xf))
+}
+
+/// Prototype `index`'s mesh in object space (centred as authored; primitives at the origin).
+pub fn prototype_mesh(file: &SceneFile, index: usize) -> Result<TriangleMesh, SceneError> {
+    let proto: &PrototypeDef = file
+        .description
+        .prototypes
+        .get(index)
+        .ok_or_else(|| file.error(format!("prototypes[{index}]"), "no such prototype"))?;
+    let missing = |f: &str| {
+        file.error(format!("prototypes[{index}].{f}"), format!("shape {:?} needs `{f}`", proto.shape))
+    };
+    Ok(match proto.shape {
+        ShapeKind::Box => {
+            primitives::cuboid(Vec3::from_array(proto.half_extents.ok_or_else(|| missing("half_extents"))?))
+        }
+        ShapeKind::Sphere => primitives::uv_sphere(proto.radius.ok_or_else(|| missing("radius"))?, 16, 8),
+        ShapeKind::Capsule => capsule(
+            proto.half_height.ok_or_else(|| missing("half_height"))?,
+            proto.radius.ok_or_else(|| missing("radius"))?,
+        ),
+        ShapeKind::Cylinder => cylinder(
+            proto.half_height.ok_or_else(|| missing("half_height"))?,
+            proto.radius.ok_or_else(|| missing("radius"))?,
+        ),
+        ShapeKind::Gltf => {
+            let field = format!("prototypes[{index}].gltf");
+            let path = proto.gltf.as_deref().ok_or_else(|| missing("gltf"))?;
+            let mesh = load_gltf_mesh(&file.resolve(path)).map_err(|source| SceneError::Asset {
+                file: file.path.clone(),
+                line: file.line_of(&field),
+                field,
+                source: Box::new(source),
+            })?;
+            mesh.transformed(&Affine3A::from_scale(Vec3::splat(proto.scale)))
+        }
+    })
+}
+
+/// A built-in environment.
+pub fn generate(kind: GeneratorKind) -> TriangleMesh {
+    match kind {
+        GeneratorKind::Ground => primitives::ground_plane(50.0, 0.0, 10),
+        GeneratorKind::Atrium => atrium(),
+        GeneratorKind::Courtyard => courtyard(),
+    }
+}
+
+/// Appends `part` to `mesh`, moved by `xf`. Keeps normals and UVs only while every part has
+/// them.
+fn append(mesh: &mut TriangleMesh, part: &TriangleMesh, xf: Affine3A) {
+    let part = part.transformed(&xf);
+    let base = mesh.positions.len() as u32;
+    let first = mesh.positions.is_empty();
+    mesh.positions.extend_from_slice(&part.positions);
+    mesh.indices.extend(part.indices.iter().map(|t| t.map(|i| i + base)));
+    match (first, &mut mesh.normals, &part.normals) {
+        (true, _, Some(n)) => mesh.normals = Some(n.clone()),
+        (false, Some(dst), Some(n)) => dst.extend_from_slice(n),
+        _ => mesh.normals = None,
+    }
+    match (first, &mut mesh.uvs, &part.uvs) {
+        (true, _, Some(uv)) => mesh.uvs = Some(uv.clone()),
+        (false, Some(dst), Some(uv)) => dst.extend_from_slice(uv),
+        _ => mesh.uvs = None,
+    }
+}
+
+fn boxed(mesh: &mut TriangleMesh, center: Vec3, half: Vec3, yaw: f32) {
+    append(
+        mesh,
+        &primitives::cuboid(half),
+        Affine3A::from_rotation_translation(Quat::from_rotation_y(yaw), center),
+    );
+}
+
+/// The atrium's layout, shared with the scene files in `scenes/`: a 48 x 32 floor at y = 0,
+/// colonnades at z = ±6 (columns every 4 units from x = -20 to 20, 6 high), semicircular
+/// arches of radius 2 springing at y = 6, an entablature at y = 8.5, and outer walls 12 high
+/// at x = ±24 and z = ±16. The nave is |z| < 6, the aisles 6 < |z| < 16.
+fn atrium() -> TriangleMesh {
+    let mut m = TriangleMesh::default();
+    append(&mut m, &primitives::ground_plane(1.0, 0.0, 1), Affine3A::from_scale(Vec3::new(24.0, 1.0, 16.0)));
+    for side in [-1.0f32, 1.0] {
+        let z = 6.0 * side;
+        for i in 0..=10 {
+            let x = -20.0 + 4.0 * i as f32;
+            // Column with a plinth and a capital.
+            boxed(&mut m, Vec3::new(x, 0.2, z), Vec3::new(0.45, 0.2, 0.45), 0.0);
+            boxed(&mut m, Vec3::new(x, 3.0, z), Vec3::new(0.3, 2.8, 0.3), 0.0);
+            boxed(&mut m, Vec3::new(x, 5.85, z), Vec3::new(0.45, 0.15, 0.45), 0.0);
+            if i < 10 {
+                // Arch of 9 voussoirs between this column and the next.
+                let cx = x + 2.0;
+                for k in 0..9 {
+                    let a = PI * (k as f32 + 0.5) / 9.0;
+                    let p = Vec3::new(cx - 1.75 * a.cos(), 6.0 + 1.75 * a.sin(), z);
+                    append(
+                        &mut m,
+                        &primitives::cuboid(Vec3::new(0.25, 0.32, 0.3)),
+                        Affine3A::from_rotation_translation(Quat::from_rotation_z(a - PI / 2.0), p),
+                    );
+                }
+            }
+        }
+        // Entablature above the arches.
+        boxed(&mut m, Vec3::new(0.0, 8.5, z), Vec3::new(20.5, 0.5, 0.5), 0.0);
+        // Outer walls along x.
+        boxed(&mut m, Vec3::new(0.0, 6.0, 16.25 * side), Vec3::new(24.5, 6.0, 0.25), 0.0);
+        boxed(&mut m, Vec3::new(24.25 * side, 6.0, 0.0), Vec3::new(0.25, 6.0, 16.0), 0.0);
+    }
+    m
+}
+
+/// A 30 x 30 courtyard: floor, a ring of pillars, low walls and a central fountain block.
+fn courtyard() -> TriangleMesh {
+    let mut m = TriangleMesh::default();
+    append(&mut m, &primitives::ground_plane(15.0, 0.0, 4), Affine3A::IDENTITY);
+    for i in 0..12 {
+        let a = 2.0 * PI * i as f32 / 12.0;
+        boxed(&mut m, Vec3::new(10.0 * a.cos(), 2.0, 10.0 * a.sin()), Vec3::new(0.35, 2.0, 0.35), a);
+    }
+    for (x, z, yaw) in [(-6.0, 12.5, 0.0), (6.0, -12.5, 0.0), (12.5, 5.0, PI / 2.0), (-12.5, -5.0, PI / 2.0)]
+    {
+        boxed(&mut m, Vec3::new(x, 0.5, z), Vec3::new(3.0, 0.5, 0.2), yaw);
+    }
+    boxed(&mut m, Vec3::new(0.0, 0.4, 0.0), Vec3::new(1.5, 0.4, 1.5), PI / 4.0);
+    for side in [-1.0f32, 1.0] {
+        boxed(&mut m, Vec3::new(0.0, 2.0, 15.2 * side), Vec3::new(15.4, 2.0, 0.2), 0.0);
+        boxed(&mut m, Vec3::new(15.2 * side, 2.0, 0.0), Vec3::new(0.2, 2.0, 15.0), 0.0);
+    }
+    m
+}
+
+/// A capsule along Y: a cylinder of `half_height` capped by hemispheres of `radius`.
+fn capsule(half_height: f32, radius: f32) -> TriangleMesh {
+    let mut m = primitives::uv_sphere(radius, 16, 8);
+    for p in &mut m.positions {
+        p.y += half_height * p.y.signum();
+    }
+    m
+}
+
+/// A closed cylinder along Y.
+fn cylinder(half_height: f32, radius: f32) -> TriangleMesh {
+    const N: u32 = 24;
+    let mut positions = Vec::new();
+    let mut indices = Vec::new();
+    for i in 0..N {
+        let a = 2.0 * PI * i as f32 / N as f32;
+        let (s, c) = a.sin_cos();
+        positions.push(Vec3::new(radius * c, -half_height, radius * s));
+        positions.push(Vec3::new(radius * c, half_height, radius * s));
+    }
+    let bottom = positions.len() as u32;
+    positions.push(Vec3::new(0.0, -half_height, 0.0));
+    positions.push(Vec3::new(0.0, half_height, 0.0));
+    for i in 0..N {
+        let (a0, a1) = (2 * i, 2 * ((i + 1) % N));
+        indices.push([a0, a0 + 1, a1]);
+        indices.push([a1, a0 + 1, a1 + 1]);
+        indices.push([bottom, a0, a1]);
+        indices.push([bottom + 1, a1 + 1, a0 + 1]);
+    }
+    TriangleMesh::new(positions, indices)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn outward(mesh: &TriangleMesh) -> bool {
+        (0..mesh.triangle_count()).all(|i| {
+            let [a, b, c] = mesh.triangle(i);
+            (b - a).cross(c - a).dot((a + b + c) / 3.0) > 0.0
+        })
+    }
+
+    #[test]
+    fn closed_primitives_wind_outward() {
+        assert!(outward(&cylinder(1.0, 0.5)));
+        assert!(outward(&capsule(0.5, 0.3)));
+    }
+
+    #[test]
+    fn generators_produce_valid_meshes() {
+        for kind in [GeneratorKind::Ground, GeneratorKind::Atrium, GeneratorKind::Courtyard] {
+            let m = generate(kind);
+            assert!(m.validate().is_ok(), "{kind:?}");
+            assert!(m.triangle_count() > 0);
+        }
+    }
+}

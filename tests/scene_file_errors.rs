@@ -1,0 +1,143 @@
+//! Bad scene input: every error names the file and the field (and the line when the field
+//! is written), and none panics.
+
+use dormant::scene::file::{SceneError, SceneFile};
+
+const GOOD: &str = r#"[scene]
+name = "t"
+frames = 10
+
+[environment]
+generator = "ground"
+
+[[prototypes]]
+name = "box"
+shape = "box"
+half_extents = [0.5, 0.5, 0.5]
+
+[[spawners]]
+prototypes = ["box"]
+count = 4
+region = { min = [0.0, 1.0, 0.0], max = [2.0, 1.0, 2.0] }
+"#;
+
+fn parse(text: &str) -> Result<SceneFile, SceneError> {
+    SceneFile::parse("scenes/bad.toml", text)
+}
+
+fn expect_error(text: &str, field: &str, line: Option<usize>) -> SceneError {
+    let err = parse(text).expect_err("scene must be rejected");
+    let message = err.to_string();
+    assert!(message.contains("scenes/bad.toml"), "{message}");
+    assert!(message.contains(field), "expected field {field:?} in {message}");
+    assert_eq!(err.field().map(|f| f.contains(field)), Some(true), "{err:?}");
+    if let Some(line) = line {
+        assert_eq!(err.line(), Some(line), "{message}");
+        assert!(message.contains(&format!("bad.toml:{line}")), "{message}");
+    }
+    err
+}
+
+#[test]
+fn the_good_scene_parses() {
+    let file = parse(GOOD).unwrap();
+    assert_eq!(file.description.spawners[0].count, 4);
+}
+
+#[test]
+fn malformed_toml_names_the_line() {
+    let text = GOOD.replace("frames = 10", "frames = = 10");
+    let err = expect_error(&text, "frames", Some(3));
+    assert!(matches!(err, SceneError::Syntax { .. }));
+}
+
+#[test]
+fn unknown_keys_are_rejected() {
+    let text = GOOD.replace("count = 4", "count = 4\ncolour = \"red\"");
+    let err = expect_error(&text, "colour", Some(16));
+    assert!(matches!(err, SceneError::Syntax { .. }));
+    let text = GOOD.replace("[environment]", "[environmnet]");
+    parse(&text).unwrap_err();
+}
+
+#[test]
+fn nan_and_infinite_values_are_rejected() {
+    let text = GOOD.replace("frames = 10", "frames = 10\n[physics]\ntimestep = nan");
+    expect_error(&text, "physics.timestep", Some(5));
+    let text = GOOD.replace("[0.5, 0.5, 0.5]", "[0.5, inf, 0.5]");
+    expect_error(&text, "prototypes[0].half_extents", Some(11));
+    let text = GOOD.replace("max = [2.0, 1.0, 2.0]", "max = [2.0, -inf, 2.0]");
+    expect_error(&text, "spawners[0].region.max", Some(16));
+}
+
+#[test]
+fn zero_and_negative_counts_are_rejected() {
+    let err = expect_error(&GOOD.replace("count = 4", "count = 0"), "spawners[0].count", Some(15));
+    assert!(matches!(err, SceneError::Invalid { .. }));
+    expect_error(&GOOD.replace("count = 4", "count = -3"), "count", Some(15));
+    expect_error(&GOOD.replace("frames = 10", "frames = 0"), "scene.frames", Some(3));
+    expect_error(&GOOD.replace("[0.5, 0.5, 0.5]", "[0.5, -0.5, 0.5]"), "half_extents", Some(11));
+}
+
+#[test]
+fn dangling_references_are_rejected() {
+    expect_error(
+        &GOOD.replace("prototypes = [\"box\"]", "prototypes = [\"crate\"]"),
+        "spawners[0].prototypes[0]",
+        Some(14),
+    );
+}
+
+#[test]
+fn missing_files_are_named() {
+    let err = SceneFile::load("/nonexistent/scene.toml").unwrap_err();
+    assert!(matches!(err, SceneError::Io { .. }));
+    assert!(err.to_string().contains("/nonexistent/scene.toml"));
+    let text = GOOD.replace("generator = \"ground\"", "gltf = \"missing.glb\"");
+    expect_error(&text, "environment.gltf", Some(6));
+}
+
+#[test]
+fn malformed_gltf_is_an_error_naming_file_and_field() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("broken.glb"), b"glTF\x02\x00\x00\x00garbage").unwrap();
+    let text = GOOD.replace("generator = \"ground\"", "gltf = \"broken.glb\"");
+    let scene = dir.path().join("scene.toml");
+    std::fs::write(&scene, text).unwrap();
+    let file = SceneFile::load(&scene).unwrap();
+    let err = dormant::scene::file::environment_mesh(&file).unwrap_err();
+    let message = err.to_string();
+    assert!(matches!(err, SceneError::Asset { .. }), "{message}");
+    assert!(message.contains("scene.toml:6") && message.contains("environment.gltf"), "{message}");
+    assert!(message.contains("broken.glb"), "{message}");
+    let err = dormant::physics::Simulation::new(&file).err().expect("simulation refuses the scene");
+    assert!(err.to_string().contains("broken.glb"), "{err}");
+}
+
+#[test]
+fn every_shipped_scene_parses() {
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes");
+    let mut n = 0;
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "toml") {
+            // Benchmark scenes need ../shared/assets; they must fail cleanly without it.
+            match SceneFile::load(&path) {
+                Ok(_) => n += 1,
+                Err(e) => assert!(e.to_string().contains("not found"), "{}: {e}", path.display()),
+            }
+        }
+    }
+    assert!(n >= 3, "atrium, forest-walk and tiny parse");
+}
+
+#[test]
+fn count_override_spreads_over_spawners() {
+    let file = SceneFile::load(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/atrium.toml")).unwrap();
+    let total: u32 = file.description.spawners.iter().map(|s| s.count).sum();
+    assert_eq!(total, 8000, "the default is the paper's experiment");
+    let small = file.clone().with_total_count(100).unwrap();
+    assert_eq!(small.description.spawners.iter().map(|s| s.count).sum::<u32>(), 100);
+    assert!(small.description.spawners.iter().all(|s| s.count >= 1 && s.waves <= s.count));
+    assert!(file.with_total_count(3).is_err(), "fewer objects than spawners");
+}
