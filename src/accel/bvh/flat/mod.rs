@@ -1,0 +1,80 @@
+//! The flattened binary BVH: 32-byte nodes in one array, built once by binned SAH and never
+//! modified. Every structure of this backend is made of these: prototype meshes, the top level
+//! over instances, and the immutable blocks of the persistent static tree.
+//!
+//! A node is a leaf when `count > 0` (primitives `first..first + count` of the owner's
+//! reordered primitive array) and interior otherwise, with its children at `first` and
+//! `first + 1` so both sit in one cache line pair. Rays traverse the [`Wide`] copy (4 children
+//! per node, tested together); the binary tree stays the structure of record.
+
+mod build;
+mod mesh;
+mod sah;
+mod traverse;
+mod wide;
+
+pub use build::build;
+pub use mesh::{MeshBvh, PrimHit};
+pub use sah::{sah_cost, subtree_cost};
+pub use traverse::{interval_is_valid, traverse, BoxRay, STACK_SIZE};
+pub use wide::Wide;
+
+use glam::Vec3;
+
+use crate::geometry::Aabb;
+
+/// One BVH node: bounds plus either a child index (interior) or a primitive range (leaf).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(32))]
+pub struct Node {
+    pub min: Vec3,
+    /// Interior: index of the first child (the second follows it). Leaf: first primitive.
+    pub first: u32,
+    pub max: Vec3,
+    /// Primitives in the leaf; 0 for interior nodes.
+    pub count: u32,
+}
+
+const _: () = assert!(std::mem::size_of::<Node>() == 32);
+
+impl Node {
+    pub fn leaf(b: Aabb, first: u32, count: u32) -> Self {
+        debug_assert!(count > 0);
+        Self { min: b.min, first, max: b.max, count }
+    }
+
+    pub fn interior(b: Aabb, first_child: u32) -> Self {
+        Self { min: b.min, first: first_child, max: b.max, count: 0 }
+    }
+
+    #[inline(always)]
+    pub fn is_leaf(&self) -> bool {
+        self.count > 0
+    }
+
+    pub fn aabb(&self) -> Aabb {
+        Aabb { min: self.min, max: self.max }
+    }
+}
+
+/// A built tree. Leaves refer to a primitive array its owner keeps in build order.
+#[derive(Clone, Debug, Default)]
+pub struct FlatBvh {
+    pub nodes: Vec<Node>,
+    /// Greatest root-to-leaf depth (root = 0), which bounds the traversal stack.
+    pub depth: u32,
+}
+
+impl FlatBvh {
+    pub fn bounds(&self) -> Aabb {
+        self.nodes.first().map_or(Aabb::EMPTY, Node::aabb)
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.nodes.is_empty()
+    }
+
+    pub fn memory_bytes(&self) -> usize {
+        self.nodes.len() * std::mem::size_of::<Node>()
+    }
+}

@@ -1,0 +1,80 @@
+//! Build parameters shared by every BVH in this backend, with named presets.
+
+/// How a binned-SAH build trades build time for trace speed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BuildParams {
+    /// Centroid bins per axis when searching for a split (2..=64).
+    pub bins: usize,
+    /// Largest leaf the builder may make; bigger ranges are always split.
+    pub max_leaf_size: usize,
+    /// SAH cost of visiting an interior node (relative to `intersection_cost`).
+    pub traversal_cost: f32,
+    /// SAH cost of one ray-primitive test.
+    pub intersection_cost: f32,
+    /// Ranges with at least this many primitives build their two halves in parallel.
+    pub parallel_threshold: usize,
+}
+
+impl BuildParams {
+    /// Few bins, larger leaves: for structures rebuilt often (the top level).
+    pub const FAST: BuildParams = BuildParams {
+        bins: 8,
+        max_leaf_size: 8,
+        traversal_cost: 1.0,
+        intersection_cost: 1.0,
+        parallel_threshold: 4096,
+    };
+
+    /// For the top level over instances: one instance per leaf, since entering an instance
+    /// (transforming the ray) costs far more than testing its world box.
+    pub const TOP_LEVEL: BuildParams = BuildParams {
+        bins: 16,
+        max_leaf_size: 1,
+        traversal_cost: 1.0,
+        intersection_cost: 4.0,
+        parallel_threshold: 4096,
+    };
+
+    /// The default for meshes: good trees at moderate cost.
+    pub const BALANCED: BuildParams = BuildParams {
+        bins: 16,
+        max_leaf_size: 4,
+        traversal_cost: 1.0,
+        intersection_cost: 1.0,
+        parallel_threshold: 4096,
+    };
+
+    /// More bins and small leaves: for structures built once and traced a lot.
+    pub const QUALITY: BuildParams = BuildParams {
+        bins: 32,
+        max_leaf_size: 4,
+        traversal_cost: 1.2,
+        intersection_cost: 1.0,
+        parallel_threshold: 2048,
+    };
+
+    /// Clamps fields to workable values (at least two bins, leaves of at least one primitive).
+    pub(crate) fn sanitized(self) -> Self {
+        Self {
+            bins: self.bins.clamp(2, 64),
+            max_leaf_size: self.max_leaf_size.clamp(1, 64),
+            traversal_cost: if self.traversal_cost.is_finite() && self.traversal_cost >= 0.0 {
+                self.traversal_cost
+            } else {
+                1.0
+            },
+            intersection_cost: if self.intersection_cost.is_finite() && self.intersection_cost > 0.0 {
+                self.intersection_cost
+            } else {
+                1.0
+            },
+            parallel_threshold: self.parallel_threshold.max(64),
+        }
+    }
+}
+
+impl Default for BuildParams {
+    fn default() -> Self {
+        Self::BALANCED
+    }
+}

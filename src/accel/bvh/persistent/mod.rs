@@ -1,0 +1,411 @@
+//! The static scene as a persistent BVH: world-space meshes that can be inserted and removed
+//! after the first build without rebuilding, with O(1) snapshots.
+//!
+//! # Layout and trade-off
+//!
+//! The tree has two kinds of parts:
+//! - **blocks**: immutable flattened BVHs ([`MeshBvh`]: 32-byte binary nodes, their 4-wide
+//!   traversal copy, triangles in leaf order) behind an `Arc`. The first build makes one block of everything (the *base*); each
+//!   mesh inserted later gets its own small block, built by binned SAH.
+//! - **overlay**: immutable binary nodes behind `Arc`s on top of the blocks. A link is either
+//!   an overlay node or a reference to a node *inside* a block.
+//!
+//! Inserting a block's subtree next to some node deep in the base copies only the path from the
+//! root to that node into the overlay (path copying); everything else, overlay or block, is
+//! shared. So a snapshot is an `Arc` clone of the root (O(1)), an old snapshot never sees later
+//! changes, and an insert of k triangles costs O(k) for the block plus O(log n) overlay nodes per
+//! inserted subtree. Traversal stays fast because rays spend nearly all their time inside
+//! blocks, which are the same cache-friendly arrays as any other BVH here; only the few overlay
+//! nodes are pointer-chased. The price: inserted subtrees are never merged into the blocks,
+//! so after many inserts the tree is worse than a rebuild. [`StaticBvh`] rebuilds when the
+//! inserted triangles exceed [`StaticBvh::rebuild_fraction`] of those of the last rebuild or the
+//! overlay gets deeper than [`MAX_OVERLAY_HEIGHT`]. Removing a mesh that has its own block
+//! unlinks its references and refits the path (collapsing path copies back into block
+//! references where they match again); removing a mesh that shares the base block rebuilds.
+//!
+//! For traversal, every new root also gets a flattened copy of its overlay (a *view*: overlay
+//! nodes as ordinary 32-byte nodes whose leaves name block subtrees), so rays chase no
+//! pointers; it costs O(overlay nodes) per change and is shared by snapshots. A reference into
+//! a block enters the block's 4-wide tree at the matching node.
+//!
+//! Mesh bookkeeping (id -> block) is an `Arc<HashMap>` cloned on first write after a snapshot,
+//! so that part of a change is O(number of static meshes), once per commit.
+
+mod insert;
+mod remove;
+mod stats;
+mod traverse;
+
+pub use stats::{SnapshotMemory, StaticStats};
+
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use super::flat::MeshBvh;
+use super::triangle::{extract, Tri};
+use super::BuildParams;
+use crate::accel::{AccelError, StaticId};
+use crate::geometry::{Aabb, TriangleMesh};
+
+/// Deepest overlay allowed before a rebuild; also bounds the overlay traversal stack.
+pub const MAX_OVERLAY_HEIGHT: u32 = 64;
+
+/// An immutable BVH over some static triangles.
+#[derive(Debug)]
+pub(crate) struct Block {
+    pub id: u32,
+    pub mesh: MeshBvh,
+}
+
+/// A child pointer: an overlay node, or a node inside a block.
+#[derive(Clone, Debug)]
+pub(crate) enum Link {
+    Node(Arc<ONode>),
+    Ref(Arc<Block>, u32),
+}
+
+/// An overlay node. Never modified after creation.
+#[derive(Debug)]
+pub(crate) struct ONode {
+    pub aabb: Aabb,
+    pub kids: [Link; 2],
+    /// Bit `block.id % 64` is set for every block referenced below: prunes removal walks.
+    pub mask: u64,
+    /// Overlay levels below and including this node (block references count 0).
+    pub height: u32,
+    /// When this node is a path copy of a block node: that block and node, so it can collapse
+    /// back into a reference once its children are the block's own again.
+    pub origin: Option<(u32, u32)>,
+}
+
+impl ONode {
+    pub fn new(kids: [Link; 2], origin: Option<(u32, u32)>) -> Self {
+        Self {
+            aabb: kids[0].aabb().union(kids[1].aabb()),
+            mask: kids[0].mask() | kids[1].mask(),
+            height: 1 + kids[0].height().max(kids[1].height()),
+            kids,
+            origin,
+        }
+    }
+}
+
+impl Link {
+    pub fn aabb(&self) -> Aabb {
+        match self {
+            Link::Node(n) => n.aabb,
+            Link::Ref(b, i) => b.mesh.bvh.nodes[*i as usize].aabb(),
+        }
+    }
+
+    pub fn mask(&self) -> u64 {
+        match self {
+            Link::Node(n) => n.mask,
+            Link::Ref(b, _) => 1u64 << (b.id % 64),
+        }
+    }
+
+    pub fn height(&self) -> u32 {
+        match self {
+            Link::Node(n) => n.height,
+            Link::Ref(..) => 0,
+        }
+    }
+
+    /// The two children, or `None` for a block leaf.
+    pub fn children(&self) -> Option<[Link; 2]> {
+        match self {
+            Link::Node(n) => Some(n.kids.clone()),
+            Link::Ref(b, i) => {
+                let n = &b.mesh.bvh.nodes[*i as usize];
+                (!n.is_leaf()).then(|| [Link::Ref(b.clone(), n.first), Link::Ref(b.clone(), n.first + 1)])
+            }
+        }
+    }
+
+    /// The block node this link is (or copies), for rebuilding a parent on a path.
+    pub fn origin(&self) -> Option<(u32, u32)> {
+        match self {
+            Link::Node(n) => n.origin,
+            Link::Ref(b, i) => Some((b.id, *i)),
+        }
+    }
+}
+
+/// What the tree knows about one static mesh.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct MeshEntry {
+    pub block: u32,
+    /// The block also holds other meshes (a rebuild's block): removal needs a rebuild.
+    pub shared: bool,
+    pub triangles: usize,
+}
+
+/// An immutable version of the static tree. Cloning is O(1).
+#[derive(Clone, Debug, Default)]
+pub struct StaticSnapshot {
+    pub(crate) root: Option<Link>,
+    pub(crate) meshes: Arc<HashMap<StaticId, MeshEntry>>,
+    pub(crate) triangles: usize,
+    pub(crate) rebuilt_triangles: usize,
+    pub(crate) inserted_since_rebuild: usize,
+    /// The overlay flattened for traversal, rebuilt with every new root.
+    pub(crate) view: Arc<traverse::View>,
+}
+
+impl StaticSnapshot {
+    fn set_root(&mut self, root: Option<Link>) {
+        self.view = Arc::new(traverse::View::new(root.as_ref()));
+        self.root = root;
+    }
+
+    /// Triangles in this version.
+    pub fn triangles(&self) -> usize {
+        self.triangles
+    }
+
+    /// Whether `id` is part of this version.
+    pub fn contains(&self, id: StaticId) -> bool {
+        self.meshes.contains_key(&id)
+    }
+}
+
+/// What [`StaticBvh::apply`] did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct StaticUpdate {
+    /// Triangles put into new blocks (all live triangles after a rebuild).
+    pub built_triangles: usize,
+    /// Triangles skipped as degenerate or not finite.
+    pub skipped_triangles: usize,
+    /// Whether the update rebuilt the tree from scratch.
+    pub rebuilt: bool,
+}
+
+/// The persistent static BVH. See the module docs for its layout.
+#[derive(Debug)]
+pub struct StaticBvh {
+    state: StaticSnapshot,
+    params: BuildParams,
+    next_block: u32,
+    /// Rebuild instead of inserting once the triangles inserted since the last rebuild exceed
+    /// this fraction of the triangles it built. Default 0.5.
+    pub rebuild_fraction: f32,
+}
+
+impl Default for StaticBvh {
+    fn default() -> Self {
+        Self::new(BuildParams::QUALITY)
+    }
+}
+
+impl StaticBvh {
+    pub fn new(params: BuildParams) -> Self {
+        Self { state: StaticSnapshot::default(), params, next_block: 0, rebuild_fraction: 0.5 }
+    }
+
+    pub fn params(&self) -> &BuildParams {
+        &self.params
+    }
+
+    /// The current version, O(1). Later changes to `self` never affect it.
+    pub fn snapshot(&self) -> StaticSnapshot {
+        self.state.clone()
+    }
+
+    /// Makes `snapshot` the current version, O(1).
+    pub fn restore(&mut self, snapshot: StaticSnapshot) {
+        self.state = snapshot;
+    }
+
+    pub fn triangles(&self) -> usize {
+        self.state.triangles
+    }
+
+    pub fn contains(&self, id: StaticId) -> bool {
+        self.state.contains(id)
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.state.root.is_none()
+    }
+
+    pub fn bounds(&self) -> Aabb {
+        self.state.root.as_ref().map_or(Aabb::EMPTY, Link::aabb)
+    }
+
+    fn new_block(&mut self, tris: Vec<Tri>) -> Arc<Block> {
+        let id = self.next_block;
+        self.next_block = self.next_block.wrapping_add(1);
+        Arc::new(Block { id, mesh: MeshBvh::build(tris, self.params) })
+    }
+
+    /// Inserts a world-space mesh without rebuilding: builds a block for it and inserts the
+    /// block's subtrees where they add the least SAH cost. Replaces a mesh with the same id.
+    /// Returns the number of skipped (degenerate or non-finite) triangles.
+    pub fn insert(&mut self, id: StaticId, mesh: &TriangleMesh) -> Result<usize, AccelError> {
+        mesh.validate()?;
+        let (tris, skipped) = extract(mesh, id.0);
+        self.remove(id);
+        self.insert_tris(id, tris);
+        Ok(skipped)
+    }
+
+    /// Inserts already extracted triangles as mesh `id` (which must not be present). Returns
+    /// whether the overlay got deeper than [`MAX_OVERLAY_HEIGHT`] so the tree was rebuilt.
+    pub(crate) fn insert_tris(&mut self, id: StaticId, tris: Vec<Tri>) -> bool {
+        debug_assert!(!self.state.meshes.contains_key(&id));
+        let n = tris.len();
+        let block = if n > 0 {
+            let block = self.new_block(tris);
+            let root = match self.state.root.take() {
+                None => Link::Ref(block.clone(), 0),
+                Some(root) => insert::insert_block(root, &block),
+            };
+            self.state.set_root(Some(root));
+            block.id
+        } else {
+            u32::MAX
+        };
+        Arc::make_mut(&mut self.state.meshes).insert(id, MeshEntry { block, shared: false, triangles: n });
+        self.state.triangles += n;
+        self.state.inserted_since_rebuild += n;
+        if self.state.root.as_ref().is_some_and(|r| r.height() > MAX_OVERLAY_HEIGHT) {
+            self.rebuild();
+            return true;
+        }
+        false
+    }
+
+    /// Removes a mesh; returns whether it was present. A mesh with its own block is unlinked
+    /// and the path refitted; one sharing a rebuilt block triggers a rebuild.
+    pub fn remove(&mut self, id: StaticId) -> bool {
+        let Some(entry) = Arc::make_mut(&mut self.state.meshes).remove(&id) else {
+            return false;
+        };
+        self.state.triangles -= entry.triangles;
+        if entry.triangles == 0 {
+            return true;
+        }
+        if entry.shared {
+            self.rebuild();
+        } else if let Some(root) = self.state.root.take() {
+            self.state.set_root(remove::remove_block(&root, entry.block).resolve(root));
+        }
+        true
+    }
+
+    /// Rebuilds the whole tree into one block from the live meshes' triangles.
+    pub fn rebuild(&mut self) {
+        let tris = self.live_tris();
+        self.rebuild_from(tris);
+    }
+
+    /// The triangles of every live mesh, gathered from the blocks.
+    fn live_tris(&self) -> Vec<Tri> {
+        let mut tris = Vec::with_capacity(self.state.triangles);
+        if let Some(root) = &self.state.root {
+            let meshes = &self.state.meshes;
+            stats::for_each_block(root, &mut |b| {
+                tris.extend(
+                    b.mesh
+                        .tris
+                        .iter()
+                        .filter(|t| meshes.get(&StaticId(t.geom)).is_some_and(|e| e.block == b.id)),
+                );
+            });
+        }
+        tris
+    }
+
+    fn rebuild_from(&mut self, tris: Vec<Tri>) {
+        debug_assert!(tris.iter().all(|t| self.state.meshes.contains_key(&StaticId(t.geom))));
+        let n = tris.len();
+        let block = self.new_block(tris);
+        let meshes = Arc::make_mut(&mut self.state.meshes);
+        for e in meshes.values_mut() {
+            if e.triangles > 0 {
+                e.block = block.id;
+                e.shared = true;
+            }
+        }
+        self.state.set_root((n > 0).then_some(Link::Ref(block, 0)));
+        self.state.triangles = n;
+        self.state.rebuilt_triangles = n;
+        self.state.inserted_since_rebuild = 0;
+    }
+
+    /// Applies a batch of changes the way a commit should: removals first, then either one
+    /// rebuild (empty tree, a removal from a shared block, or more new triangles than
+    /// [`Self::rebuild_fraction`] allows) or one insertion per added mesh. Unknown ids in
+    /// `removes` are ignored; an added id that is present replaces that mesh.
+    pub fn apply(
+        &mut self,
+        removes: &[StaticId],
+        adds: &[(StaticId, &TriangleMesh)],
+    ) -> Result<StaticUpdate, AccelError> {
+        for (_, m) in adds {
+            m.validate()?;
+        }
+        let mut skipped = 0;
+        let extracted = adds
+            .iter()
+            .map(|(id, m)| {
+                let (tris, s) = extract(m, id.0);
+                skipped += s;
+                (*id, tris)
+            })
+            .collect();
+        let mut update = self.apply_extracted(removes, extracted);
+        update.skipped_triangles += skipped;
+        Ok(update)
+    }
+
+    /// [`Self::apply`] with triangles already extracted (skipped ones are not counted here).
+    pub(crate) fn apply_extracted(
+        &mut self,
+        removes: &[StaticId],
+        adds: Vec<(StaticId, Vec<Tri>)>,
+    ) -> StaticUpdate {
+        let mut update = StaticUpdate::default();
+        let mut need_rebuild = false;
+        let replaced = adds.iter().map(|(id, _)| id);
+        for id in removes.iter().chain(replaced) {
+            let Some(e) = self.state.meshes.get(id) else {
+                continue;
+            };
+            if e.shared && e.triangles > 0 {
+                // Drop the entry now and rebuild once below.
+                let e = Arc::make_mut(&mut self.state.meshes).remove(id).expect("present");
+                self.state.triangles -= e.triangles;
+                need_rebuild = true;
+            } else {
+                self.remove(*id);
+            }
+        }
+        let added: usize = adds.iter().map(|(_, t)| t.len()).sum();
+        let budget = self.rebuild_fraction * self.state.rebuilt_triangles as f32;
+        if need_rebuild
+            || self.state.root.is_none()
+            || (self.state.inserted_since_rebuild + added) as f32 > budget
+        {
+            let mut tris = self.live_tris();
+            let meshes = Arc::make_mut(&mut self.state.meshes);
+            for (id, t) in adds {
+                meshes.insert(id, MeshEntry { block: u32::MAX, shared: true, triangles: t.len() });
+                tris.extend(t);
+            }
+            self.rebuild_from(tris);
+            update.rebuilt = true;
+            update.built_triangles = self.state.triangles;
+        } else {
+            for (id, t) in adds {
+                update.built_triangles += t.len();
+                update.rebuilt |= self.insert_tris(id, t);
+            }
+            if update.rebuilt {
+                update.built_triangles = self.state.triangles;
+            }
+        }
+        update
+    }
+}

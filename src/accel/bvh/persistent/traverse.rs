@@ -1,0 +1,114 @@
+//! Ray queries on a static snapshot: the flat traversal over the snapshot's overlay view, whose
+//! leaves hand each block subtree to the flat traversal of that block.
+
+use std::sync::Arc;
+
+use super::{Block, Link, StaticSnapshot};
+use crate::accel::bvh::flat::{interval_is_valid, traverse, BoxRay, Node, PrimHit};
+use crate::accel::bvh::triangle::RayTri;
+use crate::accel::{Hit, HitObject, SceneQuery, StaticId};
+use crate::geometry::{Aabb, Ray};
+
+impl StaticSnapshot {
+    /// Closest hit with `t <= *t_max`; lowers `*t_max` and overwrites `best` on a hit.
+    pub(crate) fn intersect_with(
+        &self,
+        bray: &BoxRay,
+        tray: &RayTri,
+        t_max: &mut f32,
+        best: &mut Option<PrimHit>,
+    ) {
+        self.walk(bray, t_max, |b, i, t_max| {
+            b.mesh.intersect_from(i, bray, tray, t_max, best);
+            false
+        });
+    }
+
+    /// Whether anything is hit within `[t_min, t_max]`.
+    pub(crate) fn occluded_with(&self, bray: &BoxRay, tray: &RayTri, t_max: f32) -> bool {
+        let mut t_max = t_max;
+        self.walk(bray, &mut t_max, |b, i, t_max| b.mesh.occluded_from(i, bray, tray, *t_max))
+    }
+
+    /// Visits the block subtrees the ray may hit, nearer first; `f` returns `true` to stop.
+    #[inline]
+    fn walk<F>(&self, bray: &BoxRay, t_max: &mut f32, mut f: F) -> bool
+    where
+        F: FnMut(&Block, u32, &mut f32) -> bool,
+    {
+        let v = &*self.view;
+        if v.nodes.len() == 1 {
+            // No overlay: straight into the block.
+            let (b, i) = &v.refs[0];
+            return f(b, *i, t_max);
+        }
+        traverse(&v.nodes, 0, bray, t_max, |first, count, t_max| {
+            v.refs[first as usize..(first + count) as usize].iter().any(|(b, i)| f(b, *i, t_max))
+        })
+    }
+}
+
+/// The overlay of one version as a flat tree: interior nodes are overlay nodes, each leaf
+/// names one block subtree (`refs[first]`).
+#[derive(Debug, Default)]
+pub(crate) struct View {
+    pub nodes: Vec<Node>,
+    pub refs: Vec<(Arc<Block>, u32)>,
+}
+
+impl View {
+    pub fn new(root: Option<&Link>) -> Self {
+        let mut v = View::default();
+        if let Some(root) = root {
+            v.nodes.push(Node::interior(Aabb::EMPTY, 0));
+            v.add(root, 0);
+        }
+        v
+    }
+
+    fn add(&mut self, link: &Link, at: usize) {
+        match link {
+            Link::Ref(b, i) => {
+                self.nodes[at] = Node::leaf(link.aabb(), self.refs.len() as u32, 1);
+                self.refs.push((b.clone(), *i));
+            }
+            Link::Node(n) => {
+                let first = self.nodes.len();
+                self.nodes.push(Node::interior(Aabb::EMPTY, 0));
+                self.nodes.push(Node::interior(Aabb::EMPTY, 0));
+                self.nodes[at] = Node::interior(n.aabb, first as u32);
+                self.add(&n.kids[0], first);
+                self.add(&n.kids[1], first + 1);
+            }
+        }
+    }
+
+    pub fn memory_bytes(&self) -> usize {
+        self.nodes.len() * std::mem::size_of::<Node>()
+            + self.refs.len() * std::mem::size_of::<(Arc<Block>, u32)>()
+    }
+}
+
+/// A static snapshot can be traced on its own (tests, tools, the geometry cache).
+impl SceneQuery for StaticSnapshot {
+    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        if !interval_is_valid(ray) {
+            return None;
+        }
+        let mut t_max = ray.t_max;
+        let mut best = None;
+        self.intersect_with(&BoxRay::new(ray), &RayTri::new(ray), &mut t_max, &mut best);
+        best.map(|h| Hit {
+            t: h.t,
+            u: h.u,
+            v: h.v,
+            ng: h.tri.normal().normalize_or_zero(),
+            object: HitObject::Static(StaticId(h.tri.geom)),
+            prim: h.tri.prim,
+        })
+    }
+
+    fn intersect_p(&self, ray: &Ray) -> bool {
+        interval_is_valid(ray) && self.occluded_with(&BoxRay::new(ray), &RayTri::new(ray), ray.t_max)
+    }
+}

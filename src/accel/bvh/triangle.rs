@@ -1,0 +1,159 @@
+//! Triangles as the BVH leaves store them, and the watertight ray-triangle test (Woop, Benthin
+//! and Wald 2013) that keeps rays from leaking through edges shared by two triangles.
+
+use glam::Vec3;
+
+use crate::geometry::{Ray, TriangleMesh};
+
+/// One triangle copied out of its mesh, with the ids a [`crate::accel::Hit`] reports.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Tri {
+    pub p: [Vec3; 3],
+    /// The mesh it came from (a `StaticId` for static geometry, unused for prototypes).
+    pub geom: u32,
+    /// Triangle index within that mesh.
+    pub prim: u32,
+}
+
+impl Tri {
+    pub fn bounds(&self) -> crate::geometry::Aabb {
+        crate::geometry::Aabb::from_points(self.p)
+    }
+
+    /// Unnormalised geometric normal `(p1 - p0) x (p2 - p0)`.
+    pub fn normal(&self) -> Vec3 {
+        (self.p[1] - self.p[0]).cross(self.p[2] - self.p[0])
+    }
+}
+
+/// Largest coordinate magnitude kept: beyond it, box areas and SAH costs overflow `f32`.
+pub const MAX_COORD: f32 = 1e30;
+
+/// Copies the usable triangles of `mesh` ([`TriangleMesh::triangle_is_valid`]: finite, non-zero
+/// area; and every coordinate below [`MAX_COORD`] in magnitude); returns them and how many were
+/// skipped. The mesh must have passed [`TriangleMesh::validate`].
+pub fn extract(mesh: &TriangleMesh, geom: u32) -> (Vec<Tri>, usize) {
+    let mut tris = Vec::with_capacity(mesh.triangle_count());
+    for i in 0..mesh.triangle_count() {
+        if mesh.triangle_is_valid(i) && mesh.triangle(i).iter().all(|p| p.abs().max_element() < MAX_COORD) {
+            tris.push(Tri { p: mesh.triangle(i), geom, prim: i as u32 });
+        }
+    }
+    let skipped = mesh.triangle_count() - tris.len();
+    (tris, skipped)
+}
+
+/// A triangle hit in the space the triangle was tested in.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TriHit {
+    pub t: f32,
+    pub u: f32,
+    pub v: f32,
+}
+
+/// Per-ray constants of the watertight test: the ray is sheared so that it runs along +z.
+#[derive(Clone, Copy, Debug)]
+pub struct RayTri {
+    org: Vec3,
+    dir: Vec3,
+    kx: usize,
+    ky: usize,
+    kz: usize,
+    sx: f32,
+    sy: f32,
+    pub t_min: f32,
+}
+
+impl RayTri {
+    pub fn new(ray: &Ray) -> Self {
+        let d = ray.dir;
+        let kz = d.abs().max_position();
+        let mut kx = (kz + 1) % 3;
+        let mut ky = (kx + 1) % 3;
+        if d[kz] < 0.0 {
+            std::mem::swap(&mut kx, &mut ky);
+        }
+        Self { org: ray.origin, dir: d, kx, ky, kz, sx: d[kx] / d[kz], sy: d[ky] / d[kz], t_min: ray.t_min }
+    }
+
+    /// Hit with `t_min <= t <= t_max`, if any. Both sides of the triangle are hit.
+    #[inline(always)]
+    pub fn intersect(&self, tri: &[Vec3; 3], t_max: f32) -> Option<TriHit> {
+        let (kx, ky, kz) = (self.kx, self.ky, self.kz);
+        let a = tri[0] - self.org;
+        let b = tri[1] - self.org;
+        let c = tri[2] - self.org;
+        let ax = a[kx] - self.sx * a[kz];
+        let ay = a[ky] - self.sy * a[kz];
+        let bx = b[kx] - self.sx * b[kz];
+        let by = b[ky] - self.sy * b[kz];
+        let cx = c[kx] - self.sx * c[kz];
+        let cy = c[ky] - self.sy * c[kz];
+        let mut u = cx * by - cy * bx;
+        let mut v = ax * cy - ay * cx;
+        let mut w = bx * ay - by * ax;
+        if u == 0.0 || v == 0.0 || w == 0.0 {
+            // Exactly on an edge in f32: decide in double precision so that the two
+            // triangles sharing the edge agree.
+            u = (f64::from(cx) * f64::from(by) - f64::from(cy) * f64::from(bx)) as f32;
+            v = (f64::from(ax) * f64::from(cy) - f64::from(ay) * f64::from(cx)) as f32;
+            w = (f64::from(bx) * f64::from(ay) - f64::from(by) * f64::from(ax)) as f32;
+        }
+        if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
+            return None;
+        }
+        let det = u + v + w;
+        if det == 0.0 || !det.is_finite() {
+            return None;
+        }
+        // The edge functions above decide *whether* the ray hits (watertight). The distance
+        // comes from the plane equation instead of the scaled barycentric sum: for long thin
+        // triangles far from the ray origin the sum cancels badly (seen on the monastery:
+        // relative t errors of 2e-4 against an exact 1e-7), while the plane equation stays
+        // accurate and is what Embree computes.
+        let n = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
+        let t = n.dot(a) / n.dot(self.dir);
+        if !(t >= self.t_min && t <= t_max) {
+            return None;
+        }
+        let rcp = 1.0 / det;
+        Some(TriHit { t, u: v * rcp, v: w * rcp })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn barycentrics_follow_embree() {
+        let tri = [Vec3::ZERO, Vec3::X, Vec3::Y];
+        let ray = Ray::new(Vec3::new(0.25, 0.5, 1.0), Vec3::new(0.0, 0.0, -2.0));
+        let h = RayTri::new(&ray).intersect(&tri, f32::INFINITY).unwrap();
+        assert!((h.t - 0.5).abs() < 1e-6);
+        assert!((h.u - 0.25).abs() < 1e-6 && (h.v - 0.5).abs() < 1e-6);
+        // Back side is hit too.
+        let ray = Ray::new(Vec3::new(0.25, 0.5, -1.0), Vec3::Z);
+        assert!(RayTri::new(&ray).intersect(&tri, f32::INFINITY).is_some());
+    }
+
+    #[test]
+    fn shared_edge_does_not_leak() {
+        // Two triangles sharing the diagonal of a unit square; rays through the diagonal hit one.
+        let q = [
+            [Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0)],
+            [Vec3::ZERO, Vec3::new(1.0, 1.0, 0.0), Vec3::Y],
+        ];
+        for i in 0..1000 {
+            let s = i as f32 / 1000.0;
+            for ray in [
+                Ray::new(Vec3::new(s, s, 1.0), -Vec3::Z),
+                Ray::new(Vec3::new(s + 0.3, s + 0.3, 1.0), Vec3::new(-0.3, -0.3, -1.0)),
+                Ray::new(Vec3::new(s - 0.7, s + 0.2, 0.9), Vec3::new(0.7, -0.2, -0.9)),
+            ] {
+                let rt = RayTri::new(&ray);
+                assert!(q.iter().any(|t| rt.intersect(t, f32::INFINITY).is_some()), "leak at {s}");
+            }
+        }
+    }
+}

@@ -1,0 +1,350 @@
+//! Property tests of the pure-Rust BVH backend against an f64 brute-force reference.
+
+mod bvh_common;
+
+use bvh_common::*;
+use dormant::accel::bvh::{BuildParams, BvhAccel, StaticBvh};
+use dormant::accel::{create, AccelError, Accelerator, Backend, HitObject, SceneQuery, StaticId};
+use dormant::geometry::{Ray, TriangleMesh};
+use glam::{Affine3A, Quat, Vec3};
+use proptest::prelude::*;
+
+fn config(cases: u32) -> ProptestConfig {
+    ProptestConfig { cases, failure_persistence: None, ..ProptestConfig::default() }
+}
+
+fn check_scene(q: &dyn SceneQuery, rays: &[Ray], tris: &[RefTri], rel: f64) -> Result<(), TestCaseError> {
+    for ray in rays {
+        check_hit(ray, q.intersect(ray), tris, rel).map_err(TestCaseError::fail)?;
+        check_any(ray, q.intersect_p(ray), tris).map_err(TestCaseError::fail)?;
+    }
+    Ok(())
+}
+
+proptest! {
+    #![proptest_config(config(48))]
+
+    #[test]
+    fn closest_hit_matches_brute_force(
+        a in soup(Vec3::ZERO, 10.0, 3.0, 1..300),
+        b in soup(Vec3::new(5.0, 0.0, 0.0), 2.0, 0.5, 0..50),
+        seed in any::<u64>(),
+    ) {
+        let mut accel = create(Backend::Bvh, Some(1)).unwrap();
+        let ia = accel.add_static(&a).unwrap();
+        let ib = accel.add_static(&b).unwrap();
+        let report = accel.commit().unwrap();
+        prop_assert_eq!(report.built_triangles + report.skipped_triangles, a.triangle_count() + b.triangle_count());
+        let mut tris = ref_tris(HitObject::Static(ia), &a);
+        tris.extend(ref_tris(HitObject::Static(ib), &b));
+        let rays = rays_for(&[&a, &b], seed, 96, 15.0);
+        check_scene(accel.query().unwrap(), &rays, &tris, 1e-5)?;
+    }
+
+    #[test]
+    fn insert_remove_matches_fresh_build(
+        base in soup(Vec3::ZERO, 10.0, 2.0, 50..300),
+        islands in prop::collection::vec((vec3(10.0), 1usize..40), 1..8),
+        ops in prop::collection::vec((any::<bool>(), 0usize..8), 1..16),
+        seed in any::<u64>(),
+        island_seed in any::<u64>(),
+    ) {
+        // Islands: small clusters at random places, built deterministically from the seed.
+        let islands: Vec<TriangleMesh> = islands
+            .iter()
+            .enumerate()
+            .map(|(k, (c, n))| cluster(*c, *n, island_seed.wrapping_add(k as u64)))
+            .collect();
+        let mut tree = StaticBvh::new(BuildParams::QUALITY);
+        tree.rebuild_fraction = f32::INFINITY;
+        tree.apply(&[], &[(StaticId(100), &base)]).unwrap();
+        let mut live = vec![false; islands.len()];
+        for (add, k) in ops {
+            let k = k % islands.len();
+            let id = StaticId(k as u32);
+            if add && !live[k] {
+                tree.insert(id, &islands[k]).unwrap();
+                live[k] = true;
+            } else if !add && live[k] {
+                prop_assert!(tree.remove(id));
+                live[k] = false;
+            }
+            tree.check().map_err(TestCaseError::fail)?;
+            let mut meshes: Vec<(StaticId, &TriangleMesh)> = vec![(StaticId(100), &base)];
+            meshes.extend((0..islands.len()).filter(|&k| live[k]).map(|k| (StaticId(k as u32), &islands[k])));
+            let mut fresh = StaticBvh::new(BuildParams::QUALITY);
+            fresh.apply(&[], &meshes).unwrap();
+            prop_assert_eq!(fresh.triangles(), tree.triangles());
+            let tris: Vec<RefTri> = meshes.iter().flat_map(|(id, m)| ref_tris(HitObject::Static(*id), m)).collect();
+            let all: Vec<&TriangleMesh> = meshes.iter().map(|(_, m)| *m).chain(islands.iter()).collect();
+            let rays = rays_for(&all, seed, 48, 12.0);
+            let (inc, fr) = (tree.snapshot(), fresh.snapshot());
+            check_scene(&inc, &rays, &tris, 1e-5)?;
+            for ray in &rays {
+                let (a, b) = (inc.intersect(ray), fr.intersect(ray));
+                prop_assert_eq!(a.map(|h| h.t), b.map(|h| h.t), "ray {:?}", ray);
+                prop_assert_eq!(inc.intersect_p(ray), fr.intersect_p(ray));
+            }
+        }
+    }
+
+    #[test]
+    fn accel_static_updates_match_brute_force(
+        base_a in soup(Vec3::ZERO, 10.0, 2.0, 20..200),
+        base_b in soup(Vec3::new(0.0, -5.0, 0.0), 10.0, 2.0, 0..100),
+        islands in prop::collection::vec((vec3(10.0), 1usize..30), 1..6),
+        ops in prop::collection::vec((0u8..4, 0usize..8), 1..12),
+        seed in any::<u64>(),
+    ) {
+        let islands: Vec<TriangleMesh> = islands
+            .iter()
+            .enumerate()
+            .map(|(k, (c, n))| cluster(*c, *n, seed.wrapping_add(k as u64)))
+            .collect();
+        let mut accel = BvhAccel::new(Some(1));
+        let ia = accel.add_static(&base_a).unwrap();
+        let ib = accel.add_static(&base_b).unwrap();
+        accel.commit().unwrap();
+        let mut live: Vec<(StaticId, &TriangleMesh)> = vec![(ia, &base_a), (ib, &base_b)];
+        let mut snapshots = Vec::new();
+        for (op, k) in ops {
+            match op {
+                // Add an island (the insertion path, or a rebuild past the budget).
+                0 | 1 => {
+                    let m = &islands[k % islands.len()];
+                    live.push((accel.add_static(m).unwrap(), m));
+                }
+                // Remove something (an island, or a base mesh, which rebuilds).
+                2 => {
+                    if !live.is_empty() {
+                        let (id, _) = live.remove(k % live.len());
+                        accel.remove_static(id).unwrap();
+                    }
+                }
+                // Snapshot now, restore a previous one.
+                _ => {
+                    snapshots.push((accel.static_snapshot(), live.clone()));
+                    let (snap, l) = snapshots[k % snapshots.len()].clone();
+                    accel.restore_static(snap);
+                    live = l;
+                }
+            }
+            accel.commit().unwrap();
+            accel.static_bvh().check().map_err(TestCaseError::fail)?;
+            let tris: Vec<RefTri> = live.iter().flat_map(|(id, m)| ref_tris(HitObject::Static(*id), m)).collect();
+            let all: Vec<&TriangleMesh> = [&base_a, &base_b].into_iter().chain(islands.iter()).collect();
+            let rays = rays_for(&all, seed, 48, 12.0);
+            check_scene(accel.query().unwrap(), &rays, &tris, 1e-5)?;
+        }
+    }
+
+    #[test]
+    fn old_snapshot_is_unchanged(
+        base in soup(Vec3::ZERO, 8.0, 2.0, 20..200),
+        extra in prop::collection::vec(soup(Vec3::ZERO, 8.0, 1.0, 1..30), 1..6),
+        seed in any::<u64>(),
+    ) {
+        let mut tree = StaticBvh::new(BuildParams::BALANCED);
+        tree.rebuild_fraction = f32::INFINITY;
+        tree.apply(&[], &[(StaticId(0), &base)]).unwrap();
+        let old = tree.snapshot();
+        let all: Vec<&TriangleMesh> = std::iter::once(&base).chain(extra.iter()).collect();
+        let rays = rays_for(&all, seed, 64, 10.0);
+        let before: Vec<_> = rays.iter().map(|r| old.intersect(r)).collect();
+        for (i, m) in extra.iter().enumerate() {
+            tree.insert(StaticId(i as u32 + 1), m).unwrap();
+        }
+        tree.check().map_err(TestCaseError::fail)?;
+        let mid = tree.snapshot();
+        tree.remove(StaticId(0));
+        tree.remove(StaticId(1));
+        tree.check().map_err(TestCaseError::fail)?;
+        let after: Vec<_> = rays.iter().map(|r| old.intersect(r)).collect();
+        prop_assert_eq!(&before, &after);
+        prop_assert!(old.contains(StaticId(0)) && !tree.contains(StaticId(0)));
+        prop_assert!(mid.contains(StaticId(1)));
+        // The old snapshot shares nothing it does not own with the current tree after the
+        // base was removed, but `mid` shares the inserted blocks with the current tree.
+        let m = mid.memory();
+        prop_assert!(m.unique_bytes <= m.total_bytes);
+        tree.restore(old.clone());
+        prop_assert_eq!(tree.triangles(), old.triangles());
+        let restored: Vec<_> = rays.iter().map(|r| tree.snapshot().intersect(r)).collect();
+        prop_assert_eq!(before, restored);
+    }
+
+    #[test]
+    fn instancing_matches_baked_triangles(
+        protos in prop::collection::vec(soup(Vec3::ZERO, 2.0, 1.0, 1..40), 1..4),
+        placements in prop::collection::vec((0usize..4, vec3(1.0), -3.0f32..3.0, vec3(1.0), vec3(10.0)), 1..16),
+        ground in soup(Vec3::new(0.0, -8.0, 0.0), 8.0, 2.0, 0..40),
+        moved in prop::collection::vec((0usize..16, vec3(10.0)), 0..4),
+        seed in any::<u64>(),
+    ) {
+        let mut accel = BvhAccel::new(Some(1));
+        let pids: Vec<_> = protos.iter().map(|p| accel.add_prototype(p).unwrap()).collect();
+        let gid = accel.add_static(&ground).unwrap();
+        let xf = |axis: Vec3, angle: f32, scale: Vec3, t: Vec3| {
+            let axis = if axis.length() > 1e-3 { axis.normalize() } else { Vec3::Y };
+            let scale = Vec3::splat(0.3) + scale.abs() * 2.0;
+            Affine3A::from_scale_rotation_translation(scale, Quat::from_axis_angle(axis, angle), t)
+        };
+        let mut placed = Vec::new();
+        for (p, axis, angle, scale, t) in &placements {
+            let p = p % protos.len();
+            let m = xf(*axis, *angle, *scale, *t);
+            placed.push((accel.add_instance(pids[p], m).unwrap(), p, m));
+        }
+        accel.commit().unwrap();
+        let check = |accel: &BvhAccel, placed: &[(dormant::accel::InstanceId, usize, Affine3A)]| -> Result<(), TestCaseError> {
+            let baked: Vec<TriangleMesh> = placed.iter().map(|(_, p, m)| protos[*p].transformed(m)).collect();
+            let mut tris = ref_tris(HitObject::Static(gid), &ground);
+            for ((id, _, _), b) in placed.iter().zip(&baked) {
+                tris.extend(ref_tris(HitObject::Instance(*id), b));
+            }
+            let all: Vec<&TriangleMesh> = baked.iter().chain(std::iter::once(&ground)).collect();
+            let rays = rays_for(&all, seed, 96, 14.0);
+            check_scene(accel.query().unwrap(), &rays, &tris, 2e-3)
+        };
+        check(&accel, &placed)?;
+        // Move and remove some instances, then check again.
+        for (k, t) in moved {
+            let k = k % placed.len();
+            placed[k].2 = Affine3A::from_translation(t) * placed[k].2;
+            accel.set_instance_transform(placed[k].0, placed[k].2).unwrap();
+        }
+        let gone = placed.remove(0);
+        accel.remove_instance(gone.0).unwrap();
+        prop_assert!(matches!(accel.query(), Err(AccelError::NotCommitted)));
+        let report = accel.commit().unwrap();
+        prop_assert_eq!(report.instances, placed.len());
+        check(&accel, &placed)?;
+    }
+}
+
+/// A deterministic cluster of `n` triangles around `c`.
+fn cluster(c: Vec3, n: usize, seed: u64) -> TriangleMesh {
+    let mut s = seed | 1;
+    let mut next = || {
+        s = s.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+        (s >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
+    };
+    let mut positions = Vec::new();
+    let mut indices = Vec::new();
+    for i in 0..n as u32 {
+        let o = c + Vec3::new(next(), next(), next()) * 1.5;
+        positions.extend([o, o + Vec3::new(next(), next(), next()), o + Vec3::new(next(), next(), next())]);
+        indices.push([3 * i, 3 * i + 1, 3 * i + 2]);
+    }
+    TriangleMesh::new(positions, indices)
+}
+
+#[test]
+fn degenerate_and_non_finite_input_never_panics() {
+    let nan = f32::NAN;
+    let inf = f32::INFINITY;
+    let positions = vec![
+        Vec3::ZERO,
+        Vec3::X,
+        Vec3::Y,
+        Vec3::new(nan, 0.0, 0.0),
+        Vec3::new(0.0, inf, 0.0),
+        Vec3::new(2.0, 0.0, 0.0),
+        Vec3::new(1e-30, 0.0, 0.0),
+    ];
+    let indices = vec![
+        [0, 1, 2], // good
+        [0, 0, 1], // repeated vertex
+        [0, 1, 5], // collinear
+        [0, 1, 3], // NaN
+        [0, 4, 2], // infinite
+        [0, 6, 2], // tiny but not zero area... or zero after rounding
+        [2, 1, 0], // good (back side)
+    ];
+    let mesh = TriangleMesh::new(positions, indices);
+    let valid = (0..mesh.triangle_count()).filter(|&i| mesh.triangle_is_valid(i)).count();
+    let mut accel = create(Backend::Bvh, None).unwrap();
+    let p = accel.add_prototype(&mesh).unwrap();
+    let s = accel.add_static(&mesh).unwrap();
+    let all_bad = TriangleMesh::new(vec![Vec3::splat(nan); 3], vec![[0, 1, 2]; 4]);
+    let empty_proto = accel.add_prototype(&all_bad).unwrap();
+    accel.add_static(&all_bad).unwrap();
+    accel.add_static(&TriangleMesh::default()).unwrap();
+    accel.add_instance(p, Affine3A::from_translation(Vec3::Z)).unwrap();
+    accel.add_instance(empty_proto, Affine3A::IDENTITY).unwrap();
+    for bad in [
+        Affine3A::from_scale(Vec3::new(1.0, 0.0, 1.0)),
+        Affine3A::from_translation(Vec3::splat(nan)),
+        Affine3A::from_scale(Vec3::splat(inf)),
+        Affine3A::from_scale(Vec3::splat(1e-30)),
+        // Invertible, but the world bounds overflow.
+        Affine3A::from_scale(Vec3::splat(1e12)) * Affine3A::from_translation(Vec3::splat(1e29)),
+    ] {
+        assert!(matches!(accel.add_instance(p, bad), Err(AccelError::InvalidTransform { .. })));
+    }
+    let huge = TriangleMesh::new(vec![Vec3::ZERO, Vec3::X * 1e31, Vec3::Y], vec![[0, 1, 2]]);
+    accel.add_static(&huge).unwrap();
+    let far = accel
+        .add_prototype(&TriangleMesh::new(vec![Vec3::ZERO, Vec3::X * 1e29, Vec3::Y * 1e29], vec![[0, 1, 2]]))
+        .unwrap();
+    assert!(matches!(
+        accel.add_instance(far, Affine3A::from_scale(Vec3::splat(1e12))),
+        Err(AccelError::InvalidTransform { .. })
+    ));
+    let bad_index = TriangleMesh::new(vec![Vec3::ZERO], vec![[0, 1, 2]]);
+    assert!(matches!(accel.add_static(&bad_index), Err(AccelError::Mesh(_))));
+    let report = accel.commit().unwrap();
+    // Both copies of the invalid ones, 4 + 4 all-NaN, and the huge one.
+    assert_eq!(report.skipped_triangles, 2 * (mesh.triangle_count() - valid) + 8 + 1);
+    // Both copies of the valid ones and the far prototype's triangle.
+    assert_eq!(report.built_triangles, 2 * valid + 1);
+    let q = accel.query().unwrap();
+    let hit = q.intersect(&Ray::new(Vec3::new(0.2, 0.2, 5.0), -Vec3::Z)).unwrap();
+    assert_eq!(hit.object, dormant::accel::HitObject::Instance(dormant::accel::InstanceId(0)));
+    let hit = q.intersect(&Ray::new(Vec3::new(0.2, 0.2, 0.5), -Vec3::Z)).unwrap();
+    assert_eq!(hit.object, dormant::accel::HitObject::Static(s));
+    for ray in [
+        Ray::new(Vec3::splat(nan), Vec3::Z),
+        Ray::new(Vec3::ZERO, Vec3::splat(nan)),
+        Ray::new(Vec3::new(0.2, 0.2, 1.0), Vec3::ZERO),
+        Ray::new(Vec3::splat(inf), -Vec3::ONE),
+        Ray::segment(Vec3::new(0.2, 0.2, 5.0), -Vec3::Z, 3.0, 1.0),
+        Ray::segment(Vec3::new(0.2, 0.2, 5.0), -Vec3::Z, nan, nan),
+        Ray::new(Vec3::new(0.0, 0.0, 5.0), Vec3::new(0.0, 0.0, -1e-30)),
+    ] {
+        let _ = q.intersect(&ray);
+        let _ = q.intersect_p(&ray);
+    }
+    accel.remove_static(s).unwrap();
+    assert!(accel.remove_static(s).is_err());
+    assert!(accel.remove_static(StaticId(999)).is_err());
+    accel.commit().unwrap();
+}
+
+#[test]
+fn queries_need_a_commit() {
+    let mut accel = create(Backend::Bvh, None).unwrap();
+    assert_eq!(accel.backend(), Backend::Bvh);
+    assert!(accel.query().is_ok(), "an empty, unchanged scene can be queried");
+    let ground = dormant::geometry::primitives::ground_plane(5.0, 0.0, 4);
+    let id = accel.add_static(&ground).unwrap();
+    assert!(matches!(accel.query(), Err(AccelError::NotCommitted)));
+    accel.commit().unwrap();
+    let down = Ray::new(Vec3::new(0.1, 1.0, 0.3), Vec3::new(0.0, -2.0, 0.0));
+    let hit = accel.query().unwrap().intersect(&down).unwrap();
+    assert!((hit.t - 0.5).abs() < 1e-6);
+    assert_eq!(hit.object, HitObject::Static(id));
+    assert!((hit.ng.y.abs() - 1.0).abs() < 1e-6);
+    // A later island is inserted, not rebuilt, and removed again.
+    let island = dormant::geometry::primitives::cuboid(Vec3::splat(0.1));
+    let island = island.transformed(&Affine3A::from_translation(Vec3::new(0.1, 0.5, 0.3)));
+    let iid = accel.add_static(&island).unwrap();
+    accel.commit().unwrap();
+    let hit = accel.query().unwrap().intersect(&down).unwrap();
+    assert_eq!(hit.object, HitObject::Static(iid));
+    accel.remove_static(iid).unwrap();
+    accel.commit().unwrap();
+    let hit = accel.query().unwrap().intersect(&down).unwrap();
+    assert_eq!(hit.object, HitObject::Static(id));
+    assert!("bvh".parse::<Backend>().unwrap() == Backend::Bvh);
+}
