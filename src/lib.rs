@@ -6,7 +6,12 @@
 //! together.
 
 pub mod accel;
+pub mod atomic_file;
+pub mod bench;
 pub mod cli;
+pub mod crosscheck;
 pub mod geometry;
+pub mod physics;
 pub mod render;
+pub(crate) mod rng;
 pub mod scene;

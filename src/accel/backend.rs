@@ -9,20 +9,24 @@ use super::{AccelError, Accelerator};
 pub enum Backend {
     /// Intel Embree 4 (feature `embree`).
     Embree,
+    /// The pure-Rust BVH (`accel::bvh`), always compiled.
+    Bvh,
 }
 
 impl Backend {
-    pub const ALL: &'static [Backend] = &[Backend::Embree];
+    pub const ALL: &'static [Backend] = &[Backend::Embree, Backend::Bvh];
 
     pub fn name(self) -> &'static str {
         match self {
             Backend::Embree => "embree",
+            Backend::Bvh => "bvh",
         }
     }
 
     pub fn is_compiled(self) -> bool {
         match self {
             Backend::Embree => cfg!(feature = "embree"),
+            Backend::Bvh => true,
         }
     }
 
@@ -45,7 +49,7 @@ impl FromStr for Backend {
             .iter()
             .copied()
             .find(|b| b.name() == s)
-            .ok_or_else(|| format!("unknown backend '{s}' (expected one of: embree)"))
+            .ok_or_else(|| format!("unknown backend '{s}' (expected one of: embree, bvh)"))
     }
 }
 
@@ -60,5 +64,6 @@ pub fn create(backend: Backend, threads: Option<usize>) -> Result<Box<dyn Accele
             let _ = threads;
             Err(AccelError::BackendUnavailable("embree"))
         }
+        Backend::Bvh => Ok(Box::new(super::bvh::BvhAccel::new(threads))),
     }
 }

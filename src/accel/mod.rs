@@ -10,12 +10,15 @@
 //! half-updated scene. Nothing outside this module knows which backend it talks to.
 
 mod backend;
+pub mod bvh;
 #[cfg(feature = "embree")]
 pub mod embree;
 mod hit;
+mod load;
 
 pub use backend::{create, Backend};
 pub use hit::{Hit, HitObject};
+pub use load::{load_scene, LoadedScene};
 
 use glam::Affine3A;
 
@@ -95,4 +98,10 @@ pub trait Accelerator: Send + Sync {
 
     /// The committed scene; [`AccelError::NotCommitted`] while changes are staged.
     fn query(&self) -> Result<&dyn SceneQuery, AccelError>;
+
+    /// SAH cost of the committed static tree, for backends that expose their tree (the BVH);
+    /// compares insertion quality with a rebuild.
+    fn static_sah_cost(&self) -> Option<f32> {
+        None
+    }
 }

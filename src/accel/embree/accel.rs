@@ -17,6 +17,43 @@ struct InstanceSlot {
     normal_matrix: Mat3,
 }
 
+/// Build qualities of the backend's three kinds of scene, with named presets.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct EmbreeBuildParams {
+    /// Prototypes: built once, traced a lot.
+    pub prototype: BuildQuality,
+    /// The static scene's top structure over its meshes. LOW (with the scene's DYNAMIC flag)
+    /// selects Embree's two-level builder, which keeps each mesh's BVH across commits: adding
+    /// a baked island then costs a build of that island plus a small top rebuild. MEDIUM or
+    /// HIGH build one flat BVH over all static triangles at every commit.
+    pub static_scene: BuildQuality,
+    /// Each static mesh's own BVH under the two-level builder.
+    pub static_mesh: BuildQuality,
+    /// The top level over instances: rebuilt every frame.
+    pub top_level: BuildQuality,
+}
+
+impl EmbreeBuildParams {
+    /// What dormant renders with.
+    pub const DEFAULT: EmbreeBuildParams = EmbreeBuildParams {
+        prototype: BuildQuality::High,
+        static_scene: BuildQuality::Low,
+        static_mesh: BuildQuality::Medium,
+        top_level: BuildQuality::Low,
+    };
+
+    /// Every scene at one quality (for comparing Embree's builders).
+    pub const fn uniform(quality: BuildQuality) -> Self {
+        Self { prototype: quality, static_scene: quality, static_mesh: quality, top_level: quality }
+    }
+}
+
+impl Default for EmbreeBuildParams {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
 /// The Embree backend: a top-level scene of instances, one of which is the static scene.
 ///
 /// - Prototypes are frozen one-mesh scenes shared by their instances.
@@ -26,6 +63,7 @@ struct InstanceSlot {
 /// - The top level is rebuilt at LOW quality each commit; it holds only instances.
 pub struct EmbreeAccel {
     device: Device,
+    params: EmbreeBuildParams,
     prototypes: Vec<Arc<FrozenScene>>,
     top: Scene,
     instances: Vec<Option<InstanceSlot>>,
@@ -37,17 +75,18 @@ pub struct EmbreeAccel {
 
 impl EmbreeAccel {
     pub fn new(threads: Option<usize>) -> Result<Self, AccelError> {
-        Self::with_device(Device::new(threads)?)
+        Self::with_device(Device::new(threads)?, EmbreeBuildParams::DEFAULT)
     }
 
-    pub fn with_device(device: Device) -> Result<Self, AccelError> {
+    pub fn with_device(device: Device, params: EmbreeBuildParams) -> Result<Self, AccelError> {
         let static_scene =
-            Scene::new(&device, SceneFlags { dynamic: true, ..SceneFlags::default() }, BuildQuality::Medium)?;
+            Scene::new(&device, SceneFlags { dynamic: true, ..SceneFlags::default() }, params.static_scene)?;
         let mut top =
-            Scene::new(&device, SceneFlags { dynamic: true, ..SceneFlags::default() }, BuildQuality::Low)?;
+            Scene::new(&device, SceneFlags { dynamic: true, ..SceneFlags::default() }, params.top_level)?;
         top.attach_by_id(InstanceGeometry::owning(&device, static_scene, &Affine3A::IDENTITY)?, STATIC_SLOT)?;
         Ok(Self {
             device,
+            params,
             prototypes: Vec::new(),
             top,
             instances: Vec::new(),
@@ -67,10 +106,14 @@ impl EmbreeAccel {
         Ok(inst.child_mut().expect("the static slot owns its scene"))
     }
 
-    fn triangle_geometry(&self, mesh: &TriangleMesh) -> Result<(TriangleGeometry, usize), AccelError> {
+    fn triangle_geometry(
+        &self,
+        mesh: &TriangleMesh,
+        quality: BuildQuality,
+    ) -> Result<(TriangleGeometry, usize), AccelError> {
         mesh.validate()?;
         let skipped = (0..mesh.triangle_count()).filter(|&i| !mesh.triangle_is_valid(i)).count();
-        Ok((TriangleGeometry::new(&self.device, &mesh.positions, &mesh.indices)?, skipped))
+        Ok((TriangleGeometry::with_quality(&self.device, &mesh.positions, &mesh.indices, quality)?, skipped))
     }
 
     fn slot(&self, id: InstanceId) -> Result<&InstanceSlot, AccelError> {
@@ -96,8 +139,8 @@ impl Accelerator for EmbreeAccel {
     }
 
     fn add_prototype(&mut self, mesh: &TriangleMesh) -> Result<PrototypeId, AccelError> {
-        let (geometry, skipped) = self.triangle_geometry(mesh)?;
-        let mut scene = Scene::new(&self.device, SceneFlags::default(), BuildQuality::High)?;
+        let (geometry, skipped) = self.triangle_geometry(mesh, self.params.prototype)?;
+        let mut scene = Scene::new(&self.device, SceneFlags::default(), self.params.prototype)?;
         scene.attach(geometry)?;
         self.prototypes.push(scene.freeze()?);
         self.pending.built_triangles += mesh.triangle_count();
@@ -106,7 +149,7 @@ impl Accelerator for EmbreeAccel {
     }
 
     fn add_static(&mut self, mesh: &TriangleMesh) -> Result<StaticId, AccelError> {
-        let (geometry, skipped) = self.triangle_geometry(mesh)?;
+        let (geometry, skipped) = self.triangle_geometry(mesh, self.params.static_mesh)?;
         let id = self.free_statics.pop().unwrap_or(self.static_triangles.len() as u32);
         self.static_scene()?.attach_by_id(geometry, id)?;
         if id as usize == self.static_triangles.len() {

@@ -5,7 +5,10 @@ use glam::{Affine3A, Vec3};
 
 use super::device::Device;
 use super::error::EmbreeError;
-use super::scene::{FrozenScene, Scene};
+use super::scene::{BuildQuality, FrozenScene, Scene};
+
+/// Caller-owned vertex (padded to 16 bytes) and index buffers.
+type SharedBuffers = (Arc<[[f32; 4]]>, Arc<[[u32; 3]]>);
 
 /// A triangle mesh geometry. Immutable once created, so one geometry can be attached to several
 /// scenes at once (rtcAttachGeometry(3)); clones share the Embree object.
@@ -14,7 +17,7 @@ pub struct TriangleGeometry {
     device: Device,
     triangles: usize,
     /// Keeps user memory alive for shared buffers (Embree does not copy them).
-    _shared: Option<(Arc<[[f32; 4]]>, Arc<[[u32; 3]]>)>,
+    _shared: Option<SharedBuffers>,
 }
 
 // SAFETY: the geometry is immutable after construction (its buffers are never written again);
@@ -48,11 +51,27 @@ fn checked_u32(what: &'static str, count: usize) -> Result<u32, EmbreeError> {
 }
 
 impl TriangleGeometry {
-    /// Copies `positions` and `indices` into buffers Embree allocates and owns.
+    /// Copies `positions` and `indices` into buffers Embree allocates and owns. The geometry's
+    /// own BVH is built at medium quality (see [`Self::with_quality`]).
     pub fn new(device: &Device, positions: &[Vec3], indices: &[[u32; 3]]) -> Result<Self, EmbreeError> {
+        Self::with_quality(device, positions, indices, BuildQuality::Medium)
+    }
+
+    /// Like [`Self::new`], with the quality of the geometry's own BVH. That BVH exists when the
+    /// geometry sits in a scene built by Embree's two-level builder (a DYNAMIC scene at LOW
+    /// quality), which keeps it across commits (rtcSetGeometryBuildQuality(3)).
+    pub fn with_quality(
+        device: &Device,
+        positions: &[Vec3],
+        indices: &[[u32; 3]],
+        quality: BuildQuality,
+    ) -> Result<Self, EmbreeError> {
         let vertex_count = checked_u32("vertex buffer", positions.len())?;
         let triangle_count = checked_u32("index buffer", indices.len())?;
         let geometry = Self::empty(device, indices.len())?;
+        // SAFETY: `geometry.raw` is valid and not yet committed.
+        unsafe { sys::rtcSetGeometryBuildQuality(geometry.raw, quality.raw()) };
+        device.check()?;
         // SAFETY: `geometry.raw` is a valid triangle geometry. Embree returns a buffer of
         // `count * stride` bytes (or null on error, checked below); we write exactly that much.
         unsafe {

@@ -15,7 +15,7 @@ mod error;
 mod geometry;
 mod scene;
 
-pub use accel::EmbreeAccel;
+pub use accel::{EmbreeAccel, EmbreeBuildParams};
 pub use device::{Device, Version};
 pub use error::EmbreeError;
 pub use geometry::{InstanceGeometry, TriangleGeometry};

@@ -49,7 +49,7 @@ pub enum BuildQuality {
 impl BuildQuality {
     pub const ALL: [BuildQuality; 3] = [BuildQuality::Low, BuildQuality::Medium, BuildQuality::High];
 
-    fn raw(self) -> sys::RTCBuildQuality::Type {
+    pub(crate) fn raw(self) -> sys::RTCBuildQuality::Type {
         use sys::RTCBuildQuality::*;
         match self {
             BuildQuality::Low => RTC_BUILD_QUALITY_LOW,
