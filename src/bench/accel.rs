@@ -1,0 +1,317 @@
+//! `dormant bench accel`: builders, tracers and incremental insertion of Embree and the BVH on
+//! one scene with the same rays.
+//!
+//! - **build**: the instanced scene (static environment, one prototype, N instances), Embree
+//!   at LOW/MEDIUM/HIGH (all its scenes at that quality) and the BVH;
+//! - **trace**: primary rays (one per pixel) and diffuse-bounce rays (cosine-distributed from
+//!   the primary hits, generated once through Embree), closest hit, rayon over all cores; best
+//!   of three runs;
+//! - **insert**: every body baked into world space in islands of 1% of the bodies; a static
+//!   scene holding all but one island gets the last one added and committed (incremental),
+//!   against a from-scratch build of the same final scene; for the BVH also the SAH cost of
+//!   both trees.
+
+use glam::Vec2;
+use rayon::prelude::*;
+use serde::Serialize;
+
+use super::timed;
+use crate::accel::{self, AccelError, Accelerator, Backend, SceneQuery};
+use crate::crosscheck::camera_rays;
+use crate::geometry::{Ray, TriangleMesh};
+use crate::rng::SplitMix64;
+use crate::scene::SceneDescription;
+
+pub struct AccelBenchOptions {
+    pub width: u32,
+    pub height: u32,
+    /// Fraction of the bodies in the inserted island.
+    pub island_fraction: f64,
+    /// Repetitions of each trace measurement (the best is kept).
+    pub trace_runs: u32,
+    pub threads: Option<usize>,
+}
+
+impl Default for AccelBenchOptions {
+    fn default() -> Self {
+        Self { width: 1280, height: 720, island_fraction: 0.01, trace_runs: 3, threads: None }
+    }
+}
+
+/// Makes an empty accelerator of one backend and configuration.
+type AccelFactory = dyn Fn() -> Result<Box<dyn Accelerator>, AccelError>;
+
+#[derive(Clone, Debug, Serialize)]
+pub struct BuildTiming {
+    pub backend: Backend,
+    /// Embree build quality, or `"sah"` for the BVH's binned SAH builder.
+    pub quality: String,
+    pub ms: f64,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct TraceTiming {
+    pub backend: Backend,
+    pub quality: String,
+    pub primary_ms: f64,
+    pub bounce_ms: f64,
+    pub primary_mrays_per_s: f64,
+    pub bounce_mrays_per_s: f64,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct InsertTiming {
+    pub backend: Backend,
+    /// Triangles in the final static scene.
+    pub triangles: usize,
+    /// Triangles in the inserted island.
+    pub island_triangles: usize,
+    pub rebuild_ms: f64,
+    pub insert_ms: f64,
+    pub sah_after_insert: Option<f32>,
+    pub sah_rebuild: Option<f32>,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct AccelRatios {
+    /// BVH trace time over Embree's (MEDIUM), primary and bounce rays together.
+    pub bvh_over_embree_trace: f64,
+    /// The same against Embree at HIGH.
+    pub bvh_over_embree_high_trace: f64,
+    /// BVH build time of the instanced scene over Embree's (MEDIUM).
+    pub bvh_over_embree_build: f64,
+    pub bvh_rebuild_over_insert: f64,
+    pub bvh_insert_sah_over_rebuild: f64,
+    pub embree_rebuild_over_insert: f64,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct AccelBenchReport {
+    pub scene: String,
+    pub static_triangles: usize,
+    pub instances: usize,
+    pub instanced_triangles: usize,
+    pub primary_rays: usize,
+    pub bounce_rays: usize,
+    pub threads: usize,
+    pub build: Vec<BuildTiming>,
+    pub trace: Vec<TraceTiming>,
+    pub insert: Vec<InsertTiming>,
+    pub ratios: AccelRatios,
+}
+
+/// A backend, its build configuration's name, and how to make one.
+type Variant = (Backend, String, Box<AccelFactory>);
+
+/// Embree at each build quality; none when Embree is not compiled in.
+fn embree_variants(threads: Option<usize>) -> Vec<Variant> {
+    #[cfg(feature = "embree")]
+    {
+        crate::accel::embree::BuildQuality::ALL
+            .into_iter()
+            .map(|q| -> Variant {
+                (Backend::Embree, format!("{q:?}").to_lowercase(), Box::new(move || embree_at(q, threads)))
+            })
+            .collect()
+    }
+    #[cfg(not(feature = "embree"))]
+    {
+        let _ = threads;
+        Vec::new()
+    }
+}
+
+#[cfg(feature = "embree")]
+fn embree_at(
+    quality: crate::accel::embree::BuildQuality,
+    threads: Option<usize>,
+) -> Result<Box<dyn Accelerator>, AccelError> {
+    use crate::accel::embree::{Device, EmbreeAccel, EmbreeBuildParams};
+    let accel = EmbreeAccel::with_device(Device::new(threads)?, EmbreeBuildParams::uniform(quality))?;
+    Ok(Box::new(accel))
+}
+
+/// Traces `rays` (closest hit) over rayon; returns ms and a checksum that keeps the work alive.
+fn trace(query: &dyn SceneQuery, rays: &[Ray]) -> (f64, f64) {
+    let (sum, ms) =
+        timed(|| rays.par_iter().map(|r| query.intersect(r).map_or(0.0, |h| h.t as f64)).sum::<f64>());
+    (ms, sum)
+}
+
+fn best_trace(query: &dyn SceneQuery, rays: &[Ray], runs: u32) -> f64 {
+    (0..runs.max(1)).map(|_| trace(query, rays).0).fold(f64::INFINITY, f64::min)
+}
+
+/// Cosine-distributed bounce rays from the primary hits.
+fn bounce_rays(query: &dyn SceneQuery, primary: &[Ray]) -> Vec<Ray> {
+    let mut rng = SplitMix64::new(7);
+    let hits: Vec<_> =
+        primary.par_iter().map(|r| query.intersect(r).map(|h| (r.at(h.t), h.ng, r.dir))).collect();
+    hits.into_iter()
+        .flatten()
+        .map(|(p, ng, dir)| {
+            let n = if ng.dot(dir) > 0.0 { -ng } else { ng };
+            let u = Vec2::new(rng.unit(), rng.unit());
+            let (t, b) = n.any_orthonormal_pair();
+            let r = u.x.sqrt();
+            let phi = std::f32::consts::TAU * u.y;
+            let d = t * (r * phi.cos()) + b * (r * phi.sin()) + n * (1.0 - u.x).max(0.0).sqrt();
+            Ray::new(p + n * (1e-4 * p.abs().max_element().max(1.0)), d.normalize())
+        })
+        .collect()
+}
+
+/// The bodies baked into world space, grouped in islands of `island_size` bodies.
+fn baked_islands(desc: &SceneDescription, island_size: usize) -> Vec<TriangleMesh> {
+    desc.bodies
+        .chunks(island_size.max(1))
+        .map(|chunk| {
+            let mut island = TriangleMesh::default();
+            for b in chunk {
+                let m = desc.prototypes[b.prototype as usize].mesh.transformed(&b.transform);
+                let base = island.positions.len() as u32;
+                island.positions.extend(m.positions);
+                island.indices.extend(m.indices.iter().map(|t| t.map(|i| i + base)));
+            }
+            island
+        })
+        .collect()
+}
+
+fn insert_timing(
+    backend: Backend,
+    desc: &SceneDescription,
+    islands: &[TriangleMesh],
+    make: &AccelFactory,
+) -> Result<InsertTiming, AccelError> {
+    let (last, rest) = islands.split_last().expect("at least one island");
+    let env: Vec<&TriangleMesh> = desc.statics.iter().map(|s| &s.mesh).collect();
+
+    let mut fresh = make()?;
+    let rebuild_ms = {
+        for m in env.iter().copied().chain(islands) {
+            fresh.add_static(m)?;
+        }
+        timed(|| fresh.commit()).1
+    };
+    let sah_rebuild = fresh.static_sah_cost();
+    drop(fresh);
+
+    let mut grown = make()?;
+    for m in env.iter().copied().chain(rest) {
+        grown.add_static(m)?;
+    }
+    grown.commit()?;
+    let (result, insert_ms) = timed(|| {
+        grown.add_static(last)?;
+        grown.commit()
+    });
+    result?;
+    Ok(InsertTiming {
+        backend,
+        triangles: env.iter().copied().chain(islands).map(TriangleMesh::triangle_count).sum(),
+        island_triangles: last.triangle_count(),
+        rebuild_ms,
+        insert_ms,
+        sah_after_insert: grown.static_sah_cost(),
+        sah_rebuild,
+    })
+}
+
+pub fn bench_accel(
+    desc: &SceneDescription,
+    opts: &AccelBenchOptions,
+) -> Result<AccelBenchReport, AccelError> {
+    let threads = opts.threads;
+    let primary = camera_rays(desc, opts.width, opts.height);
+    let mut build = Vec::new();
+    let mut trace_timings = Vec::new();
+    let mut bounce: Option<Vec<Ray>> = None;
+
+    let bvh: Variant = (Backend::Bvh, "sah".into(), Box::new(move || accel::create(Backend::Bvh, threads)));
+    let variants: Vec<Variant> = embree_variants(threads).into_iter().chain([bvh]).collect();
+
+    for (backend, quality, make) in &variants {
+        // Prototypes are built as they are added, so the timing covers loading and commit.
+        let (a, ms) = timed(|| -> Result<_, AccelError> {
+            let mut a = make()?;
+            accel::load_scene(desc, a.as_mut())?;
+            a.commit()?;
+            Ok(a)
+        });
+        let a = a?;
+        tracing::info!("{backend}/{quality}: built in {ms:.1} ms");
+        build.push(BuildTiming { backend: *backend, quality: quality.clone(), ms });
+        let query = a.query()?;
+        let bounce = bounce.get_or_insert_with(|| bounce_rays(query, &primary));
+        let primary_ms = best_trace(query, &primary, opts.trace_runs);
+        let bounce_ms = best_trace(query, bounce, opts.trace_runs);
+        trace_timings.push(TraceTiming {
+            backend: *backend,
+            quality: quality.clone(),
+            primary_ms,
+            bounce_ms,
+            primary_mrays_per_s: primary.len() as f64 / primary_ms / 1e3,
+            bounce_mrays_per_s: bounce.len() as f64 / bounce_ms / 1e3,
+        });
+    }
+
+    let island_size = ((desc.bodies.len() as f64 * opts.island_fraction).round() as usize).max(1);
+    let islands = baked_islands(desc, island_size);
+    let mut insert = Vec::new();
+    if !islands.is_empty() {
+        #[cfg(feature = "embree")]
+        insert.push(insert_timing(Backend::Embree, desc, &islands, &move || {
+            accel::create(Backend::Embree, threads)
+        })?);
+        insert.push(insert_timing(Backend::Bvh, desc, &islands, &move || {
+            accel::create(Backend::Bvh, threads)
+        })?);
+    }
+
+    let find_build =
+        |b: Backend, q: &str| build.iter().find(|t| t.backend == b && t.quality == q).map(|t| t.ms);
+    let find_trace = |b: Backend, q: &str| {
+        trace_timings.iter().find(|t| t.backend == b && t.quality == q).map(|t| t.primary_ms + t.bounce_ms)
+    };
+    let ratio = |a: Option<f64>, b: Option<f64>| match (a, b) {
+        (Some(a), Some(b)) if b > 0.0 => a / b,
+        _ => f64::NAN,
+    };
+    let bvh_insert = insert.iter().find(|t| t.backend == Backend::Bvh);
+    let embree_insert = insert.iter().find(|t| t.backend == Backend::Embree);
+    let ratios = AccelRatios {
+        bvh_over_embree_trace: ratio(find_trace(Backend::Bvh, "sah"), find_trace(Backend::Embree, "medium")),
+        bvh_over_embree_high_trace: ratio(
+            find_trace(Backend::Bvh, "sah"),
+            find_trace(Backend::Embree, "high"),
+        ),
+        bvh_over_embree_build: ratio(find_build(Backend::Bvh, "sah"), find_build(Backend::Embree, "medium")),
+        bvh_rebuild_over_insert: ratio(bvh_insert.map(|t| t.rebuild_ms), bvh_insert.map(|t| t.insert_ms)),
+        bvh_insert_sah_over_rebuild: ratio(
+            bvh_insert.and_then(|t| t.sah_after_insert).map(f64::from),
+            bvh_insert.and_then(|t| t.sah_rebuild).map(f64::from),
+        ),
+        embree_rebuild_over_insert: ratio(
+            embree_insert.map(|t| t.rebuild_ms),
+            embree_insert.map(|t| t.insert_ms),
+        ),
+    };
+    Ok(AccelBenchReport {
+        scene: desc.name.clone(),
+        static_triangles: desc.statics.iter().map(|s| s.mesh.triangle_count()).sum(),
+        instances: desc.bodies.len(),
+        instanced_triangles: desc
+            .bodies
+            .iter()
+            .map(|b| desc.prototypes[b.prototype as usize].mesh.triangle_count())
+            .sum(),
+        primary_rays: primary.len(),
+        bounce_rays: bounce.map_or(0, |b| b.len()),
+        threads: threads.unwrap_or_else(rayon::current_num_threads),
+        build,
+        trace: trace_timings,
+        insert,
+        ratios,
+    })
+}

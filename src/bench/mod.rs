@@ -1,0 +1,16 @@
+//! Benchmarks that compose several domains, run side by side in one process so ratios are
+//! comparable on a shared, noisy machine. Each returns a serialisable report; the CLI writes
+//! it. (Domain-internal benchmarks, like physics stepping, live in their domain.)
+
+pub mod accel;
+
+pub use accel::{bench_accel, AccelBenchOptions, AccelBenchReport};
+
+use std::time::Instant;
+
+/// Milliseconds `f` took, with its result.
+pub(crate) fn timed<R>(f: impl FnOnce() -> R) -> (R, f64) {
+    let start = Instant::now();
+    let r = f();
+    (r, start.elapsed().as_secs_f64() * 1e3)
+}

@@ -1,0 +1,79 @@
+//! Benchmark scenes from real assets: a static environment glTF with a heap of instanced
+//! objects on its floor. The heap is laid out procedurally (a stepped pyramid of non-touching
+//! objects with random yaw), not simulated: it gives the accelerators the same load a settled
+//! pile does without needing physics.
+
+use std::path::Path;
+
+use glam::{Affine3A, Quat, Vec3};
+
+use super::description::{Body, Camera, Material, Prototype, SceneDescription, Sky, StaticMesh, Sun};
+use super::gltf::{load_gltf_mesh, GltfError};
+use crate::rng::SplitMix64;
+
+/// A heap of `count` copies of the `object` glTF in the middle of the `env` glTF's floor.
+pub fn asset_pile(env: &Path, object: &Path, count: usize, seed: u64) -> Result<SceneDescription, GltfError> {
+    let env_mesh = load_gltf_mesh(env)?;
+    let object_mesh = load_gltf_mesh(object)?;
+    let env_bounds = env_mesh.bounds();
+    let obj_bounds = object_mesh.bounds();
+    let size = obj_bounds.extent().max_element().max(1e-6);
+    // Scale objects to about 1/60 of the environment's width, like ducks in a monastery.
+    let scale = (env_bounds.extent().x.max(env_bounds.extent().z) / 60.0) / size;
+    let spacing = size * scale * 1.05;
+    let floor = env_bounds.min.y;
+    let centre = env_bounds.center();
+
+    let mut rng = SplitMix64::new(seed);
+    let mut bodies = Vec::with_capacity(count);
+    // Smallest base side whose pyramid holds `count` objects.
+    let mut base = 1usize;
+    while (1..=base).map(|n| n * n).sum::<usize>() < count {
+        base += 1;
+    }
+    'layers: for layer in 0..base {
+        let side = base - layer;
+        let half = (side as f32 - 1.0) * 0.5;
+        for i in 0..side {
+            for j in 0..side {
+                if bodies.len() == count {
+                    break 'layers;
+                }
+                let at = Vec3::new(
+                    centre.x + (i as f32 - half) * spacing,
+                    floor + (layer as f32 + 0.5) * spacing,
+                    centre.z + (j as f32 - half) * spacing,
+                );
+                // Re-centre the object on its bounds, then scale, turn and place it.
+                let transform = Affine3A::from_scale_rotation_translation(
+                    Vec3::splat(scale),
+                    Quat::from_rotation_y(rng.unit() * std::f32::consts::TAU),
+                    at,
+                ) * Affine3A::from_translation(-obj_bounds.center());
+                bodies.push(Body { prototype: 0, transform });
+            }
+        }
+    }
+
+    let extent = env_bounds.extent();
+    let name = |p: &Path| p.file_stem().map_or_else(|| "asset".into(), |s| s.to_string_lossy().into_owned());
+    Ok(SceneDescription {
+        name: format!("{} + {count} {}", name(env), name(object)),
+        materials: vec![Material::diffuse(Vec3::splat(0.6)), Material::diffuse(Vec3::new(0.8, 0.65, 0.2))],
+        statics: vec![StaticMesh { mesh: env_mesh, material: 0 }],
+        prototypes: vec![Prototype { name: name(object), mesh: object_mesh, material: 1 }],
+        bodies,
+        camera: Camera {
+            eye: centre + Vec3::new(0.35 * extent.x, 0.6 * extent.y.max(0.2 * extent.x), 0.35 * extent.z),
+            target: Vec3::new(centre.x, floor + base as f32 * spacing * 0.3, centre.z),
+            up: Vec3::Y,
+            vfov_deg: 50.0,
+        },
+        sun: Sun {
+            direction: Vec3::new(-0.4, 0.85, 0.3).normalize(),
+            irradiance: Vec3::new(3.0, 2.8, 2.5),
+            angular_radius_deg: 1.5,
+        },
+        sky: Sky::DAYLIGHT,
+    })
+}

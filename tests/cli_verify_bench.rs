@@ -1,0 +1,99 @@
+//! `dormant verify` and `dormant bench accel` end to end, on the built-in scene and (when
+//! ../shared/assets exists) on the monastery with ducks.
+#![cfg(feature = "embree")]
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn dormant() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_dormant"))
+}
+
+/// The shared real assets, or `None` (and a note) when this checkout does not have them.
+fn assets() -> Option<PathBuf> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/assets");
+    if dir.join("monastery.glb").is_file() && dir.join("duck.glb").is_file() {
+        Some(dir)
+    } else {
+        eprintln!("skipped: ../shared/assets is absent");
+        None
+    }
+}
+
+fn read_json(path: &Path) -> serde_json::Value {
+    serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap()
+}
+
+#[test]
+fn verify_default_scene_has_no_mismatches() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("verify.json");
+    let status = dormant()
+        .args(["verify", "--size", "160x90", "--surface-rays", "20000", "--json"])
+        .arg(&json)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let report = read_json(&json);
+    for key in ["rays", "mismatches", "ties", "max_t_rel_err"] {
+        assert!(report.get(key).is_some(), "missing {key}");
+    }
+    assert_eq!(report["rays"], 160 * 90 + 20000);
+    assert_eq!(report["mismatches"], 0);
+    assert!(report["max_t_rel_err"].as_f64().unwrap() <= 1e-4);
+}
+
+#[test]
+fn verify_monastery_with_ducks_has_no_mismatches() {
+    let Some(assets) = assets() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("verify.json");
+    let status = dormant()
+        .args(["verify", "--count", "300", "--size", "160x90", "--surface-rays", "20000", "--env"])
+        .arg(assets.join("monastery.glb"))
+        .arg("--object")
+        .arg(assets.join("duck.glb"))
+        .arg("--json")
+        .arg(&json)
+        .status()
+        .unwrap();
+    let report = read_json(&json);
+    assert!(status.success(), "{report:#}");
+    assert_eq!(report["mismatches"], 0);
+}
+
+#[test]
+fn bench_accel_reports_the_four_ratios() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("accel.json");
+    let status = dormant()
+        .args(["bench", "accel", "--size", "64x36", "--runs", "1", "--json"])
+        .arg(&json)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let report = read_json(&json);
+    for key in [
+        "bvh_over_embree_trace",
+        "bvh_over_embree_build",
+        "bvh_rebuild_over_insert",
+        "bvh_insert_sah_over_rebuild",
+    ] {
+        assert!(
+            report["ratios"][key].as_f64().is_some_and(f64::is_finite),
+            "ratio {key}: {:#}",
+            report["ratios"]
+        );
+    }
+}
+
+#[test]
+fn missing_asset_is_an_input_error() {
+    let output = dormant()
+        .args(["verify", "--env", "/nonexistent/env.glb", "--object", "/nonexistent/duck.glb"])
+        .output()
+        .unwrap();
+    assert_eq!(output.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(stderr.contains("/nonexistent/env.glb"), "{stderr}");
+}
