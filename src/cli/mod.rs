@@ -1,12 +1,19 @@
 //! The command line: parses arguments, sets up logging and thread pools, and wires the
 //! domains together. No rendering or geometry logic lives here.
 
+mod bench;
 mod info;
 mod render;
+mod simulate;
+mod verify;
 
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand};
+use std::path::{Path, PathBuf};
+
+use clap::{Args, Parser, Subcommand};
+
+use crate::scene::{self, SceneDescription};
 
 pub use info::InfoReport;
 
@@ -44,9 +51,6 @@ pub struct Cli {
     /// Print only errors.
     #[arg(long, short, global = true)]
     pub quiet: bool,
-    /// Print results as JSON on stdout.
-    #[arg(long, global = true)]
-    pub json: bool,
     #[command(subcommand)]
     pub command: Command,
 }
@@ -58,6 +62,18 @@ pub enum Command {
         after_help = "Examples:\n  dormant render --out out/demo\n  dormant render --size 640x360 --spp 4 --backend embree --out /tmp/preview"
     )]
     Render(render::RenderArgs),
+    /// Simulate a scene file with Rapier and record its trajectory and island events.
+    #[command(
+        after_help = "Examples:\n  dormant simulate scenes/tiny.toml --out out/tiny.traj\n  dormant simulate scenes/atrium.toml --count 8000 --out out/atrium.traj --json out/atrium-islands.json"
+    )]
+    Simulate(simulate::SimulateArgs),
+    /// Trace the same rays through Embree and the BVH and compare the hits.
+    #[command(
+        after_help = "Examples:\n  dormant verify --json out/verify.json\n  dormant verify --env ../shared/assets/monastery.glb --object ../shared/assets/duck.glb --count 8000"
+    )]
+    Verify(verify::VerifyArgs),
+    /// Benchmarks, run side by side in one process; results as JSON.
+    Bench(bench::BenchArgs),
     /// Print dormant's version, the Embree library and header versions, and the compiled
     /// backends, as JSON.
     Info,
@@ -92,7 +108,69 @@ pub fn run(cli: &Cli) -> Result<(), CliError> {
     }
     let threads = cli.threads.map(|n| n as usize);
     match &cli.command {
-        Command::Render(args) => render::run(args, threads, cli.quiet, cli.json),
+        Command::Render(args) => render::run(args, threads, cli.quiet),
+        Command::Simulate(args) => simulate::run(args, cli.quiet),
+        Command::Verify(args) => verify::run(args, threads, cli.quiet),
+        Command::Bench(args) => bench::run(args, threads, cli.quiet),
         Command::Info => info::run(threads),
+    }
+}
+
+/// Which scene a command works on: the built-in default, or an environment glTF with a heap of
+/// object glTFs.
+#[derive(Debug, Args)]
+pub struct SceneSource {
+    /// Static environment glTF (with --object: a heap of objects on its floor).
+    #[arg(long, value_name = "GLB", requires = "object")]
+    pub env: Option<PathBuf>,
+    /// Object glTF, instanced --count times.
+    #[arg(long, value_name = "GLB", requires = "env")]
+    pub object: Option<PathBuf>,
+    /// Number of objects in the heap.
+    #[arg(long, value_name = "N", default_value_t = 8000, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+    pub count: u32,
+}
+
+impl SceneSource {
+    pub fn load(&self) -> Result<SceneDescription, CliError> {
+        match (&self.env, &self.object) {
+            (Some(env), Some(object)) => scene::asset_pile(env, object, self.count as usize, 1)
+                .map_err(|e| CliError::Input(e.to_string())),
+            _ => Ok(scene::default_scene()),
+        }
+    }
+}
+
+/// Writes pretty JSON atomically (temporary file, then rename).
+pub(crate) fn write_json_atomic(path: &Path, value: &serde_json::Value) -> Result<(), CliError> {
+    let text = serde_json::to_string_pretty(value).expect("JSON values serialise");
+    crate::atomic_file::write_atomic(path, text.as_bytes())
+        .map_err(|e| CliError::Runtime(format!("cannot write {}: {e}", path.display())))
+}
+
+/// `--json [FILE]`: write the command's report as JSON to FILE, or to stdout when FILE is
+/// omitted or `-`.
+#[derive(Debug, Args)]
+pub struct JsonOutput {
+    /// Write the report as JSON to FILE (stdout if FILE is omitted or -).
+    #[arg(long = "json", value_name = "FILE", num_args = 0..=1, default_missing_value = "-")]
+    pub path: Option<PathBuf>,
+}
+
+impl JsonOutput {
+    pub fn is_requested(&self) -> bool {
+        self.path.is_some()
+    }
+
+    /// Emits `value` where `--json` asked for it; does nothing without `--json`.
+    pub fn emit(&self, value: &serde_json::Value) -> Result<(), CliError> {
+        match &self.path {
+            None => Ok(()),
+            Some(p) if p.as_os_str() == "-" => {
+                println!("{value:#}");
+                Ok(())
+            }
+            Some(p) => write_json_atomic(p, value),
+        }
     }
 }

@@ -4,8 +4,9 @@ use clap::Args;
 
 use super::CliError;
 use crate::accel::{self, Backend};
-use crate::render::{self, DirectLighting, RenderScene, RenderSettings};
-use crate::scene;
+use crate::render::{
+    self, AmbientOcclusion, DirectLighting, Integrator, PathTracer, RenderScene, RenderSettings,
+};
 
 /// Image size as `WIDTHxHEIGHT`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -28,8 +29,22 @@ impl std::str::FromStr for Size {
     }
 }
 
+/// What a render computes per pixel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum RenderMode {
+    /// Path tracing: sun, sky and indirect light, MIS, GGX metallic-roughness.
+    Path,
+    /// Direct light only (sun and sky with shadows): the quick preview.
+    Shaded,
+    /// Ambient occlusion within one scene unit.
+    Ao,
+}
+
 #[derive(Debug, Args)]
 pub struct RenderArgs {
+    #[command(flatten)]
+    pub scene: super::SceneSource,
     /// Output directory; frames are written as frame_NNNN.png.
     #[arg(long, value_name = "DIR", default_value = "out/render")]
     pub out: PathBuf,
@@ -39,20 +54,26 @@ pub struct RenderArgs {
     /// Samples per pixel.
     #[arg(long, value_name = "N", default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=65536))]
     pub spp: u32,
+    /// Rendering mode: path tracing, direct light only, or ambient occlusion.
+    #[arg(long, value_enum, default_value_t = RenderMode::Path)]
+    pub mode: RenderMode,
+    /// Longest path (bounces) in `path` mode.
+    #[arg(long, value_name = "N", default_value_t = 6, value_parser = clap::value_parser!(u32).range(1..=64))]
+    pub max_depth: u32,
     /// Ray tracing backend (default: the first compiled in, Embree preferred).
     #[arg(long)]
     pub backend: Option<Backend>,
+    /// Also write linear HDR radiance as frame_NNNN.exr.
+    #[arg(long)]
+    pub exr: bool,
+    #[command(flatten)]
+    pub json: super::JsonOutput,
     /// Exposure multiplier applied before tone mapping.
     #[arg(long, default_value_t = 1.0)]
     pub exposure: f32,
 }
 
-pub(super) fn run(
-    args: &RenderArgs,
-    threads: Option<usize>,
-    quiet: bool,
-    json: bool,
-) -> Result<(), CliError> {
+pub(super) fn run(args: &RenderArgs, threads: Option<usize>, quiet: bool) -> Result<(), CliError> {
     let backend = match args.backend {
         Some(b) if !b.is_compiled() => {
             return Err(CliError::Input(format!("backend '{b}' is not compiled into this build")));
@@ -73,36 +94,48 @@ pub(super) fn run(
         CliError::Runtime(format!("cannot create output directory {}: {e}", args.out.display()))
     })?;
 
-    let description = scene::default_scene();
+    let description = args.scene.load()?;
     let mut accel = accel::create(backend, threads).map_err(|e| CliError::Runtime(e.to_string()))?;
     let render_scene =
         RenderScene::build(&description, accel.as_mut()).map_err(|e| CliError::Runtime(e.to_string()))?;
     let query = accel.query().map_err(|e| CliError::Runtime(e.to_string()))?;
     let settings =
         RenderSettings { width: args.size.width, height: args.size.height, spp: args.spp, frame: 0 };
-    let (film, stats) = render::render_frame(&render_scene, query, &DirectLighting, &settings)
+    let path_tracer = PathTracer { max_depth: args.max_depth, ..PathTracer::default() };
+    let integrator: &dyn Integrator = match args.mode {
+        RenderMode::Path => &path_tracer,
+        RenderMode::Shaded => &DirectLighting,
+        RenderMode::Ao => &AmbientOcclusion { radius: 1.0 },
+    };
+    let (film, stats) = render::render_frame(&render_scene, query, integrator, &settings)
         .map_err(|e| CliError::Runtime(e.to_string()))?;
     let path = args.out.join("frame_0000.png");
     render::write_png_atomic(&film, args.exposure, &path).map_err(|e| CliError::Runtime(e.to_string()))?;
+    if args.exr {
+        render::write_exr_atomic(&film, &path.with_extension("exr"))
+            .map_err(|e| CliError::Runtime(e.to_string()))?;
+    }
 
-    if json {
+    if args.json.is_requested() {
         let report = serde_json::json!({
             "scene": render_scene.name,
             "backend": backend,
             "width": settings.width,
             "height": settings.height,
             "spp": settings.spp,
+            "mode": args.mode,
             "frames": [{ "path": path, "rays": stats.rays, "seconds": stats.seconds,
                          "mrays_per_second": stats.mrays_per_second() }],
         });
-        println!("{report:#}");
+        args.json.emit(&report)?;
     } else if !quiet {
         println!(
-            "rendered {} ({}x{}, {} spp, {backend}): {:.2} s, {} rays, {:.1} Mrays/s",
+            "rendered {} ({}x{}, {} spp, {:?} mode, {backend}): {:.2} s, {} rays, {:.1} Mrays/s",
             path.display(),
             settings.width,
             settings.height,
             settings.spp,
+            args.mode,
             stats.seconds,
             stats.rays,
             stats.mrays_per_second()

@@ -1,5 +1,3 @@
-use std::fs;
-use std::io::Write;
 use std::path::Path;
 
 use glam::Vec3;
@@ -44,27 +42,6 @@ impl Film {
     }
 }
 
-/// Writes `bytes` to `path` through a temporary file in the same directory and a rename, so
-/// readers never see a partial file and a failure leaves nothing behind.
-pub(crate) fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), RenderError> {
-    let io = |source| RenderError::Io { path: path.to_path_buf(), source };
-    let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    let name = path
-        .file_name()
-        .ok_or_else(|| io(std::io::Error::new(std::io::ErrorKind::InvalidInput, "path has no file name")))?;
-    let tmp = dir.join(format!(".{}.{}.tmp", name.to_string_lossy(), std::process::id()));
-    let result = (|| {
-        let mut f = fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-        fs::rename(&tmp, path)
-    })();
-    if result.is_err() {
-        let _ = fs::remove_file(&tmp);
-    }
-    result.map_err(io)
-}
-
 /// Encodes the film as an 8-bit sRGB PNG and writes it atomically.
 pub fn write_png_atomic(film: &Film, exposure: f32, path: &Path) -> Result<(), RenderError> {
     let img: ImageBuffer<Rgb<u8>, Vec<u8>> =
@@ -73,12 +50,37 @@ pub fn write_png_atomic(film: &Film, exposure: f32, path: &Path) -> Result<(), R
     let mut bytes = Vec::new();
     img.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png)
         .map_err(|source| RenderError::Encode { path: path.to_path_buf(), source })?;
-    write_atomic(path, &bytes)
+    crate::atomic_file::write_atomic(path, &bytes)
+        .map_err(|source| RenderError::Io { path: path.to_path_buf(), source })
+}
+
+/// Writes the film's linear radiance as a 32-bit float OpenEXR file, atomically.
+pub fn write_exr_atomic(film: &Film, path: &Path) -> Result<(), RenderError> {
+    let data: Vec<f32> = film.pixels.iter().flat_map(|p| p.to_array()).collect();
+    let img: image::Rgb32FImage =
+        ImageBuffer::from_raw(film.width, film.height, data).expect("film holds width * height pixels");
+    let mut bytes = Vec::new();
+    image::DynamicImage::ImageRgb32F(img)
+        .write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::OpenExr)
+        .map_err(|source| RenderError::Encode { path: path.to_path_buf(), source })?;
+    crate::atomic_file::write_atomic(path, &bytes)
+        .map_err(|source| RenderError::Io { path: path.to_path_buf(), source })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn exr_round_trips_linear_radiance() {
+        let mut film = Film::new(3, 2);
+        film.pixels[4] = Vec3::new(12.5, 0.25, 1e-3);
+        let path = std::env::temp_dir().join(format!("dormant-film-{}.exr", std::process::id()));
+        write_exr_atomic(&film, &path).unwrap();
+        let back = image::open(&path).unwrap().to_rgb32f();
+        std::fs::remove_file(&path).unwrap();
+        assert_eq!(back.get_pixel(1, 1).0, [12.5, 0.25, 1e-3]);
+    }
 
     #[test]
     fn tone_curve_is_monotonic_and_bounded() {
@@ -90,13 +92,5 @@ mod tests {
         }
         assert_eq!(srgb_encode(aces(Vec3::splat(1e9)).x), 255);
         assert_eq!(srgb_encode(aces(Vec3::ZERO).x), 0);
-    }
-
-    #[test]
-    fn failed_write_leaves_no_file() {
-        let dir = std::env::temp_dir().join(format!("dormant-film-{}", std::process::id()));
-        let missing = dir.join("no/such/dir/frame.png");
-        assert!(write_atomic(&missing, b"x").is_err());
-        assert!(!missing.exists());
     }
 }

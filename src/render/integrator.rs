@@ -1,7 +1,8 @@
 use std::f32::consts::PI;
 
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 
+use super::bsdf::{sample_cone, sample_cosine, Bsdf};
 use super::{PixelSampler, RenderScene};
 use crate::accel::SceneQuery;
 use crate::geometry::Ray;
@@ -30,31 +31,8 @@ pub(crate) mod dims {
     pub const PIXEL: u32 = 0;
     pub const SUN: u32 = 1;
     pub const SKY: u32 = 2;
-}
-
-/// An orthonormal basis around unit `n` (Duff et al. 2017).
-fn basis(n: Vec3) -> (Vec3, Vec3) {
-    let sign = 1.0f32.copysign(n.z);
-    let a = -1.0 / (sign + n.z);
-    let b = n.x * n.y * a;
-    (Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x), Vec3::new(b, sign + n.y * n.y * a, -n.y))
-}
-
-/// Uniform direction within the cone of half-angle `cos_max` around `axis`.
-fn sample_cone(axis: Vec3, cos_max: f32, u: Vec2) -> Vec3 {
-    let cos = 1.0 - u.x * (1.0 - cos_max);
-    let sin = (1.0 - cos * cos).max(0.0).sqrt();
-    let phi = 2.0 * PI * u.y;
-    let (t, b) = basis(axis);
-    (t * (sin * phi.cos()) + b * (sin * phi.sin()) + axis * cos).normalize()
-}
-
-/// Cosine-weighted direction in the hemisphere around `n`.
-fn sample_cosine(n: Vec3, u: Vec2) -> Vec3 {
-    let r = u.x.sqrt();
-    let phi = 2.0 * PI * u.y;
-    let (t, b) = basis(n);
-    (t * (r * phi.cos()) + b * (r * phi.sin()) + n * (1.0 - u.x).max(0.0).sqrt()).normalize()
+    /// Path vertices use `BOUNCE + 4 * depth + k`, `k` in 0..4.
+    pub const BOUNCE: u32 = 3;
 }
 
 /// Origin offset that keeps secondary rays off the surface they leave, scaled with the
@@ -106,19 +84,187 @@ impl Integrator for DirectLighting {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
+/// Unidirectional path tracing with next-event estimation of the sun and the sky, combined
+/// with BSDF sampling by multiple importance sampling (power heuristic), on the
+/// metallic-roughness BSDF, with Russian roulette after three bounces.
+#[derive(Clone, Copy, Debug)]
+pub struct PathTracer {
+    pub max_depth: u32,
+    /// Largest radiance one indirect contribution may add (like Cycles' "clamp indirect"):
+    /// trades a little energy in caustics (sun off glossy metal onto diffuse surfaces) for
+    /// no fireflies. `f32::INFINITY` keeps the estimator unbiased.
+    pub clamp_indirect: f32,
+}
 
-    #[test]
-    fn samples_stay_in_their_domains() {
-        let n = Vec3::new(0.3, -0.8, 0.52).normalize();
-        for i in 0..64 {
-            let u = Vec2::new((i % 8) as f32 / 8.0 + 0.01, (i / 8) as f32 / 8.0 + 0.01);
-            assert!(sample_cosine(n, u).dot(n) >= 0.0);
-            let c = sample_cone(n, 0.99, u);
-            assert!(c.dot(n) >= 0.99 - 1e-4);
-            assert!((c.length() - 1.0).abs() < 1e-4);
+impl Default for PathTracer {
+    fn default() -> Self {
+        Self { max_depth: 6, clamp_indirect: 4.0 }
+    }
+}
+
+/// Scales `c` down so its largest component is at most `max`.
+fn clamp_radiance(c: Vec3, max: f32) -> Vec3 {
+    let m = c.max_element();
+    if m > max {
+        c * (max / m)
+    } else {
+        c
+    }
+}
+
+fn power_heuristic(a: f32, b: f32) -> f32 {
+    let (a2, b2) = (a * a, b * b);
+    if a2 + b2 > 0.0 {
+        a2 / (a2 + b2)
+    } else {
+        0.0
+    }
+}
+
+/// The sun as an area light on the sky: a disc of `cos_max` around its direction with uniform
+/// radiance `radiance`, sampled uniformly over its solid angle `1 / pdf`.
+struct SunLight {
+    dir: Vec3,
+    cos_max: f32,
+    radiance: Vec3,
+    pdf: f32,
+}
+
+impl SunLight {
+    fn new(scene: &RenderScene) -> Self {
+        let cos_max = scene.sun.angular_radius_deg.max(0.01).to_radians().cos();
+        let solid_angle = 2.0 * PI * (1.0 - cos_max);
+        Self {
+            dir: scene.sun.direction,
+            cos_max,
+            radiance: scene.sun.irradiance / solid_angle,
+            pdf: 1.0 / solid_angle,
         }
+    }
+
+    fn contains(&self, d: Vec3) -> bool {
+        d.dot(self.dir) >= self.cos_max
+    }
+}
+
+impl Integrator for PathTracer {
+    fn li(
+        &self,
+        scene: &RenderScene,
+        query: &dyn SceneQuery,
+        camera_ray: &Ray,
+        sampler: &PixelSampler,
+        index: u32,
+        rays: &mut u64,
+    ) -> Vec3 {
+        let sun = SunLight::new(scene);
+        let mut ray = *camera_ray;
+        let mut radiance = Vec3::ZERO;
+        let mut beta = Vec3::ONE;
+        let clamp = self.clamp_indirect;
+        // Direct light at the first vertex is never clamped; everything later is.
+        let add = |radiance: &mut Vec3, c: Vec3, depth: u32| {
+            *radiance += if depth == 0 { c } else { clamp_radiance(c, clamp) };
+        };
+        // The BSDF sample that made `ray`: its pdf and the shading normal it left from (for the
+        // sky's light pdf); `None` for the camera ray, which sees lights without MIS.
+        let mut came_from: Option<(f32, Vec3)> = None;
+        for depth in 0..self.max_depth {
+            *rays += 1;
+            let Some(hit) = query.intersect(&ray) else {
+                let d = ray.dir.normalize();
+                let sky = scene.sky.radiance(d);
+                let sun_l = if sun.contains(d) { sun.radiance } else { Vec3::ZERO };
+                let c = beta
+                    * match came_from {
+                        None => sky + sun_l,
+                        Some((p, n)) => {
+                            let w_sky = power_heuristic(p, n.dot(d).max(0.0) / PI);
+                            sky * w_sky + sun_l * power_heuristic(p, sun.pdf)
+                        }
+                    };
+                // Light reached through a bounce from vertex depth-1.
+                add(&mut radiance, c, depth.saturating_sub(1));
+                break;
+            };
+            let s = scene.surface(&ray, &hit);
+            let wo = -ray.dir.normalize();
+            let bsdf = Bsdf::new(&s.material, s.ns);
+            let origin = offset_origin(s.p, s.ng);
+            let dim = dims::BOUNCE + 4 * depth;
+
+            // Sun: sample its disc.
+            let l = sample_cone(sun.dir, sun.cos_max, sampler.get_2d(index, dim));
+            let f = bsdf.eval(wo, l);
+            if f != Vec3::ZERO && s.ng.dot(l) > 0.0 {
+                *rays += 1;
+                if !query.intersect_p(&Ray::new(origin, l)) {
+                    let w = power_heuristic(sun.pdf, bsdf.pdf(wo, l));
+                    add(&mut radiance, beta * f * sun.radiance * (w / sun.pdf), depth);
+                }
+            }
+            // Sky: cosine-weighted around the shading normal.
+            let d = sample_cosine(s.ns, sampler.get_2d(index, dim + 1));
+            let pdf_sky = s.ns.dot(d).max(0.0) / PI;
+            let f = bsdf.eval(wo, d);
+            if f != Vec3::ZERO && pdf_sky > 0.0 && s.ng.dot(d) > 0.0 {
+                *rays += 1;
+                if !query.intersect_p(&Ray::new(origin, d)) {
+                    let w = power_heuristic(pdf_sky, bsdf.pdf(wo, d));
+                    add(&mut radiance, beta * f * scene.sky.radiance(d) * (w / pdf_sky), depth);
+                }
+            }
+
+            // Continue the path by sampling the BSDF.
+            let u = sampler.get_2d(index, dim + 2);
+            let u_lobe = sampler.get_2d(index, dim + 3);
+            let Some(sample) = bsdf.sample(wo, u, u_lobe.x) else { break };
+            if s.ng.dot(sample.wi) <= 0.0 {
+                break;
+            }
+            beta *= sample.weight;
+            if depth >= 3 {
+                let q = beta.max_element().min(0.95);
+                if u_lobe.y >= q {
+                    break;
+                }
+                beta /= q;
+            }
+            came_from = Some((sample.pdf, s.ns));
+            ray = Ray::new(origin, sample.wi);
+        }
+        radiance
+    }
+}
+
+/// Ambient occlusion: the fraction of a cosine-weighted hemisphere that is open within
+/// `radius`, shown as grey.
+#[derive(Clone, Copy, Debug)]
+pub struct AmbientOcclusion {
+    pub radius: f32,
+}
+
+impl Integrator for AmbientOcclusion {
+    fn li(
+        &self,
+        scene: &RenderScene,
+        query: &dyn SceneQuery,
+        ray: &Ray,
+        sampler: &PixelSampler,
+        index: u32,
+        rays: &mut u64,
+    ) -> Vec3 {
+        *rays += 1;
+        let Some(hit) = query.intersect(ray) else {
+            return Vec3::ONE;
+        };
+        let s = scene.surface(ray, &hit);
+        let d = sample_cosine(s.ns, sampler.get_2d(index, dims::SKY));
+        if s.ng.dot(d) <= 0.0 {
+            return Vec3::ZERO;
+        }
+        *rays += 1;
+        let open = !query.intersect_p(&Ray::segment(offset_origin(s.p, s.ng), d, 0.0, self.radius));
+        Vec3::splat(if open { 0.8 } else { 0.0 })
     }
 }

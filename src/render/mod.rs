@@ -1,6 +1,7 @@
 //! Turning a committed scene into pixels: camera rays, shading, tiles over rayon, the film and
 //! image output. Talks to geometry only through [`crate::accel::SceneQuery`].
 
+mod bsdf;
 mod camera;
 mod film;
 mod integrator;
@@ -8,9 +9,10 @@ mod render_scene;
 mod sampler;
 mod tiles;
 
+pub use bsdf::{Bsdf, BsdfSample};
 pub use camera::PinholeCamera;
-pub use film::{write_png_atomic, Film};
-pub use integrator::{DirectLighting, Integrator};
+pub use film::{write_exr_atomic, write_png_atomic, Film};
+pub use integrator::{AmbientOcclusion, DirectLighting, Integrator, PathTracer};
 pub use render_scene::{RenderScene, SurfaceHit};
 pub use sampler::PixelSampler;
 pub use tiles::{render_frame, RenderSettings, RenderStats};

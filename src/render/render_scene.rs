@@ -1,7 +1,7 @@
 use glam::{Mat3, Vec3};
 
 use super::RenderError;
-use crate::accel::{Accelerator, Hit, HitObject};
+use crate::accel::{load_scene, Accelerator, Hit, HitObject};
 use crate::geometry::{Ray, TriangleMesh};
 use crate::scene::{Material, SceneDescription, Sky, Sun};
 
@@ -44,54 +44,51 @@ fn place<T>(v: &mut Vec<Option<T>>, index: u32, value: T) {
 }
 
 impl RenderScene {
-    /// Loads `desc` into `accel` (static meshes, one prototype per mesh, one instance per
-    /// body) and commits it.
+    /// Loads `desc` into `accel` (see [`crate::accel::load_scene`]), commits it, and records
+    /// how to shade every object it holds.
     pub fn build(desc: &SceneDescription, accel: &mut dyn Accelerator) -> Result<Self, RenderError> {
         let bad = |what: String| RenderError::Scene { scene: desc.name.clone(), what };
-        let material_ok = |m: u32| (m as usize) < desc.materials.len();
+        let material = |m: u32, what: &dyn Fn() -> String| {
+            if (m as usize) < desc.materials.len() {
+                Ok(m)
+            } else {
+                Err(bad(format!("{}: material {m} does not exist", what())))
+            }
+        };
+        let loaded = load_scene(desc, accel)?;
+        accel.commit()?;
         let mut scene = RenderScene {
             name: desc.name.clone(),
             camera: desc.camera,
             sun: desc.sun,
             sky: desc.sky,
-            meshes: Vec::new(),
+            meshes: Vec::with_capacity(desc.statics.len() + desc.prototypes.len()),
             materials: desc.materials.clone(),
             statics: Vec::new(),
             instances: Vec::new(),
         };
-        for (i, s) in desc.statics.iter().enumerate() {
-            if !material_ok(s.material) {
-                return Err(bad(format!("static mesh {i}: material {} does not exist", s.material)));
-            }
-            let id = accel.add_static(&s.mesh)?;
-            place(
-                &mut scene.statics,
-                id.0,
-                ObjectRef {
-                    mesh: scene.meshes.len() as u32,
-                    material: s.material,
-                    normal_matrix: Mat3::IDENTITY,
-                },
-            );
+        for (i, (s, id)) in desc.statics.iter().zip(&loaded.statics).enumerate() {
+            let object = ObjectRef {
+                mesh: scene.meshes.len() as u32,
+                material: material(s.material, &|| format!("static mesh {i}"))?,
+                normal_matrix: Mat3::IDENTITY,
+            };
+            place(&mut scene.statics, id.0, object);
             scene.meshes.push(s.mesh.clone());
         }
-        let mut prototypes = Vec::new();
+        let first_prototype_mesh = scene.meshes.len() as u32;
         for p in &desc.prototypes {
-            if !material_ok(p.material) {
-                return Err(bad(format!("prototype '{}': material {} does not exist", p.name, p.material)));
-            }
-            prototypes.push((accel.add_prototype(&p.mesh)?, scene.meshes.len() as u32, p.material));
+            material(p.material, &|| format!("prototype '{}'", p.name))?;
             scene.meshes.push(p.mesh.clone());
         }
-        for (i, b) in desc.bodies.iter().enumerate() {
-            let &(proto, mesh, material) = prototypes
-                .get(b.prototype as usize)
-                .ok_or_else(|| bad(format!("body {i}: prototype {} does not exist", b.prototype)))?;
-            let id = accel.add_instance(proto, b.transform)?;
-            let normal_matrix = Mat3::from(b.transform.matrix3).inverse().transpose();
-            place(&mut scene.instances, id.0, ObjectRef { mesh, material, normal_matrix });
+        for (b, id) in desc.bodies.iter().zip(&loaded.instances) {
+            let object = ObjectRef {
+                mesh: first_prototype_mesh + b.prototype,
+                material: desc.prototypes[b.prototype as usize].material,
+                normal_matrix: Mat3::from(b.transform.matrix3).inverse().transpose(),
+            };
+            place(&mut scene.instances, id.0, object);
         }
-        accel.commit()?;
         Ok(scene)
     }
 

@@ -7,6 +7,15 @@ use super::integrator::dims;
 use super::{Film, Integrator, PinholeCamera, PixelSampler, RenderError, RenderScene};
 use crate::accel::SceneQuery;
 
+/// Pixel offset distributed as a tent filter of radius one pixel per axis. Filter importance
+/// sampling (as in pbrt-v4): each sample is weighted 1 and lands where the filter puts it, so
+/// every pixel is computed alone (no splatting across tile borders) and the result is the
+/// tent-filtered image.
+fn tent_offset(u: Vec2) -> Vec2 {
+    let tent = |u: f32| if u < 0.5 { (2.0 * u).sqrt() - 1.0 } else { 1.0 - (2.0 - 2.0 * u).sqrt() };
+    Vec2::new(tent(u.x), tent(u.y))
+}
+
 /// Side of the square tiles rayon distributes.
 const TILE: u32 = 16;
 
@@ -72,8 +81,11 @@ pub fn render_frame(
                     let mut sum = Vec3::ZERO;
                     for i in 0..settings.spp {
                         // Box reconstruction: samples uniform over the pixel's area.
-                        let jitter =
-                            if settings.spp == 1 { Vec2::splat(0.5) } else { sampler.get_2d(i, dims::PIXEL) };
+                        let jitter = if settings.spp == 1 {
+                            Vec2::splat(0.5)
+                        } else {
+                            Vec2::splat(0.5) + tent_offset(sampler.get_2d(i, dims::PIXEL))
+                        };
                         let ray = camera.ray(x as f32 + jitter.x, y as f32 + jitter.y);
                         sum += integrator.li(scene, query, &ray, &sampler, i, &mut rays);
                     }

@@ -1,5 +1,5 @@
 //! The built-in default scene: a ground plane, a few boxes and spheres, a camera and a sun.
-//! Boxes and spheres are instances of two shared prototypes, so the default scene exercises
+//! Boxes and spheres are instances of shared prototypes, so the default scene exercises
 //! both levels of the accelerator.
 
 use glam::{Affine3A, Quat, Vec3};
@@ -9,10 +9,11 @@ use crate::geometry::primitives;
 
 pub fn default_scene() -> SceneDescription {
     let materials = vec![
-        Material::diffuse(Vec3::new(0.55, 0.55, 0.52)), // 0 ground
-        Material::diffuse(Vec3::new(0.80, 0.25, 0.18)), // 1 box red
-        Material::diffuse(Vec3::new(0.20, 0.45, 0.80)), // 2 sphere blue
-        Material::diffuse(Vec3::new(0.85, 0.70, 0.25)), // 3 plinth
+        Material::diffuse(Vec3::new(0.55, 0.55, 0.52)),     // 0 ground
+        Material::diffuse(Vec3::new(0.80, 0.25, 0.18)),     // 1 box red
+        Material::diffuse(Vec3::new(0.20, 0.45, 0.80)),     // 2 sphere blue
+        Material::diffuse(Vec3::new(0.85, 0.70, 0.25)),     // 3 plinth
+        Material::metal(Vec3::new(0.95, 0.78, 0.45), 0.25), // 4 gold
     ];
     let statics = vec![
         StaticMesh { mesh: primitives::ground_plane(30.0, 0.0, 8), material: 0 },
@@ -27,6 +28,7 @@ pub fn default_scene() -> SceneDescription {
     let prototypes = vec![
         Prototype { name: "box".into(), mesh: primitives::cuboid(Vec3::splat(0.5)), material: 1 },
         Prototype { name: "sphere".into(), mesh: primitives::uv_sphere(0.5, 48, 24), material: 2 },
+        Prototype { name: "gold sphere".into(), mesh: primitives::uv_sphere(0.5, 48, 24), material: 4 },
     ];
     let boxes = [
         (Vec3::new(-2.2, 0.5, 0.0), 0.35, 1.0),
@@ -34,10 +36,11 @@ pub fn default_scene() -> SceneDescription {
         (Vec3::new(-0.6, 0.4, 1.6), 0.7, 0.8),
         (Vec3::new(2.5, 1.0, -1.0), 0.2, 1.0),
     ];
+    // (centre, diameter, prototype)
     let spheres = [
-        (Vec3::new(0.2, 0.7, -0.3), 1.4),
-        (Vec3::new(1.6, 0.45, 1.4), 0.9),
-        (Vec3::new(-3.6, 0.4, 1.8), 0.8),
+        (Vec3::new(0.2, 0.7, -0.3), 1.4, 2),
+        (Vec3::new(1.6, 0.45, 1.4), 0.9, 1),
+        (Vec3::new(-3.6, 0.4, 1.8), 0.8, 1),
     ];
     let mut bodies: Vec<Body> = boxes
         .iter()
@@ -50,8 +53,8 @@ pub fn default_scene() -> SceneDescription {
             ),
         })
         .collect();
-    bodies.extend(spheres.iter().map(|&(at, size)| Body {
-        prototype: 1,
+    bodies.extend(spheres.iter().map(|&(at, size, prototype)| Body {
+        prototype,
         transform: Affine3A::from_scale_rotation_translation(Vec3::splat(size), Quat::IDENTITY, at),
     }));
     SceneDescription {
@@ -68,13 +71,9 @@ pub fn default_scene() -> SceneDescription {
         },
         sun: Sun {
             direction: Vec3::new(-0.5, 0.8, 0.35).normalize(),
-            irradiance: Vec3::new(3.0, 2.8, 2.5),
+            irradiance: Vec3::new(2.4, 2.25, 2.0),
             angular_radius_deg: 2.0,
         },
-        sky: Sky {
-            zenith: Vec3::new(0.25, 0.45, 0.85),
-            horizon: Vec3::new(0.75, 0.82, 0.90),
-            ground: Vec3::new(0.25, 0.23, 0.21),
-        },
+        sky: Sky::DAYLIGHT,
     }
 }

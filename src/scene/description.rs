@@ -2,18 +2,32 @@ use glam::{Affine3A, Vec3};
 
 use crate::geometry::TriangleMesh;
 
-/// A simple metallic-roughness material.
+/// A glTF metallic-roughness material.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Material {
     /// Linear RGB reflectance.
     pub base_color: Vec3,
     pub roughness: f32,
     pub metallic: f32,
+    /// Strength of the dielectric specular layer (KHR_materials_specular's `specularFactor`):
+    /// 1 is glTF's default F0 of 0.04, 0 leaves a pure Lambertian surface.
+    pub specular: f32,
 }
 
 impl Material {
+    /// A rough dielectric, as glTF's default material with this base colour.
     pub fn diffuse(base_color: Vec3) -> Self {
-        Self { base_color, roughness: 1.0, metallic: 0.0 }
+        Self { base_color, roughness: 1.0, metallic: 0.0, specular: 1.0 }
+    }
+
+    /// A metal with the given colour and roughness.
+    pub fn metal(base_color: Vec3, roughness: f32) -> Self {
+        Self { base_color, roughness, metallic: 1.0, specular: 1.0 }
+    }
+
+    /// A pure Lambertian reflector (no specular layer): analytic tests and furnaces.
+    pub fn lambertian(albedo: Vec3) -> Self {
+        Self { base_color: albedo, roughness: 1.0, metallic: 0.0, specular: 0.0 }
     }
 }
 
@@ -71,6 +85,13 @@ pub struct Sky {
 }
 
 impl Sky {
+    /// A clear daylight sky.
+    pub const DAYLIGHT: Sky = Sky {
+        zenith: Vec3::new(0.25, 0.45, 0.85),
+        horizon: Vec3::new(0.75, 0.82, 0.90),
+        ground: Vec3::new(0.25, 0.23, 0.21),
+    };
+
     /// Radiance arriving from unit direction `dir`.
     pub fn radiance(&self, dir: Vec3) -> Vec3 {
         let y = dir.y;

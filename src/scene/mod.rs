@@ -3,6 +3,10 @@
 
 mod builtin;
 mod description;
+pub mod file;
+pub mod gltf;
+mod pile;
 
 pub use builtin::default_scene;
 pub use description::{Body, Camera, Material, Prototype, SceneDescription, Sky, StaticMesh, Sun};
+pub use pile::asset_pile;

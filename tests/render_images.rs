@@ -1,0 +1,127 @@
+//! Renderer tests: analytic scenes (white furnace, a directly lit plane), deterministic output
+//! across thread counts, and equal images from both backends.
+
+use std::process::Command;
+
+use dormant::accel::{self, Backend};
+use dormant::geometry::primitives;
+use dormant::render::{render_frame, Film, Integrator, PathTracer, RenderScene, RenderSettings};
+use dormant::scene::{Body, Camera, Material, Prototype, SceneDescription, Sky, StaticMesh, Sun};
+use glam::{Affine3A, Vec3};
+
+fn backend() -> Backend {
+    Backend::compiled()[0]
+}
+
+fn render(
+    desc: &SceneDescription,
+    backend: Backend,
+    integrator: &dyn Integrator,
+    size: u32,
+    spp: u32,
+) -> Film {
+    let mut a = accel::create(backend, None).unwrap();
+    let scene = RenderScene::build(desc, a.as_mut()).unwrap();
+    let settings = RenderSettings { width: size, height: size, spp, frame: 0 };
+    render_frame(&scene, a.query().unwrap(), integrator, &settings).unwrap().0
+}
+
+fn empty_scene(camera: Camera, sun: Sun, sky: Sky) -> SceneDescription {
+    SceneDescription {
+        name: "test".into(),
+        materials: Vec::new(),
+        statics: Vec::new(),
+        prototypes: Vec::new(),
+        bodies: Vec::new(),
+        camera,
+        sun,
+        sky,
+    }
+}
+
+const NO_SUN: Sun = Sun { direction: Vec3::Y, irradiance: Vec3::ZERO, angular_radius_deg: 0.5 };
+
+#[test]
+fn white_furnace_sphere_reflects_its_albedo_of_the_sky() {
+    // A Lambertian sphere of albedo 0.8 under a uniform sky of radiance 1: it is convex, so
+    // every reflected ray escapes and the sphere's radiance is exactly 0.8.
+    let camera = Camera { eye: Vec3::new(0.0, 0.0, 4.0), target: Vec3::ZERO, up: Vec3::Y, vfov_deg: 40.0 };
+    let mut desc =
+        empty_scene(camera, NO_SUN, Sky { zenith: Vec3::ONE, horizon: Vec3::ONE, ground: Vec3::ONE });
+    desc.materials.push(Material::lambertian(Vec3::splat(0.8)));
+    desc.prototypes.push(Prototype {
+        name: "sphere".into(),
+        mesh: primitives::uv_sphere(1.0, 64, 32),
+        material: 0,
+    });
+    desc.bodies.push(Body { prototype: 0, transform: Affine3A::IDENTITY });
+    let film = render(
+        &desc,
+        backend(),
+        &PathTracer { clamp_indirect: f32::INFINITY, ..PathTracer::default() },
+        32,
+        64,
+    );
+    // The central 8x8 pixels all see the sphere.
+    let mut sum = Vec3::ZERO;
+    for y in 12..20 {
+        for x in 12..20 {
+            sum += film.pixels[y * 32 + x];
+        }
+    }
+    let mean = sum / 64.0;
+    assert!((mean - Vec3::splat(0.8)).abs().max_element() < 0.01, "furnace radiance {mean}, expected 0.8");
+    // Pixels that miss the sphere see the sky.
+    assert!((film.pixels[0] - Vec3::ONE).abs().max_element() < 1e-6);
+}
+
+#[test]
+fn directly_lit_plane_matches_the_closed_form() {
+    // L = albedo / pi * E * cos(theta) for a Lambertian plane under a sun of irradiance E.
+    let elevation = 60f32.to_radians();
+    let sun = Sun {
+        direction: Vec3::new(0.0, elevation.sin(), elevation.cos()),
+        irradiance: Vec3::splat(2.0),
+        angular_radius_deg: 0.25,
+    };
+    let camera = Camera { eye: Vec3::new(0.0, 5.0, 0.0), target: Vec3::ZERO, up: Vec3::Z, vfov_deg: 30.0 };
+    let black = Sky { zenith: Vec3::ZERO, horizon: Vec3::ZERO, ground: Vec3::ZERO };
+    let mut desc = empty_scene(camera, sun, black);
+    desc.materials.push(Material::lambertian(Vec3::splat(0.5)));
+    desc.statics.push(StaticMesh { mesh: primitives::ground_plane(100.0, 0.0, 1), material: 0 });
+    let film = render(&desc, backend(), &PathTracer::default(), 16, 16);
+    let expected = 0.5 / std::f32::consts::PI * 2.0 * elevation.sin();
+    for p in &film.pixels {
+        assert!((p.x - expected).abs() < 0.01 * expected, "pixel {p}, expected {expected}");
+    }
+}
+
+#[cfg(feature = "embree")]
+#[test]
+fn embree_and_bvh_images_agree_within_float_noise() {
+    let desc = dormant::scene::default_scene();
+    let pt = PathTracer::default();
+    let a = render(&desc, Backend::Embree, &pt, 64, 8);
+    let b = render(&desc, Backend::Bvh, &pt, 64, 8);
+    let n = a.pixels.len() as f32;
+    let mse: f32 =
+        a.pixels.iter().zip(&b.pixels).map(|(x, y)| (*x - *y).length_squared() / 3.0).sum::<f32>() / n;
+    assert!(mse.sqrt() < 1e-3, "RMSE {} between Embree and BVH images", mse.sqrt());
+}
+
+#[test]
+fn png_is_byte_identical_with_one_and_two_threads() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut pngs = Vec::new();
+    for threads in ["1", "2"] {
+        let out = dir.path().join(threads);
+        let status = Command::new(env!("CARGO_BIN_EXE_dormant"))
+            .args(["--threads", threads, "render", "--size", "64x40", "--spp", "4", "--quiet", "--out"])
+            .arg(&out)
+            .status()
+            .unwrap();
+        assert!(status.success());
+        pngs.push(std::fs::read(out.join("frame_0000.png")).unwrap());
+    }
+    assert!(pngs[0] == pngs[1], "images differ between 1 and 2 threads");
+}
