@@ -11,6 +11,7 @@ pub mod bench;
 pub mod cli;
 pub mod crosscheck;
 pub mod geometry;
+pub mod integrate;
 pub mod physics;
 pub mod render;
 pub(crate) mod rng;

@@ -44,6 +44,23 @@ fn verify_default_scene_has_no_mismatches() {
 }
 
 #[test]
+fn verify_simulated_frames_of_a_scene_file_has_no_mismatches() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("verify.json");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/tiny.toml");
+    let status = dormant()
+        .args(["verify", "--size", "96x54", "--surface-rays", "20000", "--check-frames", "3", "--json"])
+        .arg(&json)
+        .arg(&scene)
+        .status()
+        .unwrap();
+    let report = read_json(&json);
+    assert!(status.success(), "{report:#}");
+    assert_eq!(report["frames"].as_array().unwrap().len(), 3);
+    assert_eq!(report["mismatches"], 0);
+}
+
+#[test]
 fn verify_monastery_with_ducks_has_no_mismatches() {
     let Some(assets) = assets() else { return };
     let dir = tempfile::tempdir().unwrap();

@@ -1,12 +1,31 @@
+use std::path::PathBuf;
+
 use clap::Args;
 
 use super::{CliError, JsonOutput, SceneSource};
 use crate::accel::{self, Backend};
 use crate::crosscheck::{self, Tolerance, VerifyReport};
+use crate::integrate::{describe_frame, SceneAssets};
+use crate::physics::{self, SimulateOptions};
 use crate::render::RenderScene;
+use crate::scene::file::SceneFile;
+use crate::scene::SceneDescription;
 
 #[derive(Debug, Args)]
 pub struct VerifyArgs {
+    /// Scene file to simulate; several of its frames are checked (default: the built-in
+    /// scene, or --env/--object).
+    #[arg(value_name = "SCENE", conflicts_with_all = ["env", "object"])]
+    pub scene_file: Option<PathBuf>,
+    /// With SCENE: total dynamic objects (overrides the spawners' counts).
+    #[arg(long = "objects", value_name = "N")]
+    pub objects: Option<u32>,
+    /// With SCENE: frames to simulate.
+    #[arg(long, value_name = "N")]
+    pub frames: Option<u32>,
+    /// With SCENE: how many frames, evenly spaced and ending with the last, to check.
+    #[arg(long, value_name = "N", default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=1000))]
+    pub check_frames: u32,
     #[command(flatten)]
     pub scene: SceneSource,
     /// Camera rays: one per pixel of an image of this size.
@@ -30,27 +49,36 @@ pub(super) fn run(args: &VerifyArgs, threads: Option<usize>, quiet: bool) -> Res
             )));
         }
     }
-    let desc = args.scene.load()?;
+    let (descs, frames) = match &args.scene_file {
+        Some(path) => simulated_frames(path, args)?,
+        None => (vec![args.scene.load()?], Vec::new()),
+    };
     let runtime = |e: &dyn std::fmt::Display| CliError::Runtime(e.to_string());
-    let mut reference = accel::create(Backend::Embree, threads).map_err(|e| runtime(&e))?;
-    let mut candidate = accel::create(Backend::Bvh, threads).map_err(|e| runtime(&e))?;
-    RenderScene::build(&desc, reference.as_mut()).map_err(|e| runtime(&e))?;
-    RenderScene::build(&desc, candidate.as_mut()).map_err(|e| runtime(&e))?;
-    let (a, b) = (reference.query().map_err(|e| runtime(&e))?, candidate.query().map_err(|e| runtime(&e))?);
-
     let tolerance = Tolerance::default();
-    let camera = crosscheck::camera_rays(&desc, args.size.width, args.size.height);
-    let surface = crosscheck::surface_rays(&desc, args.surface_rays, args.seed);
     let mut report = VerifyReport::default();
-    report.merge(crosscheck::compare(a, b, &camera, &tolerance));
-    report.merge(crosscheck::compare(a, b, &surface, &tolerance));
+    let (mut camera_rays, mut surface_rays) = (0, 0);
+    for (i, desc) in descs.iter().enumerate() {
+        let mut reference = accel::create(Backend::Embree, threads).map_err(|e| runtime(&e))?;
+        let mut candidate = accel::create(Backend::Bvh, threads).map_err(|e| runtime(&e))?;
+        RenderScene::build(desc, reference.as_mut()).map_err(|e| runtime(&e))?;
+        RenderScene::build(desc, candidate.as_mut()).map_err(|e| runtime(&e))?;
+        let (a, b) =
+            (reference.query().map_err(|e| runtime(&e))?, candidate.query().map_err(|e| runtime(&e))?);
+        let camera = crosscheck::camera_rays(desc, args.size.width, args.size.height);
+        let surface = crosscheck::surface_rays(desc, args.surface_rays, args.seed + i as u64);
+        report.merge(crosscheck::compare(a, b, &camera, &tolerance));
+        report.merge(crosscheck::compare(a, b, &surface, &tolerance));
+        (camera_rays, surface_rays) = (camera_rays + camera.len(), surface_rays + surface.len());
+    }
+    let desc = &descs[0];
 
     let json = serde_json::json!({
         "scene": desc.name,
         "reference": Backend::Embree,
         "candidate": Backend::Bvh,
-        "camera_rays": camera.len(),
-        "surface_rays": surface.len(),
+        "frames": frames,
+        "camera_rays": camera_rays,
+        "surface_rays": surface_rays,
         "tolerance": tolerance,
         "rays": report.rays,
         "hits": report.hits,
@@ -68,8 +96,8 @@ pub(super) fn run(args: &VerifyArgs, threads: Option<usize>, quiet: bool) -> Res
             "verify {}: {} rays ({} camera, {} surface): {} hits, {} misses, {} ties, {} precision ties, {} mismatches, max t rel err {:.2e}",
             desc.name,
             report.rays,
-            camera.len(),
-            surface.len(),
+            camera_rays,
+            surface_rays,
             report.hits,
             report.misses,
             report.ties,
@@ -85,4 +113,27 @@ pub(super) fn run(args: &VerifyArgs, threads: Option<usize>, quiet: bool) -> Res
         )));
     }
     Ok(())
+}
+
+/// Simulates the scene file and describes `check_frames` frames of it, evenly spaced and
+/// ending with the last; returns them with their frame numbers.
+fn simulated_frames(
+    path: &std::path::Path,
+    args: &VerifyArgs,
+) -> Result<(Vec<SceneDescription>, Vec<u32>), CliError> {
+    let file = SceneFile::load(path).map_err(|e| CliError::Input(e.to_string()))?;
+    let options = SimulateOptions { count: args.objects, frames: args.frames };
+    let trajectory = physics::simulate(&file, &options).map_err(super::simulate::physics_error)?;
+    let assets = SceneAssets::load(&file).map_err(|e| CliError::Input(e.to_string()))?;
+    let n = trajectory.frames.len() as u32;
+    let k = args.check_frames.min(n.max(1));
+    let wanted: Vec<u32> = (1..=k).map(|i| (i * n).div_ceil(k).saturating_sub(1)).collect();
+    let mut replay = trajectory.replay();
+    let mut descs = Vec::new();
+    while let Some(frame) = replay.next_frame() {
+        if wanted.contains(&frame.index) {
+            descs.push(describe_frame(&assets, &trajectory.bodies, frame.states, frame.poses));
+        }
+    }
+    Ok((descs, wanted))
 }
