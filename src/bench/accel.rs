@@ -19,6 +19,7 @@ use super::timed;
 use crate::accel::{self, AccelError, Accelerator, Backend, SceneQuery};
 use crate::crosscheck::camera_rays;
 use crate::geometry::{Ray, TriangleMesh};
+use crate::render::sample_cosine;
 use crate::rng::SplitMix64;
 use crate::scene::SceneDescription;
 
@@ -151,12 +152,8 @@ fn bounce_rays(query: &dyn SceneQuery, primary: &[Ray]) -> Vec<Ray> {
         .flatten()
         .map(|(p, ng, dir)| {
             let n = if ng.dot(dir) > 0.0 { -ng } else { ng };
-            let u = Vec2::new(rng.unit(), rng.unit());
-            let (t, b) = n.any_orthonormal_pair();
-            let r = u.x.sqrt();
-            let phi = std::f32::consts::TAU * u.y;
-            let d = t * (r * phi.cos()) + b * (r * phi.sin()) + n * (1.0 - u.x).max(0.0).sqrt();
-            Ray::new(p + n * (1e-4 * p.abs().max_element().max(1.0)), d.normalize())
+            let d = sample_cosine(n, Vec2::new(rng.unit(), rng.unit()));
+            Ray::spawn(p, n, d)
         })
         .collect()
 }

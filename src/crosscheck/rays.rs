@@ -52,8 +52,7 @@ pub fn surface_rays(desc: &SceneDescription, count: usize, seed: u64) -> Vec<Ray
             let dir = Vec3::new(r * phi.cos(), r * phi.sin(), z);
             // Leave the surface on the side the ray heads to.
             let side = if n.dot(dir) >= 0.0 { n } else { -n };
-            let origin = p + side * (1e-4 * p.abs().max_element().max(1.0));
-            Ray::new(origin, dir)
+            Ray::spawn(p, side, dir)
         })
         .collect()
 }

@@ -8,4 +8,4 @@ mod ray;
 
 pub use aabb::Aabb;
 pub use mesh::{MeshError, TriangleMesh};
-pub use ray::Ray;
+pub use ray::{offset_origin, Ray};

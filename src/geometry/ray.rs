@@ -22,4 +22,16 @@ impl Ray {
     pub fn at(&self, t: f32) -> Vec3 {
         self.origin + t * self.dir
     }
+
+    /// A ray leaving surface point `p` along `dir`, its origin pushed off the surface along
+    /// `n` (the unit normal on the side `dir` leaves by) so it does not hit the surface it
+    /// starts on. The push scales with the magnitude of `p`, as float spacing does.
+    pub fn spawn(p: Vec3, n: Vec3, dir: Vec3) -> Self {
+        Self::new(offset_origin(p, n), dir)
+    }
+}
+
+/// `p` pushed off its surface along the unit normal `n` (see [`Ray::spawn`]).
+pub fn offset_origin(p: Vec3, n: Vec3) -> Vec3 {
+    p + n * (1e-4 * p.abs().max_element().max(1.0))
 }

@@ -17,7 +17,7 @@ pub(crate) fn basis(n: Vec3) -> (Vec3, Vec3) {
 }
 
 /// Cosine-weighted direction in the hemisphere around `n`; pdf `cos / pi`.
-pub(crate) fn sample_cosine(n: Vec3, u: Vec2) -> Vec3 {
+pub fn sample_cosine(n: Vec3, u: Vec2) -> Vec3 {
     let r = u.x.sqrt();
     let phi = 2.0 * PI * u.y;
     let (t, b) = basis(n);

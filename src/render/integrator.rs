@@ -5,7 +5,7 @@ use glam::Vec3;
 use super::bsdf::{sample_cone, sample_cosine, Bsdf};
 use super::{PixelSampler, RenderScene};
 use crate::accel::SceneQuery;
-use crate::geometry::Ray;
+use crate::geometry::{offset_origin, Ray};
 
 /// Computes the radiance arriving along a camera ray.
 pub trait Integrator: Sync {
@@ -33,13 +33,6 @@ pub(crate) mod dims {
     pub const SKY: u32 = 2;
     /// Path vertices use `BOUNCE + 4 * depth + k`, `k` in 0..4.
     pub const BOUNCE: u32 = 3;
-}
-
-/// Origin offset that keeps secondary rays off the surface they leave, scaled with the
-/// magnitude of the position so it works far from the origin.
-pub(crate) fn offset_origin(p: Vec3, ng: Vec3) -> Vec3 {
-    let scale = 1e-4 * p.abs().max_element().max(1.0);
-    p + ng * scale
 }
 
 impl Integrator for DirectLighting {

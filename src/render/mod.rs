@@ -9,7 +9,7 @@ mod render_scene;
 mod sampler;
 mod tiles;
 
-pub use bsdf::{Bsdf, BsdfSample};
+pub use bsdf::{sample_cosine, Bsdf, BsdfSample};
 pub use camera::PinholeCamera;
 pub use film::{write_exr_atomic, write_png_atomic, Film};
 pub use integrator::{AmbientOcclusion, DirectLighting, Integrator, PathTracer};
