@@ -89,3 +89,56 @@ fn usage_errors_exit_2() {
         assert_eq!(output.status.code(), Some(2), "{args:?}: {}", String::from_utf8_lossy(&output.stderr));
     }
 }
+
+#[test]
+fn trajectory_frames_render_the_same_split_or_whole() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/tiny.toml");
+    let traj = dir.path().join("tiny.traj");
+    let status = dormant().args(["simulate", "--quiet", "--out"]).arg(&traj).arg(&scene).status().unwrap();
+    assert!(status.success());
+    let render = |frames: &str, out: &Path| {
+        let status = dormant()
+            .args(["render", "--quiet", "--size", "48x27", "--spp", "2", "--frames", frames, "--trajectory"])
+            .arg(&traj)
+            .arg("--out")
+            .arg(out)
+            .arg(&scene)
+            .status()
+            .unwrap();
+        assert!(status.success(), "render --frames {frames}");
+    };
+    let (whole, split) = (dir.path().join("whole"), dir.path().join("split"));
+    render("200..202", &whole);
+    render("200..201", &split);
+    render("201..202", &split);
+    for name in ["frame_0200.png", "frame_0201.png"] {
+        let a = std::fs::read(whole.join(name)).unwrap();
+        assert_eq!(a, std::fs::read(split.join(name)).unwrap(), "{name} differs");
+    }
+    assert!(png_is_not_uniform(&whole.join("frame_0200.png")));
+}
+
+#[test]
+fn trajectory_of_another_scene_is_an_input_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let traj = dir.path().join("tiny.traj");
+    let status = dormant()
+        .args(["simulate", "--quiet", "--out"])
+        .arg(&traj)
+        .arg(scenes.join("tiny.toml"))
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let output = dormant()
+        .args(["render", "--trajectory"])
+        .arg(&traj)
+        .arg("--out")
+        .arg(dir.path())
+        .arg(scenes.join("forest-walk.toml"))
+        .output()
+        .unwrap();
+    assert_eq!(output.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&output.stderr).contains("tiny.traj"));
+}

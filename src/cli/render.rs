@@ -4,9 +4,13 @@ use clap::Args;
 
 use super::CliError;
 use crate::accel::{self, Backend};
+use crate::integrate::{describe_frame, SceneAssets};
+use crate::physics::{self, SimulateOptions, Trajectory};
 use crate::render::{
     self, AmbientOcclusion, DirectLighting, Integrator, PathTracer, RenderScene, RenderSettings,
 };
+use crate::scene::file::SceneFile;
+use crate::scene::SceneDescription;
 
 /// Image size as `WIDTHxHEIGHT`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -43,6 +47,18 @@ pub enum RenderMode {
 
 #[derive(Debug, Args)]
 pub struct RenderArgs {
+    /// Scene file to simulate and render (default: the built-in scene, or --env/--object).
+    #[arg(value_name = "SCENE", conflicts_with_all = ["env", "object"])]
+    pub scene_file: Option<PathBuf>,
+    /// With SCENE: replay this trajectory (from `dormant simulate`) instead of simulating.
+    #[arg(long, value_name = "FILE")]
+    pub trajectory: Option<PathBuf>,
+    /// With SCENE: render frames A..B (half-open) of the simulation.
+    #[arg(long, value_name = "A..B")]
+    pub frames: Option<FrameRange>,
+    /// With SCENE: total dynamic objects (overrides the spawners' counts).
+    #[arg(long = "objects", value_name = "N")]
+    pub objects: Option<u32>,
     #[command(flatten)]
     pub scene: super::SceneSource,
     /// Output directory; frames are written as frame_NNNN.png.
@@ -94,59 +110,133 @@ pub(super) fn run(args: &RenderArgs, threads: Option<usize>, quiet: bool) -> Res
         CliError::Runtime(format!("cannot create output directory {}: {e}", args.out.display()))
     })?;
 
-    let description = args.scene.load()?;
-    let mut accel = accel::create(backend, threads).map_err(|e| CliError::Runtime(e.to_string()))?;
-    let render_scene =
-        RenderScene::build(&description, accel.as_mut()).map_err(|e| CliError::Runtime(e.to_string()))?;
-    let query = accel.query().map_err(|e| CliError::Runtime(e.to_string()))?;
-    let settings =
-        RenderSettings { width: args.size.width, height: args.size.height, spp: args.spp, frame: 0 };
+    let frames = frames_to_render(args)?;
     let path_tracer = PathTracer { max_depth: args.max_depth, ..PathTracer::default() };
     let integrator: &dyn Integrator = match args.mode {
         RenderMode::Path => &path_tracer,
         RenderMode::Shaded => &DirectLighting,
         RenderMode::Ao => &AmbientOcclusion { radius: 1.0 },
     };
-    let (film, stats) = render::render_frame(&render_scene, query, integrator, &settings)
-        .map_err(|e| CliError::Runtime(e.to_string()))?;
-    let path = args.out.join("frame_0000.png");
-    render::write_png_atomic(&film, args.exposure, &path).map_err(|e| CliError::Runtime(e.to_string()))?;
-    if args.exr {
-        render::write_exr_atomic(&film, &path.with_extension("exr"))
-            .map_err(|e| CliError::Runtime(e.to_string()))?;
+    let runtime = |e: &dyn std::fmt::Display| CliError::Runtime(e.to_string());
+    let mut records = Vec::new();
+    for (index, description) in &frames {
+        // Each frame is loaded into a fresh accelerator, every body an instance. (The scene
+        // manager of the integration engine will update one scene incrementally instead.)
+        let mut accel = accel::create(backend, threads).map_err(|e| runtime(&e))?;
+        let render_scene = RenderScene::build(description, accel.as_mut()).map_err(|e| runtime(&e))?;
+        let query = accel.query().map_err(|e| runtime(&e))?;
+        let settings =
+            RenderSettings { width: args.size.width, height: args.size.height, spp: args.spp, frame: *index };
+        let (film, stats) =
+            render::render_frame(&render_scene, query, integrator, &settings).map_err(|e| runtime(&e))?;
+        let path = args.out.join(format!("frame_{index:04}.png"));
+        render::write_png_atomic(&film, args.exposure, &path).map_err(|e| runtime(&e))?;
+        if args.exr {
+            render::write_exr_atomic(&film, &path.with_extension("exr")).map_err(|e| runtime(&e))?;
+        }
+        if !quiet && !args.json.is_requested() {
+            println!(
+                "rendered {} ({}x{}, {} spp, {:?} mode, {backend}): {:.2} s, {} rays, {:.1} Mrays/s",
+                path.display(),
+                settings.width,
+                settings.height,
+                settings.spp,
+                args.mode,
+                stats.seconds,
+                stats.rays,
+                stats.mrays_per_second()
+            );
+        }
+        records.push(serde_json::json!({ "frame": index, "path": path, "rays": stats.rays,
+            "seconds": stats.seconds, "mrays_per_second": stats.mrays_per_second() }));
     }
+    args.json.emit(&serde_json::json!({
+        "scene": frames.first().map(|(_, d)| d.name.clone()),
+        "backend": backend,
+        "width": args.size.width,
+        "height": args.size.height,
+        "spp": args.spp,
+        "mode": args.mode,
+        "frames": records,
+    }))
+}
 
-    if args.json.is_requested() {
-        let report = serde_json::json!({
-            "scene": render_scene.name,
-            "backend": backend,
-            "width": settings.width,
-            "height": settings.height,
-            "spp": settings.spp,
-            "mode": args.mode,
-            "frames": [{ "path": path, "rays": stats.rays, "seconds": stats.seconds,
-                         "mrays_per_second": stats.mrays_per_second() }],
-        });
-        args.json.emit(&report)?;
-    } else if !quiet {
-        println!(
-            "rendered {} ({}x{}, {} spp, {:?} mode, {backend}): {:.2} s, {} rays, {:.1} Mrays/s",
-            path.display(),
-            settings.width,
-            settings.height,
-            settings.spp,
-            args.mode,
-            stats.seconds,
-            stats.rays,
-            stats.mrays_per_second()
-        );
+/// The frames to render with their numbers: the built-in or asset-pile scene as frame 0, or
+/// the selected frames of a scene file's simulation (run now, or read from --trajectory).
+fn frames_to_render(args: &RenderArgs) -> Result<Vec<(u32, SceneDescription)>, CliError> {
+    let Some(scene_path) = &args.scene_file else {
+        if args.trajectory.is_some() || args.frames.is_some() {
+            return Err(CliError::Input("--trajectory and --frames need a SCENE file".into()));
+        }
+        return Ok(vec![(0, args.scene.load()?)]);
+    };
+    let file = SceneFile::load(scene_path).map_err(|e| CliError::Input(e.to_string()))?;
+    let options = SimulateOptions { count: args.objects, frames: None };
+    let trajectory = match &args.trajectory {
+        Some(path) => {
+            let expected =
+                options.effective_scene(&file).map_err(super::simulate::physics_error)?.source_hash;
+            Trajectory::read(path, expected).map_err(|e| CliError::Input(e.to_string()))?
+        }
+        None => physics::simulate(&file, &options).map_err(super::simulate::physics_error)?,
+    };
+    let total = trajectory.frames.len() as u32;
+    let range = args.frames.unwrap_or(FrameRange { start: 0, end: total });
+    if range.end > total {
+        return Err(CliError::Input(format!(
+            "--frames {}..{}: the trajectory has {total} frames (0..{total})",
+            range.start, range.end
+        )));
     }
-    Ok(())
+    let step = file.description.render.frame_step.max(1);
+    let assets = SceneAssets::load(&file).map_err(|e| CliError::Input(e.to_string()))?;
+    let mut replay = trajectory.replay();
+    let mut frames = Vec::new();
+    while let Some(frame) = replay.next_frame() {
+        if frame.index >= range.end {
+            break;
+        }
+        if frame.index >= range.start && frame.index % step == 0 {
+            frames
+                .push((frame.index, describe_frame(&assets, &trajectory.bodies, frame.states, frame.poses)));
+        }
+    }
+    Ok(frames)
+}
+
+/// A half-open range of frames, `A..B`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct FrameRange {
+    pub start: u32,
+    pub end: u32,
+}
+
+impl std::str::FromStr for FrameRange {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let (a, b) = s.split_once("..").ok_or_else(|| format!("'{s}': expected A..B, e.g. 0..120"))?;
+        let parse =
+            |v: &str| v.trim().parse::<u32>().map_err(|_| format!("'{s}': '{v}' is not a frame number"));
+        let range = FrameRange { start: parse(a)?, end: parse(b)? };
+        if range.start >= range.end {
+            return Err(format!("'{s}': the range is empty (A must be less than B)"));
+        }
+        Ok(range)
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::Size;
+
+    #[test]
+    fn frame_ranges_parse_and_reject() {
+        use super::FrameRange;
+        assert_eq!("3..10".parse::<FrameRange>(), Ok(FrameRange { start: 3, end: 10 }));
+        for bad in ["10..3", "5..5", "a..3", "3", "-1..4"] {
+            assert!(bad.parse::<FrameRange>().is_err(), "{bad}");
+        }
+    }
 
     #[test]
     fn size_parses_and_rejects() {
