@@ -197,8 +197,16 @@ fn frames_to_render(args: &RenderArgs) -> Result<Vec<(u32, SceneDescription)>, C
             break;
         }
         if frame.index >= range.start && frame.index % step == 0 {
-            frames
-                .push((frame.index, describe_frame(&assets, &trajectory.bodies, frame.states, frame.poses)));
+            frames.push((
+                frame.index,
+                describe_frame(
+                    &assets,
+                    frame.index as f32 * trajectory.timestep,
+                    &trajectory.bodies,
+                    frame.states,
+                    frame.poses,
+                ),
+            ));
         }
     }
     Ok(frames)

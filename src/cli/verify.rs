@@ -132,7 +132,13 @@ fn simulated_frames(
     let mut descs = Vec::new();
     while let Some(frame) = replay.next_frame() {
         if wanted.contains(&frame.index) {
-            descs.push(describe_frame(&assets, &trajectory.bodies, frame.states, frame.poses));
+            descs.push(describe_frame(
+                &assets,
+                frame.index as f32 * trajectory.timestep,
+                &trajectory.bodies,
+                frame.states,
+                frame.poses,
+            ));
         }
     }
     Ok((descs, wanted))

@@ -2,7 +2,7 @@ use glam::{Vec3, Vec3A};
 
 use crate::geometry::TriangleMesh;
 use crate::physics::{BodyInfo, BodyPose, BodyState};
-use crate::scene::file::{environment_mesh, prototype_mesh, LightKind, SceneError, SceneFile};
+use crate::scene::file::{environment_mesh, prototype_mesh, CameraDef, LightKind, SceneError, SceneFile};
 use crate::scene::{Body, Camera, Material, Prototype, SceneDescription, Sky, StaticMesh, Sun};
 
 /// A scene file's meshes, loaded once: the environment and one mesh per prototype.
@@ -10,7 +10,9 @@ pub struct SceneAssets {
     pub name: String,
     pub environment: TriangleMesh,
     pub prototypes: Vec<(String, TriangleMesh)>,
-    camera: Camera,
+    /// The scene's chosen camera (`render.camera`, else the first); `None`: frame the
+    /// environment.
+    camera: Option<CameraDef>,
     sun: Sun,
 }
 
@@ -30,28 +32,27 @@ impl SceneAssets {
         let prototypes = (0..doc.prototypes.len())
             .map(|i| Ok((doc.prototypes[i].name.clone(), prototype_mesh(file, i)?)))
             .collect::<Result<Vec<_>, SceneError>>()?;
-        let environment = environment_mesh(file)?;
+        let camera = doc
+            .render
+            .camera
+            .as_ref()
+            .and_then(|name| doc.cameras.iter().find(|c| &c.name == name))
+            .or(doc.cameras.first())
+            .cloned();
         Ok(Self {
             name: doc.scene.name.clone(),
-            camera: camera_at(file, &environment, 0.0),
+            camera,
             sun: sun(file),
-            environment,
+            environment: environment_mesh(file)?,
             prototypes,
         })
     }
 }
 
-/// The scene's chosen camera at time `t` (keyframes interpolated linearly), or a view of the
+/// The scene's camera at time `t` seconds (keyframes interpolated linearly), or a view of the
 /// environment's bounds when the file has no camera.
-fn camera_at(file: &SceneFile, environment: &TriangleMesh, t: f32) -> Camera {
-    let doc = &file.description;
-    let chosen = doc
-        .render
-        .camera
-        .as_ref()
-        .and_then(|name| doc.cameras.iter().find(|c| &c.name == name))
-        .or(doc.cameras.first());
-    let Some(cam) = chosen else {
+fn camera_at(cam: Option<&CameraDef>, environment: &TriangleMesh, t: f32) -> Camera {
+    let Some(cam) = cam else {
         let b = environment.bounds();
         let e = b.extent();
         return Camera {
@@ -99,10 +100,12 @@ fn sun(file: &SceneFile) -> Sun {
     }
 }
 
-/// One frame as a render description: the environment as the only static mesh, and every
-/// body that is present (awake or asleep) as an instance of its prototype at its pose.
+/// One frame, at `time` seconds, as a render description: the environment as the only static
+/// mesh, every body that is present (awake or asleep) as an instance of its prototype at its
+/// pose, and the camera where its keyframes put it.
 pub fn describe_frame(
     assets: &SceneAssets,
+    time: f32,
     bodies: &[BodyInfo],
     states: &[BodyState],
     poses: &[BodyPose],
@@ -133,7 +136,7 @@ pub fn describe_frame(
             })
             .map(|((info, _), pose)| Body { prototype: info.prototype, transform: pose.to_affine() })
             .collect(),
-        camera: assets.camera,
+        camera: camera_at(assets.camera.as_ref(), &assets.environment, time),
         sun: assets.sun,
         sky: Sky::DAYLIGHT,
     }

@@ -1,0 +1,30 @@
+//! Describing simulated frames for rendering.
+
+use std::path::Path;
+
+use dormant::integrate::{describe_frame, SceneAssets};
+use dormant::scene::file::SceneFile;
+
+fn forest_walk() -> SceneFile {
+    SceneFile::load(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/forest-walk.toml")).unwrap()
+}
+
+#[test]
+fn keyframed_camera_moves_between_frames_regression() {
+    // Bug: every frame was described with the camera at t = 0.
+    let mut file = forest_walk();
+    file.description.render.camera = Some("follow".into());
+    let assets = SceneAssets::load(&file).unwrap();
+    let at = |t: f32| describe_frame(&assets, t, &[], &[], &[]).camera;
+    assert_ne!(at(0.0).eye, at(4.0).eye);
+    assert_eq!(at(0.0), at(0.0));
+}
+
+#[test]
+fn fixed_camera_stays_put() {
+    let mut file = forest_walk();
+    file.description.render.camera = Some("high".into());
+    let assets = SceneAssets::load(&file).unwrap();
+    let at = |t: f32| describe_frame(&assets, t, &[], &[], &[]).camera;
+    assert_eq!(at(0.0), at(4.0));
+}
