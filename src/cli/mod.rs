@@ -126,16 +126,22 @@ pub struct SceneSource {
     /// Object glTF, instanced --count times.
     #[arg(long, value_name = "GLB", requires = "env")]
     pub object: Option<PathBuf>,
-    /// Number of objects in the heap.
-    #[arg(long, value_name = "N", default_value_t = 8000, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
-    pub count: u32,
+    /// Objects: the heap's size with --env/--object (default 8000), or with a SCENE file the
+    /// total dynamic objects, spread over its spawners in proportion.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+    pub count: Option<u32>,
 }
 
 impl SceneSource {
     pub fn load(&self) -> Result<SceneDescription, CliError> {
         match (&self.env, &self.object) {
-            (Some(env), Some(object)) => scene::asset_pile(env, object, self.count as usize, 1)
-                .map_err(|e| CliError::Input(e.to_string())),
+            (Some(env), Some(object)) => {
+                scene::asset_pile(env, object, self.count.unwrap_or(8000) as usize, 1)
+                    .map_err(|e| CliError::Input(e.to_string()))
+            }
+            _ if self.count.is_some() => {
+                Err(CliError::Input("--count needs --env and --object, or a SCENE file".into()))
+            }
             _ => Ok(scene::default_scene()),
         }
     }

@@ -56,9 +56,6 @@ pub struct RenderArgs {
     /// With SCENE: render frames A..B (half-open) of the simulation.
     #[arg(long, value_name = "A..B")]
     pub frames: Option<FrameRange>,
-    /// With SCENE: total dynamic objects (overrides the spawners' counts).
-    #[arg(long = "objects", value_name = "N")]
-    pub objects: Option<u32>,
     #[command(flatten)]
     pub scene: super::SceneSource,
     /// Output directory; frames are written as frame_NNNN.png.
@@ -110,7 +107,6 @@ pub(super) fn run(args: &RenderArgs, threads: Option<usize>, quiet: bool) -> Res
         CliError::Runtime(format!("cannot create output directory {}: {e}", args.out.display()))
     })?;
 
-    let frames = frames_to_render(args)?;
     let path_tracer = PathTracer { max_depth: args.max_depth, ..PathTracer::default() };
     let integrator: &dyn Integrator = match args.mode {
         RenderMode::Path => &path_tracer,
@@ -119,14 +115,16 @@ pub(super) fn run(args: &RenderArgs, threads: Option<usize>, quiet: bool) -> Res
     };
     let runtime = |e: &dyn std::fmt::Display| CliError::Runtime(e.to_string());
     let mut records = Vec::new();
-    for (index, description) in &frames {
+    let mut scene_name = String::new();
+    for_each_frame(args, &mut |index, description| {
+        scene_name.clone_from(&description.name);
         // Each frame is loaded into a fresh accelerator, every body an instance. (The scene
         // manager of the integration engine will update one scene incrementally instead.)
         let mut accel = accel::create(backend, threads).map_err(|e| runtime(&e))?;
         let render_scene = RenderScene::build(description, accel.as_mut()).map_err(|e| runtime(&e))?;
         let query = accel.query().map_err(|e| runtime(&e))?;
         let settings =
-            RenderSettings { width: args.size.width, height: args.size.height, spp: args.spp, frame: *index };
+            RenderSettings { width: args.size.width, height: args.size.height, spp: args.spp, frame: index };
         let (film, stats) =
             render::render_frame(&render_scene, query, integrator, &settings).map_err(|e| runtime(&e))?;
         let path = args.out.join(format!("frame_{index:04}.png"));
@@ -149,9 +147,10 @@ pub(super) fn run(args: &RenderArgs, threads: Option<usize>, quiet: bool) -> Res
         }
         records.push(serde_json::json!({ "frame": index, "path": path, "rays": stats.rays,
             "seconds": stats.seconds, "mrays_per_second": stats.mrays_per_second() }));
-    }
+        Ok(())
+    })?;
     args.json.emit(&serde_json::json!({
-        "scene": frames.first().map(|(_, d)| d.name.clone()),
+        "scene": scene_name,
         "backend": backend,
         "width": args.size.width,
         "height": args.size.height,
@@ -161,17 +160,22 @@ pub(super) fn run(args: &RenderArgs, threads: Option<usize>, quiet: bool) -> Res
     }))
 }
 
-/// The frames to render with their numbers: the built-in or asset-pile scene as frame 0, or
-/// the selected frames of a scene file's simulation (run now, or read from --trajectory).
-fn frames_to_render(args: &RenderArgs) -> Result<Vec<(u32, SceneDescription)>, CliError> {
+/// Calls `render` with each frame to render and its number, one at a time (a long sequence
+/// never holds more than one frame's description): the built-in or asset-pile scene as frame
+/// 0, or the selected frames of a scene file's simulation (run now, or read from
+/// --trajectory).
+fn for_each_frame(
+    args: &RenderArgs,
+    render: &mut dyn FnMut(u32, &SceneDescription) -> Result<(), CliError>,
+) -> Result<(), CliError> {
     let Some(scene_path) = &args.scene_file else {
         if args.trajectory.is_some() || args.frames.is_some() {
             return Err(CliError::Input("--trajectory and --frames need a SCENE file".into()));
         }
-        return Ok(vec![(0, args.scene.load()?)]);
+        return render(0, &args.scene.load()?);
     };
     let file = SceneFile::load(scene_path).map_err(|e| CliError::Input(e.to_string()))?;
-    let options = SimulateOptions { count: args.objects, frames: None };
+    let options = SimulateOptions { count: args.scene.count, frames: None };
     let trajectory = match &args.trajectory {
         Some(path) => {
             let expected =
@@ -191,25 +195,19 @@ fn frames_to_render(args: &RenderArgs) -> Result<Vec<(u32, SceneDescription)>, C
     let step = file.description.render.frame_step.max(1);
     let assets = SceneAssets::load(&file).map_err(|e| CliError::Input(e.to_string()))?;
     let mut replay = trajectory.replay();
-    let mut frames = Vec::new();
     while let Some(frame) = replay.next_frame() {
         if frame.index >= range.end {
             break;
         }
         if frame.index >= range.start && frame.index % step == 0 {
-            frames.push((
+            let time = frame.index as f32 * trajectory.timestep;
+            render(
                 frame.index,
-                describe_frame(
-                    &assets,
-                    frame.index as f32 * trajectory.timestep,
-                    &trajectory.bodies,
-                    frame.states,
-                    frame.poses,
-                ),
-            ));
+                &describe_frame(&assets, time, &trajectory.bodies, frame.states, frame.poses),
+            )?;
         }
     }
-    Ok(frames)
+    Ok(())
 }
 
 /// A half-open range of frames, `A..B`.

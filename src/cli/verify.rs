@@ -7,7 +7,6 @@ use crate::accel::{self, Backend};
 use crate::crosscheck::{self, Tolerance, VerifyReport};
 use crate::integrate::{describe_frame, SceneAssets};
 use crate::physics::{self, SimulateOptions};
-use crate::render::RenderScene;
 use crate::scene::file::SceneFile;
 use crate::scene::SceneDescription;
 
@@ -17,9 +16,6 @@ pub struct VerifyArgs {
     /// scene, or --env/--object).
     #[arg(value_name = "SCENE", conflicts_with_all = ["env", "object"])]
     pub scene_file: Option<PathBuf>,
-    /// With SCENE: total dynamic objects (overrides the spawners' counts).
-    #[arg(long = "objects", value_name = "N")]
-    pub objects: Option<u32>,
     /// With SCENE: frames to simulate.
     #[arg(long, value_name = "N")]
     pub frames: Option<u32>,
@@ -60,8 +56,10 @@ pub(super) fn run(args: &VerifyArgs, threads: Option<usize>, quiet: bool) -> Res
     for (i, desc) in descs.iter().enumerate() {
         let mut reference = accel::create(Backend::Embree, threads).map_err(|e| runtime(&e))?;
         let mut candidate = accel::create(Backend::Bvh, threads).map_err(|e| runtime(&e))?;
-        RenderScene::build(desc, reference.as_mut()).map_err(|e| runtime(&e))?;
-        RenderScene::build(desc, candidate.as_mut()).map_err(|e| runtime(&e))?;
+        for a in [&mut reference, &mut candidate] {
+            accel::load_scene(desc, a.as_mut()).map_err(|e| runtime(&e))?;
+            a.commit().map_err(|e| runtime(&e))?;
+        }
         let (a, b) =
             (reference.query().map_err(|e| runtime(&e))?, candidate.query().map_err(|e| runtime(&e))?);
         let camera = crosscheck::camera_rays(desc, args.size.width, args.size.height);
@@ -122,7 +120,7 @@ fn simulated_frames(
     args: &VerifyArgs,
 ) -> Result<(Vec<SceneDescription>, Vec<u32>), CliError> {
     let file = SceneFile::load(path).map_err(|e| CliError::Input(e.to_string()))?;
-    let options = SimulateOptions { count: args.objects, frames: args.frames };
+    let options = SimulateOptions { count: args.scene.count, frames: args.frames };
     let trajectory = physics::simulate(&file, &options).map_err(super::simulate::physics_error)?;
     let assets = SceneAssets::load(&file).map_err(|e| CliError::Input(e.to_string()))?;
     let n = trajectory.frames.len() as u32;
