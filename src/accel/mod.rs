@@ -15,10 +15,12 @@ pub mod bvh;
 pub mod embree;
 mod hit;
 mod load;
+mod snapshot;
 
 pub use backend::{create, Backend};
 pub use hit::{Hit, HitObject};
 pub use load::{load_scene, LoadedScene};
+pub use snapshot::StaticSceneSnapshot;
 
 use glam::Affine3A;
 
@@ -48,6 +50,10 @@ pub enum AccelError {
     InvalidTransform { instance: u32 },
     #[error("backend '{0}' is not compiled into this build")]
     BackendUnavailable(&'static str),
+    #[error("the {backend} backend cannot restore a static scene snapshot taken by the {from} backend")]
+    ForeignSnapshot { backend: Backend, from: Backend },
+    #[error("the {0} backend does not take static scene snapshots")]
+    SnapshotsUnsupported(Backend),
     #[cfg(feature = "embree")]
     #[error(transparent)]
     Embree(#[from] embree::EmbreeError),
@@ -95,6 +101,27 @@ pub trait Accelerator: Send + Sync {
 
     /// Makes all staged changes visible to rays.
     fn commit(&mut self) -> Result<CommitReport, AccelError>;
+
+    /// Builds the staged static changes now, so callers can time them apart from the top
+    /// level; they become visible at the next [`Accelerator::commit`], which reports them.
+    fn commit_static(&mut self) -> Result<CommitReport, AccelError>;
+
+    /// Saves the static scene as of the last static build, if this backend can do so without
+    /// copying or rebuilding it (the persistent BVH: O(1)). `None` otherwise (Embree: see
+    /// docs/design.md, "Geometry cache").
+    fn snapshot_static_scene(&self) -> Option<StaticSceneSnapshot> {
+        None
+    }
+
+    /// Makes a snapshot taken from this accelerator the static scene. Static ids added after it
+    /// was taken are unknown again; staged static changes apply on top at the next commit.
+    fn restore_static_scene(&mut self, snapshot: &StaticSceneSnapshot) -> Result<(), AccelError> {
+        Err(AccelError::ForeignSnapshot { backend: self.backend(), from: snapshot.backend() })
+    }
+
+    /// Triangles the next static build must rebuild if `id` is removed: 0 when removal is a
+    /// detach or an unlink, the whole static scene when `id` shares a structure with others.
+    fn static_removal_cost(&self, id: StaticId) -> usize;
 
     /// The committed scene; [`AccelError::NotCommitted`] while changes are staged.
     fn query(&self) -> Result<&dyn SceneQuery, AccelError>;

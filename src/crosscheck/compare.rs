@@ -1,8 +1,10 @@
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::accel::{Hit, SceneQuery};
+use crate::accel::{Hit, HitObject, SceneQuery};
 use crate::geometry::Ray;
+use crate::integrate::{MeshRef, ObjectMap};
+use crate::physics::BodyId;
 
 /// When two answers count as the same.
 #[derive(Clone, Copy, Debug, Serialize)]
@@ -107,14 +109,48 @@ fn at_origin(ray: &Ray, h: &Hit, tol: &Tolerance) -> bool {
     h.t - ray.t_min <= tol.t_rel * ray.origin.abs().max_element().max(1.0)
 }
 
-fn classify(ray: &Ray, a: Option<&Hit>, b: Option<&Hit>, tol: &Tolerance) -> Verdict {
+/// What a hit is on, for deciding whether two hits are on the same triangle.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum HitKey {
+    /// The accelerator's own id (scenes loaded the same way).
+    Raw(HitObject, u32),
+    /// A body's prototype triangle, or an environment triangle, after mapping.
+    Body(BodyId, u32),
+    Mesh(MeshRef, u32),
+    Unknown,
+}
+
+/// A scene to compare, with the map from its hit ids to scene objects when its ids differ from
+/// the other side's (an integrated scene against an all-instanced one).
+#[derive(Clone, Copy)]
+pub struct MappedQuery<'a> {
+    pub query: &'a dyn SceneQuery,
+    pub objects: Option<&'a dyn ObjectMap>,
+}
+
+impl MappedQuery<'_> {
+    fn key(&self, h: &Hit) -> HitKey {
+        let Some(map) = self.objects else {
+            return HitKey::Raw(h.object, h.prim);
+        };
+        match map.resolve(h.object, h.prim) {
+            Some(r) => match r.body {
+                Some(body) => HitKey::Body(body, r.prim),
+                None => HitKey::Mesh(r.mesh, r.prim),
+            },
+            None => HitKey::Unknown,
+        }
+    }
+}
+
+fn classify(ray: &Ray, a: Option<&Hit>, b: Option<&Hit>, same_triangle: bool, tol: &Tolerance) -> Verdict {
     match (a, b) {
         (None, None) => Verdict::Agree { both_hit: false, t_rel: 0.0 },
         (Some(a), Some(b)) => {
             let dt = (a.t - b.t).abs();
             let t_rel = dt / a.t.abs().max(1.0);
             let same_t = t_rel <= tol.t_rel;
-            if a.object == b.object && a.prim == b.prim {
+            if same_triangle {
                 let scale = a.t.abs().max(1.0).max(ray.origin.abs().max_element());
                 if same_t {
                     Verdict::Agree { both_hit: true, t_rel }
@@ -149,18 +185,44 @@ fn classify(ray: &Ray, a: Option<&Hit>, b: Option<&Hit>, tol: &Tolerance) -> Ver
 }
 
 /// Traces every ray through both scenes (closest hit and any hit) and classifies the answers.
+/// Hits are on the same triangle when they have the same object and primitive ids.
 pub fn compare(
     reference: &dyn SceneQuery,
     candidate: &dyn SceneQuery,
     rays: &[Ray],
     tol: &Tolerance,
 ) -> VerifyReport {
+    compare_mapped(
+        MappedQuery { query: reference, objects: None },
+        MappedQuery { query: candidate, objects: None },
+        rays,
+        tol,
+    )
+}
+
+/// Like [`compare`], with hits identified through each side's object map: the same body and
+/// prototype triangle (or environment triangle) whether instanced or baked.
+pub fn compare_mapped(
+    reference: MappedQuery<'_>,
+    candidate: MappedQuery<'_>,
+    rays: &[Ray],
+    tol: &Tolerance,
+) -> VerifyReport {
+    let (ra, rb) = (reference, candidate);
+    let (reference, candidate) = (ra.query, rb.query);
     rays.par_iter()
         .enumerate()
         .fold(VerifyReport::default, |mut report, (i, ray)| {
             let a = reference.intersect(ray);
             let b = candidate.intersect(ray);
-            let mut verdict = classify(ray, a.as_ref(), b.as_ref(), tol);
+            let same = match (&a, &b) {
+                (Some(x), Some(y)) => {
+                    let (kx, ky) = (ra.key(x), rb.key(y));
+                    kx == ky && kx != HitKey::Unknown
+                }
+                _ => false,
+            };
+            let mut verdict = classify(ray, a.as_ref(), b.as_ref(), same, tol);
             // Any-hit must agree with closest-hit existence, except at ties.
             let occ = [reference.intersect_p(ray), candidate.intersect_p(ray)];
             let occlusion_differs = occ[0] != occ[1] || occ[0] != a.is_some() || occ[1] != b.is_some();
@@ -221,7 +283,10 @@ mod tests {
         let near = Ray::new(Vec3::ZERO, Vec3::X);
         let far = Ray::new(Vec3::splat(40.0), Vec3::X);
         let a = hit(10.0, 0, 3, 0.3, 0.3);
-        let c = |r: &Ray, x: Option<&Hit>, y: Option<&Hit>| classify(r, x, y, &tol);
+        let c = |r: &Ray, x: Option<&Hit>, y: Option<&Hit>| {
+            let same = x.zip(y).is_some_and(|(x, y)| (x.object, x.prim) == (y.object, y.prim));
+            classify(r, x, y, same, &tol)
+        };
         assert!(matches!(c(&near, Some(&a), Some(&hit(10.0005, 0, 3, 0.3, 0.3))), Verdict::Agree { .. }));
         assert!(matches!(c(&near, Some(&a), Some(&hit(10.1, 0, 3, 0.3, 0.3))), Verdict::Mismatch));
         assert!(matches!(c(&near, Some(&a), Some(&hit(10.0, 0, 4, 0.0, 0.5))), Verdict::Tie));

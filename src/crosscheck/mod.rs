@@ -5,5 +5,5 @@
 mod compare;
 mod rays;
 
-pub use compare::{compare, Mismatch, Tolerance, VerifyReport};
+pub use compare::{compare, compare_mapped, MappedQuery, Mismatch, Tolerance, VerifyReport};
 pub use rays::{camera_rays, surface_rays};

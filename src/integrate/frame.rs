@@ -100,6 +100,13 @@ fn sun(file: &SceneFile) -> Sun {
     }
 }
 
+impl SceneAssets {
+    /// The camera at `time` seconds.
+    pub fn camera_at(&self, time: f32) -> Camera {
+        camera_at(self.camera.as_ref(), &self.environment, time)
+    }
+}
+
 /// One frame, at `time` seconds, as a render description: the environment as the only static
 /// mesh, every body that is present (awake or asleep) as an instance of its prototype at its
 /// pose, and the camera where its keyframes put it.
@@ -111,6 +118,23 @@ pub fn describe_frame(
     poses: &[BodyPose],
 ) -> SceneDescription {
     debug_assert_eq!(bodies.len(), states.len());
+    SceneDescription {
+        bodies: bodies
+            .iter()
+            .zip(states)
+            .zip(poses)
+            .filter(|((_, state), pose)| {
+                **state != BodyState::Absent && Vec3A::from(pose.translation).is_finite()
+            })
+            .map(|((info, _), pose)| Body { prototype: info.prototype, transform: pose.to_affine() })
+            .collect(),
+        ..describe_scene(assets, time)
+    }
+}
+
+/// The scene at `time` seconds without its bodies: environment, prototypes, materials,
+/// camera and lights (the scene manager's template).
+pub fn describe_scene(assets: &SceneAssets, time: f32) -> SceneDescription {
     let mut materials = vec![Material::diffuse(Vec3::splat(0.6))];
     materials.extend((0..assets.prototypes.len()).map(|i| Material::diffuse(PALETTE[i % PALETTE.len()])));
     SceneDescription {
@@ -127,15 +151,7 @@ pub fn describe_frame(
                 material: i as u32 + 1,
             })
             .collect(),
-        bodies: bodies
-            .iter()
-            .zip(states)
-            .zip(poses)
-            .filter(|((_, state), pose)| {
-                **state != BodyState::Absent && Vec3A::from(pose.translation).is_finite()
-            })
-            .map(|((info, _), pose)| Body { prototype: info.prototype, transform: pose.to_affine() })
-            .collect(),
+        bodies: Vec::new(),
         camera: camera_at(assets.camera.as_ref(), &assets.environment, time),
         sun: assets.sun,
         sky: Sky::DAYLIGHT,

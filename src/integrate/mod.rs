@@ -1,9 +1,25 @@
-//! Integration: turning simulated frames into scenes the accelerators hold. This first part
-//! loads a scene file's meshes once ([`SceneAssets`]) and describes any frame of a
-//! trajectory as a render [`SceneDescription`] with every present body as an instance.
-//! (The scene manager that bakes sleeping islands, the geometry cache and the cost model
-//! build on it.)
+//! Integration: from simulated frames to the scenes the accelerators hold.
+//!
+//! - [`SceneAssets`] loads a scene file's meshes once; [`describe_frame`] describes any frame
+//!   with every body an instance (the reference the integrated scenes are checked against).
+//! - [`SceneManager`] keeps one accelerator in step with a simulation: awake bodies are
+//!   instances, sleeping islands the [`IntegrationPolicy`] accepts are baked into the static
+//!   scene ([`BakedIsland`]), woken ones leave it through the [`GeometryCache`] or by removal.
+//! - [`CostModel`] decides, under the `auto` policy, whether integrating pays off.
+//! - [`ObjectMap`] maps hits back to bodies, prototypes and triangles for shading.
 
+mod baked;
+mod cache;
+mod cost_model;
 mod frame;
+mod manager;
+mod object_map;
+mod policy;
 
-pub use frame::{describe_frame, SceneAssets};
+pub use baked::{BakedIsland, BakedPart};
+pub use cache::{CacheBudget, CacheHit, CacheOutcome, CacheStats, GeometryCache, FRACTION_BUCKETS};
+pub use cost_model::{CostEstimate, CostModel, CostModelState};
+pub use frame::{describe_frame, describe_scene, SceneAssets};
+pub use manager::{Decision, FrameState, FrameStats, ManagerOptions, ReactivationPath, SceneManager};
+pub use object_map::{normal_matrix, LoadedObjectMap, MeshRef, ObjectMap, ResolvedHit};
+pub use policy::IntegrationPolicy;

@@ -216,6 +216,19 @@ impl Accelerator for EmbreeAccel {
         Ok(report)
     }
 
+    fn commit_static(&mut self) -> Result<CommitReport, AccelError> {
+        // Committing the owned child scene now leaves the top level dirty (the instance
+        // changed), so nothing is visible before `commit`; the report waits for it too.
+        self.top.instance_mut(STATIC_SLOT)?.commit_child()?;
+        Ok(CommitReport::default())
+    }
+
+    /// Removal is a detach: the two-level builder keeps every other mesh's BVH and rebuilds
+    /// only its small top over the meshes.
+    fn static_removal_cost(&self, _id: StaticId) -> usize {
+        0
+    }
+
     fn query(&self) -> Result<&dyn SceneQuery, AccelError> {
         if self.top.is_dirty() {
             Err(AccelError::NotCommitted)

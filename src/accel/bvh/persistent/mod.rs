@@ -225,6 +225,12 @@ impl StaticBvh {
         self.state.contains(id)
     }
 
+    /// Whether removing `id` needs a rebuild (it shares a block with other meshes) rather
+    /// than an unlink and refit.
+    pub fn removal_rebuilds(&self, id: StaticId) -> bool {
+        self.state.meshes.get(&id).is_some_and(|e| e.shared && e.triangles > 0)
+    }
+
     pub fn is_empty(&self) -> bool {
         self.state.root.is_none()
     }

@@ -15,8 +15,10 @@ use super::flat::MeshBvh;
 use super::persistent::{StaticBvh, StaticSnapshot};
 use super::triangle::{extract, Tri};
 use super::BuildParams;
+use crate::accel::snapshot::SnapshotPayload;
 use crate::accel::{
     AccelError, Accelerator, Backend, CommitReport, InstanceId, PrototypeId, SceneQuery, StaticId,
+    StaticSceneSnapshot,
 };
 use crate::geometry::TriangleMesh;
 
@@ -147,6 +149,16 @@ impl BvhAccel {
     }
 }
 
+impl SnapshotPayload for StaticSnapshot {
+    fn unique_bytes(&self) -> usize {
+        self.memory().unique_bytes
+    }
+
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+}
+
 impl Default for BvhAccel {
     fn default() -> Self {
         Self::new(None)
@@ -232,21 +244,9 @@ impl Accelerator for BvhAccel {
     }
 
     fn commit(&mut self) -> Result<CommitReport, AccelError> {
-        let mut report = CommitReport {
-            built_triangles: std::mem::take(&mut self.pending_built),
-            skipped_triangles: std::mem::take(&mut self.pending_skipped),
-            instances: 0,
-        };
-        if !self.staged_adds.is_empty() || !self.staged_removes.is_empty() {
-            let adds = std::mem::take(&mut self.staged_adds);
-            let removes = std::mem::take(&mut self.staged_removes);
-            let statics = &mut self.statics;
-            let update = match &self.pool {
-                Some(p) => p.install(|| statics.apply_extracted(&removes, adds)),
-                None => statics.apply_extracted(&removes, adds),
-            };
-            report.built_triangles += update.built_triangles;
-        }
+        let mut report = self.commit_static()?;
+        report.built_triangles += std::mem::take(&mut self.pending_built);
+        report.skipped_triangles += std::mem::take(&mut self.pending_skipped);
         if self.instances_changed {
             self.build_top();
             self.instances_changed = false;
@@ -255,6 +255,41 @@ impl Accelerator for BvhAccel {
         report.instances = self.instances.iter().flatten().count();
         self.dirty = false;
         Ok(report)
+    }
+
+    fn commit_static(&mut self) -> Result<CommitReport, AccelError> {
+        let mut report = CommitReport::default();
+        if !self.staged_adds.is_empty() || !self.staged_removes.is_empty() {
+            let adds = std::mem::take(&mut self.staged_adds);
+            let removes = std::mem::take(&mut self.staged_removes);
+            let statics = &mut self.statics;
+            let update = match &self.pool {
+                Some(p) => p.install(|| statics.apply_extracted(&removes, adds)),
+                None => statics.apply_extracted(&removes, adds),
+            };
+            report.built_triangles = update.built_triangles;
+        }
+        Ok(report)
+    }
+
+    fn snapshot_static_scene(&self) -> Option<StaticSceneSnapshot> {
+        Some(StaticSceneSnapshot::new(Backend::Bvh, self.statics.snapshot()))
+    }
+
+    fn restore_static_scene(&mut self, snapshot: &StaticSceneSnapshot) -> Result<(), AccelError> {
+        let saved = snapshot
+            .payload::<StaticSnapshot>()
+            .ok_or(AccelError::ForeignSnapshot { backend: Backend::Bvh, from: snapshot.backend() })?;
+        self.restore_static(saved.clone());
+        Ok(())
+    }
+
+    fn static_removal_cost(&self, id: StaticId) -> usize {
+        if self.statics.removal_rebuilds(id) {
+            self.statics.triangles()
+        } else {
+            0
+        }
     }
 
     fn query(&self) -> Result<&dyn SceneQuery, AccelError> {

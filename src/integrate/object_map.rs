@@ -1,0 +1,103 @@
+//! Hit to object mapping: what a hit on the accelerator's ids means in scene terms, so shading
+//! is the same whether a body is an instance or baked into the static scene.
+
+use glam::{Affine3A, Mat3};
+
+use crate::accel::{HitObject, LoadedScene};
+use crate::physics::BodyId;
+use crate::scene::SceneDescription;
+
+/// The mesh a hit lies on, as the scene description names it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum MeshRef {
+    /// `SceneDescription::statics[i]` (the environment).
+    Static(u32),
+    /// `SceneDescription::prototypes[i]`, placed by a body's transform.
+    Prototype(u32),
+}
+
+/// A hit resolved to its scene object.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ResolvedHit {
+    pub mesh: MeshRef,
+    /// Triangle index within that mesh.
+    pub prim: u32,
+    /// The body, for hits on bodies (instanced or baked).
+    pub body: Option<BodyId>,
+    /// Object-to-world transform for normals (identity for static meshes).
+    pub normal_matrix: Mat3,
+    /// Whether the hit was on baked (integrated) geometry: the debug view colours it.
+    pub baked: bool,
+}
+
+/// Resolves the accelerator's hit ids to scene objects.
+pub trait ObjectMap: Sync {
+    /// `None` for ids the map does not know (a correct accelerator never reports them).
+    fn resolve(&self, object: HitObject, prim: u32) -> Option<ResolvedHit>;
+}
+
+/// The normal matrix of an object-to-world transform.
+pub fn normal_matrix(transform: &Affine3A) -> Mat3 {
+    Mat3::from(transform.matrix3).inverse().transpose()
+}
+
+/// The map of a description loaded by [`crate::accel::load_scene`]: every body an instance.
+#[derive(Clone, Debug, Default)]
+pub struct LoadedObjectMap {
+    statics: Vec<Option<u32>>,
+    instances: Vec<Option<(u32, BodyId, Mat3)>>,
+}
+
+fn place<T>(v: &mut Vec<Option<T>>, index: u32, value: T) {
+    let i = index as usize;
+    if v.len() <= i {
+        v.resize_with(i + 1, || None);
+    }
+    v[i] = Some(value);
+}
+
+impl LoadedObjectMap {
+    /// Body `i` of `desc` is `BodyId(i)`.
+    pub fn new(desc: &SceneDescription, loaded: &LoadedScene) -> Self {
+        let ids: Vec<BodyId> = (0..desc.bodies.len() as u32).map(BodyId).collect();
+        Self::with_body_ids(desc, loaded, &ids)
+    }
+
+    /// Body `i` of `desc` is `body_ids[i]` (a frame description lists only present bodies).
+    pub fn with_body_ids(desc: &SceneDescription, loaded: &LoadedScene, body_ids: &[BodyId]) -> Self {
+        debug_assert_eq!(desc.bodies.len(), body_ids.len());
+        let mut map = Self::default();
+        for (i, id) in loaded.statics.iter().enumerate() {
+            place(&mut map.statics, id.0, i as u32);
+        }
+        for ((body, id), b) in desc.bodies.iter().zip(&loaded.instances).zip(body_ids) {
+            place(&mut map.instances, id.0, (body.prototype, *b, normal_matrix(&body.transform)));
+        }
+        map
+    }
+}
+
+impl ObjectMap for LoadedObjectMap {
+    fn resolve(&self, object: HitObject, prim: u32) -> Option<ResolvedHit> {
+        match object {
+            HitObject::Static(id) => {
+                self.statics.get(id.0 as usize).copied().flatten().map(|i| ResolvedHit {
+                    mesh: MeshRef::Static(i),
+                    prim,
+                    body: None,
+                    normal_matrix: Mat3::IDENTITY,
+                    baked: false,
+                })
+            }
+            HitObject::Instance(id) => {
+                self.instances.get(id.0 as usize).copied().flatten().map(|(proto, body, m)| ResolvedHit {
+                    mesh: MeshRef::Prototype(proto),
+                    prim,
+                    body: Some(body),
+                    normal_matrix: m,
+                    baked: false,
+                })
+            }
+        }
+    }
+}

@@ -1,0 +1,283 @@
+//! The scene manager's scenes against all-instanced references, on both backends:
+//! - simulated frames: integrated scenes give the same hits (same body and prototype triangle)
+//!   as the same frame with every body an instance;
+//! - random sleep/wake sequences (over 10,000 events per backend): every static scene the
+//!   manager serves, including those restored from the geometry cache, gives the same hits as a
+//!   from-scratch build of the same island set.
+
+use std::path::Path;
+
+use dormant::accel::{self, load_scene, Backend};
+use dormant::crosscheck::{camera_rays, compare_mapped, surface_rays, MappedQuery, Tolerance, VerifyReport};
+use dormant::geometry::{primitives, Ray};
+use dormant::integrate::{
+    describe_frame, describe_scene, CacheBudget, FrameState, IntegrationPolicy, LoadedObjectMap,
+    ManagerOptions, ReactivationPath, SceneAssets, SceneManager,
+};
+use dormant::physics::{
+    self, BodyId, BodyInfo, BodyKind, BodyPose, BodyState, IslandEvent, IslandId, SimulateOptions,
+};
+use dormant::scene::file::SceneFile;
+use dormant::scene::{Body, Camera, Material, Prototype, SceneDescription, Sky, StaticMesh, Sun};
+use glam::{Quat, Vec3};
+use proptest::prelude::*;
+
+fn backends() -> Vec<Backend> {
+    Backend::compiled().to_vec()
+}
+
+/// Compares the manager's committed scene with `reference` (every body an instance).
+/// `body_ids[i]` is the body of `reference.bodies[i]`.
+fn check_against(
+    manager: &SceneManager,
+    reference: &SceneDescription,
+    body_ids: &[BodyId],
+    rays: &[Ray],
+) -> VerifyReport {
+    let mut fresh = accel::create(manager.accel().backend(), Some(2)).unwrap();
+    let loaded = load_scene(reference, fresh.as_mut()).unwrap();
+    fresh.commit().unwrap();
+    let map = LoadedObjectMap::with_body_ids(reference, &loaded, body_ids);
+    compare_mapped(
+        MappedQuery { query: fresh.query().unwrap(), objects: Some(&map) },
+        MappedQuery { query: manager.query().unwrap(), objects: Some(manager) },
+        rays,
+        &Tolerance::default(),
+    )
+}
+
+fn assert_agrees(report: &VerifyReport, what: &str) {
+    assert_eq!(report.mismatches, 0, "{what}: {:#?}", report.examples);
+    assert!(report.ties * 100 <= report.rays, "{what}: {} ties in {} rays", report.ties, report.rays);
+}
+
+#[test]
+fn integrated_frames_hit_like_all_instanced_frames() {
+    let file = SceneFile::load(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/tiny.toml")).unwrap();
+    let trajectory = physics::simulate(&file, &SimulateOptions::default()).unwrap();
+    let assets = SceneAssets::load(&file).unwrap();
+    let template = describe_scene(&assets, 0.0);
+    for backend in backends() {
+        for policy in [IntegrationPolicy::Always, IntegrationPolicy::Auto] {
+            let options = ManagerOptions { policy, ..ManagerOptions::default() };
+            let accel = accel::create(backend, Some(2)).unwrap();
+            let mut manager = SceneManager::new(accel, &template, &trajectory.bodies, options).unwrap();
+            let (mut compared, mut integrated_seen, mut reactivated) = (0, 0, 0);
+            let mut replay = trajectory.replay();
+            while let Some(f) = replay.next_frame() {
+                manager.observe(f.events);
+                if f.index % 4 != 0 {
+                    continue;
+                }
+                let stats = manager
+                    .prepare(FrameState { index: f.index, states: f.states, poses: f.poses })
+                    .unwrap()
+                    .clone();
+                manager.record_trace(0.0, 0);
+                reactivated += stats.islands_reactivated;
+                if f.index % 40 == 0 {
+                    let time = f.index as f32 * trajectory.timestep;
+                    let reference = describe_frame(&assets, time, &trajectory.bodies, f.states, f.poses);
+                    let mut rays = camera_rays(&reference, 48, 32);
+                    rays.extend(surface_rays(&reference, 1500, u64::from(f.index)));
+                    let present: Vec<BodyId> = (0..f.states.len())
+                        .filter(|&b| f.states[b] != BodyState::Absent && f.poses[b].translation.is_finite())
+                        .map(|b| BodyId(b as u32))
+                        .collect();
+                    let report = check_against(&manager, &reference, &present, &rays);
+                    assert_agrees(&report, &format!("{backend} {policy} frame {}", f.index));
+                    compared += 1;
+                    integrated_seen = integrated_seen.max(stats.integrated_islands);
+                }
+            }
+            assert!(compared >= 10);
+            // (`auto` may rightly decline everything in a scene this small.)
+            if policy == IntegrationPolicy::Always {
+                assert!(integrated_seen > 0, "{backend}: nothing was integrated");
+                assert!(reactivated > 0, "{backend}: the sweeper and the explosion wake integrated islands");
+            }
+        }
+    }
+}
+
+/// A synthetic world for the property test: bodies on a grid of cells (so they never touch),
+/// islands formed from random awake bodies, woken at random.
+struct World {
+    cells: Vec<Vec3>,
+    prototypes: Vec<u32>,
+    poses: Vec<BodyPose>,
+    states: Vec<BodyState>,
+    sleeping: Vec<(IslandId, Vec<BodyId>)>,
+    next_island: u64,
+}
+
+impl World {
+    fn new(bodies: usize, rng: &mut u64) -> Self {
+        let side = (bodies as f32).sqrt().ceil() as usize;
+        let cells =
+            (0..bodies).map(|i| Vec3::new((i % side) as f32 * 3.0, 1.0, (i / side) as f32 * 3.0)).collect();
+        let prototypes = (0..bodies).map(|_| (next(rng) % 2) as u32).collect();
+        let mut w = World {
+            cells,
+            prototypes,
+            poses: Vec::new(),
+            states: vec![BodyState::Awake; bodies],
+            sleeping: Vec::new(),
+            next_island: 1,
+        };
+        w.poses = (0..bodies).map(|i| w.jitter(i, rng)).collect();
+        w
+    }
+
+    fn jitter(&self, body: usize, rng: &mut u64) -> BodyPose {
+        let r = |rng: &mut u64| (next(rng) % 1000) as f32 / 1000.0 - 0.5;
+        BodyPose {
+            translation: self.cells[body] + Vec3::new(r(rng), r(rng), r(rng)) * 0.8,
+            rotation: Quat::from_rotation_y(r(rng) * 6.0) * Quat::from_rotation_x(r(rng)),
+        }
+    }
+
+    /// One frame: a few islands sleep or wake, awake bodies move. Returns the events.
+    fn step(&mut self, rng: &mut u64) -> Vec<IslandEvent> {
+        let mut events = Vec::new();
+        for _ in 0..1 + next(rng) % 3 {
+            let wake = !self.sleeping.is_empty() && next(rng) % 2 == 0;
+            if wake {
+                let (island, bodies) = self.sleeping.swap_remove((next(rng) as usize) % self.sleeping.len());
+                for b in bodies {
+                    self.states[b.0 as usize] = BodyState::Awake;
+                }
+                events.push(IslandEvent::Woke { island });
+            } else {
+                let awake: Vec<usize> =
+                    (0..self.states.len()).filter(|&b| self.states[b] == BodyState::Awake).collect();
+                if awake.is_empty() {
+                    continue;
+                }
+                let n = 1 + (next(rng) as usize) % 6;
+                let start = (next(rng) as usize) % awake.len();
+                let mut bodies: Vec<BodyId> = (0..n.min(awake.len()))
+                    .map(|k| BodyId(awake[(start + k) % awake.len()] as u32))
+                    .collect();
+                bodies.sort();
+                for b in &bodies {
+                    self.states[b.0 as usize] = BodyState::Asleep;
+                }
+                let island = IslandId(self.next_island);
+                self.next_island += 1;
+                let poses = bodies.iter().map(|b| self.poses[b.0 as usize]).collect();
+                events.push(IslandEvent::Slept { island, bodies: bodies.clone(), poses });
+                self.sleeping.push((island, bodies));
+            }
+        }
+        for b in 0..self.states.len() {
+            if self.states[b] == BodyState::Awake && next(rng) % 4 == 0 {
+                self.poses[b] = self.jitter(b, rng);
+            }
+        }
+        events
+    }
+
+    fn description(&self, template: &SceneDescription) -> SceneDescription {
+        SceneDescription {
+            bodies: (0..self.poses.len())
+                .map(|b| Body { prototype: self.prototypes[b], transform: self.poses[b].to_affine() })
+                .collect(),
+            ..template.clone()
+        }
+    }
+}
+
+fn next(state: &mut u64) -> u64 {
+    // SplitMix64.
+    *state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    let mut z = *state;
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+fn template() -> SceneDescription {
+    SceneDescription {
+        name: "sleep-wake".into(),
+        materials: vec![Material::diffuse(Vec3::splat(0.5))],
+        statics: vec![StaticMesh { mesh: primitives::ground_plane(60.0, 0.0, 4), material: 0 }],
+        prototypes: vec![
+            Prototype { name: "box".into(), mesh: primitives::cuboid(Vec3::new(0.5, 0.3, 0.4)), material: 0 },
+            Prototype { name: "ball".into(), mesh: primitives::uv_sphere(0.45, 12, 8), material: 0 },
+        ],
+        bodies: Vec::new(),
+        camera: Camera {
+            eye: Vec3::new(20.0, 25.0, -15.0),
+            target: Vec3::new(20.0, 0.0, 20.0),
+            up: Vec3::Y,
+            vfov_deg: 60.0,
+        },
+        sun: Sun { direction: Vec3::Y, irradiance: Vec3::ONE, angular_radius_deg: 1.0 },
+        sky: Sky::DAYLIGHT,
+    }
+}
+
+/// Runs `events` sleep/wake events through a manager and checks its scene against a fresh
+/// build every `check_every` frames and after every cache-served reactivation. Returns
+/// (events, checks, cache-served reactivations).
+fn run_sleep_wake(backend: Backend, seed: u64, events: usize, check_every: u32) -> (usize, u32, u32) {
+    let mut rng = seed;
+    let bodies = 400;
+    let mut world = World::new(bodies, &mut rng);
+    let template = template();
+    let infos: Vec<BodyInfo> = world
+        .prototypes
+        .iter()
+        .map(|&p| BodyInfo { prototype: p, kind: BodyKind::Dynamic, spawn_frame: 0 })
+        .collect();
+    let options = ManagerOptions {
+        policy: IntegrationPolicy::Always,
+        cache: true,
+        // Few entries, so lookups see evictions, partial hits and misses.
+        cache_budget: CacheBudget { bytes: 64 << 20, entries: 12 },
+        planned_frames: None,
+    };
+    let mut manager =
+        SceneManager::new(accel::create(backend, Some(2)).unwrap(), &template, &infos, options).unwrap();
+    let (mut seen, mut checks, mut served) = (0, 0, 0);
+    let mut frame = 0u32;
+    while seen < events {
+        let evs = world.step(&mut rng);
+        seen += evs.len();
+        manager.observe(&evs);
+        let stats = manager
+            .prepare(FrameState { index: frame, states: &world.states, poses: &world.poses })
+            .unwrap()
+            .clone();
+        manager.record_trace(0.0, 0);
+        let from_cache = matches!(stats.reactivation_path, Some(ReactivationPath::Cache(_)));
+        served += u32::from(from_cache);
+        if from_cache || frame % check_every == 0 {
+            let reference = world.description(&template);
+            let mut rays = surface_rays(&reference, 600, u64::from(frame) ^ seed);
+            rays.extend(camera_rays(&reference, 24, 16));
+            let ids: Vec<BodyId> = (0..bodies as u32).map(BodyId).collect();
+            let report = check_against(&manager, &reference, &ids, &rays);
+            assert_agrees(&report, &format!("{backend} seed {seed} frame {frame}"));
+            checks += 1;
+        }
+        frame += 1;
+    }
+    (seen, checks, served)
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 3, failure_persistence: None, ..ProptestConfig::default() })]
+
+    #[test]
+    fn cache_served_scenes_equal_fresh_builds(seed in any::<u64>()) {
+        for backend in backends() {
+            let (events, checks, served) = run_sleep_wake(backend, seed, 3500, 25);
+            prop_assert!(events >= 3500 && checks > 50, "{events} events, {checks} checks");
+            if backend == Backend::Bvh {
+                prop_assert!(served > 0, "the BVH serves some reactivations from the cache");
+            }
+        }
+    }
+}
