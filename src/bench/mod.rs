@@ -3,8 +3,10 @@
 //! it. (Domain-internal benchmarks, like physics stepping, live in their domain.)
 
 pub mod accel;
+pub mod integration;
 
 pub use accel::{bench_accel, AccelBenchOptions, AccelBenchReport};
+pub use integration::{bench_integration, IntegrationBenchOptions, IntegrationBenchReport};
 
 use std::time::Instant;
 

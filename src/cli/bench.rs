@@ -1,7 +1,11 @@
+use std::path::PathBuf;
+
 use clap::{Args, Subcommand};
 
 use super::{CliError, JsonOutput, SceneSource};
-use crate::bench::{self, AccelBenchOptions};
+use crate::bench::{self, AccelBenchOptions, IntegrationBenchOptions};
+use crate::integrate::SceneAssets;
+use crate::render::SequenceOptions;
 
 #[derive(Debug, Args)]
 pub struct BenchArgs {
@@ -16,6 +20,11 @@ pub enum BenchCommand {
         after_help = "Examples:\n  dormant bench accel --json out/accel.json\n  dormant bench accel --env ../shared/assets/monastery.glb --object ../shared/assets/duck.glb --count 8000 --json out/accel.json"
     )]
     Accel(AccelArgs),
+    /// Integration policies never/always/auto, cache on and off, on one simulated scene.
+    #[command(
+        after_help = "Examples:\n  dormant bench integration scenes/atrium.toml --json out/integration.json\n  dormant bench integration scenes/tiny.toml --backend bvh --size 160x90"
+    )]
+    Integration(IntegrationArgs),
     /// Physics step time with every body awake against most asleep.
     #[command(after_help = "Examples:\n  dormant bench physics scenes/atrium.toml --json out/physics.json")]
     Physics(PhysicsArgs),
@@ -28,6 +37,36 @@ pub struct PhysicsArgs {
     /// Frames measured in each phase.
     #[arg(long, value_name = "N", default_value_t = 60)]
     pub measure_frames: u32,
+    #[command(flatten)]
+    pub json: JsonOutput,
+}
+
+#[derive(Debug, Args)]
+pub struct IntegrationArgs {
+    #[command(flatten)]
+    pub scene: super::simulate::PhysicsScene,
+    /// Replay this trajectory (from `dormant simulate` with the same options) instead of
+    /// simulating.
+    #[arg(long, value_name = "FILE")]
+    pub trajectory: Option<PathBuf>,
+    /// Ray tracing backend (default: the first compiled in, Embree preferred).
+    #[arg(long)]
+    pub backend: Option<crate::accel::Backend>,
+    /// Render frames A..B (half-open) of the simulation.
+    #[arg(long = "range", value_name = "A..B")]
+    pub range: Option<super::render::FrameRange>,
+    /// Render every N-th frame (default: the scene's render.frame_step).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    pub frame_step: Option<u32>,
+    /// Image size of each traced frame.
+    #[arg(long, value_name = "WxH", default_value = "320x180")]
+    pub size: super::render::Size,
+    /// Samples per pixel.
+    #[arg(long, value_name = "N", default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=65536))]
+    pub spp: u32,
+    /// What each frame traces.
+    #[arg(long, value_enum, default_value_t = super::render::RenderMode::Path)]
+    pub mode: super::render::RenderMode,
     #[command(flatten)]
     pub json: JsonOutput,
 }
@@ -50,7 +89,35 @@ pub(super) fn run(args: &BenchArgs, threads: Option<usize>, quiet: bool) -> Resu
     match &args.which {
         BenchCommand::Accel(a) => accel(a, threads, quiet),
         BenchCommand::Physics(p) => physics(p, quiet),
+        BenchCommand::Integration(i) => integration(i, threads, quiet),
     }
+}
+
+fn integration(args: &IntegrationArgs, threads: Option<usize>, quiet: bool) -> Result<(), CliError> {
+    let backend = super::render::choose_backend(args.backend)?;
+    let (file, simulate) = args.scene.load()?;
+    let trajectory = super::render::load_trajectory(&file, &simulate, args.trajectory.as_deref())?;
+    let total = trajectory.frames.len() as u32;
+    let range = super::render::check_range(args.range, total)?;
+    let assets = SceneAssets::load(&file).map_err(|e| CliError::Input(e.to_string()))?;
+    let sequence = SequenceOptions {
+        start: range.start,
+        end: range.end,
+        step: args.frame_step.unwrap_or(file.description.render.frame_step.max(1)),
+        width: args.size.width,
+        height: args.size.height,
+        spp: args.spp,
+    };
+    let options = IntegrationBenchOptions { backend, sequence, threads };
+    let integrator = super::render::integrator(args.mode, 6);
+    let mut progress = |done: u32, total: u32| {
+        if !quiet && (done % 50 == 0 || done == total) {
+            eprintln!("bench integration: frame {done} of {total}, 5 configurations each");
+        }
+    };
+    let report = bench::bench_integration(&trajectory, &assets, integrator.as_ref(), &options, &mut progress)
+        .map_err(|e| CliError::Runtime(e.to_string()))?;
+    emit(&serde_json::to_value(&report).expect("bench report serialises"), &args.json, quiet)
 }
 
 fn physics(args: &PhysicsArgs, quiet: bool) -> Result<(), CliError> {

@@ -28,6 +28,13 @@ pub enum CliError {
     Runtime(String),
 }
 
+/// Render failures while running (bad scenes are caught as input before rendering starts).
+impl From<crate::render::RenderError> for CliError {
+    fn from(e: crate::render::RenderError) -> Self {
+        CliError::Runtime(e.to_string())
+    }
+}
+
 impl CliError {
     pub fn exit_code(&self) -> u8 {
         match self {

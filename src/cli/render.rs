@@ -1,16 +1,18 @@
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use clap::Args;
 
 use super::CliError;
 use crate::accel::{self, Backend};
-use crate::integrate::{describe_frame, SceneAssets};
+use crate::integrate::{
+    describe_scene, FrameStats, IntegrationPolicy, ManagerOptions, SceneAssets, SceneManager,
+};
 use crate::physics::{self, SimulateOptions, Trajectory};
 use crate::render::{
-    self, AmbientOcclusion, DirectLighting, Integrator, PathTracer, RenderScene, RenderSettings,
+    self, AmbientOcclusion, DirectLighting, Integrator, PathTracer, RenderScene, RenderSettings, RenderStats,
+    SequenceOptions,
 };
 use crate::scene::file::SceneFile;
-use crate::scene::SceneDescription;
 
 /// Image size as `WIDTHxHEIGHT`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -81,74 +83,158 @@ pub struct RenderArgs {
     pub exr: bool,
     #[command(flatten)]
     pub json: super::JsonOutput,
+    /// With SCENE: when sleeping islands are baked into the static scene.
+    #[arg(long, value_enum, default_value_t = IntegrationPolicy::Auto)]
+    pub integration: IntegrationPolicy,
+    /// With SCENE: serve reactivations from the geometry cache.
+    #[arg(long, value_enum, default_value_t = CacheSwitch::On)]
+    pub cache: CacheSwitch,
     /// Exposure multiplier applied before tone mapping.
     #[arg(long, default_value_t = 1.0)]
     pub exposure: f32,
 }
 
-pub(super) fn run(args: &RenderArgs, threads: Option<usize>, quiet: bool) -> Result<(), CliError> {
-    let backend = match args.backend {
+/// The requested backend, or the first compiled in.
+pub(super) fn choose_backend(requested: Option<Backend>) -> Result<Backend, CliError> {
+    match requested {
         Some(b) if !b.is_compiled() => {
-            return Err(CliError::Input(format!("backend '{b}' is not compiled into this build")));
+            Err(CliError::Input(format!("backend '{b}' is not compiled into this build")))
         }
-        Some(b) => b,
-        None => *Backend::compiled().first().ok_or_else(|| {
+        Some(b) => Ok(b),
+        None => Backend::compiled().first().copied().ok_or_else(|| {
             CliError::Input(
                 "no ray tracing backend is compiled in: Embree is not compiled in (build with the default \
                  feature `embree`)"
                     .into(),
             )
-        })?,
-    };
+        }),
+    }
+}
+
+/// The integrator for a mode.
+pub(super) fn integrator(mode: RenderMode, max_depth: u32) -> Box<dyn Integrator> {
+    match mode {
+        RenderMode::Path => Box::new(PathTracer { max_depth, ..PathTracer::default() }),
+        RenderMode::Shaded => Box::new(DirectLighting),
+        RenderMode::Ao => Box::new(AmbientOcclusion { radius: 1.0 }),
+    }
+}
+
+/// The scene's simulation: read from `path` (checked against the scene) or run now.
+pub(super) fn load_trajectory(
+    file: &SceneFile,
+    options: &SimulateOptions,
+    path: Option<&Path>,
+) -> Result<Trajectory, CliError> {
+    match path {
+        Some(path) => {
+            let expected = options.effective_scene(file).map_err(super::simulate::physics_error)?.source_hash;
+            Trajectory::read(path, expected).map_err(|e| CliError::Input(e.to_string()))
+        }
+        None => physics::simulate(file, options).map_err(super::simulate::physics_error),
+    }
+}
+
+/// `range` (default: every frame) checked against a trajectory of `total` frames.
+pub(super) fn check_range(range: Option<FrameRange>, total: u32) -> Result<FrameRange, CliError> {
+    let range = range.unwrap_or(FrameRange { start: 0, end: total });
+    if range.end > total {
+        return Err(CliError::Input(format!(
+            "--frames {}..{}: the trajectory has {total} frames (0..{total})",
+            range.start, range.end
+        )));
+    }
+    Ok(range)
+}
+
+pub(super) fn run(args: &RenderArgs, threads: Option<usize>, quiet: bool) -> Result<(), CliError> {
+    let backend = choose_backend(args.backend)?;
     if !args.exposure.is_finite() || args.exposure <= 0.0 {
         return Err(CliError::Input(format!("--exposure {}: must be a positive number", args.exposure)));
     }
     std::fs::create_dir_all(&args.out).map_err(|e| {
         CliError::Runtime(format!("cannot create output directory {}: {e}", args.out.display()))
     })?;
-
-    let path_tracer = PathTracer { max_depth: args.max_depth, ..PathTracer::default() };
-    let integrator: &dyn Integrator = match args.mode {
-        RenderMode::Path => &path_tracer,
-        RenderMode::Shaded => &DirectLighting,
-        RenderMode::Ao => &AmbientOcclusion { radius: 1.0 },
-    };
+    let integrator = integrator(args.mode, args.max_depth);
     let runtime = |e: &dyn std::fmt::Display| CliError::Runtime(e.to_string());
     let mut records = Vec::new();
-    let mut scene_name = String::new();
-    for_each_frame(args, &mut |index, description| {
-        scene_name.clone_from(&description.name);
-        // Each frame is loaded into a fresh accelerator, every body an instance. (The scene
-        // manager of the integration engine will update one scene incrementally instead.)
-        let mut accel = accel::create(backend, threads).map_err(|e| runtime(&e))?;
-        let render_scene = RenderScene::build(description, accel.as_mut()).map_err(|e| runtime(&e))?;
-        let query = accel.query().map_err(|e| runtime(&e))?;
-        let settings =
-            RenderSettings { width: args.size.width, height: args.size.height, spp: args.spp, frame: index };
-        let (film, stats) =
-            render::render_frame(&render_scene, query, integrator, &settings).map_err(|e| runtime(&e))?;
-        let path = args.out.join(format!("frame_{index:04}.png"));
-        render::write_png_atomic(&film, args.exposure, &path).map_err(|e| runtime(&e))?;
-        if args.exr {
-            render::write_exr_atomic(&film, &path.with_extension("exr")).map_err(|e| runtime(&e))?;
+    let mut write_frame =
+        |index: u32, film: &render::Film, stats: &RenderStats, scene_stats: Option<&FrameStats>| {
+            let path = args.out.join(format!("frame_{index:04}.png"));
+            render::write_png_atomic(film, args.exposure, &path).map_err(|e| runtime(&e))?;
+            if args.exr {
+                render::write_exr_atomic(film, &path.with_extension("exr")).map_err(|e| runtime(&e))?;
+            }
+            if !quiet && !args.json.is_requested() {
+                println!(
+                    "rendered {} ({}x{}, {} spp, {:?} mode, {backend}): {:.2} s, {} rays, {:.1} Mrays/s",
+                    path.display(),
+                    args.size.width,
+                    args.size.height,
+                    args.spp,
+                    args.mode,
+                    stats.seconds,
+                    stats.rays,
+                    stats.mrays_per_second()
+                );
+            }
+            records.push(serde_json::json!({ "frame": index, "path": path, "rays": stats.rays,
+            "seconds": stats.seconds, "mrays_per_second": stats.mrays_per_second(), "scene": scene_stats }));
+            Ok::<(), CliError>(())
+        };
+
+    let scene_name = match &args.scene_file {
+        None => {
+            if args.trajectory.is_some() || args.frames.is_some() {
+                return Err(CliError::Input("--trajectory and --frames need a SCENE file".into()));
+            }
+            let description = args.scene.load()?;
+            let mut accel = accel::create(backend, threads).map_err(|e| runtime(&e))?;
+            let scene = RenderScene::build(&description, accel.as_mut()).map_err(|e| runtime(&e))?;
+            let query = accel.query().map_err(|e| runtime(&e))?;
+            let settings =
+                RenderSettings { width: args.size.width, height: args.size.height, spp: args.spp, frame: 0 };
+            let (film, stats) = render::render_frame(&scene, query, integrator.as_ref(), &settings)
+                .map_err(|e| runtime(&e))?;
+            write_frame(0, &film, &stats, None)?;
+            description.name
         }
-        if !quiet && !args.json.is_requested() {
-            println!(
-                "rendered {} ({}x{}, {} spp, {:?} mode, {backend}): {:.2} s, {} rays, {:.1} Mrays/s",
-                path.display(),
-                settings.width,
-                settings.height,
-                settings.spp,
-                args.mode,
-                stats.seconds,
-                stats.rays,
-                stats.mrays_per_second()
-            );
+        Some(scene_path) => {
+            let file = SceneFile::load(scene_path).map_err(|e| CliError::Input(e.to_string()))?;
+            let options = SimulateOptions { count: args.scene.count, frames: None };
+            let trajectory = load_trajectory(&file, &options, args.trajectory.as_deref())?;
+            let range = check_range(args.frames, trajectory.frames.len() as u32)?;
+            let assets = SceneAssets::load(&file).map_err(|e| CliError::Input(e.to_string()))?;
+            let template = describe_scene(&assets, 0.0);
+            let sequence = SequenceOptions {
+                start: range.start,
+                end: range.end,
+                step: file.description.render.frame_step.max(1),
+                width: args.size.width,
+                height: args.size.height,
+                spp: args.spp,
+            };
+            let manager_options = ManagerOptions {
+                policy: args.integration,
+                cache: args.cache == CacheSwitch::On,
+                planned_frames: Some(sequence.frame_count()),
+                ..ManagerOptions::default()
+            };
+            let accel = accel::create(backend, threads).map_err(|e| runtime(&e))?;
+            let mut manager = SceneManager::new(accel, &template, &trajectory.bodies, manager_options)
+                .map_err(|e| runtime(&e))?;
+            render::render_sequence(
+                &trajectory,
+                &assets,
+                &template,
+                &mut manager,
+                integrator.as_ref(),
+                &sequence,
+                &mut |f| write_frame(f.index, f.film, &f.render, Some(f.stats)),
+            )?;
+            template.name
         }
-        records.push(serde_json::json!({ "frame": index, "path": path, "rays": stats.rays,
-            "seconds": stats.seconds, "mrays_per_second": stats.mrays_per_second() }));
-        Ok(())
-    })?;
+    };
     args.json.emit(&serde_json::json!({
         "scene": scene_name,
         "backend": backend,
@@ -156,58 +242,16 @@ pub(super) fn run(args: &RenderArgs, threads: Option<usize>, quiet: bool) -> Res
         "height": args.size.height,
         "spp": args.spp,
         "mode": args.mode,
+        "integration": args.scene_file.as_ref().map(|_| args.integration),
         "frames": records,
     }))
 }
 
-/// Calls `render` with each frame to render and its number, one at a time (a long sequence
-/// never holds more than one frame's description): the built-in or asset-pile scene as frame
-/// 0, or the selected frames of a scene file's simulation (run now, or read from
-/// --trajectory).
-fn for_each_frame(
-    args: &RenderArgs,
-    render: &mut dyn FnMut(u32, &SceneDescription) -> Result<(), CliError>,
-) -> Result<(), CliError> {
-    let Some(scene_path) = &args.scene_file else {
-        if args.trajectory.is_some() || args.frames.is_some() {
-            return Err(CliError::Input("--trajectory and --frames need a SCENE file".into()));
-        }
-        return render(0, &args.scene.load()?);
-    };
-    let file = SceneFile::load(scene_path).map_err(|e| CliError::Input(e.to_string()))?;
-    let options = SimulateOptions { count: args.scene.count, frames: None };
-    let trajectory = match &args.trajectory {
-        Some(path) => {
-            let expected =
-                options.effective_scene(&file).map_err(super::simulate::physics_error)?.source_hash;
-            Trajectory::read(path, expected).map_err(|e| CliError::Input(e.to_string()))?
-        }
-        None => physics::simulate(&file, &options).map_err(super::simulate::physics_error)?,
-    };
-    let total = trajectory.frames.len() as u32;
-    let range = args.frames.unwrap_or(FrameRange { start: 0, end: total });
-    if range.end > total {
-        return Err(CliError::Input(format!(
-            "--frames {}..{}: the trajectory has {total} frames (0..{total})",
-            range.start, range.end
-        )));
-    }
-    let step = file.description.render.frame_step.max(1);
-    let assets = SceneAssets::load(&file).map_err(|e| CliError::Input(e.to_string()))?;
-    let mut replay = trajectory.replay();
-    while let Some(frame) = replay.next_frame() {
-        if frame.index >= range.end {
-            break;
-        }
-        if frame.index >= range.start && frame.index % step == 0 {
-            let time = frame.index as f32 * trajectory.timestep;
-            render(
-                frame.index,
-                &describe_frame(&assets, time, &trajectory.bodies, frame.states, frame.poses),
-            )?;
-        }
-    }
-    Ok(())
+/// `--cache on|off`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum CacheSwitch {
+    On,
+    Off,
 }
 
 /// A half-open range of frames, `A..B`.

@@ -3,8 +3,10 @@
 //!
 //! Every estimate comes from measurements of this run:
 //! - **build cost**: a least-squares line `ms = a + b * triangles` over recent static builds;
-//! - **gain per frame**: least-squares slopes of commit and trace time over the number of
-//!   instances in the top level (what one body fewer saves per frame), floored at 0;
+//! - **gain per frame**: what one instance fewer saves: commit ms per instance (the top
+//!   level's rebuild is linear in its instances) weighted by how often frames commit at all,
+//!   plus the least-squares slope of trace time over instance count once the counts spread
+//!   enough to measure it (floored at 0);
 //! - **expected remaining sleep**: the mean residual sleep of islands that slept as long as
 //!   this one already has, over every island seen (integrated or not: declined islands are
 //!   "shadow" samples, so the estimate does not learn only from its own choices). Islands still
@@ -41,31 +43,55 @@ impl LineFit {
         self.samples.push_back((x, y));
     }
 
-    /// `(intercept, slope)`, or `None` while the x values do not spread.
-    fn fit(&self) -> Option<(f64, f64)> {
+    /// `(intercept, slope)`, or `None` with fewer than `min_samples` or while the x values
+    /// spread over less than `min_spread` of their mean.
+    fn fit_with(&self, min_samples: usize, min_spread: f64) -> Option<(f64, f64)> {
         let n = self.samples.len() as f64;
-        if n < 2.0 {
+        if self.samples.len() < min_samples.max(2) {
             return None;
         }
+        let (lo, hi) =
+            self.samples.iter().fold((f64::MAX, f64::MIN), |(lo, hi), (x, _)| (lo.min(*x), hi.max(*x)));
         let (sx, sy) = self.samples.iter().fold((0.0, 0.0), |(a, b), (x, y)| (a + x, b + y));
         let (mx, my) = (sx / n, sy / n);
         let (sxx, sxy) = self
             .samples
             .iter()
             .fold((0.0, 0.0), |(a, b), (x, y)| (a + (x - mx) * (x - mx), b + (x - mx) * (y - my)));
-        if sxx <= 1e-9 * mx.abs().max(1.0) {
+        if sxx <= 1e-9 * mx.abs().max(1.0) || hi - lo < min_spread * mx.abs() {
             return None;
         }
         let slope = sxy / sxx;
         Some((my - slope * mx, slope))
     }
+
+    /// `sum(y) / sum(x)`: the slope of a line through the origin.
+    fn ratio(&self) -> Option<f64> {
+        let (sx, sy) = self.samples.iter().fold((0.0, 0.0), |(a, b), (x, y)| (a + x, b + y));
+        (sx > 0.0).then(|| sy / sx)
+    }
+
+    fn min_y(&self) -> f64 {
+        self.samples.iter().map(|s| s.1).fold(f64::INFINITY, f64::min)
+    }
 }
+
+/// Build samples before the fitted line replaces the prior.
+const MIN_BUILD_SAMPLES: usize = 6;
+/// Trace samples, and the relative spread of their instance counts, before the trace slope
+/// counts: the trace time of a frame varies with much more than the instance count, so a slope
+/// over a narrow range is noise (and when `auto` integrates nothing the range stays narrow).
+const MIN_TRACE_SAMPLES: usize = 16;
+const MIN_TRACE_SPREAD: f64 = 0.2;
 
 /// The numbers behind one decision.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct CostEstimate {
-    /// Estimated build cost `C_i`, ms.
+    /// Estimated build cost of this island's triangles, ms: `C_i` without the fixed cost of
+    /// a static build, which one frame's integrations share.
     pub build_ms: f64,
+    /// Fixed cost of the frame's static build (commit overhead), ms.
+    pub fixed_ms: f64,
     /// Estimated saving per rendered frame while integrated, ms.
     pub gain_ms_per_frame: f64,
     /// Expected further frames asleep.
@@ -78,9 +104,21 @@ impl CostEstimate {
         self.gain_ms_per_frame * self.expected_frames
     }
 
-    pub fn pays_off(&self) -> bool {
-        self.build_ms < self.gain_ms()
+    /// `t_n - C_i` without the fixed cost.
+    pub fn net_ms(&self) -> f64 {
+        self.gain_ms() - self.build_ms
     }
+}
+
+/// Which of one frame's candidates to integrate: those with a positive net saving, if
+/// together they also pay the static build's fixed cost (`estimates` share one `fixed_ms`).
+/// Islands one by one would each pay the fixed cost and many small islands that pay off
+/// together would be declined.
+pub fn choose_batch(estimates: &[CostEstimate]) -> Vec<bool> {
+    let fixed = estimates.first().map_or(0.0, |e| e.fixed_ms);
+    let net: f64 = estimates.iter().map(|e| e.net_ms().max(0.0)).sum();
+    let go = net > fixed;
+    estimates.iter().map(|e| go && e.net_ms() > 0.0).collect()
 }
 
 /// What the model has learned so far (for the per-run report).
@@ -100,6 +138,9 @@ pub struct CostModel {
     build: LineFit,
     commit: LineFit,
     trace: LineFit,
+    /// Whether each recent frame committed (a frame where nothing moved commits nothing, so
+    /// an instance fewer saves nothing there).
+    committed: VecDeque<bool>,
     /// Frames each ended island slept (rendered frames).
     sleeps: VecDeque<f64>,
     shadow_islands: u64,
@@ -123,6 +164,10 @@ impl CostModel {
         if let Some(ms) = commit_ms {
             self.commit.push(instances as f64, ms);
         }
+        if self.committed.len() == WINDOW {
+            self.committed.pop_front();
+        }
+        self.committed.push_back(commit_ms.is_some());
         self.trace.push(instances as f64, trace_ms);
     }
 
@@ -138,18 +183,60 @@ impl CostModel {
         }
     }
 
+    /// The build line in use: the fit once it has enough samples (intercept clamped to the
+    /// cheapest build seen, so one slow outlier cannot make every build look expensive), else
+    /// the prior.
+    fn build_line(&self) -> (f64, f64) {
+        match self.build.fit_with(MIN_BUILD_SAMPLES, 0.0) {
+            Some((a, b)) if b >= 0.0 => (a.clamp(0.0, self.build.min_y()), b),
+            _ => PRIOR_BUILD_MS,
+        }
+    }
+
     /// Estimated ms to build `triangles` into the static scene.
     pub fn build_ms(&self, triangles: usize) -> f64 {
-        let (a, b) = self.build.fit().filter(|(_, b)| *b > 0.0).unwrap_or(PRIOR_BUILD_MS);
+        let (a, b) = self.build_line();
         (a + b * triangles as f64).max(0.0)
+    }
+
+    /// The estimate for an island of `bodies` bodies and `triangles` triangles asleep for
+    /// `age` rendered frames.
+    pub fn estimate(
+        &self,
+        bodies: usize,
+        triangles: usize,
+        age: f64,
+        live_ages: impl Iterator<Item = f64>,
+        frames_left: f64,
+    ) -> CostEstimate {
+        let (fixed_ms, per_triangle) = self.build_line();
+        CostEstimate {
+            build_ms: per_triangle * triangles as f64,
+            fixed_ms,
+            gain_ms_per_frame: self.gain_ms_per_frame(bodies),
+            expected_frames: self.expected_frames(age, live_ages, frames_left),
+        }
+    }
+
+    /// Commit ms per instance: the top level's rebuild is linear in its instances.
+    fn commit_per_instance(&self) -> Option<f64> {
+        self.commit.ratio()
+    }
+
+    fn trace_per_instance(&self) -> Option<f64> {
+        self.trace.fit_with(MIN_TRACE_SAMPLES, MIN_TRACE_SPREAD).map(|(_, b)| b.max(0.0))
     }
 
     /// Estimated ms saved per rendered frame by removing `instances` from the top level.
     pub fn gain_ms_per_frame(&self, instances: usize) -> f64 {
-        let slope = |f: &LineFit| f.fit().map(|(_, b)| b.max(0.0));
-        let per_instance = match (slope(&self.commit), slope(&self.trace)) {
+        let commit_rate = if self.committed.is_empty() {
+            1.0
+        } else {
+            self.committed.iter().filter(|c| **c).count() as f64 / self.committed.len() as f64
+        };
+        let per_instance = match (self.commit_per_instance(), self.trace_per_instance()) {
             (None, None) => PRIOR_GAIN_MS_PER_INSTANCE,
-            (c, t) => c.unwrap_or(0.0) + t.unwrap_or(0.0),
+            (c, t) => c.unwrap_or(0.0) * commit_rate + t.unwrap_or(0.0),
         };
         per_instance * instances as f64
     }
@@ -169,13 +256,12 @@ impl CostModel {
     }
 
     pub fn state(&self) -> CostModelState {
-        let (a, b) = self.build.fit().unwrap_or(PRIOR_BUILD_MS);
-        let slope = |f: &LineFit| f.fit().map_or(0.0, |(_, b)| b);
+        let (a, b) = self.build_line();
         CostModelState {
             build_ms_intercept: a,
             build_ms_per_mtriangle: b * 1e6,
-            commit_ms_per_instance: slope(&self.commit),
-            trace_ms_per_instance: slope(&self.trace),
+            commit_ms_per_instance: self.commit_per_instance().unwrap_or(0.0),
+            trace_ms_per_instance: self.trace_per_instance().unwrap_or(0.0),
             sleep_samples: self.sleeps.len(),
             shadow_islands: self.shadow_islands,
         }
@@ -192,7 +278,7 @@ mod tests {
         for x in 0..10 {
             f.push(x as f64, 2.0 + 0.5 * x as f64);
         }
-        let (a, b) = f.fit().unwrap();
+        let (a, b) = f.fit_with(2, 0.0).unwrap();
         assert!((a - 2.0).abs() < 1e-9 && (b - 0.5).abs() < 1e-9);
     }
 
@@ -200,9 +286,32 @@ mod tests {
     fn build_cost_follows_measurements() {
         let mut m = CostModel::new();
         assert!(m.build_ms(1_000_000) > 0.0, "prior before samples");
-        m.record_build(1000, 1.0);
-        m.record_build(11000, 6.0);
+        for k in 0..6 {
+            m.record_build(1000 + 2000 * k, 1.0 + k as f64);
+        }
         assert!((m.build_ms(21000) - 11.0).abs() < 1e-6);
+        m.record_build(500, 60.0);
+        assert!(
+            m.state().build_ms_intercept <= 1.0,
+            "an outlier cannot lift the intercept above the cheapest build"
+        );
+    }
+
+    #[test]
+    fn small_islands_pay_off_together() {
+        let e = |build_ms, gain_ms_per_frame| CostEstimate {
+            build_ms,
+            fixed_ms: 2.0,
+            gain_ms_per_frame,
+            expected_frames: 10.0,
+        };
+        // Each nets 0.9 ms, less than the 2 ms fixed cost alone, but three together pay it.
+        assert_eq!(choose_batch(&[e(0.1, 0.1), e(0.1, 0.1)]), [false, false]);
+        assert_eq!(
+            choose_batch(&[e(0.1, 0.1), e(0.1, 0.1), e(0.1, 0.1), e(5.0, 0.1)]),
+            [true, true, true, false]
+        );
+        assert!(choose_batch(&[]).is_empty());
     }
 
     #[test]

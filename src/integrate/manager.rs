@@ -16,7 +16,7 @@
 //! frames can be skipped between renders; an island that slept and woke in between never
 //! touches the accelerator.
 
-use std::collections::{BTreeMap, BTreeSet, HashMap};
+use std::collections::{BTreeMap, BTreeSet};
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -24,7 +24,7 @@ use glam::Mat3;
 
 use super::baked::BakedIsland;
 use super::cache::{CacheBudget, CacheOutcome, CacheStats, GeometryCache};
-use super::cost_model::{CostEstimate, CostModel, CostModelState};
+use super::cost_model::{choose_batch, CostEstimate, CostModel, CostModelState};
 use super::object_map::{normal_matrix, MeshRef, ObjectMap, ResolvedHit};
 use super::policy::IntegrationPolicy;
 use crate::accel::{
@@ -91,6 +91,39 @@ struct Integrated {
 enum StaticOwner {
     Environment(u32),
     Island(Arc<BakedIsland>),
+}
+
+/// Owners by static id: a dense table, because every hit on static geometry looks here (a
+/// hashed map cost the path tracer about 10% of its frame time on the 8,000-body atrium).
+#[derive(Default)]
+struct StaticOwners(Vec<Option<StaticOwner>>);
+
+impl StaticOwners {
+    fn insert(&mut self, id: StaticId, owner: StaticOwner) {
+        let i = id.0 as usize;
+        if self.0.len() <= i {
+            self.0.resize(i + 1, None);
+        }
+        self.0[i] = Some(owner);
+    }
+
+    fn remove(&mut self, id: StaticId) {
+        if let Some(slot) = self.0.get_mut(id.0 as usize) {
+            *slot = None;
+        }
+    }
+
+    fn get(&self, id: StaticId) -> Option<&StaticOwner> {
+        self.0.get(id.0 as usize)?.as_ref()
+    }
+
+    fn retain_environment(&mut self) {
+        for slot in &mut self.0 {
+            if matches!(slot, Some(StaticOwner::Island(_))) {
+                *slot = None;
+            }
+        }
+    }
 }
 
 /// A cache entry: a saved static scene and the static ids its islands had in it.
@@ -179,7 +212,7 @@ pub struct SceneManager {
     bodies: Vec<BodySlot>,
     /// Body, prototype and normal matrix per instance id.
     instance_owner: Vec<Option<(BodyId, u32, Mat3)>>,
-    static_owner: HashMap<StaticId, StaticOwner>,
+    static_owner: StaticOwners,
     sleeping: BTreeMap<IslandId, SleepingIsland>,
     integrated: BTreeMap<IslandId, Integrated>,
     /// Integrated islands that woke since the last frame.
@@ -202,7 +235,7 @@ impl SceneManager {
         bodies: &[BodyInfo],
         options: ManagerOptions,
     ) -> Result<Self, AccelError> {
-        let mut static_owner = HashMap::new();
+        let mut static_owner = StaticOwners::default();
         for (i, s) in template.statics.iter().enumerate() {
             static_owner.insert(accel.add_static(&s.mesh)?, StaticOwner::Environment(i as u32));
         }
@@ -261,6 +294,11 @@ impl SceneManager {
 
     pub fn cost_model(&self) -> CostModelState {
         self.cost.state()
+    }
+
+    /// The world-space meshes of the islands in the static scene now.
+    pub fn integrated_meshes(&self) -> impl Iterator<Item = &TriangleMesh> + '_ {
+        self.integrated.values().map(|i| &i.baked.mesh)
     }
 
     /// The islands in the static scene now.
@@ -390,7 +428,7 @@ impl SceneManager {
                 self.accel.restore_static_scene(snapshot)?;
                 // The scene is now the environment plus the entry's islands, under the ids
                 // they had in it; the other requested islands are added again.
-                self.static_owner.retain(|_, owner| matches!(owner, StaticOwner::Environment(_)));
+                self.static_owner.retain_environment();
                 for island in &request {
                     let baked = self.integrated[island].baked.clone();
                     let id = match entry.ids.get(island) {
@@ -412,7 +450,7 @@ impl SceneManager {
                 for island in &woken {
                     let gone = self.integrated.remove(island).expect("woken islands are integrated");
                     self.accel.remove_static(gone.id)?;
-                    self.static_owner.remove(&gone.id);
+                    self.static_owner.remove(gone.id);
                 }
                 stats.built_triangles += removal_cost;
                 stats.reactivation_path = Some(ReactivationPath::Removal);
@@ -443,7 +481,7 @@ impl SceneManager {
             self.options.planned_frames.map_or(f64::INFINITY, |n| f64::from(n.saturating_sub(self.rendered)));
         let live_ages: Vec<f64> =
             self.sleeping.values().map(|s| f64::from(self.rendered - s.slept_at)).collect();
-        let mut chosen = Vec::new();
+        let mut candidates = Vec::new();
         for (island, s) in &mut self.sleeping {
             if self.integrated.contains_key(island) {
                 continue;
@@ -461,19 +499,25 @@ impl SceneManager {
                 })
                 .clone();
             let age = self.rendered - s.slept_at;
-            let estimate = (policy == IntegrationPolicy::Auto).then(|| CostEstimate {
-                build_ms: self.cost.build_ms(baked.triangle_count()),
-                gain_ms_per_frame: self.cost.gain_ms_per_frame(s.bodies.len()),
-                expected_frames: self.cost.expected_frames(
-                    f64::from(age),
-                    live_ages.iter().copied(),
-                    frames_left,
-                ),
+            let estimate = (policy == IntegrationPolicy::Auto).then(|| {
+                let ages = live_ages.iter().copied();
+                self.cost.estimate(s.bodies.len(), baked.triangle_count(), f64::from(age), ages, frames_left)
             });
-            let integrate = estimate.is_none_or(|e| e.pays_off());
+            candidates.push((*island, baked, age, estimate));
+        }
+        let accept = match policy {
+            IntegrationPolicy::Auto => {
+                let estimates: Vec<CostEstimate> = candidates.iter().filter_map(|c| c.3).collect();
+                choose_batch(&estimates)
+            }
+            _ => vec![true; candidates.len()],
+        };
+        let mut chosen = Vec::new();
+        for ((island, baked, age, estimate), integrate) in candidates.into_iter().zip(accept) {
+            let s = self.sleeping.get_mut(&island).expect("candidate is asleep");
             if integrate || !s.decided {
                 stats.decisions.push(Decision {
-                    island: *island,
+                    island,
                     bodies: s.bodies.len(),
                     triangles: baked.triangle_count(),
                     age,
@@ -483,7 +527,7 @@ impl SceneManager {
                 s.decided = true;
             }
             if integrate {
-                chosen.push((*island, baked));
+                chosen.push((island, baked));
             }
         }
         if chosen.is_empty() {
@@ -588,7 +632,7 @@ impl ObjectMap for SceneManager {
                     baked: false,
                 })
             }
-            HitObject::Static(id) => match self.static_owner.get(&id)? {
+            HitObject::Static(id) => match self.static_owner.get(id)? {
                 StaticOwner::Environment(i) => Some(ResolvedHit {
                     mesh: MeshRef::Static(*i),
                     prim,

@@ -1,5 +1,6 @@
 //! Turning a committed scene into pixels: camera rays, shading, tiles over rayon, the film and
-//! image output. Talks to geometry only through [`crate::accel::SceneQuery`].
+//! image output, and image sequences of simulations ([`render_sequence`]). Talks to geometry
+//! only through [`crate::accel::SceneQuery`] and the scene manager's hit mapping.
 
 mod bsdf;
 mod camera;
@@ -7,6 +8,7 @@ mod film;
 mod integrator;
 mod render_scene;
 mod sampler;
+mod sequence;
 mod tiles;
 
 pub use bsdf::{sample_cosine, Bsdf, BsdfSample};
@@ -15,6 +17,7 @@ pub use film::{write_exr_atomic, write_png_atomic, Film};
 pub use integrator::{AmbientOcclusion, DirectLighting, Integrator, PathTracer};
 pub use render_scene::{RenderScene, SurfaceHit};
 pub use sampler::PixelSampler;
+pub use sequence::{render_sequence, SequenceFrame, SequenceOptions};
 pub use tiles::{render_frame, RenderSettings, RenderStats};
 
 use std::path::PathBuf;

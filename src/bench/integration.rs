@@ -1,0 +1,378 @@
+//! `dormant bench integration`: one simulated scene rendered under the integration policies
+//! `never`, `always` and `auto`, with the geometry cache on and off, in one process on the
+//! same trajectory, frames and rays, in lockstep (each frame is rendered by every
+//! configuration before the next frame).
+//!
+//! Per configuration it keeps every frame's stage times; the ratios compare whole frames
+//! (reactivate + integrate + update + commit + trace), so integration's own costs count
+//! against it. The settled phase is the frames where at least 90% of the dynamic bodies
+//! present are asleep. `never` is a fair baseline: its top level is Embree's LOW-quality
+//! instance BVH (rebuilt only when something moved; see docs/performance.md for the top
+//! level qualities tried) and it commits nothing when nothing moved.
+
+use std::time::Instant;
+
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::accel::{self, AccelError, Backend};
+use crate::crosscheck::camera_rays;
+use crate::integrate::{
+    describe_scene, CacheStats, CostModelState, FrameState, FrameStats, IntegrationPolicy, ManagerOptions,
+    ReactivationPath, SceneAssets, SceneManager, FRACTION_BUCKETS,
+};
+use crate::physics::{BodyKind, BodyState, Trajectory};
+use crate::render::{render_frame, Integrator, RenderError, RenderScene, RenderSettings, SequenceOptions};
+use crate::scene::{SceneDescription, StaticMesh};
+
+/// What to run.
+pub struct IntegrationBenchOptions {
+    pub backend: Backend,
+    pub sequence: SequenceOptions,
+    pub threads: Option<usize>,
+}
+
+/// Mean milliseconds per stage over some frames.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct StageMeans {
+    pub frames: usize,
+    pub reactivate_ms: f64,
+    pub integrate_ms: f64,
+    pub update_ms: f64,
+    pub commit_ms: f64,
+    pub trace_ms: f64,
+    pub frame_ms: f64,
+}
+
+/// One configuration's run.
+#[derive(Clone, Debug, Serialize)]
+pub struct PolicyRun {
+    pub policy: IntegrationPolicy,
+    pub cache: bool,
+    pub total_ms: f64,
+    pub all: StageMeans,
+    pub settled: StageMeans,
+    pub islands_integrated: u64,
+    pub islands_reactivated: u64,
+    pub reactivations_by_removal: u64,
+    pub reactivations_from_cache: u64,
+    pub integrated_at_end: usize,
+    pub instances_at_end: usize,
+    pub rays: u64,
+    pub decisions_integrate: u64,
+    pub decisions_decline: u64,
+    pub cache_stats: CacheStats,
+    pub cost_model: CostModelState,
+    /// Whole-frame ms, one per rendered frame (for plots).
+    pub frame_ms: Vec<f64>,
+}
+
+/// The headline numbers.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct IntegrationRatios {
+    /// Settled-phase mean frame time, `never` over `auto` (cache on).
+    pub settled_speedup: f64,
+    /// Whole-run frame time, `never` over `auto` (cache on).
+    pub run_speedup: f64,
+    /// `auto` over the better of `never` and `always` (cache on), whole run.
+    pub auto_over_best: f64,
+    /// A from-scratch build of the final static scene of `always` over the mean integration
+    /// of one island in that run.
+    pub rebuild_over_insert: f64,
+    /// Share of `auto`'s cache requests whose entry held 90-99% of the requested islands.
+    pub partial_hit_90_99_fraction: f64,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct IntegrationBenchReport {
+    pub scene: String,
+    pub backend: Backend,
+    pub bodies: usize,
+    pub frames_rendered: u32,
+    pub settled_frames: usize,
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
+    /// Per-frame share of present dynamic bodies asleep.
+    pub asleep_fraction: Vec<f64>,
+    pub runs: Vec<PolicyRun>,
+    /// From-scratch builds of `always`'s final static scene: the first is the rebuild of
+    /// `rebuild_over_insert`; the others are the alternatives docs/design.md weighs.
+    pub static_variants: Vec<StaticVariant>,
+    pub rebuild_ms: f64,
+    pub rebuild_triangles: usize,
+    pub mean_insert_ms: f64,
+    pub ratios: IntegrationRatios,
+    pub cache_histogram_buckets: [&'static str; 12],
+}
+
+fn means<'a>(frames: impl Iterator<Item = &'a FrameStats>) -> StageMeans {
+    let mut m = StageMeans::default();
+    for f in frames {
+        m.frames += 1;
+        m.reactivate_ms += f.reactivate_ms;
+        m.integrate_ms += f.integrate_ms;
+        m.update_ms += f.update_ms;
+        m.commit_ms += f.commit_ms;
+        m.trace_ms += f.trace_ms;
+        m.frame_ms += f.frame_ms();
+    }
+    let n = m.frames.max(1) as f64;
+    for v in [&mut m.reactivate_ms, &mut m.integrate_ms, &mut m.update_ms, &mut m.commit_ms, &mut m.trace_ms]
+    {
+        *v /= n;
+    }
+    m.frame_ms /= n;
+    m
+}
+
+/// Runs every configuration in lockstep, frame by frame (rotating which goes first), so load
+/// from other processes on a shared machine falls on all of them alike. Returns each one's
+/// per-frame statistics and its manager at the end.
+fn run_lockstep(
+    trajectory: &Trajectory,
+    assets: &SceneAssets,
+    template: &SceneDescription,
+    integrator: &dyn Integrator,
+    options: &IntegrationBenchOptions,
+    configs: &[ManagerOptions],
+    progress: &mut dyn FnMut(u32, u32),
+) -> Result<Vec<(Vec<FrameStats>, SceneManager)>, RenderError> {
+    let mut runs = Vec::with_capacity(configs.len());
+    for c in configs {
+        let accel = accel::create(options.backend, options.threads)?;
+        runs.push((Vec::new(), SceneManager::new(accel, template, &trajectory.bodies, *c)?));
+    }
+    let seq = &options.sequence;
+    let (step, total) = (seq.step.max(1), seq.frame_count());
+    let mut replay = trajectory.replay();
+    let mut rendered = 0;
+    while let Some(frame) = replay.next_frame() {
+        if frame.index >= seq.end {
+            break;
+        }
+        for (_, m) in &mut runs {
+            m.observe(frame.events);
+        }
+        if frame.index % step != 0 || frame.index < seq.start {
+            continue;
+        }
+        let settings =
+            RenderSettings { width: seq.width, height: seq.height, spp: seq.spp, frame: frame.index };
+        let camera = assets.camera_at(frame.index as f32 * trajectory.timestep);
+        let n = runs.len();
+        for k in 0..n {
+            let (frames, manager) = &mut runs[(k + rendered as usize) % n];
+            manager.prepare(FrameState { index: frame.index, states: frame.states, poses: frame.poses })?;
+            let (_, render) = {
+                let mut scene = RenderScene::with_objects(template, &*manager)?;
+                scene.camera = camera;
+                render_frame(&scene, manager.query()?, integrator, &settings)?
+            };
+            frames.push(manager.record_trace(render.seconds * 1e3, render.rays).clone());
+        }
+        rendered += 1;
+        progress(rendered, total);
+    }
+    Ok(runs)
+}
+
+/// One way to hold a final static scene: its from-scratch build time and primary-ray trace.
+#[derive(Clone, Debug, Serialize)]
+pub struct StaticVariant {
+    pub name: String,
+    pub build_ms: f64,
+    pub primary_trace_ms: f64,
+}
+
+/// The backend's ways to build the final static scene of `manager` (environment plus every
+/// integrated island) from scratch, each traced with the same primary rays. The first is the
+/// one dormant uses.
+fn static_variants(
+    manager: &SceneManager,
+    template: &SceneDescription,
+    options: &IntegrationBenchOptions,
+) -> Result<(Vec<StaticVariant>, usize), AccelError> {
+    let mut statics: Vec<StaticMesh> = template.statics.clone();
+    statics.extend(manager.integrated_meshes().map(|m| StaticMesh { mesh: m.clone(), material: 0 }));
+    let triangles = statics.iter().map(|s| s.mesh.triangle_count()).sum();
+    let scene = SceneDescription { statics, ..template.clone() };
+    let rays = camera_rays(&scene, 640, 360);
+    let mut variants = Vec::new();
+    for (name, make) in variant_factories(options) {
+        let mut accel = make()?;
+        let start = Instant::now();
+        for s in &scene.statics {
+            accel.add_static(&s.mesh)?;
+        }
+        accel.commit()?;
+        let build_ms = start.elapsed().as_secs_f64() * 1e3;
+        let query = accel.query()?;
+        let primary_trace_ms = (0..3)
+            .map(|_| {
+                let t = Instant::now();
+                let sum: f64 =
+                    rays.par_iter().map(|r| query.intersect(r).map_or(0.0, |h| f64::from(h.t))).sum();
+                std::hint::black_box(sum);
+                t.elapsed().as_secs_f64() * 1e3
+            })
+            .fold(f64::INFINITY, f64::min);
+        variants.push(StaticVariant { name, build_ms, primary_trace_ms });
+    }
+    Ok((variants, triangles))
+}
+
+type Factory = Box<dyn Fn() -> Result<Box<dyn accel::Accelerator>, AccelError>>;
+
+fn variant_factories(options: &IntegrationBenchOptions) -> Vec<(String, Factory)> {
+    let threads = options.threads;
+    match options.backend {
+        #[cfg(feature = "embree")]
+        Backend::Embree => {
+            use crate::accel::embree::{BuildQuality, Device, EmbreeAccel, EmbreeBuildParams};
+            let with = |params: EmbreeBuildParams| -> Factory {
+                Box::new(move || Ok(Box::new(EmbreeAccel::with_device(Device::new(threads)?, params)?)))
+            };
+            let d = EmbreeBuildParams::DEFAULT;
+            vec![
+                ("embree two-level (dynamic, low top, medium meshes)".into(), with(d)),
+                (
+                    "embree flat medium".into(),
+                    with(EmbreeBuildParams { static_scene: BuildQuality::Medium, ..d }),
+                ),
+                (
+                    "embree flat high".into(),
+                    with(EmbreeBuildParams { static_scene: BuildQuality::High, ..d }),
+                ),
+            ]
+        }
+        backend => {
+            vec![(format!("{backend} from-scratch build"), Box::new(move || accel::create(backend, threads)))]
+        }
+    }
+}
+
+/// See the module docs. `progress` gets (frames rendered, frames planned) after each frame.
+pub fn bench_integration(
+    trajectory: &Trajectory,
+    assets: &SceneAssets,
+    integrator: &dyn Integrator,
+    options: &IntegrationBenchOptions,
+    progress: &mut dyn FnMut(u32, u32),
+) -> Result<IntegrationBenchReport, RenderError> {
+    let template = describe_scene(assets, 0.0);
+    let seq = &options.sequence;
+    let step = seq.step.max(1);
+    // Asleep share per rendered frame, from the trajectory itself.
+    let dynamic: Vec<bool> = trajectory.bodies.iter().map(|b| b.kind == BodyKind::Dynamic).collect();
+    let asleep_fraction: Vec<f64> = trajectory
+        .frames
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| (seq.start..seq.end).contains(&(*i as u32)) && *i as u32 % step == 0)
+        .map(|(_, f)| {
+            let (mut present, mut asleep) = (0usize, 0usize);
+            for (s, d) in f.states.iter().zip(&dynamic) {
+                if *d && *s != BodyState::Absent {
+                    present += 1;
+                    asleep += usize::from(*s == BodyState::Asleep);
+                }
+            }
+            if present == 0 {
+                0.0
+            } else {
+                asleep as f64 / present as f64
+            }
+        })
+        .collect();
+    let settled: Vec<bool> = asleep_fraction.iter().map(|&a| a >= 0.9).collect();
+
+    let planned = Some(seq.frame_count());
+    let configs = [
+        (IntegrationPolicy::Never, false),
+        (IntegrationPolicy::Always, true),
+        (IntegrationPolicy::Always, false),
+        (IntegrationPolicy::Auto, true),
+        (IntegrationPolicy::Auto, false),
+    ];
+    let manager_options: Vec<ManagerOptions> = configs
+        .iter()
+        .map(|&(policy, cache)| ManagerOptions {
+            policy,
+            cache,
+            planned_frames: planned,
+            ..ManagerOptions::default()
+        })
+        .collect();
+    let results =
+        run_lockstep(trajectory, assets, &template, integrator, options, &manager_options, progress)?;
+    let mut runs = Vec::new();
+    let (mut rebuild_ms, mut rebuild_triangles, mut mean_insert_ms) = (0.0, 0, 0.0);
+    let mut variants = Vec::new();
+    for ((policy, cache), (frames, manager)) in configs.into_iter().zip(results) {
+        let total_ms = frames.iter().map(|f| f.frame_ms()).sum();
+        let sum = |f: &dyn Fn(&FrameStats) -> u64| frames.iter().map(f).sum::<u64>();
+        let run = PolicyRun {
+            policy,
+            cache,
+            total_ms,
+            all: means(frames.iter()),
+            settled: means(frames.iter().zip(&settled).filter(|(_, s)| **s).map(|(f, _)| f)),
+            islands_integrated: sum(&|f| u64::from(f.islands_integrated)),
+            islands_reactivated: sum(&|f| u64::from(f.islands_reactivated)),
+            reactivations_by_removal: sum(&|f| {
+                u64::from(f.reactivation_path == Some(ReactivationPath::Removal))
+            }),
+            reactivations_from_cache: sum(&|f| {
+                u64::from(matches!(f.reactivation_path, Some(ReactivationPath::Cache(_))))
+            }),
+            integrated_at_end: frames.last().map_or(0, |f| f.integrated_islands),
+            instances_at_end: frames.last().map_or(0, |f| f.instances),
+            rays: sum(&|f| f.rays),
+            decisions_integrate: sum(&|f| f.decisions.iter().filter(|d| d.integrate).count() as u64),
+            decisions_decline: sum(&|f| f.decisions.iter().filter(|d| !d.integrate).count() as u64),
+            cache_stats: manager.cache_stats(),
+            cost_model: manager.cost_model(),
+            frame_ms: frames.iter().map(|f| f.frame_ms()).collect(),
+        };
+        if policy == IntegrationPolicy::Always && cache {
+            (variants, rebuild_triangles) = static_variants(&manager, &template, options)?;
+            rebuild_ms = variants.first().map_or(0.0, |v| v.build_ms);
+            let integrate_ms: f64 = frames.iter().map(|f| f.integrate_ms).sum();
+            mean_insert_ms = integrate_ms / run.islands_integrated.max(1) as f64;
+        }
+        runs.push(run);
+    }
+    let find =
+        |p: IntegrationPolicy, c: bool| runs.iter().find(|r| r.policy == p && r.cache == c).expect("ran");
+    let (never, always, auto) = (
+        find(IntegrationPolicy::Never, false),
+        find(IntegrationPolicy::Always, true),
+        find(IntegrationPolicy::Auto, true),
+    );
+    let ratios = IntegrationRatios {
+        settled_speedup: never.settled.frame_ms / auto.settled.frame_ms.max(1e-9),
+        run_speedup: never.total_ms / auto.total_ms.max(1e-9),
+        auto_over_best: auto.total_ms / never.total_ms.min(always.total_ms).max(1e-9),
+        rebuild_over_insert: rebuild_ms / mean_insert_ms.max(1e-9),
+        partial_hit_90_99_fraction: auto.cache_stats.partial_90_99_fraction(),
+    };
+    Ok(IntegrationBenchReport {
+        scene: template.name.clone(),
+        backend: options.backend,
+        bodies: trajectory.bodies.len(),
+        frames_rendered: seq.frame_count(),
+        settled_frames: settled.iter().filter(|s| **s).count(),
+        width: seq.width,
+        height: seq.height,
+        spp: seq.spp,
+        asleep_fraction,
+        runs,
+        static_variants: variants,
+        rebuild_ms,
+        rebuild_triangles,
+        mean_insert_ms,
+        ratios,
+        cache_histogram_buckets: FRACTION_BUCKETS,
+    })
+}
