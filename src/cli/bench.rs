@@ -64,8 +64,9 @@ pub struct IntegrationArgs {
     /// Samples per pixel.
     #[arg(long, value_name = "N", default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=65536))]
     pub spp: u32,
-    /// What each frame traces.
-    #[arg(long, value_enum, default_value_t = super::render::RenderMode::Path)]
+    /// What each frame traces: by default the interactive preview (primary and shadow rays),
+    /// where structure updates are a sizeable part of a frame.
+    #[arg(long, value_enum, default_value_t = super::render::RenderMode::Shaded)]
     pub mode: super::render::RenderMode,
     #[command(flatten)]
     pub json: JsonOutput,

@@ -34,12 +34,25 @@ use crate::geometry::TriangleMesh;
 use crate::physics::{BodyId, BodyInfo, BodyPose, BodyState, IslandEvent, IslandId};
 use crate::scene::SceneDescription;
 
+/// How a reactivation leaves the static scene.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ReactivationStrategy {
+    /// Whichever the accelerator says builds fewer triangles: removal from the live scene, or
+    /// a cached scene plus the missing islands.
+    Cheapest,
+    /// A cached scene (or the pristine one) plus the missing islands whenever the backend can
+    /// restore one, as the paper does; removal otherwise.
+    CacheFirst,
+}
+
 /// How the manager integrates.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ManagerOptions {
     pub policy: IntegrationPolicy,
     /// Use the geometry cache to serve reactivations.
     pub cache: bool,
+    pub reactivation: ReactivationStrategy,
     pub cache_budget: CacheBudget,
     /// Rendered frames the run will have, if known: caps expected sleep in the cost model.
     pub planned_frames: Option<u32>,
@@ -50,6 +63,7 @@ impl Default for ManagerOptions {
         Self {
             policy: IntegrationPolicy::Auto,
             cache: true,
+            reactivation: ReactivationStrategy::Cheapest,
             cache_budget: CacheBudget::DEFAULT,
             planned_frames: None,
         }
@@ -422,7 +436,8 @@ impl SceneManager {
             }
         }
         let t = Instant::now();
-        match restore.filter(|(_, cost, _)| *cost < removal_cost) {
+        let cache_first = self.options.reactivation == ReactivationStrategy::CacheFirst;
+        match restore.filter(|(_, cost, _)| cache_first || *cost < removal_cost) {
             Some((entry, _, outcome)) => {
                 let snapshot = entry.snapshot.as_ref().expect("restorable entries only");
                 self.accel.restore_static_scene(snapshot)?;

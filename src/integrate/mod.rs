@@ -20,6 +20,8 @@ pub use baked::{BakedIsland, BakedPart};
 pub use cache::{CacheBudget, CacheHit, CacheOutcome, CacheStats, GeometryCache, FRACTION_BUCKETS};
 pub use cost_model::{choose_batch, CostEstimate, CostModel, CostModelState};
 pub use frame::{describe_frame, describe_scene, SceneAssets};
-pub use manager::{Decision, FrameState, FrameStats, ManagerOptions, ReactivationPath, SceneManager};
+pub use manager::{
+    Decision, FrameState, FrameStats, ManagerOptions, ReactivationPath, ReactivationStrategy, SceneManager,
+};
 pub use object_map::{normal_matrix, LoadedObjectMap, MeshRef, ObjectMap, ResolvedHit};
 pub use policy::IntegrationPolicy;

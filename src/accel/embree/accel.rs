@@ -29,7 +29,10 @@ pub struct EmbreeBuildParams {
     pub static_scene: BuildQuality,
     /// Each static mesh's own BVH under the two-level builder.
     pub static_mesh: BuildQuality,
-    /// The top level over instances: rebuilt every frame.
+    /// The top level over instances: rebuilt at every commit where an instance changed. HIGH
+    /// is both the fastest to build and to trace here: on the atrium's 8,000 instances LOW,
+    /// MEDIUM and HIGH measured 13.6, 10.8 and 7.9 ms per commit and 40.1, 36.1 and 31.5 ms
+    /// for 640x360 primary rays (Embree 4.4, 2 threads).
     pub top_level: BuildQuality,
 }
 
@@ -39,7 +42,7 @@ impl EmbreeBuildParams {
         prototype: BuildQuality::High,
         static_scene: BuildQuality::Low,
         static_mesh: BuildQuality::Medium,
-        top_level: BuildQuality::Low,
+        top_level: BuildQuality::High,
     };
 
     /// Every scene at one quality (for comparing Embree's builders).
@@ -60,7 +63,8 @@ impl Default for EmbreeBuildParams {
 /// - The static scene (environment plus baked islands) is a DYNAMIC scene owned by an identity
 ///   instance at top-level id 0, so adding a baked mesh commits it incrementally and the
 ///   per-frame top-level rebuild never touches its triangles.
-/// - The top level is rebuilt at LOW quality each commit; it holds only instances.
+/// - The top level is rebuilt at HIGH quality at each commit that changed an instance; it
+///   holds only instances.
 pub struct EmbreeAccel {
     device: Device,
     params: EmbreeBuildParams,

@@ -17,11 +17,13 @@
 //! inserted subtree. Traversal stays fast because rays spend nearly all their time inside
 //! blocks, which are the same cache-friendly arrays as any other BVH here; only the few overlay
 //! nodes are pointer-chased. The price: inserted subtrees are never merged into the blocks,
-//! so after many inserts the tree is worse than a rebuild. [`StaticBvh`] rebuilds when the
-//! inserted triangles exceed [`StaticBvh::rebuild_fraction`] of those of the last rebuild or the
-//! overlay gets deeper than [`MAX_OVERLAY_HEIGHT`]. Removing a mesh that has its own block
-//! unlinks its references and refits the path (collapsing path copies back into block
-//! references where they match again); removing a mesh that shares the base block rebuilds.
+//! so after many inserts the overlay depends on insertion order. [`StaticBvh`] rebuilds the
+//! overlay over the existing blocks ([`StaticBvh::relink`], no triangle work) when the inserted
+//! triangles exceed [`StaticBvh::rebuild_fraction`] of the tree's size at the last relink, and
+//! rebuilds everything into one block only when the overlay gets deeper than
+//! [`MAX_OVERLAY_HEIGHT`]. Removing a mesh that has its own block unlinks its references and
+//! refits the path (collapsing path copies back into block references where they match
+//! again); removing a mesh that shares the base block rebuilds.
 //!
 //! For traversal, every new root also gets a flattened copy of its overlay (a *view*: overlay
 //! nodes as ordinary 32-byte nodes whose leaves name block subtrees), so rays chase no
@@ -179,6 +181,8 @@ pub struct StaticUpdate {
     pub skipped_triangles: usize,
     /// Whether the update rebuilt the tree from scratch.
     pub rebuilt: bool,
+    /// Whether the overlay was rebuilt over the existing blocks ([`StaticBvh::relink`]).
+    pub relinked: bool,
 }
 
 /// The persistent static BVH. See the module docs for its layout.
@@ -187,8 +191,8 @@ pub struct StaticBvh {
     state: StaticSnapshot,
     params: BuildParams,
     next_block: u32,
-    /// Rebuild instead of inserting once the triangles inserted since the last rebuild exceed
-    /// this fraction of the triangles it built. Default 0.5.
+    /// Relink ([`Self::relink`]) once the triangles inserted since the last rebuild or relink
+    /// exceed this fraction of the triangles the tree then held. Default 0.5.
     pub rebuild_fraction: f32,
 }
 
@@ -323,6 +327,48 @@ impl StaticBvh {
         tris
     }
 
+    /// Rebuilds the overlay over the existing blocks, re-inserting each whole, largest first:
+    /// no triangle is touched and every mesh keeps its own block, so it stays removable
+    /// without a rebuild. What growth past [`Self::rebuild_fraction`] triggers: the
+    /// overlay's shape then depends less on insertion order. Returns whether it fell back to a
+    /// full rebuild (the overlay came out deeper than [`MAX_OVERLAY_HEIGHT`]).
+    ///
+    /// (Merging everything into one block instead, as a full rebuild does, traces a little
+    /// faster but makes every later removal a full rebuild: on the 8,000-body atrium, where
+    /// islands keep waking, the BVH backend then spent most of its frame time rebuilding.)
+    pub fn relink(&mut self) -> bool {
+        let Some(root) = self.state.root.take() else {
+            return false;
+        };
+        let mut blocks: Vec<Arc<Block>> = Vec::new();
+        let mut seen = std::collections::HashSet::new();
+        let mut stack = vec![&root];
+        while let Some(l) = stack.pop() {
+            match l {
+                Link::Ref(b, _) => {
+                    if seen.insert(b.id) {
+                        blocks.push(b.clone());
+                    }
+                }
+                Link::Node(n) => stack.extend(n.kids.iter()),
+            }
+        }
+        blocks.sort_by_key(|b| (std::cmp::Reverse(b.mesh.tris.len()), b.id));
+        let mut fresh = Link::Ref(blocks[0].clone(), 0);
+        for b in &blocks[1..] {
+            fresh = insert::insert_block(fresh, b);
+        }
+        self.state.rebuilt_triangles = self.state.triangles;
+        self.state.inserted_since_rebuild = 0;
+        if fresh.height() > MAX_OVERLAY_HEIGHT {
+            self.state.set_root(Some(root));
+            self.rebuild();
+            return true;
+        }
+        self.state.set_root(Some(fresh));
+        false
+    }
+
     fn rebuild_from(&mut self, tris: Vec<Tri>) {
         debug_assert!(tris.iter().all(|t| self.state.meshes.contains_key(&StaticId(t.geom))));
         let n = tris.len();
@@ -390,10 +436,7 @@ impl StaticBvh {
         }
         let added: usize = adds.iter().map(|(_, t)| t.len()).sum();
         let budget = self.rebuild_fraction * self.state.rebuilt_triangles as f32;
-        if need_rebuild
-            || self.state.root.is_none()
-            || (self.state.inserted_since_rebuild + added) as f32 > budget
-        {
+        if need_rebuild || self.state.root.is_none() {
             let mut tris = self.live_tris();
             let meshes = Arc::make_mut(&mut self.state.meshes);
             for (id, t) in adds {
@@ -404,12 +447,19 @@ impl StaticBvh {
             update.rebuilt = true;
             update.built_triangles = self.state.triangles;
         } else {
+            let over_budget = (self.state.inserted_since_rebuild + added) as f32 > budget;
             for (id, t) in adds {
                 update.built_triangles += t.len();
                 update.rebuilt |= self.insert_tris(id, t);
             }
             if update.rebuilt {
                 update.built_triangles = self.state.triangles;
+            } else if over_budget {
+                update.relinked = true;
+                if self.relink() {
+                    update.rebuilt = true;
+                    update.built_triangles = self.state.triangles;
+                }
             }
         }
         update
