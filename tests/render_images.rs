@@ -30,12 +30,14 @@ fn empty_scene(camera: Camera, sun: Sun, sky: Sky) -> SceneDescription {
     SceneDescription {
         name: "test".into(),
         materials: Vec::new(),
+        textures: Vec::new(),
         statics: Vec::new(),
         prototypes: Vec::new(),
         bodies: Vec::new(),
         camera,
         sun,
         sky,
+        lights: Vec::new(),
     }
 }
 

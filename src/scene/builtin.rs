@@ -60,6 +60,7 @@ pub fn default_scene() -> SceneDescription {
     SceneDescription {
         name: "default".into(),
         materials,
+        textures: Vec::new(),
         statics,
         prototypes,
         bodies,
@@ -75,5 +76,6 @@ pub fn default_scene() -> SceneDescription {
             angular_radius_deg: 2.0,
         },
         sky: Sky::DAYLIGHT,
+        lights: Vec::new(),
     }
 }
