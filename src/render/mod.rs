@@ -7,6 +7,7 @@ mod film;
 mod integrator;
 mod render_scene;
 mod sampler;
+mod texture;
 mod tiles;
 
 pub use bsdf::{sample_cosine, Bsdf, BsdfSample};
@@ -15,6 +16,7 @@ pub use film::{write_exr_atomic, write_png_atomic, Film};
 pub use integrator::{AmbientOcclusion, DirectLighting, Integrator, PathTracer};
 pub use render_scene::{RenderScene, SurfaceHit};
 pub use sampler::PixelSampler;
+pub use texture::sample as sample_texture;
 pub use tiles::{render_frame, RenderSettings, RenderStats};
 
 use std::path::PathBuf;

@@ -1,9 +1,15 @@
-use glam::{Mat3, Vec3};
+//! The renderer's view of a committed scene: which mesh and material every accelerator
+//! object is, and the shading data (normal, UV, textured material, emission) at a hit.
 
+use std::sync::Arc;
+
+use glam::{Mat3, Vec2, Vec3};
+
+use super::texture::sample;
 use super::RenderError;
 use crate::accel::{load_scene, Accelerator, Hit, HitObject};
 use crate::geometry::{Ray, TriangleMesh};
-use crate::scene::{Material, SceneDescription, Sky, Sun};
+use crate::scene::{Light, Material, SceneDescription, Sky, Sun, Texture};
 
 #[derive(Clone, Copy, Debug)]
 struct ObjectRef {
@@ -20,8 +26,11 @@ pub struct RenderScene {
     pub camera: crate::scene::Camera,
     pub sun: Sun,
     pub sky: Sky,
+    /// Punctual lights besides the sun.
+    pub lights: Vec<Light>,
     meshes: Vec<TriangleMesh>,
     materials: Vec<Material>,
+    textures: Vec<Arc<Texture>>,
     statics: Vec<Option<ObjectRef>>,
     instances: Vec<Option<ObjectRef>>,
 }
@@ -32,7 +41,12 @@ pub struct SurfaceHit {
     pub p: Vec3,
     pub ng: Vec3,
     pub ns: Vec3,
+    /// Texture coordinates (zero when the mesh has none).
+    pub uv: Vec2,
+    /// The triangle's material with its textures applied at `uv`.
     pub material: Material,
+    /// Radiance the surface emits (towards either side).
+    pub emission: Vec3,
 }
 
 fn place<T>(v: &mut Vec<Option<T>>, index: u32, value: T) {
@@ -48,11 +62,18 @@ impl RenderScene {
     /// how to shade every object it holds.
     pub fn build(desc: &SceneDescription, accel: &mut dyn Accelerator) -> Result<Self, RenderError> {
         let bad = |what: String| RenderError::Scene { scene: desc.name.clone(), what };
-        let material = |m: u32, what: &dyn Fn() -> String| {
-            if (m as usize) < desc.materials.len() {
+        for (i, m) in desc.materials.iter().enumerate() {
+            if let Some(t) = m.textures().find(|&t| t as usize >= desc.textures.len()) {
+                return Err(bad(format!("material {i}: texture {t} does not exist")));
+            }
+        }
+        // The object's material and, for meshes with per-triangle slots, the last slot.
+        let material = |m: u32, mesh: &TriangleMesh, what: &dyn Fn() -> String| {
+            let last = m as u64 + mesh.max_material_slot() as u64;
+            if last < desc.materials.len() as u64 {
                 Ok(m)
             } else {
-                Err(bad(format!("{}: material {m} does not exist", what())))
+                Err(bad(format!("{}: material {last} does not exist", what())))
             }
         };
         let loaded = load_scene(desc, accel)?;
@@ -62,15 +83,17 @@ impl RenderScene {
             camera: desc.camera,
             sun: desc.sun,
             sky: desc.sky,
+            lights: desc.lights.clone(),
             meshes: Vec::with_capacity(desc.statics.len() + desc.prototypes.len()),
             materials: desc.materials.clone(),
+            textures: desc.textures.clone(),
             statics: Vec::new(),
             instances: Vec::new(),
         };
         for (i, (s, id)) in desc.statics.iter().zip(&loaded.statics).enumerate() {
             let object = ObjectRef {
                 mesh: scene.meshes.len() as u32,
-                material: material(s.material, &|| format!("static mesh {i}"))?,
+                material: material(s.material, &s.mesh, &|| format!("static mesh {i}"))?,
                 normal_matrix: Mat3::IDENTITY,
             };
             place(&mut scene.statics, id.0, object);
@@ -78,7 +101,7 @@ impl RenderScene {
         }
         let first_prototype_mesh = scene.meshes.len() as u32;
         for p in &desc.prototypes {
-            material(p.material, &|| format!("prototype '{}'", p.name))?;
+            material(p.material, &p.mesh, &|| format!("prototype '{}'", p.name))?;
             scene.meshes.push(p.mesh.clone());
         }
         for (b, id) in desc.bodies.iter().zip(&loaded.instances) {
@@ -100,27 +123,61 @@ impl RenderScene {
         .and_then(Option::as_ref)
     }
 
-    /// Shading data for `hit` on `ray`. Hits on objects the scene does not know (which a
-    /// correct accelerator never reports) shade as a neutral grey facet.
+    /// Shading data for `hit` on `ray`. The hit resolves to an object (mesh, local primitive,
+    /// normal matrix); normal, UV and material are then looked up from the mesh by that local
+    /// primitive. Hits on objects the scene does not know (which a correct accelerator never
+    /// reports) shade as a neutral grey facet.
     pub fn surface(&self, ray: &Ray, hit: &Hit) -> SurfaceHit {
         let p = ray.at(hit.t);
         let ng = if hit.ng.dot(ray.dir) > 0.0 { -hit.ng } else { hit.ng };
         let Some(obj) = self.object(hit.object) else {
             debug_assert!(false, "hit on unknown object {:?}", hit.object);
-            return SurfaceHit { p, ng, ns: ng, material: Material::diffuse(Vec3::splat(0.5)) };
+            let material = Material::diffuse(Vec3::splat(0.5));
+            return SurfaceHit { p, ng, ns: ng, uv: Vec2::ZERO, material, emission: Vec3::ZERO };
         };
         let mesh = &self.meshes[obj.mesh as usize];
+        let prim = hit.prim as usize;
+        let tri = mesh.indices.get(prim).copied();
+        debug_assert!(tri.is_some(), "primitive {prim} outside its mesh");
+        let (w, u, v) = (1.0 - hit.u - hit.v, hit.u, hit.v);
         let ns = mesh
             .normals
             .as_ref()
-            .and_then(|normals| {
-                let [a, b, c] = *mesh.indices.get(hit.prim as usize)?;
-                let w = 1.0 - hit.u - hit.v;
-                let n = w * normals[a as usize] + hit.u * normals[b as usize] + hit.v * normals[c as usize];
+            .zip(tri)
+            .and_then(|(normals, [a, b, c])| {
+                let n = w * normals[a as usize] + u * normals[b as usize] + v * normals[c as usize];
                 let n = (obj.normal_matrix * n).normalize_or_zero();
                 (n != Vec3::ZERO).then_some(if n.dot(ng) < 0.0 { -n } else { n })
             })
             .unwrap_or(ng);
-        SurfaceHit { p, ng, ns, material: self.materials[obj.material as usize] }
+        let uv = mesh.uvs.as_ref().zip(tri).map_or(Vec2::ZERO, |(uvs, [a, b, c])| {
+            w * uvs[a as usize] + u * uvs[b as usize] + v * uvs[c as usize]
+        });
+        // Per-triangle material slot on top of the object's material; build() checked the
+        // range, the fallback only guards against a mesh changed since.
+        let index = obj.material as usize + mesh.material_slot(prim) as usize;
+        let mut material = *self.materials.get(index).unwrap_or(&self.materials[obj.material as usize]);
+        let texture = |t: Option<u32>, srgb: bool| {
+            t.and_then(|t| self.textures.get(t as usize)).map(|tex| sample(tex, uv, srgb))
+        };
+        if let Some(c) = texture(material.base_color_texture, true) {
+            material.base_color *= c.truncate();
+        }
+        if let Some(mr) = texture(material.metallic_roughness_texture, false) {
+            material.roughness *= mr.y;
+            material.metallic *= mr.z;
+        }
+        let mut emission = material.emissive;
+        if emission != Vec3::ZERO {
+            if let Some(e) = texture(material.emissive_texture, true) {
+                emission *= e.truncate();
+            }
+        }
+        SurfaceHit { p, ng, ns, uv, material, emission }
+    }
+
+    /// Whether any material emits light.
+    pub fn has_emission(&self) -> bool {
+        self.materials.iter().any(|m| m.emissive != Vec3::ZERO)
     }
 }
