@@ -1,3 +1,7 @@
+//! Integrators: path tracing with next-event estimation (sun, sky, punctual lights), the
+//! direct-light preview and ambient occlusion. Emissive surfaces add their emission where
+//! rays hit them.
+
 use std::f32::consts::PI;
 
 use glam::Vec3;
@@ -6,6 +10,7 @@ use super::bsdf::{sample_cone, sample_cosine, Bsdf};
 use super::{PixelSampler, RenderScene};
 use crate::accel::SceneQuery;
 use crate::geometry::{offset_origin, Ray};
+use crate::scene::Light;
 
 /// Computes the radiance arriving along a camera ray.
 pub trait Integrator: Sync {
@@ -21,8 +26,46 @@ pub trait Integrator: Sync {
     ) -> Vec3;
 }
 
-/// Direct light only: the sun (a disc, so shadows are soft) and the sky, each through one
-/// shadow ray per sample, on Lambertian surfaces. The preview mode beside the path tracer.
+/// Light from a punctual light reaching point `p`: the unit direction towards the light, the
+/// irradiance it gives a surface facing it, and the distance to it (infinite for directional
+/// lights). `None` when `p` is outside a spot's cone or on a point light.
+pub(crate) fn punctual_light(light: &Light, p: Vec3) -> Option<(Vec3, Vec3, f32)> {
+    let towards = |position: Vec3| {
+        let d = position - p;
+        let r2 = d.length_squared();
+        (r2 > 0.0 && r2.is_finite()).then(|| (d / r2.sqrt(), r2))
+    };
+    match *light {
+        Light::Point { position, intensity } => {
+            let (wi, r2) = towards(position)?;
+            Some((wi, intensity / r2, r2.sqrt()))
+        }
+        Light::Spot { position, direction, intensity, cos_inner, cos_outer } => {
+            let (wi, r2) = towards(position)?;
+            let cos = (-wi).dot(direction);
+            if cos <= cos_outer {
+                return None;
+            }
+            // glTF's recommended smooth falloff between the cones.
+            let t = if cos_inner > cos_outer {
+                ((cos - cos_outer) / (cos_inner - cos_outer)).min(1.0)
+            } else {
+                1.0
+            };
+            Some((wi, intensity * (t * t) / r2, r2.sqrt()))
+        }
+        Light::Directional { direction, irradiance } => Some((-direction, irradiance, f32::INFINITY)),
+    }
+}
+
+/// A shadow ray from `origin` towards a light `distance` away in unit direction `wi`.
+fn shadow_ray(origin: Vec3, wi: Vec3, distance: f32) -> Ray {
+    Ray::segment(origin, wi, 0.0, if distance.is_finite() { distance * (1.0 - 1e-4) } else { f32::INFINITY })
+}
+
+/// Direct light only: the sun (a disc, so shadows are soft), the sky and punctual lights,
+/// each through one shadow ray per sample, on Lambertian surfaces, plus emission. The preview
+/// mode beside the path tracer.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct DirectLighting;
 
@@ -52,7 +95,18 @@ impl Integrator for DirectLighting {
         let s = scene.surface(ray, &hit);
         let albedo = s.material.base_color;
         let origin = offset_origin(s.p, s.ng);
-        let mut radiance = Vec3::ZERO;
+        let mut radiance = s.emission;
+
+        for light in &scene.lights {
+            let Some((l, e, distance)) = punctual_light(light, s.p) else { continue };
+            let cos = s.ns.dot(l);
+            if cos > 0.0 && s.ng.dot(l) > 0.0 {
+                *rays += 1;
+                if !query.intersect_p(&shadow_ray(origin, l, distance)) {
+                    radiance += albedo / PI * e * cos;
+                }
+            }
+        }
 
         let sun = &scene.sun;
         let cos_max = sun.angular_radius_deg.to_radians().cos();
@@ -78,8 +132,9 @@ impl Integrator for DirectLighting {
 }
 
 /// Unidirectional path tracing with next-event estimation of the sun and the sky, combined
-/// with BSDF sampling by multiple importance sampling (power heuristic), on the
-/// metallic-roughness BSDF, with Russian roulette after three bounces.
+/// with BSDF sampling by multiple importance sampling (power heuristic), and of punctual
+/// lights (delta lights: light sampling only), on the metallic-roughness BSDF, with Russian
+/// roulette after three bounces. Emissive surfaces count where paths hit them.
 #[derive(Clone, Copy, Debug)]
 pub struct PathTracer {
     pub max_depth: u32,
@@ -181,10 +236,26 @@ impl Integrator for PathTracer {
                 break;
             };
             let s = scene.surface(&ray, &hit);
+            if s.emission != Vec3::ZERO {
+                // Emission seen directly, or reached through a bounce from vertex depth-1.
+                add(&mut radiance, beta * s.emission, depth.saturating_sub(1));
+            }
             let wo = -ray.dir.normalize();
             let bsdf = Bsdf::new(&s.material, s.ns);
             let origin = offset_origin(s.p, s.ng);
             let dim = dims::BOUNCE + 4 * depth;
+
+            // Punctual lights: delta distributions, so light sampling alone.
+            for light in &scene.lights {
+                let Some((l, e, distance)) = punctual_light(light, s.p) else { continue };
+                let f = bsdf.eval(wo, l);
+                if f != Vec3::ZERO && s.ng.dot(l) > 0.0 {
+                    *rays += 1;
+                    if !query.intersect_p(&shadow_ray(origin, l, distance)) {
+                        add(&mut radiance, beta * f * e, depth);
+                    }
+                }
+            }
 
             // Sun: sample its disc.
             let l = sample_cone(sun.dir, sun.cos_max, sampler.get_2d(index, dim));
