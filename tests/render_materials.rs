@@ -448,3 +448,18 @@ fn scene_file_point_and_spot_lights_reach_the_description() {
     assert_eq!(bad.field(), Some("lights[2].inner_cone_degrees"), "{bad}");
     assert_eq!(bad.line(), Some(21), "{bad}");
 }
+
+#[test]
+fn floor_under_an_emissive_ceiling_reflects_albedo_times_radiance() {
+    // A Lambertian floor under a (practically) infinite ceiling of radiance L receives
+    // E = pi * L, so it shows albedo * L. Emitter sampling and BSDF sampling meet by MIS.
+    let mut desc = scene(top_down(0.9, 40.0), BLACK_SKY);
+    desc.materials.push(Material::lambertian(Vec3::splat(0.5)));
+    desc.materials.push(Material { emissive: Vec3::new(2.0, 1.0, 0.5), ..Material::lambertian(Vec3::ZERO) });
+    desc.statics.push(StaticMesh { mesh: primitives::ground_plane(100.0, 0.0, 1), material: 0 });
+    desc.statics.push(StaticMesh { mesh: primitives::ground_plane(100.0, 1.0, 1), material: 1 });
+    let film = render(&desc, &PathTracer::default(), 16, 16, 16);
+    let mean = film.pixels.iter().sum::<Vec3>() / film.pixels.len() as f32;
+    let expected = Vec3::new(1.0, 0.5, 0.25);
+    assert!((mean - expected).abs().max_element() < 0.01, "mean {mean}, expected {expected}");
+}

@@ -1,6 +1,5 @@
-//! Integrators: path tracing with next-event estimation (sun, sky, punctual lights), the
-//! direct-light preview and ambient occlusion. Emissive surfaces add their emission where
-//! rays hit them.
+//! Integrators: path tracing with next-event estimation (sun, sky, emissive triangles,
+//! punctual lights), the direct-light preview and ambient occlusion.
 
 use std::f32::consts::PI;
 
@@ -76,6 +75,9 @@ pub(crate) mod dims {
     pub const SKY: u32 = 2;
     /// Path vertices use `BOUNCE + 4 * depth + k`, `k` in 0..4.
     pub const BOUNCE: u32 = 3;
+    /// Emitter sampling at path vertex `depth` uses `EMITTER + 2 * depth + k`, `k` in 0..2
+    /// (past every `BOUNCE` pair of the longest path, 64 bounces).
+    pub const EMITTER: u32 = BOUNCE + 4 * 64;
 }
 
 impl Integrator for DirectLighting {
@@ -131,10 +133,10 @@ impl Integrator for DirectLighting {
     }
 }
 
-/// Unidirectional path tracing with next-event estimation of the sun and the sky, combined
-/// with BSDF sampling by multiple importance sampling (power heuristic), and of punctual
-/// lights (delta lights: light sampling only), on the metallic-roughness BSDF, with Russian
-/// roulette after three bounces. Emissive surfaces count where paths hit them.
+/// Unidirectional path tracing with next-event estimation of the sun, the sky and emissive
+/// triangles, each combined with BSDF sampling by multiple importance sampling (power
+/// heuristic), and of punctual lights (delta lights: light sampling only), on the
+/// metallic-roughness BSDF, with Russian roulette after three bounces.
 #[derive(Clone, Copy, Debug)]
 pub struct PathTracer {
     pub max_depth: u32,
@@ -237,8 +239,19 @@ impl Integrator for PathTracer {
             };
             let s = scene.surface(&ray, &hit);
             if s.emission != Vec3::ZERO {
-                // Emission seen directly, or reached through a bounce from vertex depth-1.
-                add(&mut radiance, beta * s.emission, depth.saturating_sub(1));
+                // Emission seen directly, or reached through a bounce from vertex depth-1,
+                // where emitter sampling could have found it too.
+                let w = match came_from {
+                    Some((pdf_bsdf, _)) if !scene.emitters.is_empty() => {
+                        let d = s.p - ray.origin;
+                        let cos = s.ng.dot(ray.dir.normalize()).abs();
+                        let pdf_light =
+                            scene.emitters.pdf_area(s.material.emissive) * d.length_squared() / cos.max(1e-8);
+                        power_heuristic(pdf_bsdf, pdf_light)
+                    }
+                    _ => 1.0,
+                };
+                add(&mut radiance, beta * s.emission * w, depth.saturating_sub(1));
             }
             let wo = -ray.dir.normalize();
             let bsdf = Bsdf::new(&s.material, s.ns);
@@ -276,6 +289,27 @@ impl Integrator for PathTracer {
                 if !query.intersect_p(&Ray::new(origin, d)) {
                     let w = power_heuristic(pdf_sky, bsdf.pdf(wo, d));
                     add(&mut radiance, beta * f * scene.sky.radiance(d) * (w / pdf_sky), depth);
+                }
+            }
+
+            // Emissive triangles: one point on one of them, MIS against BSDF sampling.
+            if !scene.emitters.is_empty() {
+                let dim = dims::EMITTER + 2 * depth;
+                let u_pick = sampler.get_2d(index, dim).x;
+                if let Some((e, le)) = scene.sample_emitter(u_pick, sampler.get_2d(index, dim + 1)) {
+                    let d = e.p - s.p;
+                    let dist2 = d.length_squared();
+                    let wi = d / dist2.sqrt();
+                    let cos_light = e.n.dot(wi).abs();
+                    let f = bsdf.eval(wo, wi);
+                    if dist2 > 0.0 && cos_light > 0.0 && f != Vec3::ZERO && s.ng.dot(wi) > 0.0 {
+                        let pdf_light = e.pdf_area * dist2 / cos_light;
+                        *rays += 1;
+                        if !query.intersect_p(&Ray::segment(origin, wi, 0.0, dist2.sqrt() * (1.0 - 1e-3))) {
+                            let w = power_heuristic(pdf_light, bsdf.pdf(wo, wi));
+                            add(&mut radiance, beta * f * le * (w / pdf_light), depth);
+                        }
+                    }
                 }
             }
 

@@ -3,6 +3,7 @@
 
 mod bsdf;
 mod camera;
+mod emitters;
 mod film;
 mod integrator;
 mod render_scene;

@@ -5,6 +5,7 @@ use std::sync::Arc;
 
 use glam::{Mat3, Vec2, Vec3};
 
+use super::emitters::{EmitterSample, Emitters};
 use super::texture::sample;
 use super::RenderError;
 use crate::accel::{load_scene, Accelerator, Hit, HitObject};
@@ -31,6 +32,8 @@ pub struct RenderScene {
     meshes: Vec<TriangleMesh>,
     materials: Vec<Material>,
     textures: Vec<Arc<Texture>>,
+    /// Emissive triangles, for light sampling.
+    pub(crate) emitters: Emitters,
     statics: Vec<Option<ObjectRef>>,
     instances: Vec<Option<ObjectRef>>,
 }
@@ -87,6 +90,7 @@ impl RenderScene {
             meshes: Vec::with_capacity(desc.statics.len() + desc.prototypes.len()),
             materials: desc.materials.clone(),
             textures: desc.textures.clone(),
+            emitters: Emitters::build(desc),
             statics: Vec::new(),
             instances: Vec::new(),
         };
@@ -167,13 +171,27 @@ impl RenderScene {
             material.roughness *= mr.y;
             material.metallic *= mr.z;
         }
+        let emission = self.emission(&material, uv);
+        SurfaceHit { p, ng, ns, uv, material, emission }
+    }
+
+    /// Radiance emitted by `material` at `uv` (its emissive factor times its texture).
+    fn emission(&self, material: &Material, uv: Vec2) -> Vec3 {
         let mut emission = material.emissive;
         if emission != Vec3::ZERO {
-            if let Some(e) = texture(material.emissive_texture, true) {
-                emission *= e.truncate();
+            if let Some(tex) = material.emissive_texture.and_then(|t| self.textures.get(t as usize)) {
+                emission *= sample(tex, uv, true).truncate();
             }
         }
-        SurfaceHit { p, ng, ns, uv, material, emission }
+        emission
+    }
+
+    /// A point on an emissive triangle for light sampling (see [`Emitters`]), with the
+    /// radiance it emits; `None` when the scene has no emitters.
+    pub(crate) fn sample_emitter(&self, u_pick: f32, u: Vec2) -> Option<(EmitterSample, Vec3)> {
+        let s = self.emitters.sample(u_pick, u)?;
+        let material = self.materials.get(s.material as usize)?;
+        Some((s, self.emission(material, s.uv)))
     }
 
     /// Whether any material emits light.
