@@ -49,7 +49,7 @@ fn scene(camera: Camera, sky: Sky) -> SceneDescription {
 /// non-robust intersector is not watertight there), which is not what these tests test.
 fn top_down(height: f32, vfov_deg: f32) -> Camera {
     let off = Vec3::new(0.0123, 0.0, 0.0371);
-    Camera { eye: Vec3::new(0.0, height, 0.0) + off, target: off, up: Vec3::Z, vfov_deg }
+    Camera::pinhole(Vec3::new(0.0, height, 0.0) + off, off, Vec3::Z, vfov_deg)
 }
 
 /// Where the centre of pixel (x, y) sees the plane y = 0.
@@ -328,8 +328,7 @@ fn duck_in_a_scene_file_renders_with_its_texture_not_the_palette() {
     desc.bodies.push(Body { prototype: 0, transform: lift });
     let centre = lift.transform_point3(bounds.center());
     let r = bounds.extent().length();
-    desc.camera =
-        Camera { eye: centre + Vec3::new(0.6, 0.4, 1.0) * r, target: centre, up: Vec3::Y, vfov_deg: 25.0 };
+    desc.camera = Camera::pinhole(centre + Vec3::new(0.6, 0.4, 1.0) * r, centre, Vec3::Y, 25.0);
     desc.sun = Sun {
         direction: Vec3::new(0.3, 1.0, 0.6).normalize(),
         irradiance: Vec3::splat(3.0),
@@ -462,4 +461,43 @@ fn floor_under_an_emissive_ceiling_reflects_albedo_times_radiance() {
     let mean = film.pixels.iter().sum::<Vec3>() / film.pixels.len() as f32;
     let expected = Vec3::new(1.0, 0.5, 0.25);
     assert!((mean - expected).abs().max_element() < 0.01, "mean {mean}, expected {expected}");
+}
+
+#[test]
+fn thin_lens_keeps_the_focus_plane_sharp_and_blurs_the_rest() {
+    let dir = tempfile::tempdir().unwrap();
+    write_checker(dir.path());
+    let path = textured_quad(dir.path(), "checker.png", |_| {});
+    let size = 48;
+    // Fraction of pixels that show a pure checker colour (red or blue within 2%).
+    let pure = |camera: Camera| {
+        let film = render(&quad_scene(&path, camera, WHITE_SKY), &DirectLighting, size, size, 32);
+        let is_pure =
+            |p: &Vec3| (*p - Vec3::X).abs().max_element() < 0.02 || (*p - Vec3::Z).abs().max_element() < 0.02;
+        film.pixels.iter().filter(|p| is_pure(p)).count() as f32 / film.pixels.len() as f32
+    };
+    let pinhole = top_down(4.0, 24.0);
+    let focused = Camera { aperture_radius: 0.3, ..pinhole };
+    let near_focus = Camera { aperture_radius: 0.3, focus_distance: Some(1.0), ..pinhole };
+    let (p0, p1, p2) = (pure(pinhole), pure(focused), pure(near_focus));
+    assert!(p0 > 0.6, "pinhole: {p0}");
+    assert!((p1 - p0).abs() < 0.1, "focused on the quad: {p1} pure pixels vs pinhole {p0}");
+    assert!(p2 < 0.5 * p0, "focused in front of the quad: {p2} pure pixels vs pinhole {p0}");
+}
+
+#[test]
+fn scene_file_camera_aperture_reaches_the_description() {
+    let dir = tempfile::tempdir().unwrap();
+    let base = "[scene]\nname = \"lens\"\nframes = 1\n\n[environment]\ngenerator = \"ground\"\n\n\
+                [[cameras]]\nname = \"main\"\nposition = [0.0, 2.0, 5.0]\nlook_at = [0.0, 0.0, 0.0]\n";
+    let file = SceneFile::parse(
+        dir.path().join("lens.toml"),
+        format!("{base}aperture_radius = 0.05\nfocus_distance = 4.0\n"),
+    )
+    .unwrap();
+    let camera = describe_frame(&SceneAssets::load(&file).unwrap(), 0.0, &[], &[], &[]).camera;
+    assert_eq!((camera.aperture_radius, camera.focus_distance), (0.05, Some(4.0)));
+    let bad =
+        SceneFile::parse(dir.path().join("bad.toml"), format!("{base}focus_distance = -1.0\n")).unwrap_err();
+    assert_eq!(bad.field(), Some("cameras[0].focus_distance"), "{bad}");
 }

@@ -80,12 +80,12 @@ fn camera_at(cam: Option<&CameraDef>, environment: &TriangleMesh, t: f32) -> Cam
     let Some(cam) = cam else {
         let b = environment.bounds();
         let e = b.extent();
-        return Camera {
-            eye: b.center() + Vec3::new(0.6 * e.x, 0.5 * e.y.max(0.3 * e.x), 0.6 * e.z),
-            target: b.center(),
-            up: Vec3::Y,
-            vfov_deg: 45.0,
-        };
+        return Camera::pinhole(
+            b.center() + Vec3::new(0.6 * e.x, 0.5 * e.y.max(0.3 * e.x), 0.6 * e.z),
+            b.center(),
+            Vec3::Y,
+            45.0,
+        );
     };
     let (eye, target) = match (cam.position, cam.look_at, cam.keyframes.as_slice()) {
         (_, _, [first, ..]) => {
@@ -105,7 +105,11 @@ fn camera_at(cam: Option<&CameraDef>, environment: &TriangleMesh, t: f32) -> Cam
         (Some(p), Some(l), []) => (p, l),
         _ => ([0.0, 5.0, 10.0], [0.0; 3]),
     };
-    Camera { eye: eye.into(), target: target.into(), up: Vec3::Y, vfov_deg: cam.fov_degrees }
+    Camera {
+        aperture_radius: cam.aperture_radius,
+        focus_distance: cam.focus_distance,
+        ..Camera::pinhole(eye.into(), target.into(), Vec3::Y, cam.fov_degrees)
+    }
 }
 
 /// The first directional light as the sun (its `direction` is where light travels).

@@ -78,6 +78,8 @@ pub(crate) mod dims {
     /// Emitter sampling at path vertex `depth` uses `EMITTER + 2 * depth + k`, `k` in 0..2
     /// (past every `BOUNCE` pair of the longest path, 64 bounces).
     pub const EMITTER: u32 = BOUNCE + 4 * 64;
+    /// The point on the camera's lens (depth of field).
+    pub const LENS: u32 = EMITTER + 2 * 64;
 }
 
 impl Integrator for DirectLighting {

@@ -110,7 +110,7 @@ pub struct Body {
     pub transform: Affine3A,
 }
 
-/// Pinhole camera.
+/// A pinhole camera, or a thin lens when `aperture_radius` is positive (depth of field).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Camera {
     pub eye: Vec3,
@@ -118,6 +118,17 @@ pub struct Camera {
     pub up: Vec3,
     /// Vertical field of view in degrees.
     pub vfov_deg: f32,
+    /// Radius of the lens in scene units; 0 is a pinhole (everything sharp).
+    pub aperture_radius: f32,
+    /// Distance along the view direction that is in focus; `None`: the target's distance.
+    pub focus_distance: Option<f32>,
+}
+
+impl Camera {
+    /// A pinhole camera at `eye` looking at `target`.
+    pub fn pinhole(eye: Vec3, target: Vec3, up: Vec3, vfov_deg: f32) -> Self {
+        Self { eye, target, up, vfov_deg, aperture_radius: 0.0, focus_distance: None }
+    }
 }
 
 /// A directional light with a finite angular size, for soft shadows.

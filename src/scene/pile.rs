@@ -80,12 +80,12 @@ pub fn asset_pile(env: &Path, object: &Path, count: usize, seed: u64) -> Result<
         statics: vec![StaticMesh { mesh: env_mesh, material: 0 }],
         prototypes: vec![Prototype { name: name(object), mesh: object_mesh, material: object_material }],
         bodies,
-        camera: Camera {
-            eye: centre + Vec3::new(0.35 * extent.x, 0.6 * extent.y.max(0.2 * extent.x), 0.35 * extent.z),
-            target: Vec3::new(centre.x, floor + base as f32 * spacing * 0.3, centre.z),
-            up: Vec3::Y,
-            vfov_deg: 50.0,
-        },
+        camera: Camera::pinhole(
+            centre + Vec3::new(0.35 * extent.x, 0.6 * extent.y.max(0.2 * extent.x), 0.35 * extent.z),
+            Vec3::new(centre.x, floor + base as f32 * spacing * 0.3, centre.z),
+            Vec3::Y,
+            50.0,
+        ),
         sun: Sun {
             direction: Vec3::new(-0.4, 0.85, 0.3).normalize(),
             irradiance: Vec3::new(3.0, 2.8, 2.5),

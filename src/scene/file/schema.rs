@@ -274,6 +274,11 @@ pub struct CameraDef {
     pub keyframes: Vec<CameraKeyframeDef>,
     #[serde(default = "default_fov")]
     pub fov_degrees: f32,
+    /// Lens radius in scene units for depth of field; 0 is a pinhole.
+    #[serde(default)]
+    pub aperture_radius: f32,
+    /// Distance in focus; the `look_at` point's distance when absent.
+    pub focus_distance: Option<f32>,
 }
 
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq)]

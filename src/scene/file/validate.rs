@@ -364,4 +364,8 @@ fn check_camera(c: &mut Checker, i: usize, cam: &CameraDef) {
     if c.finite(&at("fov_degrees"), cam.fov_degrees) && !(cam.fov_degrees > 0.0 && cam.fov_degrees < 180.0) {
         c.fail(at("fov_degrees"), format!("must be within (0, 180), got {}", cam.fov_degrees));
     }
+    c.non_negative(&at("aperture_radius"), cam.aperture_radius);
+    if let Some(d) = cam.focus_distance {
+        c.positive(&at("focus_distance"), d);
+    }
 }
