@@ -501,3 +501,59 @@ fn scene_file_camera_aperture_reaches_the_description() {
         SceneFile::parse(dir.path().join("bad.toml"), format!("{base}focus_distance = -1.0\n")).unwrap_err();
     assert_eq!(bad.field(), Some("cameras[0].focus_distance"), "{bad}");
 }
+
+#[test]
+fn aov_passes_record_albedo_normal_and_depth() {
+    use dormant::render::{Aov, AovIntegrator};
+    let dir = tempfile::tempdir().unwrap();
+    write_checker(dir.path());
+    let path = textured_quad(dir.path(), "checker.png", |_| {});
+    let camera = top_down(4.0, 24.0);
+    let desc = quad_scene(&path, camera, BLACK_SKY);
+    let size = 32;
+    let albedo = render(&desc, &AovIntegrator(Aov::Albedo), size, size, 1);
+    let normal = render(&desc, &AovIntegrator(Aov::Normal), size, size, 1);
+    let depth = render(&desc, &AovIntegrator(Aov::Depth), size, size, 1);
+    for y in 0..size {
+        for x in 0..size {
+            let i = (y * size + x) as usize;
+            let p = plane_point(&camera, size, x, y);
+            assert!((normal.pixels[i] - Vec3::Y).abs().max_element() < 1e-5, "{}", normal.pixels[i]);
+            let expected = (p - camera.eye).length();
+            assert!(
+                (depth.pixels[i].x - expected).abs() < 1e-4 * expected,
+                "{} vs {expected}",
+                depth.pixels[i]
+            );
+            let (fu, fv) = (((p.x + 1.0) * 2.0).fract(), ((p.z + 1.0) * 2.0).fract());
+            if (0.15..0.85).contains(&fu) && (0.15..0.85).contains(&fv) {
+                let a = albedo.pixels[i];
+                assert!(a == Vec3::X || a == Vec3::Z, "albedo {a}");
+            }
+        }
+    }
+    // The command line writes each pass next to the frame.
+    let out = dir.path().join("out");
+    let status = Command::new(env!("CARGO_BIN_EXE_dormant"))
+        .args([
+            "render",
+            "--size",
+            "16x16",
+            "--spp",
+            "1",
+            "--quiet",
+            "--exr",
+            "--aov",
+            "albedo,normal,depth",
+            "--out",
+        ])
+        .arg(&out)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    for name in ["albedo", "normal", "depth"] {
+        for ext in ["png", "exr"] {
+            assert!(out.join(format!("frame_0000.{name}.{ext}")).is_file(), "{name}.{ext}");
+        }
+    }
+}

@@ -7,7 +7,8 @@ use crate::accel::{self, Backend};
 use crate::integrate::{describe_frame, SceneAssets};
 use crate::physics::{self, SimulateOptions, Trajectory};
 use crate::render::{
-    self, AmbientOcclusion, DirectLighting, Integrator, PathTracer, RenderScene, RenderSettings,
+    self, AmbientOcclusion, Aov, AovIntegrator, DirectLighting, Integrator, PathTracer, RenderScene,
+    RenderSettings,
 };
 use crate::scene::file::SceneFile;
 use crate::scene::SceneDescription;
@@ -79,6 +80,10 @@ pub struct RenderArgs {
     /// Also write linear HDR radiance as frame_NNNN.exr.
     #[arg(long)]
     pub exr: bool,
+    /// Also write these passes (comma-separated) as frame_NNNN.KIND.png, and as .exr with
+    /// --exr: albedo (textured base colour), normal (shading normal), depth (distance).
+    #[arg(long, value_enum, value_delimiter = ',', value_name = "KIND")]
+    pub aov: Vec<Aov>,
     #[command(flatten)]
     pub json: super::JsonOutput,
     /// Exposure multiplier applied before tone mapping.
@@ -132,6 +137,17 @@ pub(super) fn run(args: &RenderArgs, threads: Option<usize>, quiet: bool) -> Res
         if args.exr {
             render::write_exr_atomic(&film, &path.with_extension("exr")).map_err(|e| runtime(&e))?;
         }
+        let mut aov_paths = Vec::new();
+        for &aov in &args.aov {
+            let (film, _) = render::render_frame(&render_scene, query, &AovIntegrator(aov), &settings)
+                .map_err(|e| runtime(&e))?;
+            let aov_path = args.out.join(format!("frame_{index:04}.{}.png", aov.name()));
+            render::write_aov_png_atomic(&film, aov, &aov_path).map_err(|e| runtime(&e))?;
+            if args.exr {
+                render::write_exr_atomic(&film, &aov_path.with_extension("exr")).map_err(|e| runtime(&e))?;
+            }
+            aov_paths.push(aov_path);
+        }
         if !quiet && !args.json.is_requested() {
             println!(
                 "rendered {} ({}x{}, {} spp, {:?} mode, {backend}): {:.2} s, {} rays, {:.1} Mrays/s",
@@ -146,7 +162,7 @@ pub(super) fn run(args: &RenderArgs, threads: Option<usize>, quiet: bool) -> Res
             );
         }
         records.push(serde_json::json!({ "frame": index, "path": path, "rays": stats.rays,
-            "seconds": stats.seconds, "mrays_per_second": stats.mrays_per_second() }));
+            "seconds": stats.seconds, "mrays_per_second": stats.mrays_per_second(), "aovs": aov_paths }));
         Ok(())
     })?;
     args.json.emit(&serde_json::json!({

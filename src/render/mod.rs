@@ -1,6 +1,7 @@
 //! Turning a committed scene into pixels: camera rays, shading, tiles over rayon, the film and
 //! image output. Talks to geometry only through [`crate::accel::SceneQuery`].
 
+mod aov;
 mod bsdf;
 mod camera;
 mod emitters;
@@ -11,9 +12,10 @@ mod sampler;
 mod texture;
 mod tiles;
 
+pub use aov::{Aov, AovIntegrator};
 pub use bsdf::{sample_cosine, Bsdf, BsdfSample};
 pub use camera::PinholeCamera;
-pub use film::{write_exr_atomic, write_png_atomic, Film};
+pub use film::{write_aov_png_atomic, write_exr_atomic, write_png_atomic, Film};
 pub use integrator::{AmbientOcclusion, DirectLighting, Integrator, PathTracer};
 pub use render_scene::{RenderScene, SurfaceHit};
 pub use sampler::PixelSampler;
