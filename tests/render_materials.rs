@@ -557,3 +557,62 @@ fn aov_passes_record_albedo_normal_and_depth() {
         }
     }
 }
+
+#[test]
+fn gltf_punctual_lights_and_sampler_wrap_modes_are_imported() {
+    use dormant::scene::Wrap;
+    let dir = tempfile::tempdir().unwrap();
+    write_checker(dir.path());
+    let path = textured_quad(dir.path(), "checker.png", |doc| {
+        // MIRRORED_REPEAT along s, CLAMP_TO_EDGE along t.
+        doc["samplers"] = json!([{ "wrapS": 33648, "wrapT": 33071 }]);
+        doc["extensionsUsed"] = json!(["KHR_lights_punctual"]);
+        doc["extensions"] = json!({ "KHR_lights_punctual": { "lights": [
+            { "type": "point", "color": [1.0, 0.5, 0.25], "intensity": 8.0 },
+            { "type": "spot", "intensity": 2.0, "spot": { "innerConeAngle": 0.2, "outerConeAngle": 0.5 } },
+            { "type": "directional", "intensity": 3.0 }
+        ] } });
+        // A parent moved up by 2 holds the lights; the spot is turned to shine along -Y
+        // (a -90 degree turn about X takes the node's -Z to -Y).
+        let s = std::f32::consts::FRAC_1_SQRT_2;
+        doc["nodes"] = json!([
+            { "mesh": 0 },
+            { "translation": [0.0, 2.0, 0.0], "children": [2, 3, 4] },
+            { "translation": [1.0, 0.0, 0.0], "extensions": { "KHR_lights_punctual": { "light": 0 } } },
+            { "rotation": [-s, 0.0, 0.0, s], "extensions": { "KHR_lights_punctual": { "light": 1 } } },
+            { "extensions": { "KHR_lights_punctual": { "light": 2 } } }
+        ]);
+        doc["scenes"] = json!([{ "nodes": [0, 1] }]);
+    });
+    let asset = load_gltf(&path).unwrap();
+    assert_eq!(
+        (asset.textures[0].wrap_s, asset.textures[0].wrap_t),
+        (Wrap::MirroredRepeat, Wrap::ClampToEdge)
+    );
+    assert_eq!(asset.lights.len(), 3, "{:?}", asset.lights);
+    let close = |a: Vec3, b: Vec3| (a - b).length() < 1e-5;
+    let mut kinds = 0;
+    for light in &asset.lights {
+        match *light {
+            Light::Point { position, intensity } => {
+                assert!(close(position, Vec3::new(1.0, 2.0, 0.0)), "{position}");
+                assert!(close(intensity, Vec3::new(8.0, 4.0, 2.0)), "{intensity}");
+                kinds |= 1;
+            }
+            Light::Spot { position, direction, intensity, cos_inner, cos_outer } => {
+                assert!(
+                    close(position, Vec3::new(0.0, 2.0, 0.0)) && close(direction, Vec3::NEG_Y),
+                    "{light:?}"
+                );
+                assert!(close(intensity, Vec3::splat(2.0)));
+                assert!((cos_inner - 0.2f32.cos()).abs() < 1e-6 && (cos_outer - 0.5f32.cos()).abs() < 1e-6);
+                kinds |= 2;
+            }
+            Light::Directional { direction, irradiance } => {
+                assert!(close(direction, Vec3::NEG_Z) && close(irradiance, Vec3::splat(3.0)), "{light:?}");
+                kinds |= 4;
+            }
+        }
+    }
+    assert_eq!(kinds, 7);
+}
