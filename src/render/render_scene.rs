@@ -193,9 +193,4 @@ impl RenderScene {
         let material = self.materials.get(s.material as usize)?;
         Some((s, self.emission(material, s.uv)))
     }
-
-    /// Whether any material emits light.
-    pub fn has_emission(&self) -> bool {
-        self.materials.iter().any(|m| m.emissive != Vec3::ZERO)
-    }
 }
