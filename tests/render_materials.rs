@@ -616,3 +616,24 @@ fn gltf_punctual_lights_and_sampler_wrap_modes_are_imported() {
     }
     assert_eq!(kinds, 7);
 }
+
+#[test]
+fn textured_primitive_without_uvs_warns_and_renders() {
+    let dir = tempfile::tempdir().unwrap();
+    write_checker(dir.path());
+    let path = textured_quad(dir.path(), "checker.png", |doc| {
+        doc["meshes"][0]["primitives"][0]["attributes"] = json!({ "POSITION": 0, "NORMAL": 1 });
+    });
+    let output = Command::new(env!("CARGO_BIN_EXE_dormant"))
+        .args(["render", "--size", "8x8", "--spp", "1", "--count", "1", "--env"])
+        .arg(&path)
+        .arg("--object")
+        .arg(&path)
+        .arg("--out")
+        .arg(dir.path().join("out"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{stderr}");
+    assert!(stderr.contains("meshes[0].primitives[0]") && stderr.contains("TEXCOORD_0"), "{stderr}");
+}

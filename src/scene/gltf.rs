@@ -238,7 +238,21 @@ fn load(path: &Path, with_materials: bool) -> Result<GltfAsset, GltfError> {
                     None if prim.get(&gltf::Semantic::TexCoords(0)).is_some() => {
                         return Err(unreadable("TEXCOORD_0", prim.get(&gltf::Semantic::TexCoords(0))))
                     }
-                    None => uvs.resize(out.positions.len(), Vec2::ZERO),
+                    None => {
+                        let m = prim.material();
+                        let pbr = m.pbr_metallic_roughness();
+                        let textured = pbr.base_color_texture().is_some()
+                            || pbr.metallic_roughness_texture().is_some()
+                            || m.emissive_texture().is_some();
+                        if with_materials && textured {
+                            tracing::warn!(
+                                file = %path.display(),
+                                "{element}: its material has textures but the primitive has no \
+                                 TEXCOORD_0; they are read at (0, 0)"
+                            );
+                        }
+                        uvs.resize(out.positions.len(), Vec2::ZERO)
+                    }
                 }
                 if normals.len() != out.positions.len() || uvs.len() != out.positions.len() {
                     return Err(GltfError::new(path, &element, "attribute counts differ from POSITION's"));
@@ -416,10 +430,8 @@ fn decode_image(
         (Some(view), _) => {
             let view = document.views().nth(view.value()).ok_or("buffer view does not exist")?;
             let data = buffers.get(view.buffer().index()).ok_or("buffer does not exist")?;
-            data.0
-                .get(view.offset()..view.offset() + view.length())
-                .ok_or("buffer view lies outside its buffer")?
-                .to_vec()
+            let end = view.offset().checked_add(view.length()).ok_or("buffer view is too long")?;
+            data.0.get(view.offset()..end).ok_or("buffer view lies outside its buffer")?.to_vec()
         }
         (None, Some(uri)) => {
             gltf::buffer::Data::from_source(gltf::buffer::Source::Uri(uri), path.parent())
