@@ -637,3 +637,33 @@ fn textured_primitive_without_uvs_warns_and_renders() {
     assert!(output.status.success(), "{stderr}");
     assert!(stderr.contains("meshes[0].primitives[0]") && stderr.contains("TEXCOORD_0"), "{stderr}");
 }
+
+/// Standard base64 with padding (for data URIs).
+fn base64(bytes: &[u8]) -> String {
+    const ABC: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut out = String::new();
+    for chunk in bytes.chunks(3) {
+        let b = [chunk[0], *chunk.get(1).unwrap_or(&0), *chunk.get(2).unwrap_or(&0)];
+        let n = (b[0] as u32) << 16 | (b[1] as u32) << 8 | b[2] as u32;
+        for k in 0..4 {
+            if k <= chunk.len() {
+                out.push(ABC[(n >> (18 - 6 * k) & 63) as usize] as char);
+            } else {
+                out.push('=');
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn data_uri_images_decode_like_files() {
+    let dir = tempfile::tempdir().unwrap();
+    write_checker(dir.path());
+    let png = std::fs::read(dir.path().join("checker.png")).unwrap();
+    let uri = format!("data:image/png;base64,{}", base64(&png));
+    let from_file = load_gltf(&textured_quad(dir.path(), "checker.png", |_| {})).unwrap();
+    let from_uri = load_gltf(&textured_quad(dir.path(), &uri, |_| {})).unwrap();
+    assert_eq!(from_uri.textures[0].texels, from_file.textures[0].texels);
+    assert_eq!((from_uri.textures[0].width, from_uri.textures[0].height), (16, 16));
+}
