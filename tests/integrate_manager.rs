@@ -207,14 +207,11 @@ fn template() -> SceneDescription {
             Prototype { name: "ball".into(), mesh: primitives::uv_sphere(0.45, 12, 8), material: 0 },
         ],
         bodies: Vec::new(),
-        camera: Camera {
-            eye: Vec3::new(20.0, 25.0, -15.0),
-            target: Vec3::new(20.0, 0.0, 20.0),
-            up: Vec3::Y,
-            vfov_deg: 60.0,
-        },
+        camera: Camera::pinhole(Vec3::new(20.0, 25.0, -15.0), Vec3::new(20.0, 0.0, 20.0), Vec3::Y, 60.0),
         sun: Sun { direction: Vec3::Y, irradiance: Vec3::ONE, angular_radius_deg: 1.0 },
         sky: Sky::DAYLIGHT,
+        lights: Vec::new(),
+        textures: Vec::new(),
     }
 }
 
@@ -294,7 +291,7 @@ proptest! {
 
 #[test]
 fn never_always_and_auto_render_the_same_images() {
-    use dormant::render::{render_sequence, Film, PathTracer, SequenceOptions};
+    use dormant::render::{render_sequence, Film, PathTracer, SequenceOptions, SequenceScene};
     let file = SceneFile::load(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/tiny.toml")).unwrap();
     let trajectory = physics::simulate(&file, &SimulateOptions::default()).unwrap();
     let assets = SceneAssets::load(&file).unwrap();
@@ -309,19 +306,12 @@ fn never_always_and_auto_render_the_same_images() {
             let accel = accel::create(backend, Some(2)).unwrap();
             let mut manager = SceneManager::new(accel, &template, &trajectory.bodies, options).unwrap();
             let mut frames = Vec::new();
-            render_sequence(
-                &trajectory,
-                &assets,
-                &template,
-                &mut manager,
-                &integrator,
-                &sequence,
-                &mut |f| {
-                    integrated = integrated.max(f.stats.integrated_islands);
-                    frames.push(f.film.clone());
-                    Ok::<(), dormant::render::RenderError>(())
-                },
-            )
+            let scene = SequenceScene { trajectory: &trajectory, assets: &assets, template: &template };
+            render_sequence(&scene, &mut manager, &integrator, &[], &sequence, &mut |f| {
+                integrated = integrated.max(f.stats.integrated_islands);
+                frames.push(f.film.clone());
+                Ok::<(), dormant::render::RenderError>(())
+            })
             .unwrap();
             films.push(frames);
         }

@@ -30,12 +30,14 @@ fn empty_scene(camera: Camera, sun: Sun, sky: Sky) -> SceneDescription {
     SceneDescription {
         name: "test".into(),
         materials: Vec::new(),
+        textures: Vec::new(),
         statics: Vec::new(),
         prototypes: Vec::new(),
         bodies: Vec::new(),
         camera,
         sun,
         sky,
+        lights: Vec::new(),
     }
 }
 
@@ -45,7 +47,7 @@ const NO_SUN: Sun = Sun { direction: Vec3::Y, irradiance: Vec3::ZERO, angular_ra
 fn white_furnace_sphere_reflects_its_albedo_of_the_sky() {
     // A Lambertian sphere of albedo 0.8 under a uniform sky of radiance 1: it is convex, so
     // every reflected ray escapes and the sphere's radiance is exactly 0.8.
-    let camera = Camera { eye: Vec3::new(0.0, 0.0, 4.0), target: Vec3::ZERO, up: Vec3::Y, vfov_deg: 40.0 };
+    let camera = Camera::pinhole(Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, Vec3::Y, 40.0);
     let mut desc =
         empty_scene(camera, NO_SUN, Sky { zenith: Vec3::ONE, horizon: Vec3::ONE, ground: Vec3::ONE });
     desc.materials.push(Material::lambertian(Vec3::splat(0.8)));
@@ -84,7 +86,7 @@ fn directly_lit_plane_matches_the_closed_form() {
         irradiance: Vec3::splat(2.0),
         angular_radius_deg: 0.25,
     };
-    let camera = Camera { eye: Vec3::new(0.0, 5.0, 0.0), target: Vec3::ZERO, up: Vec3::Z, vfov_deg: 30.0 };
+    let camera = Camera::pinhole(Vec3::new(0.0, 5.0, 0.0), Vec3::ZERO, Vec3::Z, 30.0);
     let black = Sky { zenith: Vec3::ZERO, horizon: Vec3::ZERO, ground: Vec3::ZERO };
     let mut desc = empty_scene(camera, sun, black);
     desc.materials.push(Material::lambertian(Vec3::splat(0.5)));

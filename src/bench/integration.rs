@@ -169,7 +169,8 @@ fn run_lockstep(
             let (frames, manager) = &mut runs[(k + rendered as usize) % n];
             manager.prepare(FrameState { index: frame.index, states: frame.states, poses: frame.poses })?;
             let (_, render) = {
-                let mut scene = RenderScene::with_objects(template, &*manager)?;
+                // No bench scene has emissive prototypes: no bodies to place for light sampling.
+                let mut scene = RenderScene::with_objects(template, &*manager, &[])?;
                 scene.camera = camera;
                 render_frame(&scene, manager.query()?, integrator, &settings)?
             };

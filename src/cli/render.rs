@@ -9,8 +9,8 @@ use crate::integrate::{
 };
 use crate::physics::{self, SimulateOptions, Trajectory};
 use crate::render::{
-    self, AmbientOcclusion, DirectLighting, Integrator, PathTracer, RenderScene, RenderSettings, RenderStats,
-    SequenceOptions,
+    self, AmbientOcclusion, Aov, AovIntegrator, DirectLighting, Integrator, PathTracer, RenderScene,
+    RenderSettings, RenderStats, SequenceOptions, SequenceScene,
 };
 use crate::scene::file::SceneFile;
 
@@ -81,6 +81,10 @@ pub struct RenderArgs {
     /// Also write linear HDR radiance as frame_NNNN.exr.
     #[arg(long)]
     pub exr: bool,
+    /// Also write these passes (comma-separated) as frame_NNNN.KIND.png, and as .exr with
+    /// --exr: albedo (textured base colour), normal (shading normal), depth (distance).
+    #[arg(long, value_enum, value_delimiter = ',', value_name = "KIND")]
+    pub aov: Vec<Aov>,
     #[command(flatten)]
     pub json: super::JsonOutput,
     /// With SCENE: when sleeping islands are baked into the static scene.
@@ -158,30 +162,43 @@ pub(super) fn run(args: &RenderArgs, threads: Option<usize>, quiet: bool) -> Res
     let integrator = integrator(args.mode, args.max_depth);
     let runtime = |e: &dyn std::fmt::Display| CliError::Runtime(e.to_string());
     let mut records = Vec::new();
-    let mut write_frame =
-        |index: u32, film: &render::Film, stats: &RenderStats, scene_stats: Option<&FrameStats>| {
-            let path = args.out.join(format!("frame_{index:04}.png"));
-            render::write_png_atomic(film, args.exposure, &path).map_err(|e| runtime(&e))?;
+    let mut write_frame = |index: u32,
+                           film: &render::Film,
+                           aovs: &[(Aov, render::Film)],
+                           stats: &RenderStats,
+                           scene_stats: Option<&FrameStats>| {
+        let path = args.out.join(format!("frame_{index:04}.png"));
+        render::write_png_atomic(film, args.exposure, &path).map_err(|e| runtime(&e))?;
+        if args.exr {
+            render::write_exr_atomic(film, &path.with_extension("exr")).map_err(|e| runtime(&e))?;
+        }
+        let mut aov_paths = Vec::new();
+        for (aov, film) in aovs {
+            let aov_path = args.out.join(format!("frame_{index:04}.{}.png", aov.name()));
+            render::write_aov_png_atomic(film, *aov, &aov_path).map_err(|e| runtime(&e))?;
             if args.exr {
-                render::write_exr_atomic(film, &path.with_extension("exr")).map_err(|e| runtime(&e))?;
+                render::write_exr_atomic(film, &aov_path.with_extension("exr")).map_err(|e| runtime(&e))?;
             }
-            if !quiet && !args.json.is_requested() {
-                println!(
-                    "rendered {} ({}x{}, {} spp, {:?} mode, {backend}): {:.2} s, {} rays, {:.1} Mrays/s",
-                    path.display(),
-                    args.size.width,
-                    args.size.height,
-                    args.spp,
-                    args.mode,
-                    stats.seconds,
-                    stats.rays,
-                    stats.mrays_per_second()
-                );
-            }
-            records.push(serde_json::json!({ "frame": index, "path": path, "rays": stats.rays,
-            "seconds": stats.seconds, "mrays_per_second": stats.mrays_per_second(), "scene": scene_stats }));
-            Ok::<(), CliError>(())
-        };
+            aov_paths.push(aov_path);
+        }
+        if !quiet && !args.json.is_requested() {
+            println!(
+                "rendered {} ({}x{}, {} spp, {:?} mode, {backend}): {:.2} s, {} rays, {:.1} Mrays/s",
+                path.display(),
+                args.size.width,
+                args.size.height,
+                args.spp,
+                args.mode,
+                stats.seconds,
+                stats.rays,
+                stats.mrays_per_second()
+            );
+        }
+        records.push(serde_json::json!({ "frame": index, "path": path, "rays": stats.rays,
+            "seconds": stats.seconds, "mrays_per_second": stats.mrays_per_second(), "aovs": aov_paths,
+            "scene": scene_stats }));
+        Ok::<(), CliError>(())
+    };
 
     let scene_name = match &args.scene_file {
         None => {
@@ -196,7 +213,13 @@ pub(super) fn run(args: &RenderArgs, threads: Option<usize>, quiet: bool) -> Res
                 RenderSettings { width: args.size.width, height: args.size.height, spp: args.spp, frame: 0 };
             let (film, stats) = render::render_frame(&scene, query, integrator.as_ref(), &settings)
                 .map_err(|e| runtime(&e))?;
-            write_frame(0, &film, &stats, None)?;
+            let mut aovs = Vec::new();
+            for &aov in &args.aov {
+                let (film, _) = render::render_frame(&scene, query, &AovIntegrator(aov), &settings)
+                    .map_err(|e| runtime(&e))?;
+                aovs.push((aov, film));
+            }
+            write_frame(0, &film, &aovs, &stats, None)?;
             description.name
         }
         Some(scene_path) => {
@@ -223,14 +246,14 @@ pub(super) fn run(args: &RenderArgs, threads: Option<usize>, quiet: bool) -> Res
             let accel = accel::create(backend, threads).map_err(|e| runtime(&e))?;
             let mut manager = SceneManager::new(accel, &template, &trajectory.bodies, manager_options)
                 .map_err(|e| runtime(&e))?;
+            let scene = SequenceScene { trajectory: &trajectory, assets: &assets, template: &template };
             render::render_sequence(
-                &trajectory,
-                &assets,
-                &template,
+                &scene,
                 &mut manager,
                 integrator.as_ref(),
+                &args.aov,
                 &sequence,
-                &mut |f| write_frame(f.index, f.film, &f.render, Some(f.stats)),
+                &mut |f| write_frame(f.index, f.film, &f.aovs, &f.render, Some(f.stats)),
             )?;
             template.name
         }

@@ -1,3 +1,6 @@
+//! Indexed triangle meshes with optional per-vertex normals and UVs and per-triangle material
+//! slots.
+
 use glam::{Affine3A, Vec2, Vec3};
 
 use super::Aabb;
@@ -9,21 +12,36 @@ pub enum MeshError {
     IndexOutOfRange { triangle: usize, index: u32, vertices: usize },
     #[error("{attribute} has {found} entries, expected one per vertex ({vertices})")]
     AttributeLength { attribute: &'static str, found: usize, vertices: usize },
+    #[error("material_ids has {found} entries, expected one per triangle ({triangles})")]
+    MaterialIdsLength { found: usize, triangles: usize },
 }
 
 /// An indexed triangle mesh in its own object space. Normals and UVs are optional per-vertex
-/// attributes.
+/// attributes; `material_ids` optionally gives each triangle a material slot, an offset from
+/// the material the mesh is placed with (so one mesh can carry a glTF file's materials).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct TriangleMesh {
     pub positions: Vec<Vec3>,
     pub indices: Vec<[u32; 3]>,
     pub normals: Option<Vec<Vec3>>,
     pub uvs: Option<Vec<Vec2>>,
+    /// Per triangle: material slot, added to the owning object's material index.
+    pub material_ids: Option<Vec<u32>>,
 }
 
 impl TriangleMesh {
     pub fn new(positions: Vec<Vec3>, indices: Vec<[u32; 3]>) -> Self {
-        Self { positions, indices, normals: None, uvs: None }
+        Self { positions, indices, normals: None, uvs: None, material_ids: None }
+    }
+
+    /// Triangle `prim`'s material slot (0 when the mesh has no per-triangle materials).
+    pub fn material_slot(&self, prim: usize) -> u32 {
+        self.material_ids.as_ref().and_then(|ids| ids.get(prim).copied()).unwrap_or(0)
+    }
+
+    /// The largest material slot any triangle uses.
+    pub fn max_material_slot(&self) -> u32 {
+        self.material_ids.as_ref().and_then(|ids| ids.iter().copied().max()).unwrap_or(0)
     }
 
     /// Checks that indices and attributes are consistent. Does not reject degenerate or
@@ -47,6 +65,11 @@ impl TriangleMesh {
         if let Some(uvs) = &self.uvs {
             if uvs.len() != n {
                 return Err(MeshError::AttributeLength { attribute: "uvs", found: uvs.len(), vertices: n });
+            }
+        }
+        if let Some(ids) = &self.material_ids {
+            if ids.len() != self.indices.len() {
+                return Err(MeshError::MaterialIdsLength { found: ids.len(), triangles: self.indices.len() });
             }
         }
         Ok(())
@@ -82,6 +105,7 @@ impl TriangleMesh {
                 .as_ref()
                 .map(|ns| ns.iter().map(|&n| (normal_matrix * n).normalize_or_zero()).collect()),
             uvs: self.uvs.clone(),
+            material_ids: self.material_ids.clone(),
         }
     }
 }

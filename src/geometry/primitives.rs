@@ -28,7 +28,7 @@ pub fn cuboid(half: Vec3) -> TriangleMesh {
             indices.push([base, base + 2, base + 3]);
         }
     }
-    TriangleMesh { positions, indices, normals: Some(normals), uvs: Some(uvs) }
+    TriangleMesh { positions, indices, normals: Some(normals), uvs: Some(uvs), material_ids: None }
 }
 
 /// A UV sphere of the given radius centred at the origin, smooth normals.
@@ -63,7 +63,7 @@ pub fn uv_sphere(radius: f32, segments: u32, rings: u32) -> TriangleMesh {
             }
         }
     }
-    TriangleMesh { positions, indices, normals: Some(normals), uvs: Some(uvs) }
+    TriangleMesh { positions, indices, normals: Some(normals), uvs: Some(uvs), material_ids: None }
 }
 
 /// A square in the XZ plane at height `y`, facing +Y, split into `n x n` cells.
@@ -88,7 +88,7 @@ pub fn ground_plane(half_size: f32, y: f32, n: u32) -> TriangleMesh {
         }
     }
     let normals = vec![Vec3::Y; positions.len()];
-    TriangleMesh { positions, indices, normals: Some(normals), uvs: Some(uvs) }
+    TriangleMesh { positions, indices, normals: Some(normals), uvs: Some(uvs), material_ids: None }
 }
 
 #[cfg(test)]

@@ -47,6 +47,7 @@ impl BakedIsland {
             indices: Vec::with_capacity(triangles),
             normals: None,
             uvs: None,
+            material_ids: None,
         };
         let mut parts = Vec::with_capacity(bodies.len());
         for &(body, proto, pose) in bodies {

@@ -1,15 +1,29 @@
+//! Scene files to render descriptions: [`SceneAssets`] loads a scene file's meshes,
+//! materials, textures and lights once; [`describe_frame`] places every present body of a
+//! simulated frame.
+
+use std::sync::Arc;
+
 use glam::{Vec3, Vec3A};
 
 use crate::geometry::TriangleMesh;
 use crate::physics::{BodyInfo, BodyPose, BodyState};
-use crate::scene::file::{environment_mesh, prototype_mesh, CameraDef, LightKind, SceneError, SceneFile};
-use crate::scene::{Body, Camera, Material, Prototype, SceneDescription, Sky, StaticMesh, Sun};
+use crate::scene::file::{environment_asset, prototype_asset, CameraDef, LightKind, SceneError, SceneFile};
+use crate::scene::{
+    Body, Camera, Light, Material, Prototype, SceneDescription, Sky, StaticMesh, Sun, Texture,
+};
 
 /// A scene file's meshes, loaded once: the environment and one mesh per prototype.
 pub struct SceneAssets {
     pub name: String,
     pub environment: TriangleMesh,
     pub prototypes: Vec<(String, TriangleMesh)>,
+    /// The glTF materials of the environment (first) and of every prototype; empty where the
+    /// mesh has none, which then gets a grey (environment) or palette colour (prototypes).
+    materials: Vec<Vec<Material>>,
+    textures: Vec<Arc<Texture>>,
+    /// Point, spot and extra directional lights: the scene file's and the environment glTF's.
+    lights: Vec<Light>,
     /// The scene's chosen camera (`render.camera`, else the first); `None`: frame the
     /// environment.
     camera: Option<CameraDef>,
@@ -29,9 +43,17 @@ const PALETTE: [Vec3; 6] = [
 impl SceneAssets {
     pub fn load(file: &SceneFile) -> Result<Self, SceneError> {
         let doc = &file.description;
-        let prototypes = (0..doc.prototypes.len())
-            .map(|i| Ok((doc.prototypes[i].name.clone(), prototype_mesh(file, i)?)))
-            .collect::<Result<Vec<_>, SceneError>>()?;
+        let mut textures = Vec::new();
+        let mut environment = environment_asset(file)?;
+        let mut materials = vec![environment.take_materials(&mut textures)];
+        let mut prototypes = Vec::with_capacity(doc.prototypes.len());
+        for i in 0..doc.prototypes.len() {
+            let mut asset = prototype_asset(file, i)?;
+            materials.push(asset.take_materials(&mut textures));
+            prototypes.push((doc.prototypes[i].name.clone(), asset.mesh));
+        }
+        let mut lights = file_lights(file);
+        lights.append(&mut environment.lights);
         let camera = doc
             .render
             .camera
@@ -43,8 +65,11 @@ impl SceneAssets {
             name: doc.scene.name.clone(),
             camera,
             sun: sun(file),
-            environment: environment_mesh(file)?,
+            environment: environment.mesh,
             prototypes,
+            materials,
+            textures,
+            lights,
         })
     }
 }
@@ -55,12 +80,12 @@ fn camera_at(cam: Option<&CameraDef>, environment: &TriangleMesh, t: f32) -> Cam
     let Some(cam) = cam else {
         let b = environment.bounds();
         let e = b.extent();
-        return Camera {
-            eye: b.center() + Vec3::new(0.6 * e.x, 0.5 * e.y.max(0.3 * e.x), 0.6 * e.z),
-            target: b.center(),
-            up: Vec3::Y,
-            vfov_deg: 45.0,
-        };
+        return Camera::pinhole(
+            b.center() + Vec3::new(0.6 * e.x, 0.5 * e.y.max(0.3 * e.x), 0.6 * e.z),
+            b.center(),
+            Vec3::Y,
+            45.0,
+        );
     };
     let (eye, target) = match (cam.position, cam.look_at, cam.keyframes.as_slice()) {
         (_, _, [first, ..]) => {
@@ -80,7 +105,11 @@ fn camera_at(cam: Option<&CameraDef>, environment: &TriangleMesh, t: f32) -> Cam
         (Some(p), Some(l), []) => (p, l),
         _ => ([0.0, 5.0, 10.0], [0.0; 3]),
     };
-    Camera { eye: eye.into(), target: target.into(), up: Vec3::Y, vfov_deg: cam.fov_degrees }
+    Camera {
+        aperture_radius: cam.aperture_radius,
+        focus_distance: cam.focus_distance,
+        ..Camera::pinhole(eye.into(), target.into(), Vec3::Y, cam.fov_degrees)
+    }
 }
 
 /// The first directional light as the sun (its `direction` is where light travels).
@@ -100,11 +129,53 @@ fn sun(file: &SceneFile) -> Sun {
     }
 }
 
-impl SceneAssets {
-    /// The camera at `time` seconds.
-    pub fn camera_at(&self, time: f32) -> Camera {
-        camera_at(self.camera.as_ref(), &self.environment, time)
+/// The scene file's point and spot lights, and its directional lights after the first (which
+/// is the sun).
+fn file_lights(file: &SceneFile) -> Vec<Light> {
+    let color = |l: &crate::scene::file::LightDef| Vec3::from(l.color) * l.intensity;
+    let direction = |d: Option<[f32; 3]>| d.map_or(Vec3::NEG_Y, |d| Vec3::from(d).normalize_or(Vec3::NEG_Y));
+    let mut suns = 0;
+    let mut lights = Vec::new();
+    for l in &file.description.lights {
+        match (l.kind, l.position) {
+            (LightKind::Directional, _) => {
+                suns += 1;
+                if suns > 1 {
+                    lights
+                        .push(Light::Directional { direction: direction(l.direction), irradiance: color(l) });
+                }
+            }
+            (LightKind::Point, Some(p)) => {
+                lights.push(Light::Point { position: p.into(), intensity: color(l) })
+            }
+            (LightKind::Spot, Some(p)) => {
+                let outer = l.outer_cone_degrees.unwrap_or(45.0).clamp(0.0, 90.0);
+                let inner = l.inner_cone_degrees.unwrap_or(0.0).clamp(0.0, outer);
+                lights.push(Light::Spot {
+                    position: p.into(),
+                    direction: direction(l.direction),
+                    intensity: color(l),
+                    cos_inner: inner.to_radians().cos(),
+                    cos_outer: outer.to_radians().cos(),
+                });
+            }
+            // Validation requires a position; nothing to place without one.
+            (LightKind::Point | LightKind::Spot, None) => {}
+        }
     }
+    lights
+}
+
+/// Appends `own` (a mesh's glTF materials) to `materials`, or `fallback` when it has none;
+/// returns the index of the first.
+fn push_materials(materials: &mut Vec<Material>, own: &[Material], fallback: Material) -> u32 {
+    let first = materials.len() as u32;
+    if own.is_empty() {
+        materials.push(fallback);
+    } else {
+        materials.extend_from_slice(own);
+    }
+    first
 }
 
 /// One frame, at `time` seconds, as a render description: the environment as the only static
@@ -133,27 +204,42 @@ pub fn describe_frame(
 }
 
 /// The scene at `time` seconds without its bodies: environment, prototypes, materials,
-/// camera and lights (the scene manager's template).
+/// textures, camera and lights (the scene manager's template).
 pub fn describe_scene(assets: &SceneAssets, time: f32) -> SceneDescription {
-    let mut materials = vec![Material::diffuse(Vec3::splat(0.6))];
-    materials.extend((0..assets.prototypes.len()).map(|i| Material::diffuse(PALETTE[i % PALETTE.len()])));
+    let mut materials = Vec::new();
+    let env_material =
+        push_materials(&mut materials, &assets.materials[0], Material::diffuse(Vec3::splat(0.6)));
+    let prototypes = assets
+        .prototypes
+        .iter()
+        .enumerate()
+        .map(|(i, (name, mesh))| Prototype {
+            name: name.clone(),
+            mesh: mesh.clone(),
+            material: push_materials(
+                &mut materials,
+                &assets.materials[i + 1],
+                Material::diffuse(PALETTE[i % PALETTE.len()]),
+            ),
+        })
+        .collect();
     SceneDescription {
         name: assets.name.clone(),
         materials,
-        statics: vec![StaticMesh { mesh: assets.environment.clone(), material: 0 }],
-        prototypes: assets
-            .prototypes
-            .iter()
-            .enumerate()
-            .map(|(i, (name, mesh))| Prototype {
-                name: name.clone(),
-                mesh: mesh.clone(),
-                material: i as u32 + 1,
-            })
-            .collect(),
+        textures: assets.textures.clone(),
+        statics: vec![StaticMesh { mesh: assets.environment.clone(), material: env_material }],
+        prototypes,
         bodies: Vec::new(),
-        camera: camera_at(assets.camera.as_ref(), &assets.environment, time),
+        camera: assets.camera_at(time),
         sun: assets.sun,
         sky: Sky::DAYLIGHT,
+        lights: assets.lights.clone(),
+    }
+}
+
+impl SceneAssets {
+    /// The camera at `time` seconds.
+    pub fn camera_at(&self, time: f32) -> Camera {
+        camera_at(self.camera.as_ref(), &self.environment, time)
     }
 }

@@ -90,7 +90,6 @@ struct SleepingIsland {
     slept_at: u32,
     /// Whether a decision about it was logged.
     decided: bool,
-    baked: Option<Arc<BakedIsland>>,
 }
 
 /// An integrated island in the static scene.
@@ -333,7 +332,6 @@ impl SceneManager {
                             poses: poses.clone(),
                             slept_at: self.rendered,
                             decided: false,
-                            baked: None,
                         },
                     );
                 }
@@ -501,24 +499,18 @@ impl SceneManager {
             if self.integrated.contains_key(island) {
                 continue;
             }
-            let baked = s
-                .baked
-                .get_or_insert_with(|| {
-                    let bodies: Vec<_> = s
-                        .bodies
-                        .iter()
-                        .zip(&s.poses)
-                        .map(|(b, p)| (*b, self.bodies[b.0 as usize].prototype, *p))
-                        .collect();
-                    Arc::new(BakedIsland::bake(*island, &bodies, &self.prototypes))
-                })
-                .clone();
+            // Baking waits until the island is chosen: the decision only needs its size.
+            let triangles: usize = s
+                .bodies
+                .iter()
+                .map(|b| self.prototypes[self.bodies[b.0 as usize].prototype as usize].triangle_count())
+                .sum();
             let age = self.rendered - s.slept_at;
             let estimate = (policy == IntegrationPolicy::Auto).then(|| {
                 let ages = live_ages.iter().copied();
-                self.cost.estimate(s.bodies.len(), baked.triangle_count(), f64::from(age), ages, frames_left)
+                self.cost.estimate(s.bodies.len(), triangles, f64::from(age), ages, frames_left)
             });
-            candidates.push((*island, baked, age, estimate));
+            candidates.push((*island, triangles, age, estimate));
         }
         let accept = match policy {
             IntegrationPolicy::Auto => {
@@ -528,13 +520,13 @@ impl SceneManager {
             _ => vec![true; candidates.len()],
         };
         let mut chosen = Vec::new();
-        for ((island, baked, age, estimate), integrate) in candidates.into_iter().zip(accept) {
+        for ((island, triangles, age, estimate), integrate) in candidates.into_iter().zip(accept) {
             let s = self.sleeping.get_mut(&island).expect("candidate is asleep");
             if integrate || !s.decided {
                 stats.decisions.push(Decision {
                     island,
                     bodies: s.bodies.len(),
-                    triangles: baked.triangle_count(),
+                    triangles,
                     age,
                     integrate,
                     estimate,
@@ -542,6 +534,13 @@ impl SceneManager {
                 s.decided = true;
             }
             if integrate {
+                let bodies: Vec<_> = s
+                    .bodies
+                    .iter()
+                    .zip(&s.poses)
+                    .map(|(b, p)| (*b, self.bodies[b.0 as usize].prototype, *p))
+                    .collect();
+                let baked = Arc::new(BakedIsland::bake(island, &bodies, &self.prototypes));
                 chosen.push((island, baked));
             }
         }

@@ -53,7 +53,7 @@ pub struct Bsdf {
     p_spec: f32,
 }
 
-fn luminance(c: Vec3) -> f32 {
+pub(crate) fn luminance(c: Vec3) -> f32 {
     c.dot(Vec3::new(0.2126, 0.7152, 0.0722))
 }
 
@@ -192,8 +192,7 @@ mod tests {
 
     #[test]
     fn sample_weight_matches_eval_over_pdf() {
-        let m =
-            Material { base_color: Vec3::new(0.8, 0.5, 0.2), roughness: 0.3, metallic: 0.4, specular: 1.0 };
+        let m = Material { roughness: 0.3, metallic: 0.4, ..Material::diffuse(Vec3::new(0.8, 0.5, 0.2)) };
         let b = Bsdf::new(&m, Vec3::Y);
         let wo = Vec3::new(0.3, 0.9, 0.1).normalize();
         for i in 0..50 {

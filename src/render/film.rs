@@ -1,3 +1,5 @@
+//! The film: per-pixel linear radiance, tone mapping, and atomic PNG and OpenEXR output.
+
 use std::path::Path;
 
 use glam::Vec3;
@@ -44,9 +46,34 @@ impl Film {
 
 /// Encodes the film as an 8-bit sRGB PNG and writes it atomically.
 pub fn write_png_atomic(film: &Film, exposure: f32, path: &Path) -> Result<(), RenderError> {
+    write_rgb8_png_atomic(film.width, film.height, film.to_srgb8(exposure), path)
+}
+
+/// Writes an AOV pass as an 8-bit PNG, atomically, without tone mapping: albedo sRGB-encoded,
+/// normals as `0.5 * n + 0.5`, depth as grey from 0 (at the camera) to 1 (the farthest hit;
+/// rays that hit nothing are white too).
+pub fn write_aov_png_atomic(film: &Film, aov: super::Aov, path: &Path) -> Result<(), RenderError> {
+    let far = film.pixels.iter().map(|p| p.x).filter(|d| d.is_finite()).fold(0.0f32, f32::max).max(1e-6);
+    let byte = |c: f32| (c.clamp(0.0, 1.0) * 255.0 + 0.5) as u8;
+    let bytes = film
+        .pixels
+        .iter()
+        .flat_map(|&p| {
+            let p = if p.is_finite() { p } else { Vec3::ZERO };
+            match aov {
+                super::Aov::Albedo => p.to_array().map(|c| srgb_encode(c.clamp(0.0, 1.0))),
+                super::Aov::Normal => (p * 0.5 + Vec3::splat(0.5)).to_array().map(byte),
+                super::Aov::Depth if p.x <= 0.0 => [255; 3],
+                super::Aov::Depth => [byte(p.x / far); 3],
+            }
+        })
+        .collect();
+    write_rgb8_png_atomic(film.width, film.height, bytes, path)
+}
+
+fn write_rgb8_png_atomic(width: u32, height: u32, bytes: Vec<u8>, path: &Path) -> Result<(), RenderError> {
     let img: ImageBuffer<Rgb<u8>, Vec<u8>> =
-        ImageBuffer::from_raw(film.width, film.height, film.to_srgb8(exposure))
-            .expect("film holds width * height pixels");
+        ImageBuffer::from_raw(width, height, bytes).expect("film holds width * height pixels");
     let mut bytes = Vec::new();
     img.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png)
         .map_err(|source| RenderError::Encode { path: path.to_path_buf(), source })?;

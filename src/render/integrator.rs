@@ -1,3 +1,6 @@
+//! Integrators: path tracing with next-event estimation (sun, sky, emissive triangles,
+//! punctual lights), the direct-light preview and ambient occlusion.
+
 use std::f32::consts::PI;
 
 use glam::Vec3;
@@ -6,6 +9,7 @@ use super::bsdf::{sample_cone, sample_cosine, Bsdf};
 use super::{PixelSampler, RenderScene};
 use crate::accel::SceneQuery;
 use crate::geometry::{offset_origin, Ray};
+use crate::scene::Light;
 
 /// Computes the radiance arriving along a camera ray.
 pub trait Integrator: Sync {
@@ -21,8 +25,46 @@ pub trait Integrator: Sync {
     ) -> Vec3;
 }
 
-/// Direct light only: the sun (a disc, so shadows are soft) and the sky, each through one
-/// shadow ray per sample, on Lambertian surfaces. The preview mode beside the path tracer.
+/// Light from a punctual light reaching point `p`: the unit direction towards the light, the
+/// irradiance it gives a surface facing it, and the distance to it (infinite for directional
+/// lights). `None` when `p` is outside a spot's cone or on a point light.
+pub(crate) fn punctual_light(light: &Light, p: Vec3) -> Option<(Vec3, Vec3, f32)> {
+    let towards = |position: Vec3| {
+        let d = position - p;
+        let r2 = d.length_squared();
+        (r2 > 0.0 && r2.is_finite()).then(|| (d / r2.sqrt(), r2))
+    };
+    match *light {
+        Light::Point { position, intensity } => {
+            let (wi, r2) = towards(position)?;
+            Some((wi, intensity / r2, r2.sqrt()))
+        }
+        Light::Spot { position, direction, intensity, cos_inner, cos_outer } => {
+            let (wi, r2) = towards(position)?;
+            let cos = (-wi).dot(direction);
+            if cos <= cos_outer {
+                return None;
+            }
+            // glTF's recommended smooth falloff between the cones.
+            let t = if cos_inner > cos_outer {
+                ((cos - cos_outer) / (cos_inner - cos_outer)).min(1.0)
+            } else {
+                1.0
+            };
+            Some((wi, intensity * (t * t) / r2, r2.sqrt()))
+        }
+        Light::Directional { direction, irradiance } => Some((-direction, irradiance, f32::INFINITY)),
+    }
+}
+
+/// A shadow ray from `origin` towards a light `distance` away in unit direction `wi`.
+fn shadow_ray(origin: Vec3, wi: Vec3, distance: f32) -> Ray {
+    Ray::segment(origin, wi, 0.0, if distance.is_finite() { distance * (1.0 - 1e-4) } else { f32::INFINITY })
+}
+
+/// Direct light only: the sun (a disc, so shadows are soft), the sky and punctual lights,
+/// each through one shadow ray per sample, on Lambertian surfaces, plus emission. The preview
+/// mode beside the path tracer.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct DirectLighting;
 
@@ -33,6 +75,11 @@ pub(crate) mod dims {
     pub const SKY: u32 = 2;
     /// Path vertices use `BOUNCE + 4 * depth + k`, `k` in 0..4.
     pub const BOUNCE: u32 = 3;
+    /// Emitter sampling at path vertex `depth` uses `EMITTER + 2 * depth + k`, `k` in 0..2
+    /// (past every `BOUNCE` pair of the longest path, 64 bounces).
+    pub const EMITTER: u32 = BOUNCE + 4 * 64;
+    /// The point on the camera's lens (depth of field).
+    pub const LENS: u32 = EMITTER + 2 * 64;
 }
 
 impl Integrator for DirectLighting {
@@ -52,7 +99,18 @@ impl Integrator for DirectLighting {
         let s = scene.surface(ray, &hit);
         let albedo = s.material.base_color;
         let origin = offset_origin(s.p, s.ng);
-        let mut radiance = Vec3::ZERO;
+        let mut radiance = s.emission;
+
+        for light in &scene.lights {
+            let Some((l, e, distance)) = punctual_light(light, s.p) else { continue };
+            let cos = s.ns.dot(l);
+            if cos > 0.0 && s.ng.dot(l) > 0.0 {
+                *rays += 1;
+                if !query.intersect_p(&shadow_ray(origin, l, distance)) {
+                    radiance += albedo / PI * e * cos;
+                }
+            }
+        }
 
         let sun = &scene.sun;
         let cos_max = sun.angular_radius_deg.to_radians().cos();
@@ -77,8 +135,9 @@ impl Integrator for DirectLighting {
     }
 }
 
-/// Unidirectional path tracing with next-event estimation of the sun and the sky, combined
-/// with BSDF sampling by multiple importance sampling (power heuristic), on the
+/// Unidirectional path tracing with next-event estimation of the sun, the sky and emissive
+/// triangles, each combined with BSDF sampling by multiple importance sampling (power
+/// heuristic), and of punctual lights (delta lights: light sampling only), on the
 /// metallic-roughness BSDF, with Russian roulette after three bounces.
 #[derive(Clone, Copy, Debug)]
 pub struct PathTracer {
@@ -181,10 +240,37 @@ impl Integrator for PathTracer {
                 break;
             };
             let s = scene.surface(&ray, &hit);
+            if s.emission != Vec3::ZERO {
+                // Emission seen directly, or reached through a bounce from vertex depth-1,
+                // where emitter sampling could have found it too.
+                let w = match came_from {
+                    Some((pdf_bsdf, _)) if !scene.emitters.is_empty() => {
+                        let d = s.p - ray.origin;
+                        let cos = s.ng.dot(ray.dir.normalize()).abs();
+                        let pdf_light =
+                            scene.emitters.pdf_area(s.material.emissive) * d.length_squared() / cos.max(1e-8);
+                        power_heuristic(pdf_bsdf, pdf_light)
+                    }
+                    _ => 1.0,
+                };
+                add(&mut radiance, beta * s.emission * w, depth.saturating_sub(1));
+            }
             let wo = -ray.dir.normalize();
             let bsdf = Bsdf::new(&s.material, s.ns);
             let origin = offset_origin(s.p, s.ng);
             let dim = dims::BOUNCE + 4 * depth;
+
+            // Punctual lights: delta distributions, so light sampling alone.
+            for light in &scene.lights {
+                let Some((l, e, distance)) = punctual_light(light, s.p) else { continue };
+                let f = bsdf.eval(wo, l);
+                if f != Vec3::ZERO && s.ng.dot(l) > 0.0 {
+                    *rays += 1;
+                    if !query.intersect_p(&shadow_ray(origin, l, distance)) {
+                        add(&mut radiance, beta * f * e, depth);
+                    }
+                }
+            }
 
             // Sun: sample its disc.
             let l = sample_cone(sun.dir, sun.cos_max, sampler.get_2d(index, dim));
@@ -205,6 +291,27 @@ impl Integrator for PathTracer {
                 if !query.intersect_p(&Ray::new(origin, d)) {
                     let w = power_heuristic(pdf_sky, bsdf.pdf(wo, d));
                     add(&mut radiance, beta * f * scene.sky.radiance(d) * (w / pdf_sky), depth);
+                }
+            }
+
+            // Emissive triangles: one point on one of them, MIS against BSDF sampling.
+            if !scene.emitters.is_empty() {
+                let dim = dims::EMITTER + 2 * depth;
+                let u_pick = sampler.get_2d(index, dim).x;
+                if let Some((e, le)) = scene.sample_emitter(u_pick, sampler.get_2d(index, dim + 1)) {
+                    let d = e.p - s.p;
+                    let dist2 = d.length_squared();
+                    let wi = d / dist2.sqrt();
+                    let cos_light = e.n.dot(wi).abs();
+                    let f = bsdf.eval(wo, wi);
+                    if dist2 > 0.0 && cos_light > 0.0 && f != Vec3::ZERO && s.ng.dot(wi) > 0.0 {
+                        let pdf_light = e.pdf_area * dist2 / cos_light;
+                        *rays += 1;
+                        if !query.intersect_p(&Ray::segment(origin, wi, 0.0, dist2.sqrt() * (1.0 - 1e-3))) {
+                            let w = power_heuristic(pdf_light, bsdf.pdf(wo, wi));
+                            add(&mut radiance, beta * f * le * (w / pdf_light), depth);
+                        }
+                    }
                 }
             }
 

@@ -2,22 +2,27 @@
 //! image output, and image sequences of simulations ([`render_sequence`]). Talks to geometry
 //! only through [`crate::accel::SceneQuery`] and the scene manager's hit mapping.
 
+mod aov;
 mod bsdf;
 mod camera;
+mod emitters;
 mod film;
 mod integrator;
 mod render_scene;
 mod sampler;
 mod sequence;
+mod texture;
 mod tiles;
 
+pub use aov::{Aov, AovIntegrator};
 pub use bsdf::{sample_cosine, Bsdf, BsdfSample};
 pub use camera::PinholeCamera;
-pub use film::{write_exr_atomic, write_png_atomic, Film};
+pub use film::{write_aov_png_atomic, write_exr_atomic, write_png_atomic, Film};
 pub use integrator::{AmbientOcclusion, DirectLighting, Integrator, PathTracer};
 pub use render_scene::{RenderScene, SurfaceHit};
 pub use sampler::PixelSampler;
-pub use sequence::{render_sequence, SequenceFrame, SequenceOptions};
+pub use sequence::{render_sequence, SequenceFrame, SequenceOptions, SequenceScene};
+pub use texture::sample as sample_texture;
 pub use tiles::{render_frame, RenderSettings, RenderStats};
 
 use std::path::PathBuf;

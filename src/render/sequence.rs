@@ -2,10 +2,13 @@
 //! keeps one accelerator in step (integrating sleeping islands), and renders the selected
 //! frames. The trace stage's time goes back to the manager's cost model.
 
-use super::{render_frame, Film, Integrator, RenderError, RenderScene, RenderSettings, RenderStats};
+use super::emitters::Emitters;
+use super::{
+    render_frame, Aov, AovIntegrator, Film, Integrator, RenderError, RenderScene, RenderSettings, RenderStats,
+};
 use crate::integrate::{FrameState, FrameStats, SceneAssets, SceneManager};
-use crate::physics::Trajectory;
-use crate::scene::SceneDescription;
+use crate::physics::{BodyState, Trajectory};
+use crate::scene::{Body, SceneDescription};
 
 /// Which frames to render, and how.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -27,6 +30,15 @@ impl SequenceOptions {
     }
 }
 
+/// The simulation a sequence shows: its trajectory, the scene file's assets, and the scene
+/// without bodies ([`crate::integrate::describe_scene`]).
+#[derive(Clone, Copy)]
+pub struct SequenceScene<'a> {
+    pub trajectory: &'a Trajectory,
+    pub assets: &'a SceneAssets,
+    pub template: &'a SceneDescription,
+}
+
 /// One rendered frame of a sequence.
 pub struct SequenceFrame<'a> {
     pub index: u32,
@@ -34,6 +46,8 @@ pub struct SequenceFrame<'a> {
     pub render: RenderStats,
     /// The manager's per-stage statistics, trace included.
     pub stats: &'a FrameStats,
+    /// The requested AOV passes, in request order.
+    pub aovs: Vec<(Aov, Film)>,
 }
 
 /// Replays `trajectory` from its first frame (every island event must be seen), renders the
@@ -41,15 +55,16 @@ pub struct SequenceFrame<'a> {
 /// is first brought up to date at `options.start`, so a slice of a sequence renders the same
 /// images as a whole run, up to float noise (integrated and instanced bodies are hit alike).
 pub fn render_sequence<E: From<RenderError>>(
-    trajectory: &Trajectory,
-    assets: &SceneAssets,
-    template: &SceneDescription,
+    scene: &SequenceScene<'_>,
     manager: &mut SceneManager,
     integrator: &dyn Integrator,
+    aovs: &[Aov],
     options: &SequenceOptions,
     on_frame: &mut dyn FnMut(SequenceFrame<'_>) -> Result<(), E>,
 ) -> Result<(), E> {
+    let SequenceScene { trajectory, assets, template } = *scene;
     let step = options.step.max(1);
+    let emissive_bodies = Emitters::prototypes_emit(template);
     let mut replay = trajectory.replay();
     while let Some(frame) = replay.next_frame() {
         if frame.index >= options.end {
@@ -67,13 +82,31 @@ pub fn render_sequence<E: From<RenderError>>(
             spp: options.spp,
             frame: frame.index,
         };
-        let (film, render) = {
-            let mut scene = RenderScene::with_objects(template, &*manager)?;
+        // Emissive prototypes are light-sampled where their bodies are this frame.
+        let bodies: Vec<Body> = if emissive_bodies {
+            (0..frame.states.len())
+                .filter(|&b| frame.states[b] != BodyState::Absent && frame.poses[b].translation.is_finite())
+                .map(|b| Body {
+                    prototype: trajectory.bodies[b].prototype,
+                    transform: frame.poses[b].to_affine(),
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let (film, render, aov_films) = {
+            let mut scene = RenderScene::with_objects(template, &*manager, &bodies)?;
             scene.camera = assets.camera_at(frame.index as f32 * trajectory.timestep);
-            render_frame(&scene, manager.query().map_err(RenderError::from)?, integrator, &settings)?
+            let query = manager.query().map_err(RenderError::from)?;
+            let (film, render) = render_frame(&scene, query, integrator, &settings)?;
+            let mut aov_films = Vec::with_capacity(aovs.len());
+            for &aov in aovs {
+                aov_films.push((aov, render_frame(&scene, query, &AovIntegrator(aov), &settings)?.0));
+            }
+            (film, render, aov_films)
         };
         let stats = manager.record_trace(render.seconds * 1e3, render.rays);
-        on_frame(SequenceFrame { index: frame.index, film: &film, render, stats })?;
+        on_frame(SequenceFrame { index: frame.index, film: &film, render, stats, aovs: aov_films })?;
     }
     Ok(())
 }

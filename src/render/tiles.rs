@@ -86,7 +86,12 @@ pub fn render_frame(
                         } else {
                             Vec2::splat(0.5) + tent_offset(sampler.get_2d(i, dims::PIXEL))
                         };
-                        let ray = camera.ray(x as f32 + jitter.x, y as f32 + jitter.y);
+                        let (px, py) = (x as f32 + jitter.x, y as f32 + jitter.y);
+                        let ray = if camera.has_aperture() {
+                            camera.ray_through_lens(px, py, sampler.get_2d(i, dims::LENS))
+                        } else {
+                            camera.ray(px, py)
+                        };
                         sum += integrator.li(scene, query, &ray, &sampler, i, &mut rays);
                     }
                     pixels.push(sum / settings.spp as f32);

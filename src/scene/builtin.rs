@@ -60,20 +60,17 @@ pub fn default_scene() -> SceneDescription {
     SceneDescription {
         name: "default".into(),
         materials,
+        textures: Vec::new(),
         statics,
         prototypes,
         bodies,
-        camera: Camera {
-            eye: Vec3::new(-1.5, 3.2, 8.5),
-            target: Vec3::new(0.0, 0.6, 0.0),
-            up: Vec3::Y,
-            vfov_deg: 40.0,
-        },
+        camera: Camera::pinhole(Vec3::new(-1.5, 3.2, 8.5), Vec3::new(0.0, 0.6, 0.0), Vec3::Y, 40.0),
         sun: Sun {
             direction: Vec3::new(-0.5, 0.8, 0.35).normalize(),
             irradiance: Vec3::new(2.4, 2.25, 2.0),
             angular_radius_deg: 2.0,
         },
         sky: Sky::DAYLIGHT,
+        lights: Vec::new(),
     }
 }

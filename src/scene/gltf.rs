@@ -1,12 +1,22 @@
-//! A plain glTF mesh loader: every triangle primitive of the default scene (or of all
+//! glTF import as plain scene data. Every triangle primitive of the default scene (or of all
 //! scenes' root nodes when there is no default), with node transforms baked in, merged into
-//! one [`TriangleMesh`]. No materials, no textures: those belong to the renderer's loader.
+//! one [`TriangleMesh`] per file; with [`load_gltf`] also the metallic-roughness materials
+//! (one material slot per glTF material, per triangle), their textures decoded to RGBA8 with
+//! the samplers' wrap modes, and KHR_lights_punctual lights. Builds no render objects.
+//!
+//! Bad input: a malformed file, accessor or non-finite vertex is an error naming the file
+//! and the element; an image that cannot be loaded (missing file, unsupported format, zero
+//! size) is a warning and a magenta texture; an unsupported extension is a warning, or an
+//! error when the file requires it.
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use glam::{Affine3A, Mat4, Vec2, Vec3};
 
 use crate::geometry::TriangleMesh;
+use crate::scene::texture::{Texture, Wrap};
+use crate::scene::{Light, Material};
 
 /// A glTF file that could not be turned into a mesh: names the file and the element.
 #[derive(Debug, thiserror::Error)]
@@ -24,19 +34,99 @@ impl GltfError {
     }
 }
 
-/// Loads the triangles of a `.gltf` or `.glb` file in world space.
+/// Extensions whose meaning the importer implements; any other one is ignored with a warning
+/// (or refused when required).
+pub const SUPPORTED_EXTENSIONS: &[&str] = &["KHR_lights_punctual", "KHR_materials_emissive_strength"];
+
+/// A glTF file as plain data.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct GltfAsset {
+    /// All triangles in the file's space. `material_ids` (when the file has materials) are
+    /// indices into `materials`.
+    pub mesh: TriangleMesh,
+    /// Empty when no primitive names a material (the caller picks a colour). Otherwise one
+    /// per glTF material, plus glTF's default material last when some primitive has none.
+    pub materials: Vec<Material>,
+    /// The textures `materials` reference by index.
+    pub textures: Vec<Texture>,
+    /// Punctual lights placed by the scene's nodes, in the file's space.
+    pub lights: Vec<Light>,
+}
+
+impl GltfAsset {
+    /// An asset of bare geometry (no materials, textures or lights).
+    pub fn from_mesh(mesh: TriangleMesh) -> Self {
+        Self { mesh, ..Self::default() }
+    }
+
+    /// Moves the textures to the end of a scene's shared list and returns the materials
+    /// with their texture indices pointing there.
+    pub fn take_materials(&mut self, textures: &mut Vec<std::sync::Arc<Texture>>) -> Vec<Material> {
+        let offset = textures.len() as u32;
+        textures.extend(self.textures.drain(..).map(std::sync::Arc::new));
+        let shift = |t: Option<u32>| t.map(|t| t + offset);
+        self.materials
+            .drain(..)
+            .map(|m| Material {
+                base_color_texture: shift(m.base_color_texture),
+                metallic_roughness_texture: shift(m.metallic_roughness_texture),
+                emissive_texture: shift(m.emissive_texture),
+                ..m
+            })
+            .collect()
+    }
+
+    /// The asset moved by `xf` (mesh and lights).
+    pub fn transformed(mut self, xf: &Affine3A) -> Self {
+        self.mesh = self.mesh.transformed(xf);
+        for light in &mut self.lights {
+            match light {
+                Light::Point { position, .. } => *position = xf.transform_point3(*position),
+                Light::Spot { position, direction, .. } => {
+                    *position = xf.transform_point3(*position);
+                    *direction = xf.transform_vector3(*direction).normalize_or(*direction);
+                }
+                Light::Directional { direction, .. } => {
+                    *direction = xf.transform_vector3(*direction).normalize_or(*direction)
+                }
+            }
+        }
+        self
+    }
+}
+
+/// Loads only the triangles (normals and UVs included) of a `.gltf` or `.glb` file: no
+/// materials, no image decoding. For colliders and accelerator benchmarks.
 pub fn load_gltf_mesh(path: &Path) -> Result<TriangleMesh, GltfError> {
+    let mut asset = load(path, false)?;
+    asset.mesh.material_ids = None;
+    Ok(asset.mesh)
+}
+
+/// Loads triangles, materials, textures and punctual lights of a `.gltf` or `.glb` file.
+pub fn load_gltf(path: &Path) -> Result<GltfAsset, GltfError> {
+    load(path, true)
+}
+
+fn load(path: &Path, with_materials: bool) -> Result<GltfAsset, GltfError> {
     let bytes = std::fs::read(path).map_err(|e| GltfError::new(path, "(file)", e.to_string()))?;
-    let gltf::Gltf { document, blob } =
-        gltf::Gltf::from_slice(&bytes).map_err(|e| GltfError::new(path, "(document)", e.to_string()))?;
+    let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(&bytes)
+        .map_err(|e| GltfError::new(path, "(document)", e.to_string()))?;
+    check_extensions(path, &document)?;
+    let document = gltf::Document::from_json(document.into_json())
+        .map_err(|e| GltfError::new(path, "(document)", e.to_string()))?;
     let buffers = gltf::import_buffers(&document, path.parent(), blob)
         .map_err(|e| GltfError::new(path, "buffers", e.to_string()))?;
 
     let mut out = TriangleMesh::default();
     let mut normals = Vec::new();
     let mut uvs = Vec::new();
-    let mut all_have_normals = true;
-    let mut all_have_uvs = true;
+    let mut material_ids = Vec::new();
+    let mut any_normals = false;
+    let mut any_uvs = false;
+    let mut lights = Vec::new();
+    // glTF material index per triangle; `None` for glTF's default material.
+    let mut any_material = false;
 
     let roots: Vec<gltf::Node> = match document.default_scene().or_else(|| document.scenes().next()) {
         Some(scene) => scene.nodes().collect(),
@@ -58,6 +148,12 @@ pub fn load_gltf_mesh(path: &Path) -> Result<TriangleMesh, GltfError> {
             ));
         }
         let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+        if !world.is_finite() {
+            return Err(GltfError::new(path, format!("nodes[{}]", node.index()), "non-finite transform"));
+        }
+        if let (true, Some(light)) = (with_materials, node.light()) {
+            lights.push(punctual_light(&light, &world));
+        }
         if let Some(mesh) = node.mesh() {
             let xf = Affine3A::from_mat4(world);
             let normal_matrix = glam::Mat3::from(xf.matrix3).inverse().transpose();
@@ -68,16 +164,29 @@ pub fn load_gltf_mesh(path: &Path) -> Result<TriangleMesh, GltfError> {
                     continue;
                 }
                 let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+                // The reader answers `None` both for a missing attribute and for an accessor
+                // whose data lies outside its buffer view or buffer: tell them apart.
+                let unreadable = |what: &str, accessor: Option<gltf::Accessor>| {
+                    match accessor {
+                    Some(a) => GltfError::new(
+                        path,
+                        &element,
+                        format!("{what} (accessors[{}]) cannot be read: its data lies outside its buffer view or buffer", a.index()),
+                    ),
+                    None => GltfError::new(path, &element, format!("has no {what} attribute")),
+                }
+                };
                 let positions: Vec<Vec3> = reader
                     .read_positions()
-                    .ok_or_else(|| GltfError::new(path, &element, "has no POSITION attribute"))?
+                    .ok_or_else(|| unreadable("POSITION", prim.get(&gltf::Semantic::Positions)))?
                     .map(Vec3::from_array)
                     .collect();
                 let base = out.positions.len();
                 let n = positions.len();
-                let indices: Vec<u32> = match reader.read_indices() {
-                    Some(ix) => ix.into_u32().collect(),
-                    None => (0..n as u32).collect(),
+                let indices: Vec<u32> = match (reader.read_indices(), prim.indices()) {
+                    (Some(ix), _) => ix.into_u32().collect(),
+                    (None, None) => (0..n as u32).collect(),
+                    (None, Some(a)) => return Err(unreadable("indices", Some(a))),
                 };
                 if indices.len() % 3 != 0 {
                     return Err(GltfError::new(
@@ -102,25 +211,56 @@ pub fn load_gltf_mesh(path: &Path) -> Result<TriangleMesh, GltfError> {
                         .chunks_exact(3)
                         .map(|t| [t[0] + base as u32, t[1] + base as u32, t[2] + base as u32]),
                 );
+                // Primitives without an attribute get zeros: a zero normal shades with the
+                // geometric normal, and a zero UV only matters to an untextured material.
                 match reader.read_normals() {
                     Some(ns) => {
+                        any_normals = true;
                         normals.extend(ns.map(|v| (normal_matrix * Vec3::from_array(v)).normalize_or_zero()))
                     }
-                    None => {
-                        all_have_normals = false;
-                        normals.resize(out.positions.len(), Vec3::ZERO);
+                    None if prim.get(&gltf::Semantic::Normals).is_some() => {
+                        return Err(unreadable("NORMAL", prim.get(&gltf::Semantic::Normals)))
                     }
+                    None => normals.resize(out.positions.len(), Vec3::ZERO),
                 }
                 match reader.read_tex_coords(0) {
-                    Some(tc) => uvs.extend(tc.into_f32().map(Vec2::from_array)),
+                    Some(tc) => {
+                        any_uvs = true;
+                        uvs.extend(tc.into_f32().map(|uv| {
+                            let uv = Vec2::from_array(uv);
+                            if uv.is_finite() {
+                                uv
+                            } else {
+                                Vec2::ZERO
+                            }
+                        }))
+                    }
+                    None if prim.get(&gltf::Semantic::TexCoords(0)).is_some() => {
+                        return Err(unreadable("TEXCOORD_0", prim.get(&gltf::Semantic::TexCoords(0))))
+                    }
                     None => {
-                        all_have_uvs = false;
-                        uvs.resize(out.positions.len(), Vec2::ZERO);
+                        let m = prim.material();
+                        let pbr = m.pbr_metallic_roughness();
+                        let textured = pbr.base_color_texture().is_some()
+                            || pbr.metallic_roughness_texture().is_some()
+                            || m.emissive_texture().is_some();
+                        if with_materials && textured {
+                            tracing::warn!(
+                                file = %path.display(),
+                                "{element}: its material has textures but the primitive has no \
+                                 TEXCOORD_0; they are read at (0, 0)"
+                            );
+                        }
+                        uvs.resize(out.positions.len(), Vec2::ZERO)
                     }
                 }
                 if normals.len() != out.positions.len() || uvs.len() != out.positions.len() {
                     return Err(GltfError::new(path, &element, "attribute counts differ from POSITION's"));
                 }
+                let material = prim.material().index();
+                any_material |= material.is_some();
+                let slot = material.map_or(u32::MAX, |m| m as u32);
+                material_ids.resize(out.indices.len(), slot);
             }
         }
         for child in node.children() {
@@ -130,12 +270,187 @@ pub fn load_gltf_mesh(path: &Path) -> Result<TriangleMesh, GltfError> {
     if out.indices.is_empty() {
         return Err(GltfError::new(path, "(document)", "contains no triangles"));
     }
-    if all_have_normals {
+    if any_normals {
         out.normals = Some(normals);
     }
-    if all_have_uvs {
+    if any_uvs {
         out.uvs = Some(uvs);
     }
+
+    let mut asset = GltfAsset { lights, ..GltfAsset::default() };
+    if any_material {
+        let default_slot = document.materials().len() as u32;
+        if material_ids.contains(&u32::MAX) {
+            for id in &mut material_ids {
+                if *id == u32::MAX {
+                    *id = default_slot;
+                }
+            }
+        }
+        out.material_ids = Some(material_ids);
+        if with_materials {
+            let mut textures = TextureLoader::new(path, &document, &buffers);
+            asset.materials = document.materials().map(|m| material(path, &m, &mut textures)).collect();
+            if out.max_material_slot() == default_slot {
+                asset.materials.push(Material::gltf_default());
+            }
+            asset.textures = textures.textures;
+        }
+    }
     out.validate().map_err(|e| GltfError::new(path, "(merged mesh)", e.to_string()))?;
-    Ok(out)
+    asset.mesh = out;
+    Ok(asset)
+}
+
+/// Warns about every used extension the importer ignores; refuses a file that requires one.
+fn check_extensions(path: &Path, document: &gltf::Document) -> Result<(), GltfError> {
+    for (i, ext) in document.extensions_required().enumerate() {
+        if !SUPPORTED_EXTENSIONS.contains(&ext) {
+            return Err(GltfError::new(
+                path,
+                format!("extensionsRequired[{i}]"),
+                format!("requires extension {ext}, which dormant does not support"),
+            ));
+        }
+    }
+    for ext in document.extensions_used() {
+        if !SUPPORTED_EXTENSIONS.contains(&ext) {
+            tracing::warn!(file = %path.display(), "glTF extension {ext} is not supported: ignored");
+        }
+    }
+    Ok(())
+}
+
+fn punctual_light(light: &gltf::khr_lights_punctual::Light, world: &Mat4) -> Light {
+    use gltf::khr_lights_punctual::Kind;
+    let intensity = Vec3::from_array(light.color()) * light.intensity().max(0.0);
+    let position = world.transform_point3(Vec3::ZERO);
+    // Lights shine along their node's -Z.
+    let direction = world.transform_vector3(Vec3::NEG_Z).normalize_or(Vec3::NEG_Y);
+    match light.kind() {
+        Kind::Point => Light::Point { position, intensity },
+        Kind::Directional => Light::Directional { direction, irradiance: intensity },
+        Kind::Spot { inner_cone_angle, outer_cone_angle } => {
+            let outer = outer_cone_angle.clamp(0.0, std::f32::consts::FRAC_PI_2);
+            let inner = inner_cone_angle.clamp(0.0, outer);
+            Light::Spot { position, direction, intensity, cos_inner: inner.cos(), cos_outer: outer.cos() }
+        }
+    }
+}
+
+fn material(path: &Path, m: &gltf::Material, textures: &mut TextureLoader) -> Material {
+    let pbr = m.pbr_metallic_roughness();
+    let [r, g, b, _alpha] = pbr.base_color_factor();
+    let at = |slot: &str| format!("materials[{}].{slot}", m.index().unwrap_or(0));
+    let mut texture = |info: Option<gltf::texture::Info>, slot: &str| {
+        let info = info?;
+        if info.tex_coord() != 0 {
+            tracing::warn!(
+                file = %path.display(),
+                "{}: uses TEXCOORD_{}; only TEXCOORD_0 is supported, using it instead",
+                at(slot),
+                info.tex_coord()
+            );
+        }
+        Some(textures.get(&info.texture()))
+    };
+    let strength = m.emissive_strength().unwrap_or(1.0).max(0.0);
+    Material {
+        base_color: Vec3::new(r, g, b).max(Vec3::ZERO),
+        roughness: pbr.roughness_factor().clamp(0.0, 1.0),
+        metallic: pbr.metallic_factor().clamp(0.0, 1.0),
+        specular: 1.0,
+        emissive: Vec3::from_array(m.emissive_factor()).max(Vec3::ZERO) * strength,
+        base_color_texture: texture(pbr.base_color_texture(), "baseColorTexture"),
+        metallic_roughness_texture: texture(pbr.metallic_roughness_texture(), "metallicRoughnessTexture"),
+        emissive_texture: texture(m.emissive_texture(), "emissiveTexture"),
+    }
+}
+
+/// Decodes the textures materials use, each glTF texture once (and each image once).
+struct TextureLoader<'a> {
+    path: &'a Path,
+    document: &'a gltf::Document,
+    buffers: &'a [gltf::buffer::Data],
+    /// glTF texture index -> index in `textures`.
+    by_texture: BTreeMap<usize, u32>,
+    images: BTreeMap<usize, Texture>,
+    textures: Vec<Texture>,
+}
+
+impl<'a> TextureLoader<'a> {
+    fn new(path: &'a Path, document: &'a gltf::Document, buffers: &'a [gltf::buffer::Data]) -> Self {
+        Self {
+            path,
+            document,
+            buffers,
+            by_texture: BTreeMap::new(),
+            images: BTreeMap::new(),
+            textures: Vec::new(),
+        }
+    }
+
+    fn get(&mut self, texture: &gltf::Texture) -> u32 {
+        if let Some(&i) = self.by_texture.get(&texture.index()) {
+            return i;
+        }
+        let image = texture.source();
+        let decoded = self.images.entry(image.index()).or_insert_with(|| {
+            let name = format!("{}: images[{}]", self.path.display(), image.index());
+            decode_image(self.path, self.document, self.buffers, &image).unwrap_or_else(|why| {
+                tracing::warn!("{name}: {why}; using a magenta texture");
+                Texture::magenta(&name)
+            })
+        });
+        let sampler = texture.sampler();
+        let wrap = |w: gltf::texture::WrappingMode| match w {
+            gltf::texture::WrappingMode::Repeat => Wrap::Repeat,
+            gltf::texture::WrappingMode::ClampToEdge => Wrap::ClampToEdge,
+            gltf::texture::WrappingMode::MirroredRepeat => Wrap::MirroredRepeat,
+        };
+        let texture_data =
+            Texture { wrap_s: wrap(sampler.wrap_s()), wrap_t: wrap(sampler.wrap_t()), ..decoded.clone() };
+        let i = self.textures.len() as u32;
+        self.textures.push(texture_data);
+        self.by_texture.insert(texture.index(), i);
+        i
+    }
+}
+
+/// The encoded bytes of an image (buffer view, data URI or file next to the glTF), decoded by
+/// whatever format the bytes are in (PNG and JPEG are compiled in).
+fn decode_image(
+    path: &Path,
+    document: &gltf::Document,
+    buffers: &[gltf::buffer::Data],
+    image: &gltf::Image,
+) -> Result<Texture, String> {
+    let json = &document.as_json().images[image.index()];
+    let bytes: Vec<u8> = match (&json.buffer_view, &json.uri) {
+        (Some(view), _) => {
+            let view = document.views().nth(view.value()).ok_or("buffer view does not exist")?;
+            let data = buffers.get(view.buffer().index()).ok_or("buffer does not exist")?;
+            let end = view.offset().checked_add(view.length()).ok_or("buffer view is too long")?;
+            data.0.get(view.offset()..end).ok_or("buffer view lies outside its buffer")?.to_vec()
+        }
+        (None, Some(uri)) => {
+            gltf::buffer::Data::from_source(gltf::buffer::Source::Uri(uri), path.parent())
+                .map_err(|e| format!("cannot read '{uri}': {e}"))?
+                .0
+        }
+        (None, None) => return Err("has neither a uri nor a bufferView".into()),
+    };
+    let decoded = image::load_from_memory(&bytes).map_err(|e| format!("cannot decode: {e}"))?.to_rgba8();
+    let (width, height) = decoded.dimensions();
+    if width == 0 || height == 0 {
+        return Err(format!("image is {width}x{height}"));
+    }
+    Ok(Texture {
+        name: format!("{}: images[{}]", path.display(), image.index()),
+        width,
+        height,
+        texels: decoded.pixels().map(|p| p.0).collect(),
+        wrap_s: Wrap::Repeat,
+        wrap_t: Wrap::Repeat,
+    })
 }

@@ -6,7 +6,9 @@ mod description;
 pub mod file;
 pub mod gltf;
 mod pile;
+pub mod texture;
 
 pub use builtin::default_scene;
-pub use description::{Body, Camera, Material, Prototype, SceneDescription, Sky, StaticMesh, Sun};
+pub use description::{Body, Camera, Light, Material, Prototype, SceneDescription, Sky, StaticMesh, Sun};
 pub use pile::asset_pile;
+pub use texture::{Texture, Wrap};

@@ -8,13 +8,29 @@ use std::path::Path;
 use glam::{Affine3A, Quat, Vec3};
 
 use super::description::{Body, Camera, Material, Prototype, SceneDescription, Sky, StaticMesh, Sun};
-use super::gltf::{load_gltf_mesh, GltfError};
+use super::gltf::{load_gltf, GltfError};
 use crate::rng::SplitMix64;
 
 /// A heap of `count` copies of the `object` glTF in the middle of the `env` glTF's floor.
+/// Both keep their glTF materials and textures (grey and ochre when a file has none); the
+/// environment's punctual lights are kept too.
 pub fn asset_pile(env: &Path, object: &Path, count: usize, seed: u64) -> Result<SceneDescription, GltfError> {
-    let env_mesh = load_gltf_mesh(env)?;
-    let object_mesh = load_gltf_mesh(object)?;
+    let mut env_asset = load_gltf(env)?;
+    let mut object_asset = load_gltf(object)?;
+    let mut textures = Vec::new();
+    let mut materials = env_asset.take_materials(&mut textures);
+    if materials.is_empty() {
+        materials.push(Material::diffuse(Vec3::splat(0.6)));
+    }
+    let object_material = materials.len() as u32;
+    let object_materials = object_asset.take_materials(&mut textures);
+    if object_materials.is_empty() {
+        materials.push(Material::diffuse(Vec3::new(0.8, 0.65, 0.2)));
+    } else {
+        materials.extend(object_materials);
+    }
+    let env_mesh = env_asset.mesh;
+    let object_mesh = object_asset.mesh;
     let env_bounds = env_mesh.bounds();
     let obj_bounds = object_mesh.bounds();
     let size = obj_bounds.extent().max_element().max(1e-6);
@@ -59,21 +75,23 @@ pub fn asset_pile(env: &Path, object: &Path, count: usize, seed: u64) -> Result<
     let name = |p: &Path| p.file_stem().map_or_else(|| "asset".into(), |s| s.to_string_lossy().into_owned());
     Ok(SceneDescription {
         name: format!("{} + {count} {}", name(env), name(object)),
-        materials: vec![Material::diffuse(Vec3::splat(0.6)), Material::diffuse(Vec3::new(0.8, 0.65, 0.2))],
+        materials,
+        textures,
         statics: vec![StaticMesh { mesh: env_mesh, material: 0 }],
-        prototypes: vec![Prototype { name: name(object), mesh: object_mesh, material: 1 }],
+        prototypes: vec![Prototype { name: name(object), mesh: object_mesh, material: object_material }],
         bodies,
-        camera: Camera {
-            eye: centre + Vec3::new(0.35 * extent.x, 0.6 * extent.y.max(0.2 * extent.x), 0.35 * extent.z),
-            target: Vec3::new(centre.x, floor + base as f32 * spacing * 0.3, centre.z),
-            up: Vec3::Y,
-            vfov_deg: 50.0,
-        },
+        camera: Camera::pinhole(
+            centre + Vec3::new(0.35 * extent.x, 0.6 * extent.y.max(0.2 * extent.x), 0.35 * extent.z),
+            Vec3::new(centre.x, floor + base as f32 * spacing * 0.3, centre.z),
+            Vec3::Y,
+            50.0,
+        ),
         sun: Sun {
             direction: Vec3::new(-0.4, 0.85, 0.3).normalize(),
             irradiance: Vec3::new(3.0, 2.8, 2.5),
             angular_radius_deg: 1.5,
         },
         sky: Sky::DAYLIGHT,
+        lights: env_asset.lights,
     })
 }

@@ -1,6 +1,7 @@
 //! Turning a scene file's environment and prototypes into plain triangle meshes: built-in
-//! generators (a Sponza-like atrium, a courtyard, a ground) and glTF files. Used by physics
-//! for colliders and by the renderer for drawing; builds no physics or render objects.
+//! generators (a Sponza-like atrium, a courtyard, a ground) and glTF files (for the renderer
+//! with their materials, textures and lights). Used by physics for colliders and by the
+//! renderer for drawing; builds no physics or render objects.
 
 use std::f32::consts::PI;
 
@@ -10,19 +11,42 @@ use super::parse::SceneFile;
 use super::schema::{GeneratorKind, PrototypeDef, ShapeKind};
 use super::SceneError;
 use crate::geometry::{primitives, TriangleMesh};
-use crate::scene::gltf::load_gltf_mesh;
+use crate::scene::gltf::{load_gltf, load_gltf_mesh, GltfAsset, GltfError};
 
 /// The static environment in world space (scale and offset applied).
 pub fn environment_mesh(file: &SceneFile) -> Result<TriangleMesh, SceneError> {
+    Ok(environment(file, false)?.mesh)
+}
+
+/// The environment with its glTF materials, textures and punctual lights (a generator's has
+/// none), in world space.
+pub fn environment_asset(file: &SceneFile) -> Result<GltfAsset, SceneError> {
+    environment(file, true)
+}
+
+/// Loads a glTF asset named by `field`, with or without materials.
+fn gltf_asset(
+    file: &SceneFile,
+    field: &str,
+    path: &str,
+    with_materials: bool,
+) -> Result<GltfAsset, SceneError> {
+    let path = file.resolve(path);
+    let loaded =
+        if with_materials { load_gltf(&path) } else { load_gltf_mesh(&path).map(GltfAsset::from_mesh) };
+    loaded.map_err(|source: GltfError| SceneError::Asset {
+        file: file.path.clone(),
+        line: file.line_of(field),
+        field: field.into(),
+        source: Box::new(source),
+    })
+}
+
+fn environment(file: &SceneFile, with_materials: bool) -> Result<GltfAsset, SceneError> {
     let env = &file.description.environment;
-    let mesh = match (&env.gltf, env.generator) {
-        (Some(path), _) => load_gltf_mesh(&file.resolve(path)).map_err(|source| SceneError::Asset {
-            file: file.path.clone(),
-            line: file.line_of("environment.gltf"),
-            field: "environment.gltf".into(),
-            source: Box::new(source),
-        })?,
-        (None, Some(kind)) => generate(kind),
+    let asset = match (&env.gltf, env.generator) {
+        (Some(path), _) => gltf_asset(file, "environment.gltf", path, with_materials)?,
+        (None, Some(kind)) => GltfAsset::from_mesh(generate(kind)),
         (None, None) => return Err(file.error("environment", "no `gltf` and no `generator`")),
     };
     let xf = Affine3A::from_scale_rotation_translation(
@@ -30,11 +54,30 @@ pub fn environment_mesh(file: &SceneFile) -> Result<TriangleMesh, SceneError> {
         Quat::IDENTITY,
         Vec3::from_array(env.offset),
     );
-    Ok(mesh.transformed(&xf))
+    Ok(asset.transformed(&xf))
 }
 
 /// Prototype `index`'s mesh in object space (centred as authored; primitives at the origin).
 pub fn prototype_mesh(file: &SceneFile, index: usize) -> Result<TriangleMesh, SceneError> {
+    Ok(prototype(file, index, false)?.mesh)
+}
+
+/// Prototype `index` with its glTF materials and textures (primitive shapes have none). Lights
+/// in a prototype's file are dropped: they would have to move with every body.
+pub fn prototype_asset(file: &SceneFile, index: usize) -> Result<GltfAsset, SceneError> {
+    let mut asset = prototype(file, index, true)?;
+    if !asset.lights.is_empty() {
+        tracing::warn!(
+            file = %file.path.display(),
+            "prototypes[{index}]: {} glTF light(s) ignored (only the environment's lights are used)",
+            asset.lights.len()
+        );
+        asset.lights.clear();
+    }
+    Ok(asset)
+}
+
+fn prototype(file: &SceneFile, index: usize, with_materials: bool) -> Result<GltfAsset, SceneError> {
     let proto: &PrototypeDef = file
         .description
         .prototypes
@@ -43,7 +86,7 @@ pub fn prototype_mesh(file: &SceneFile, index: usize) -> Result<TriangleMesh, Sc
     let missing = |f: &str| {
         file.error(format!("prototypes[{index}].{f}"), format!("shape {:?} needs `{f}`", proto.shape))
     };
-    Ok(match proto.shape {
+    Ok(GltfAsset::from_mesh(match proto.shape {
         ShapeKind::Box => {
             primitives::cuboid(Vec3::from_array(proto.half_extents.ok_or_else(|| missing("half_extents"))?))
         }
@@ -59,15 +102,10 @@ pub fn prototype_mesh(file: &SceneFile, index: usize) -> Result<TriangleMesh, Sc
         ShapeKind::Gltf => {
             let field = format!("prototypes[{index}].gltf");
             let path = proto.gltf.as_deref().ok_or_else(|| missing("gltf"))?;
-            let mesh = load_gltf_mesh(&file.resolve(path)).map_err(|source| SceneError::Asset {
-                file: file.path.clone(),
-                line: file.line_of(&field),
-                field,
-                source: Box::new(source),
-            })?;
-            mesh.transformed(&Affine3A::from_scale(Vec3::splat(proto.scale)))
+            let asset = gltf_asset(file, &field, path, with_materials)?;
+            return Ok(asset.transformed(&Affine3A::from_scale(Vec3::splat(proto.scale))));
         }
-    })
+    }))
 }
 
 /// A built-in environment.

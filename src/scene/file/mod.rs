@@ -10,7 +10,7 @@ mod schema;
 mod validate;
 
 pub use error::SceneError;
-pub use geometry::{environment_mesh, generate, prototype_mesh};
+pub use geometry::{environment_asset, environment_mesh, generate, prototype_asset, prototype_mesh};
 pub use parse::SceneFile;
 pub(crate) use parse::{fnv1a64, fnv1a64_extend};
 pub use schema::{

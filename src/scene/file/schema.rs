@@ -274,6 +274,11 @@ pub struct CameraDef {
     pub keyframes: Vec<CameraKeyframeDef>,
     #[serde(default = "default_fov")]
     pub fov_degrees: f32,
+    /// Lens radius in scene units for depth of field; 0 is a pinhole.
+    #[serde(default)]
+    pub aperture_radius: f32,
+    /// Distance in focus; the `look_at` point's distance when absent.
+    pub focus_distance: Option<f32>,
 }
 
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
@@ -289,14 +294,19 @@ pub struct CameraKeyframeDef {
 #[serde(deny_unknown_fields)]
 pub struct LightDef {
     pub kind: LightKind,
-    /// `directional`: direction the light travels.
+    /// `directional`, `spot`: direction the light travels.
     pub direction: Option<[f32; 3]>,
-    /// `point`: position.
+    /// `point`, `spot`: position.
     pub position: Option<[f32; 3]>,
     #[serde(default = "white")]
     pub color: [f32; 3],
+    /// `directional`: irradiance; `point`, `spot`: intensity (per steradian).
     #[serde(default = "one")]
     pub intensity: f32,
+    /// `spot`: half-angle of full intensity, degrees (default 0).
+    pub inner_cone_degrees: Option<f32>,
+    /// `spot`: half-angle where the light ends, degrees (default 45).
+    pub outer_cone_degrees: Option<f32>,
 }
 
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
@@ -304,6 +314,7 @@ pub struct LightDef {
 pub enum LightKind {
     Directional,
     Point,
+    Spot,
 }
 
 /// `[render]`: output settings for the renderer.

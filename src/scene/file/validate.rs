@@ -222,12 +222,52 @@ pub(crate) fn validate(file: &SceneFile) -> Vec<Problem> {
                 }
                 None => c.fail(at("direction"), "a directional light needs `direction`"),
             },
-            LightKind::Point => match light.position {
-                Some(v) => {
-                    c.finite3(&at("position"), v);
+            LightKind::Point | LightKind::Spot => {
+                match light.position {
+                    Some(v) => {
+                        c.finite3(&at("position"), v);
+                    }
+                    None => c.fail(at("position"), format!("a {:?} light needs `position`", light.kind)),
                 }
-                None => c.fail(at("position"), "a point light needs `position`"),
-            },
+                if light.kind == LightKind::Spot {
+                    match light.direction {
+                        Some(v) => {
+                            if c.finite3(&at("direction"), v) && v == [0.0; 3] {
+                                c.fail(at("direction"), "must not be the zero vector");
+                            }
+                        }
+                        None => c.fail(at("direction"), "a spot light needs `direction`"),
+                    }
+                } else if light.direction.is_some() {
+                    c.fail(at("direction"), "a point light has no `direction`");
+                }
+            }
+        }
+        if light.kind == LightKind::Directional && light.position.is_some() {
+            c.fail(at("position"), "a directional light has no `position`");
+        }
+        if light.kind == LightKind::Spot {
+            let inner = light.inner_cone_degrees.unwrap_or(0.0);
+            let outer = light.outer_cone_degrees.unwrap_or(45.0);
+            if c.finite(&at("inner_cone_degrees"), inner) && c.finite(&at("outer_cone_degrees"), outer) {
+                if !(outer > 0.0 && outer <= 90.0) {
+                    c.fail(at("outer_cone_degrees"), format!("must be within (0, 90], got {outer}"));
+                } else if !(0.0..outer).contains(&inner) {
+                    c.fail(
+                        at("inner_cone_degrees"),
+                        format!("must be at least 0 and less than outer_cone_degrees ({outer}), got {inner}"),
+                    );
+                }
+            }
+        } else {
+            for (key, v) in [
+                ("inner_cone_degrees", light.inner_cone_degrees),
+                ("outer_cone_degrees", light.outer_cone_degrees),
+            ] {
+                if v.is_some() {
+                    c.fail(at(key), "only spot lights take cone angles");
+                }
+            }
         }
         if c.finite3(&at("color"), light.color) && light.color.iter().any(|&x| x < 0.0) {
             c.fail(at("color"), "must not be negative");
@@ -323,5 +363,9 @@ fn check_camera(c: &mut Checker, i: usize, cam: &CameraDef) {
     }
     if c.finite(&at("fov_degrees"), cam.fov_degrees) && !(cam.fov_degrees > 0.0 && cam.fov_degrees < 180.0) {
         c.fail(at("fov_degrees"), format!("must be within (0, 180), got {}", cam.fov_degrees));
+    }
+    c.non_negative(&at("aperture_radius"), cam.aperture_radius);
+    if let Some(d) = cam.focus_distance {
+        c.positive(&at("focus_distance"), d);
     }
 }

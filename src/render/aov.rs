@@ -1,0 +1,58 @@
+//! Arbitrary output variables: per-pixel albedo (the textured base colour), shading normal
+//! and depth at the first hit, rendered as integrators so they share tiles, sampling and the
+//! film with the beauty pass.
+
+use glam::Vec3;
+
+use super::{Integrator, PixelSampler, RenderScene};
+use crate::accel::SceneQuery;
+use crate::geometry::Ray;
+
+/// What an AOV pass records. Pixels whose camera ray escapes are 0.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Aov {
+    /// Base colour with textures applied (linear RGB).
+    Albedo,
+    /// World-space shading normal facing the camera, components in [-1, 1].
+    Normal,
+    /// Distance from the camera to the first hit, in scene units (in all three channels).
+    Depth,
+}
+
+impl Aov {
+    pub fn name(self) -> &'static str {
+        match self {
+            Aov::Albedo => "albedo",
+            Aov::Normal => "normal",
+            Aov::Depth => "depth",
+        }
+    }
+}
+
+/// An [`Integrator`] that returns one AOV at the camera ray's first hit.
+#[derive(Clone, Copy, Debug)]
+pub struct AovIntegrator(pub Aov);
+
+impl Integrator for AovIntegrator {
+    fn li(
+        &self,
+        scene: &RenderScene,
+        query: &dyn SceneQuery,
+        ray: &Ray,
+        _sampler: &PixelSampler,
+        _index: u32,
+        rays: &mut u64,
+    ) -> Vec3 {
+        *rays += 1;
+        let Some(hit) = query.intersect(ray) else {
+            return Vec3::ZERO;
+        };
+        let s = scene.surface(ray, &hit);
+        match self.0 {
+            Aov::Albedo => s.material.base_color,
+            Aov::Normal => s.ns,
+            Aov::Depth => Vec3::splat((s.p - ray.origin).length()),
+        }
+    }
+}
