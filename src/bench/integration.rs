@@ -330,8 +330,10 @@ pub fn bench_integration(
             settled: means(frames.iter().zip(&settled).filter(|(_, s)| **s).map(|(f, _)| f)),
             islands_integrated: sum(&|f| u64::from(f.islands_integrated)),
             islands_reactivated: sum(&|f| u64::from(f.islands_reactivated)),
-            integrate_ms_per_island: frames.iter().map(|f| f.integrate_ms).sum::<f64>()
-                / sum(&|f| u64::from(f.islands_integrated)).max(1) as f64,
+            integrate_ms_per_island: match sum(&|f| u64::from(f.islands_integrated)) {
+                0 => 0.0,
+                n => frames.iter().map(|f| f.integrate_ms).sum::<f64>() / n as f64,
+            },
             reactivate_ms_per_frame_with_wakes: means(frames.iter().filter(|f| f.islands_reactivated > 0))
                 .reactivate_ms,
             reactivations_by_removal: sum(&|f| {

@@ -121,6 +121,41 @@ pub fn choose_batch(estimates: &[CostEstimate]) -> Vec<bool> {
     estimates.iter().map(|e| go && e.net_ms() > 0.0).collect()
 }
 
+/// The cost model's estimates for one frame (see [`CostModel::outlook`]).
+#[derive(Clone, Debug)]
+pub struct Outlook {
+    fixed_ms: f64,
+    ms_per_triangle: f64,
+    gain_ms_per_instance: f64,
+    /// Sleep durations of ended islands and ages of live ones, ascending.
+    durations: Vec<f64>,
+    suffix: Vec<f64>,
+    frames_left: f64,
+}
+
+impl Outlook {
+    /// The estimate for an island of `bodies` bodies and `triangles` triangles asleep for
+    /// `age` rendered frames.
+    pub fn estimate(&self, bodies: usize, triangles: usize, age: f64) -> CostEstimate {
+        CostEstimate {
+            build_ms: self.ms_per_triangle * triangles as f64,
+            fixed_ms: self.fixed_ms,
+            gain_ms_per_frame: self.gain_ms_per_instance * bodies as f64,
+            expected_frames: self.expected_frames(age),
+        }
+    }
+
+    /// Expected further rendered frames of sleep for an island asleep for `age` frames: the
+    /// mean of `d - age` over the durations `d > age`, at most the frames left.
+    pub fn expected_frames(&self, age: f64) -> f64 {
+        let first = self.durations.partition_point(|&d| d <= age);
+        let n = self.durations.len() - first;
+        let expected =
+            if n == 0 { PRIOR_SLEEP_FRAMES } else { (self.suffix[first] - age * n as f64) / n as f64 };
+        expected.min(self.frames_left.max(0.0))
+    }
+}
+
 /// What the model has learned so far (for the per-run report).
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 pub struct CostModelState {
@@ -199,22 +234,24 @@ impl CostModel {
         (a + b * triangles as f64).max(0.0)
     }
 
-    /// The estimate for an island of `bodies` bodies and `triangles` triangles asleep for
-    /// `age` rendered frames.
-    pub fn estimate(
-        &self,
-        bodies: usize,
-        triangles: usize,
-        age: f64,
-        live_ages: impl Iterator<Item = f64>,
-        frames_left: f64,
-    ) -> CostEstimate {
-        let (fixed_ms, per_triangle) = self.build_line();
-        CostEstimate {
-            build_ms: per_triangle * triangles as f64,
+    /// The model's current estimates, fixed for one frame's decisions: the fits are computed
+    /// once and the sleep durations sorted, so each island's estimate is O(log n).
+    pub fn outlook(&self, live_ages: impl Iterator<Item = f64>, frames_left: f64) -> Outlook {
+        let (fixed_ms, ms_per_triangle) = self.build_line();
+        let mut durations: Vec<f64> = self.sleeps.iter().copied().chain(live_ages).collect();
+        durations.sort_by(f64::total_cmp);
+        // suffix[i] = sum of durations[i..].
+        let mut suffix = vec![0.0; durations.len() + 1];
+        for i in (0..durations.len()).rev() {
+            suffix[i] = suffix[i + 1] + durations[i];
+        }
+        Outlook {
             fixed_ms,
-            gain_ms_per_frame: self.gain_ms_per_frame(bodies),
-            expected_frames: self.expected_frames(age, live_ages, frames_left),
+            ms_per_triangle,
+            gain_ms_per_instance: self.gain_ms_per_frame(1),
+            durations,
+            suffix,
+            frames_left,
         }
     }
 
@@ -239,20 +276,6 @@ impl CostModel {
             (c, t) => c.unwrap_or(0.0) * commit_rate + t.unwrap_or(0.0),
         };
         per_instance * instances as f64
-    }
-
-    /// Expected further rendered frames of sleep for an island asleep for `age` frames,
-    /// given the ages of islands still asleep (censored samples), at most `frames_left`.
-    pub fn expected_frames(&self, age: f64, live_ages: impl Iterator<Item = f64>, frames_left: f64) -> f64 {
-        let (mut sum, mut n) = (0.0, 0usize);
-        for d in self.sleeps.iter().copied().chain(live_ages) {
-            if d > age {
-                sum += d - age;
-                n += 1;
-            }
-        }
-        let expected = if n == 0 { PRIOR_SLEEP_FRAMES } else { sum / n as f64 };
-        expected.min(frames_left.max(0.0))
     }
 
     pub fn state(&self) -> CostModelState {
@@ -320,9 +343,11 @@ mod tests {
         for d in [10.0, 20.0, 90.0] {
             m.record_sleep(d, true);
         }
-        assert_eq!(m.expected_frames(0.0, std::iter::empty(), 1e9), 40.0);
-        assert_eq!(m.expected_frames(15.0, std::iter::empty(), 1e9), 40.0, "(5 + 75) / 2");
-        assert_eq!(m.expected_frames(15.0, [115.0].into_iter(), 1e9), 60.0, "(5 + 75 + 100) / 3");
-        assert_eq!(m.expected_frames(15.0, std::iter::empty(), 7.0), 7.0, "capped by the run");
+        let none = || std::iter::empty();
+        assert_eq!(m.outlook(none(), 1e9).expected_frames(0.0), 40.0);
+        assert_eq!(m.outlook(none(), 1e9).expected_frames(15.0), 40.0, "(5 + 75) / 2");
+        assert_eq!(m.outlook([115.0].into_iter(), 1e9).expected_frames(15.0), 60.0, "(5 + 75 + 100) / 3");
+        assert_eq!(m.outlook(none(), 7.0).expected_frames(15.0), 7.0, "capped by the run");
+        assert_eq!(m.outlook(none(), 1e9).expected_frames(90.0), PRIOR_SLEEP_FRAMES, "older than all");
     }
 }

@@ -492,8 +492,9 @@ impl SceneManager {
         }
         let frames_left =
             self.options.planned_frames.map_or(f64::INFINITY, |n| f64::from(n.saturating_sub(self.rendered)));
-        let live_ages: Vec<f64> =
-            self.sleeping.values().map(|s| f64::from(self.rendered - s.slept_at)).collect();
+        let outlook = self
+            .cost
+            .outlook(self.sleeping.values().map(|s| f64::from(self.rendered - s.slept_at)), frames_left);
         let mut candidates = Vec::new();
         for (island, s) in &mut self.sleeping {
             if self.integrated.contains_key(island) {
@@ -506,10 +507,8 @@ impl SceneManager {
                 .map(|b| self.prototypes[self.bodies[b.0 as usize].prototype as usize].triangle_count())
                 .sum();
             let age = self.rendered - s.slept_at;
-            let estimate = (policy == IntegrationPolicy::Auto).then(|| {
-                let ages = live_ages.iter().copied();
-                self.cost.estimate(s.bodies.len(), triangles, f64::from(age), ages, frames_left)
-            });
+            let estimate = (policy == IntegrationPolicy::Auto)
+                .then(|| outlook.estimate(s.bodies.len(), triangles, f64::from(age)));
             candidates.push((*island, triangles, age, estimate));
         }
         let accept = match policy {

@@ -18,7 +18,7 @@ mod policy;
 
 pub use baked::{BakedIsland, BakedPart};
 pub use cache::{CacheBudget, CacheHit, CacheOutcome, CacheStats, GeometryCache, FRACTION_BUCKETS};
-pub use cost_model::{choose_batch, CostEstimate, CostModel, CostModelState};
+pub use cost_model::{choose_batch, CostEstimate, CostModel, CostModelState, Outlook};
 pub use frame::{describe_frame, describe_scene, SceneAssets};
 pub use manager::{
     Decision, FrameState, FrameStats, ManagerOptions, ReactivationPath, ReactivationStrategy, SceneManager,
