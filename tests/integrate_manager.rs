@@ -318,7 +318,8 @@ fn never_always_and_auto_render_the_same_images() {
         assert!(integrated > 0);
         // Integrated and instanced bodies are hit alike up to float tolerance, so the images
         // may differ only where a ray's hit point moved by rounding: RMSE of linear radiance
-        // under 1e-3 per frame.
+        // under 1e-5 per frame (measured: about 2e-8).
+        let mut worst = 0.0f64;
         for other in &films[1..] {
             for (i, (a, b)) in films[0].iter().zip(other).enumerate() {
                 let se: f64 = a
@@ -328,8 +329,10 @@ fn never_always_and_auto_render_the_same_images() {
                     .map(|(p, q)| f64::from((*p - *q).length_squared()) / 3.0)
                     .sum();
                 let rmse = (se / a.pixels.len() as f64).sqrt();
-                assert!(rmse < 1e-3, "{backend} frame {}: RMSE {rmse}", i as u32 * sequence.step);
+                assert!(rmse < 1e-5, "{backend} frame {}: RMSE {rmse}", i as u32 * sequence.step);
+                worst = worst.max(rmse);
             }
         }
+        eprintln!("{backend}: largest RMSE between policies {worst:.2e}");
     }
 }
