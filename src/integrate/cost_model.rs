@@ -6,7 +6,7 @@
 //! - **gain per frame**: what one instance fewer saves: commit ms per instance (the top
 //!   level's rebuild is linear in its instances) weighted by how often frames commit at all,
 //!   plus the least-squares slope of trace time over instance count once the counts spread
-//!   enough to measure it (floored at 0);
+//!   enough to measure it (negative where baked geometry traces slower than instances);
 //! - **expected remaining sleep**: the mean residual sleep of islands that slept as long as
 //!   this one already has, over every island seen (integrated or not: declined islands are
 //!   "shadow" samples, so the estimate does not learn only from its own choices). Islands still
@@ -260,8 +260,11 @@ impl CostModel {
         self.commit.ratio()
     }
 
+    /// Trace ms per top-level instance. Not floored at 0: where baked geometry traces slower
+    /// than instances (the BVH backend's many-block static tree), fewer instances cost time
+    /// and integration must pay for that too.
     fn trace_per_instance(&self) -> Option<f64> {
-        self.trace.fit_with(MIN_TRACE_SAMPLES, MIN_TRACE_SPREAD).map(|(_, b)| b.max(0.0))
+        self.trace.fit_with(MIN_TRACE_SAMPLES, MIN_TRACE_SPREAD).map(|(_, b)| b)
     }
 
     /// Estimated ms saved per rendered frame by removing `instances` from the top level.
