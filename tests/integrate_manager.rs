@@ -51,12 +51,18 @@ fn assert_agrees(report: &VerifyReport, what: &str) {
     assert!(report.ties * 100 <= report.rays, "{what}: {} ties in {} rays", report.ties, report.rays);
 }
 
-#[test]
-fn integrated_frames_hit_like_all_instanced_frames() {
+/// `scenes/tiny.toml` simulated: its trajectory, assets and body-less description.
+fn tiny() -> (physics::Trajectory, SceneAssets, SceneDescription) {
     let file = SceneFile::load(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/tiny.toml")).unwrap();
     let trajectory = physics::simulate(&file, &SimulateOptions::default()).unwrap();
     let assets = SceneAssets::load(&file).unwrap();
     let template = describe_scene(&assets, 0.0);
+    (trajectory, assets, template)
+}
+
+#[test]
+fn integrated_frames_hit_like_all_instanced_frames() {
+    let (trajectory, assets, template) = tiny();
     for backend in backends() {
         for policy in [IntegrationPolicy::Always, IntegrationPolicy::Auto] {
             let options = ManagerOptions { policy, ..ManagerOptions::default() };
@@ -292,10 +298,7 @@ proptest! {
 #[test]
 fn never_always_and_auto_render_the_same_images() {
     use dormant::render::{render_sequence, Film, PathTracer, SequenceOptions, SequenceScene};
-    let file = SceneFile::load(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/tiny.toml")).unwrap();
-    let trajectory = physics::simulate(&file, &SimulateOptions::default()).unwrap();
-    let assets = SceneAssets::load(&file).unwrap();
-    let template = describe_scene(&assets, 0.0);
+    let (trajectory, assets, template) = tiny();
     let sequence = SequenceOptions { start: 0, end: 480, step: 40, width: 64, height: 36, spp: 4 };
     let integrator = PathTracer::default();
     for backend in backends() {
