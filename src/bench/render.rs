@@ -215,3 +215,31 @@ pub fn bench_render(
         ratios,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_compiled_backend_is_measured_on_the_same_rays() {
+        let desc = crate::scene::default_scene();
+        let opts = RenderBenchOptions { width: 24, height: 16, spp: 1, runs: 1, threads: None };
+        let report = bench_render(&desc, &opts).unwrap();
+        let measured: Vec<Backend> = report.backends.iter().map(|b| b.backend).collect();
+        assert_eq!(measured, Backend::compiled());
+        for b in &report.backends {
+            assert_eq!(b.camera.rays, 24 * 16);
+            assert_eq!(b.shadow.rays, report.backends[0].shadow.rays);
+            assert_eq!(b.bounce.rays, report.backends[0].bounce.rays);
+            assert!(b.frame.samples_per_s.is_finite() && b.frame.samples_per_s > 0.0);
+        }
+        assert_eq!(report.ratios.bvh_over_embree_frame_samples.is_some(), Backend::Embree.is_compiled());
+    }
+
+    #[test]
+    fn invalid_size_is_an_error_not_a_panic() {
+        let desc = crate::scene::default_scene();
+        let opts = RenderBenchOptions { width: 0, ..RenderBenchOptions::default() };
+        assert!(matches!(bench_render(&desc, &opts), Err(RenderError::InvalidSize { .. })));
+    }
+}
