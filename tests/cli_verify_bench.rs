@@ -1,4 +1,4 @@
-//! `dormant verify` and `dormant bench accel` end to end, on the built-in scene and (when
+//! `dormant verify`, `dormant bench accel` and `dormant bench render` end to end, on the built-in scene and (when
 //! ../shared/assets exists) on the monastery with ducks.
 #![cfg(feature = "embree")]
 
@@ -101,6 +101,43 @@ fn bench_accel_reports_the_four_ratios() {
             "ratio {key}: {:#}",
             report["ratios"]
         );
+    }
+}
+
+#[test]
+fn bench_render_reports_both_backends_and_ratios_per_ray_type() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("render.json");
+    let status = dormant()
+        .args(["bench", "render", "--size", "48x27", "--spp", "1", "--runs", "1", "--json"])
+        .arg(&json)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let report = read_json(&json);
+    let backends = report["backends"].as_array().unwrap();
+    let names: Vec<&str> = backends.iter().map(|b| b["backend"].as_str().unwrap()).collect();
+    assert_eq!(names, ["embree", "bvh"]);
+    for b in backends {
+        assert_eq!(b["camera"]["rays"], 48 * 27);
+        for kind in ["camera", "shadow", "bounce"] {
+            assert!(b[kind]["rays"].as_u64().unwrap() > 0, "{kind}: {b:#}");
+            assert!(b[kind]["mrays_per_s"].as_f64().is_some_and(|r| r.is_finite() && r > 0.0), "{b:#}");
+        }
+        assert!(b["frame"]["samples_per_s"].as_f64().is_some_and(|s| s.is_finite() && s > 0.0));
+        assert!(b["frame"]["rays"].as_u64().unwrap() >= 48 * 27);
+    }
+    // Both backends traced the same ray sets.
+    for kind in ["shadow", "bounce"] {
+        assert_eq!(backends[0][kind]["rays"], backends[1][kind]["rays"]);
+    }
+    for key in [
+        "bvh_over_embree_camera",
+        "bvh_over_embree_shadow",
+        "bvh_over_embree_bounce",
+        "bvh_over_embree_frame_samples",
+    ] {
+        assert!(report["ratios"][key].as_f64().is_some_and(f64::is_finite), "ratio {key}");
     }
 }
 

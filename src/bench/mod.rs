@@ -4,9 +4,11 @@
 
 pub mod accel;
 pub mod integration;
+pub mod render;
 
 pub use accel::{bench_accel, AccelBenchOptions, AccelBenchReport};
 pub use integration::{bench_integration, IntegrationBenchOptions, IntegrationBenchReport};
+pub use render::{bench_render, RenderBenchOptions, RenderBenchReport};
 
 use std::time::Instant;
 

@@ -1,9 +1,12 @@
+//! `dormant bench`: argument parsing for the cross-domain benchmarks (accel, render,
+//! integration) and physics stepping, and writing their reports.
+
 use std::path::PathBuf;
 
 use clap::{Args, Subcommand};
 
 use super::{CliError, JsonOutput, SceneSource};
-use crate::bench::{self, AccelBenchOptions, IntegrationBenchOptions};
+use crate::bench::{self, AccelBenchOptions, IntegrationBenchOptions, RenderBenchOptions};
 use crate::integrate::SceneAssets;
 use crate::render::SequenceOptions;
 
@@ -20,6 +23,12 @@ pub enum BenchCommand {
         after_help = "Examples:\n  dormant bench accel --json out/accel.json\n  dormant bench accel --env ../shared/assets/monastery.glb --object ../shared/assets/duck.glb --count 8000 --json out/accel.json"
     )]
     Accel(AccelArgs),
+    /// Rendering: Mrays/s per ray type (camera, shadow, bounce) and path-traced samples/s,
+    /// every compiled backend on the same scene.
+    #[command(
+        after_help = "Examples:\n  dormant bench render --json out/render.json\n  dormant bench render --size 1280x720 --spp 16 --runs 1\n  dormant bench render --env ../shared/assets/monastery.glb --object ../shared/assets/duck.glb --count 8000 --json out/render.json"
+    )]
+    Render(RenderBenchArgs),
     /// Integration policies never/always/auto, cache on and off, on one simulated scene.
     #[command(
         after_help = "Examples:\n  dormant bench integration scenes/atrium.toml --json out/integration.json\n  dormant bench integration scenes/tiny.toml --backend bvh --size 160x90"
@@ -86,9 +95,27 @@ pub struct AccelArgs {
     pub json: JsonOutput,
 }
 
+#[derive(Debug, Args)]
+pub struct RenderBenchArgs {
+    #[command(flatten)]
+    pub scene: SceneSource,
+    /// Size of the rendered frame; the ray sets have one camera ray per pixel.
+    #[arg(long, value_name = "WxH", default_value = "640x360")]
+    pub size: super::render::Size,
+    /// Samples per pixel of the path-traced frame.
+    #[arg(long, value_name = "N", default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=65536))]
+    pub spp: u32,
+    /// Repetitions of each measurement; the best is reported.
+    #[arg(long, value_name = "N", default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
+    pub runs: u32,
+    #[command(flatten)]
+    pub json: JsonOutput,
+}
+
 pub(super) fn run(args: &BenchArgs, threads: Option<usize>, quiet: bool) -> Result<(), CliError> {
     match &args.which {
         BenchCommand::Accel(a) => accel(a, threads, quiet),
+        BenchCommand::Render(r) => render(r, threads, quiet),
         BenchCommand::Physics(p) => physics(p, quiet),
         BenchCommand::Integration(i) => integration(i, threads, quiet),
     }
@@ -146,5 +173,18 @@ fn accel(args: &AccelArgs, threads: Option<usize>, quiet: bool) -> Result<(), Cl
         ..AccelBenchOptions::default()
     };
     let report = bench::bench_accel(&desc, &opts).map_err(|e| CliError::Runtime(e.to_string()))?;
+    emit(&serde_json::to_value(&report).expect("bench report serialises"), &args.json, quiet)
+}
+
+fn render(args: &RenderBenchArgs, threads: Option<usize>, quiet: bool) -> Result<(), CliError> {
+    let desc = args.scene.load()?;
+    let opts = RenderBenchOptions {
+        width: args.size.width,
+        height: args.size.height,
+        spp: args.spp,
+        runs: args.runs,
+        threads,
+    };
+    let report = bench::bench_render(&desc, &opts).map_err(|e| CliError::Runtime(e.to_string()))?;
     emit(&serde_json::to_value(&report).expect("bench report serialises"), &args.json, quiet)
 }

@@ -15,6 +15,7 @@ mod texture;
 mod tiles;
 
 pub use aov::{Aov, AovIntegrator};
+pub(crate) use bsdf::sample_cone;
 pub use bsdf::{sample_cosine, Bsdf, BsdfSample};
 pub use camera::PinholeCamera;
 pub use film::{write_aov_png_atomic, write_exr_atomic, write_png_atomic, Film};
