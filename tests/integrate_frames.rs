@@ -28,3 +28,19 @@ fn fixed_camera_stays_put() {
     let at = |t: f32| describe_frame(&assets, t, &[], &[], &[]).camera;
     assert_eq!(at(0.0), at(4.0));
 }
+
+#[test]
+fn scene_file_sky_reaches_the_description() {
+    use dormant::scene::Sky;
+    use glam::Vec3;
+    let base =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/tiny.toml")).unwrap();
+    let sky_of = |extra: &str| {
+        let file = SceneFile::parse("scenes/tiny.toml", &format!("{base}\n{extra}")).unwrap();
+        dormant::integrate::describe_scene(&SceneAssets::load(&file).unwrap(), 0.0).sky
+    };
+    assert_eq!(sky_of(""), Sky::DAYLIGHT);
+    assert_eq!(sky_of("[sky]\ncolor = [0.5, 0.5, 0.5]\nintensity = 2.0"), Sky::constant(Vec3::ONE));
+    let gradient = sky_of("[sky]\nzenith = [0.0, 0.0, 1.0]");
+    assert_eq!((gradient.zenith, gradient.horizon), (Vec3::Z, Sky::DAYLIGHT.horizon));
+}

@@ -141,3 +141,13 @@ fn count_override_spreads_over_spawners() {
     assert!(small.description.spawners.iter().all(|s| s.count >= 1 && s.waves <= s.count));
     assert!(file.with_total_count(3).is_err(), "fewer objects than spawners");
 }
+
+#[test]
+fn sky_table_is_checked() {
+    let both = format!("{GOOD}\n[sky]\ncolor = [1.0, 1.0, 1.0]\nzenith = [0.1, 0.2, 0.9]\n");
+    expect_error(&both, "sky.color", None);
+    let negative = format!("{GOOD}\n[sky]\nhorizon = [0.5, -0.1, 0.5]\n");
+    expect_error(&negative, "sky.horizon", None);
+    let unknown = format!("{GOOD}\n[sky]\ncolour = [1.0, 1.0, 1.0]\n");
+    expect_error(&unknown, "colour", None);
+}

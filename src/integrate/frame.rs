@@ -28,6 +28,7 @@ pub struct SceneAssets {
     /// environment.
     camera: Option<CameraDef>,
     sun: Sun,
+    sky: Sky,
 }
 
 /// Distinct, muted colours for prototypes, by index.
@@ -65,6 +66,7 @@ impl SceneAssets {
             name: doc.scene.name.clone(),
             camera,
             sun: sun(file),
+            sky: sky(file),
             environment: environment.mesh,
             prototypes,
             materials,
@@ -109,6 +111,22 @@ fn camera_at(cam: Option<&CameraDef>, environment: &TriangleMesh, t: f32) -> Cam
         aperture_radius: cam.aperture_radius,
         focus_distance: cam.focus_distance,
         ..Camera::pinhole(eye.into(), target.into(), Vec3::Y, cam.fov_degrees)
+    }
+}
+
+/// The scene file's `[sky]`, or the daylight gradient.
+fn sky(file: &SceneFile) -> Sky {
+    let Some(def) = &file.description.sky else {
+        return Sky::DAYLIGHT;
+    };
+    let rgb = |v: Option<[f32; 3]>, default: Vec3| v.map_or(default, Vec3::from) * def.intensity;
+    match def.color {
+        Some(c) => Sky::constant(Vec3::from(c) * def.intensity),
+        None => Sky {
+            zenith: rgb(def.zenith, Sky::DAYLIGHT.zenith),
+            horizon: rgb(def.horizon, Sky::DAYLIGHT.horizon),
+            ground: rgb(def.ground, Sky::DAYLIGHT.ground),
+        },
     }
 }
 
@@ -232,7 +250,7 @@ pub fn describe_scene(assets: &SceneAssets, time: f32) -> SceneDescription {
         bodies: Vec::new(),
         camera: assets.camera_at(time),
         sun: assets.sun,
-        sky: Sky::DAYLIGHT,
+        sky: assets.sky,
         lights: assets.lights.clone(),
     }
 }

@@ -151,6 +151,11 @@ pub struct Sky {
 }
 
 impl Sky {
+    /// The same radiance from every direction (furnace tests, studio lighting).
+    pub const fn constant(radiance: Vec3) -> Sky {
+        Sky { zenith: radiance, horizon: radiance, ground: radiance }
+    }
+
     /// A clear daylight sky.
     pub const DAYLIGHT: Sky = Sky {
         zenith: Vec3::new(0.25, 0.45, 0.85),

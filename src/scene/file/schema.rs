@@ -24,8 +24,23 @@ pub struct SceneDocument {
     pub cameras: Vec<CameraDef>,
     #[serde(default)]
     pub lights: Vec<LightDef>,
+    /// `[sky]`: absent means the built-in daylight gradient.
+    pub sky: Option<SkyDef>,
     #[serde(default)]
     pub render: RenderSettings,
+}
+
+/// `[sky]`: a constant sky (`color`), or a gradient from `ground` through `horizon` to
+/// `zenith` (linear RGB radiance; each defaults to the daylight sky's), times `intensity`.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SkyDef {
+    pub color: Option<[f32; 3]>,
+    pub zenith: Option<[f32; 3]>,
+    pub horizon: Option<[f32; 3]>,
+    pub ground: Option<[f32; 3]>,
+    #[serde(default = "one")]
+    pub intensity: f32,
 }
 
 /// `[scene]`: name, master seed and how many frames to simulate.

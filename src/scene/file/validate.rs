@@ -211,6 +211,22 @@ pub(crate) fn validate(file: &SceneFile) -> Vec<Problem> {
         check_camera(&mut c, i, cam);
     }
 
+    if let Some(sky) = &d.sky {
+        let gradient = [("zenith", sky.zenith), ("horizon", sky.horizon), ("ground", sky.ground)];
+        for (name, v) in gradient.iter().chain([("color", sky.color)].iter()) {
+            if let Some(v) = v {
+                let field = format!("sky.{name}");
+                if c.finite3(&field, *v) && v.iter().any(|x| *x < 0.0) {
+                    c.fail(field, format!("radiance must not be negative, got {v:?}"));
+                }
+            }
+        }
+        if sky.color.is_some() && gradient.iter().any(|(_, v)| v.is_some()) {
+            c.fail("sky.color", "a constant sky (`color`) takes no `zenith`, `horizon` or `ground`");
+        }
+        c.non_negative("sky.intensity", sky.intensity);
+    }
+
     for (i, light) in d.lights.iter().enumerate() {
         let at = |f: &str| format!("lights[{i}].{f}");
         match light.kind {
