@@ -36,7 +36,7 @@ fn scene_file_sky_reaches_the_description() {
     let base =
         std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/tiny.toml")).unwrap();
     let sky_of = |extra: &str| {
-        let file = SceneFile::parse("scenes/tiny.toml", &format!("{base}\n{extra}")).unwrap();
+        let file = SceneFile::parse("scenes/tiny.toml", format!("{base}\n{extra}")).unwrap();
         dormant::integrate::describe_scene(&SceneAssets::load(&file).unwrap(), 0.0).sky
     };
     assert_eq!(sky_of(""), Sky::DAYLIGHT);
