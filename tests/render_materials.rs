@@ -667,3 +667,35 @@ fn data_uri_images_decode_like_files() {
     assert_eq!(from_uri.textures[0].texels, from_file.textures[0].texels);
     assert_eq!((from_uri.textures[0].width, from_uri.textures[0].height), (16, 16));
 }
+
+#[test]
+fn gltf_cameras_are_imported_and_frame_a_scene_file_without_cameras() {
+    let dir = tempfile::tempdir().unwrap();
+    write_checker(dir.path());
+    let path = textured_quad(dir.path(), "checker.png", |doc| {
+        doc["cameras"] = json!([
+            { "type": "orthographic", "orthographic": { "xmag": 1.0, "ymag": 1.0, "znear": 0.1, "zfar": 10.0 } },
+            { "type": "perspective", "perspective": { "yfov": 0.5, "znear": 0.1 } }
+        ]);
+        doc["nodes"] =
+            json!([{ "mesh": 0 }, { "camera": 0 }, { "translation": [0.0, 3.0, 5.0], "camera": 1 }]);
+        doc["scenes"] = json!([{ "nodes": [0, 1, 2] }]);
+    });
+    let asset = load_gltf(&path).unwrap();
+    assert_eq!(asset.cameras.len(), 1, "the orthographic camera is skipped: {:?}", asset.cameras);
+    let cam = &asset.cameras[0];
+    assert_eq!((cam.position, cam.forward), (Vec3::new(0.0, 3.0, 5.0), Vec3::NEG_Z));
+    assert!((cam.yfov_degrees - 0.5f32.to_degrees()).abs() < 1e-4);
+
+    // A scene file with no [[cameras]] looks through the environment's first camera,
+    // placed by the environment's scale and offset.
+    let text = format!(
+        "[scene]\nname = \"cam\"\nframes = 1\n\n[environment]\ngltf = \"{}\"\nscale = 2.0\noffset = [1.0, 0.0, 0.0]\n",
+        path.display()
+    );
+    let file = SceneFile::parse(dir.path().join("cam.toml"), text).unwrap();
+    let camera = describe_frame(&SceneAssets::load(&file).unwrap(), 0.0, &[], &[], &[]).camera;
+    assert_eq!(camera.eye, Vec3::new(1.0, 6.0, 10.0));
+    assert!((camera.target - Vec3::new(1.0, 6.0, 9.0)).length() < 1e-5);
+    assert!((camera.vfov_deg - 0.5f32.to_degrees()).abs() < 1e-4);
+}

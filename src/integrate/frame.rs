@@ -55,13 +55,25 @@ impl SceneAssets {
         }
         let mut lights = file_lights(file);
         lights.append(&mut environment.lights);
+        // The scene file's camera; without any, the environment glTF's first camera.
         let camera = doc
             .render
             .camera
             .as_ref()
             .and_then(|name| doc.cameras.iter().find(|c| &c.name == name))
             .or(doc.cameras.first())
-            .cloned();
+            .cloned()
+            .or_else(|| {
+                environment.cameras.first().map(|c| CameraDef {
+                    name: c.name.clone(),
+                    position: Some(c.position.to_array()),
+                    look_at: Some((c.position + c.forward).to_array()),
+                    keyframes: Vec::new(),
+                    fov_degrees: c.yfov_degrees,
+                    aperture_radius: 0.0,
+                    focus_distance: None,
+                })
+            });
         Ok(Self {
             name: doc.scene.name.clone(),
             camera,

@@ -51,6 +51,20 @@ pub struct GltfAsset {
     pub textures: Vec<Texture>,
     /// Punctual lights placed by the scene's nodes, in the file's space.
     pub lights: Vec<Light>,
+    /// Perspective cameras placed by the scene's nodes, in the file's space, in node order.
+    pub cameras: Vec<GltfCamera>,
+}
+
+/// A glTF perspective camera where its node puts it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GltfCamera {
+    /// `camera N`, by its index in the file (the gltf crate is built without names).
+    pub name: String,
+    pub position: Vec3,
+    /// Unit direction the camera looks (its node's -Z).
+    pub forward: Vec3,
+    /// Vertical field of view.
+    pub yfov_degrees: f32,
 }
 
 impl GltfAsset {
@@ -79,6 +93,10 @@ impl GltfAsset {
     /// The asset moved by `xf` (mesh and lights).
     pub fn transformed(mut self, xf: &Affine3A) -> Self {
         self.mesh = self.mesh.transformed(xf);
+        for camera in &mut self.cameras {
+            camera.position = xf.transform_point3(camera.position);
+            camera.forward = xf.transform_vector3(camera.forward).normalize_or(camera.forward);
+        }
         for light in &mut self.lights {
             match light {
                 Light::Point { position, .. } => *position = xf.transform_point3(*position),
@@ -125,6 +143,7 @@ fn load(path: &Path, with_materials: bool) -> Result<GltfAsset, GltfError> {
     let mut any_normals = false;
     let mut any_uvs = false;
     let mut lights = Vec::new();
+    let mut cameras = Vec::new();
     // glTF material index per triangle; `None` for glTF's default material.
     let mut any_material = false;
 
@@ -153,6 +172,27 @@ fn load(path: &Path, with_materials: bool) -> Result<GltfAsset, GltfError> {
         }
         if let (true, Some(light)) = (with_materials, node.light()) {
             lights.push(punctual_light(&light, &world));
+        }
+        if let (true, Some(camera)) = (with_materials, node.camera()) {
+            match camera.projection() {
+                gltf::camera::Projection::Perspective(p) if p.yfov().is_finite() && p.yfov() > 0.0 => cameras
+                    .push(GltfCamera {
+                        name: format!("camera {}", camera.index()),
+                        position: world.transform_point3(Vec3::ZERO),
+                        forward: world.transform_vector3(Vec3::NEG_Z).normalize_or(Vec3::NEG_Z),
+                        yfov_degrees: p.yfov().to_degrees(),
+                    }),
+                gltf::camera::Projection::Perspective(_) => tracing::warn!(
+                    "{}: cameras[{}]: perspective camera without a usable yfov, ignored",
+                    path.display(),
+                    camera.index()
+                ),
+                gltf::camera::Projection::Orthographic(_) => tracing::warn!(
+                    "{}: cameras[{}]: orthographic cameras are not supported, ignored",
+                    path.display(),
+                    camera.index()
+                ),
+            }
         }
         if let Some(mesh) = node.mesh() {
             let xf = Affine3A::from_mat4(world);
@@ -277,7 +317,7 @@ fn load(path: &Path, with_materials: bool) -> Result<GltfAsset, GltfError> {
         out.uvs = Some(uvs);
     }
 
-    let mut asset = GltfAsset { lights, ..GltfAsset::default() };
+    let mut asset = GltfAsset { lights, cameras, ..GltfAsset::default() };
     if any_material {
         let default_slot = document.materials().len() as u32;
         if material_ids.contains(&u32::MAX) {
