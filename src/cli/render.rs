@@ -94,6 +94,9 @@ pub struct RenderArgs {
     /// With SCENE: serve reactivations from the geometry cache.
     #[arg(long, value_enum, default_value_t = CacheSwitch::On)]
     pub cache: CacheSwitch,
+    /// With SCENE: also encode the frames as DIR/video.mp4 (needs ffmpeg on PATH).
+    #[arg(long)]
+    pub video: bool,
     /// Exposure multiplier applied before tone mapping.
     #[arg(long, default_value_t = 1.0)]
     pub exposure: f32,
@@ -166,6 +169,14 @@ pub(super) fn run(args: &RenderArgs, threads: Option<usize>, quiet: bool) -> Res
     let backend = choose_backend(args.backend)?;
     if !args.exposure.is_finite() || args.exposure <= 0.0 {
         return Err(CliError::Input(format!("--exposure {}: must be a positive number", args.exposure)));
+    }
+    if args.video {
+        if args.scene_file.is_none() {
+            return Err(CliError::Input("--video needs a SCENE file (a sequence of frames)".into()));
+        }
+        if !render::ffmpeg_available() {
+            return Err(CliError::Input(render::VideoError::FfmpegMissing.to_string()));
+        }
     }
     std::fs::create_dir_all(&args.out).map_err(|e| {
         CliError::Runtime(format!("cannot create output directory {}: {e}", args.out.display()))
@@ -283,6 +294,7 @@ pub(super) fn run(args: &RenderArgs, threads: Option<usize>, quiet: bool) -> Res
                 u64::from(sequence.frame_count()),
             );
             let (mut rays, mut trace_seconds) = (0u64, 0.0f64);
+            let mut frame_paths = Vec::new();
             render::render_sequence(
                 &scene,
                 &mut manager,
@@ -291,6 +303,7 @@ pub(super) fn run(args: &RenderArgs, threads: Option<usize>, quiet: bool) -> Res
                 &sequence,
                 &mut |f| {
                     write_frame(f.index, f.film, &f.aovs, &f.render, Some(f.stats))?;
+                    frame_paths.push(args.out.join(format!("frame_{:04}.png", f.index)));
                     let physics = physics_ms.get(f.index as usize).copied();
                     frame_records.push(FrameRecord::new(f.stats, f.render.mrays_per_second(), physics));
                     rays += f.render.rays;
@@ -325,6 +338,17 @@ pub(super) fn run(args: &RenderArgs, threads: Option<usize>, quiet: bool) -> Res
             );
             run_stats.write(&args.out).map_err(|e| runtime(&e))?;
             report::write_report_png(&run_stats, &args.out.join("report.png")).map_err(|e| runtime(&e))?;
+            if args.video {
+                let fps = 1.0 / (f64::from(trajectory.timestep) * f64::from(sequence.step));
+                let video = args.out.join("video.mp4");
+                render::encode_video(&args.out, &frame_paths, fps, &video).map_err(|e| match e {
+                    render::VideoError::FfmpegMissing => CliError::Input(e.to_string()),
+                    e => runtime(&e),
+                })?;
+                if !quiet && !args.json.is_requested() {
+                    println!("wrote {} ({} frames, {fps:.2} fps)", video.display(), frame_paths.len());
+                }
+            }
             template.name
         }
     };

@@ -13,6 +13,7 @@ mod sampler;
 mod sequence;
 mod texture;
 mod tiles;
+mod video;
 
 pub use aov::{Aov, AovIntegrator};
 pub use bsdf::{sample_cosine, Bsdf, BsdfSample};
@@ -24,6 +25,7 @@ pub use sampler::PixelSampler;
 pub use sequence::{render_sequence, SequenceFrame, SequenceOptions, SequenceScene};
 pub use texture::sample as sample_texture;
 pub use tiles::{render_frame, RenderSettings, RenderStats};
+pub use video::{encode_video, ffmpeg_available, VideoError, FFMPEG_HINT};
 
 use std::path::PathBuf;
 
