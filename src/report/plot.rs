@@ -160,6 +160,8 @@ fn cache_hits(stats: &RunStats, area: &Area<'_>) -> PlotResult {
         .x_desc("frame")
         .x_label_formatter(&|v| format!("{v:.0}"))
         .y_desc("cache requests (count)")
+        .y_labels(count_labels(top))
+        .y_label_formatter(&|v| format!("{v:.0}"))
         .label_style((FONT, 14))
         .axis_desc_style((FONT, 16))
         .draw()
@@ -181,6 +183,11 @@ fn cache_hits(stats: &RunStats, area: &Area<'_>) -> PlotResult {
         .border_style(BLACK)
         .draw()
         .map_err(err)
+}
+
+/// Tick labels for a count axis up to `top`: at most one per whole number, so none repeats.
+fn count_labels(top: f64) -> usize {
+    (top.floor() as usize + 1).clamp(2, 11)
 }
 
 fn fraction_histogram(stats: &RunStats, area: &Area<'_>) -> PlotResult {
@@ -211,6 +218,8 @@ fn fraction_histogram(stats: &RunStats, area: &Area<'_>) -> PlotResult {
         })
         .x_desc("fraction of requested islands held (bucket)")
         .y_desc("requests (count)")
+        .y_labels(count_labels(top))
+        .y_label_formatter(&|v| format!("{v:.0}"))
         .label_style((FONT, 13))
         .axis_desc_style((FONT, 16))
         .draw()
