@@ -14,5 +14,6 @@ pub mod geometry;
 pub mod integrate;
 pub mod physics;
 pub mod render;
+pub mod report;
 pub(crate) mod rng;
 pub mod scene;

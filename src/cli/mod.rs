@@ -3,6 +3,7 @@
 
 mod bench;
 mod info;
+mod progress;
 mod render;
 mod simulate;
 mod verify;

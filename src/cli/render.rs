@@ -12,6 +12,7 @@ use crate::render::{
     self, AmbientOcclusion, Aov, AovIntegrator, DirectLighting, Integrator, PathTracer, RenderScene,
     RenderSettings, RenderStats, SequenceOptions, SequenceScene,
 };
+use crate::report::{self, FrameRecord, PhysicsSource, RunInfo, RunStats};
 use crate::scene::file::SceneFile;
 
 /// Image size as `WIDTHxHEIGHT`.
@@ -93,6 +94,9 @@ pub struct RenderArgs {
     /// With SCENE: serve reactivations from the geometry cache.
     #[arg(long, value_enum, default_value_t = CacheSwitch::On)]
     pub cache: CacheSwitch,
+    /// With SCENE: also encode the frames as DIR/video.mp4 (needs ffmpeg on PATH).
+    #[arg(long)]
+    pub video: bool,
     /// Exposure multiplier applied before tone mapping.
     #[arg(long, default_value_t = 1.0)]
     pub exposure: f32,
@@ -130,12 +134,22 @@ pub(super) fn load_trajectory(
     options: &SimulateOptions,
     path: Option<&Path>,
 ) -> Result<Trajectory, CliError> {
+    load_trajectory_timed(file, options, path, &mut |_| {})
+}
+
+/// [`load_trajectory`], calling `on_step` with each simulated frame (nothing when read).
+pub(super) fn load_trajectory_timed(
+    file: &SceneFile,
+    options: &SimulateOptions,
+    path: Option<&Path>,
+    on_step: &mut dyn FnMut(physics::SimulatedFrame),
+) -> Result<Trajectory, CliError> {
     match path {
         Some(path) => {
             let expected = options.effective_scene(file).map_err(super::simulate::physics_error)?.source_hash;
             Trajectory::read(path, expected).map_err(|e| CliError::Input(e.to_string()))
         }
-        None => physics::simulate(file, options).map_err(super::simulate::physics_error),
+        None => physics::simulate_observed(file, options, on_step).map_err(super::simulate::physics_error),
     }
 }
 
@@ -156,12 +170,25 @@ pub(super) fn run(args: &RenderArgs, threads: Option<usize>, quiet: bool) -> Res
     if !args.exposure.is_finite() || args.exposure <= 0.0 {
         return Err(CliError::Input(format!("--exposure {}: must be a positive number", args.exposure)));
     }
+    if args.video {
+        if args.scene_file.is_none() {
+            return Err(CliError::Input("--video needs a SCENE file (a sequence of frames)".into()));
+        }
+        if !render::ffmpeg_available() {
+            return Err(CliError::Input(render::VideoError::FfmpegMissing.to_string()));
+        }
+    }
     std::fs::create_dir_all(&args.out).map_err(|e| {
         CliError::Runtime(format!("cannot create output directory {}: {e}", args.out.display()))
     })?;
     let integrator = integrator(args.mode, args.max_depth);
     let runtime = |e: &dyn std::fmt::Display| CliError::Runtime(e.to_string());
     let mut records = Vec::new();
+    // Per-frame statistics of a sequence (stats.json / stats.csv), and the physics step time of
+    // each simulated frame when the simulation runs in this process.
+    let mut frame_records: Vec<FrameRecord> = Vec::new();
+    let mut physics_ms: Vec<f64> = Vec::new();
+    let progress = super::progress::hidden();
     let mut write_frame = |index: u32,
                            film: &render::Film,
                            aovs: &[(Aov, render::Film)],
@@ -182,17 +209,19 @@ pub(super) fn run(args: &RenderArgs, threads: Option<usize>, quiet: bool) -> Res
             aov_paths.push(aov_path);
         }
         if !quiet && !args.json.is_requested() {
-            println!(
-                "rendered {} ({}x{}, {} spp, {:?} mode, {backend}): {:.2} s, {} rays, {:.1} Mrays/s",
-                path.display(),
-                args.size.width,
-                args.size.height,
-                args.spp,
-                args.mode,
-                stats.seconds,
-                stats.rays,
-                stats.mrays_per_second()
-            );
+            progress.suspend(|| {
+                println!(
+                    "rendered {} ({}x{}, {} spp, {:?} mode, {backend}): {:.2} s, {} rays, {:.1} Mrays/s",
+                    path.display(),
+                    args.size.width,
+                    args.size.height,
+                    args.spp,
+                    args.mode,
+                    stats.seconds,
+                    stats.rays,
+                    stats.mrays_per_second()
+                )
+            });
         }
         records.push(serde_json::json!({ "frame": index, "path": path, "rays": stats.rays,
             "seconds": stats.seconds, "mrays_per_second": stats.mrays_per_second(), "aovs": aov_paths,
@@ -225,7 +254,18 @@ pub(super) fn run(args: &RenderArgs, threads: Option<usize>, quiet: bool) -> Res
         Some(scene_path) => {
             let file = SceneFile::load(scene_path).map_err(|e| CliError::Input(e.to_string()))?;
             let options = SimulateOptions { count: args.scene.count, frames: None };
-            let trajectory = load_trajectory(&file, &options, args.trajectory.as_deref())?;
+            let simulate_bar = super::progress::frames_bar(quiet, "simulating", None);
+            let trajectory =
+                load_trajectory_timed(&file, &options, args.trajectory.as_deref(), &mut |step| {
+                    simulate_bar.set_length(u64::from(step.frames));
+                    simulate_bar.inc(1);
+                    physics_ms.push(step.step_ms);
+                })?;
+            simulate_bar.finish_and_clear();
+            let physics_source =
+                if args.trajectory.is_some() { PhysicsSource::Trajectory } else { PhysicsSource::Simulated };
+            let physics_total_ms =
+                (physics_source == PhysicsSource::Simulated).then(|| physics_ms.iter().sum::<f64>());
             let range = check_range(args.frames, trajectory.frames.len() as u32)?;
             let assets = SceneAssets::load(&file).map_err(|e| CliError::Input(e.to_string()))?;
             let template = describe_scene(&assets, 0.0);
@@ -247,14 +287,68 @@ pub(super) fn run(args: &RenderArgs, threads: Option<usize>, quiet: bool) -> Res
             let mut manager = SceneManager::new(accel, &template, &trajectory.bodies, manager_options)
                 .map_err(|e| runtime(&e))?;
             let scene = SequenceScene { trajectory: &trajectory, assets: &assets, template: &template };
+            super::progress::become_frames_bar(
+                &progress,
+                quiet,
+                "rendering",
+                u64::from(sequence.frame_count()),
+            );
+            let (mut rays, mut trace_seconds) = (0u64, 0.0f64);
+            let mut frame_paths = Vec::new();
             render::render_sequence(
                 &scene,
                 &mut manager,
                 integrator.as_ref(),
                 &args.aov,
                 &sequence,
-                &mut |f| write_frame(f.index, f.film, &f.aovs, &f.render, Some(f.stats)),
+                &mut |f| {
+                    write_frame(f.index, f.film, &f.aovs, &f.render, Some(f.stats))?;
+                    frame_paths.push(args.out.join(format!("frame_{:04}.png", f.index)));
+                    let physics = physics_ms.get(f.index as usize).copied();
+                    frame_records.push(FrameRecord::new(f.stats, f.render.mrays_per_second(), physics));
+                    rays += f.render.rays;
+                    trace_seconds += f.render.seconds;
+                    let mrays = if trace_seconds > 0.0 { rays as f64 / trace_seconds / 1e6 } else { 0.0 };
+                    progress.set_message(format!(
+                        "frame {} | {mrays:.1} Mrays/s | {} islands integrated",
+                        f.index, f.stats.integrated_islands
+                    ));
+                    progress.inc(1);
+                    Ok::<(), CliError>(())
+                },
             )?;
+            progress.finish_and_clear();
+            let info = RunInfo {
+                scene: template.name.clone(),
+                backend: backend.to_string(),
+                mode: json_name(&args.mode),
+                integration: json_name(&args.integration),
+                cache_enabled: args.cache == CacheSwitch::On,
+                width: args.size.width,
+                height: args.size.height,
+                spp: args.spp,
+                physics: physics_source,
+            };
+            let run_stats = RunStats::new(
+                info,
+                std::mem::take(&mut frame_records),
+                manager.cache_stats(),
+                manager.cost_model(),
+                physics_total_ms,
+            );
+            run_stats.write(&args.out).map_err(|e| runtime(&e))?;
+            report::write_report_png(&run_stats, &args.out.join("report.png")).map_err(|e| runtime(&e))?;
+            if args.video {
+                let fps = 1.0 / (f64::from(trajectory.timestep) * f64::from(sequence.step));
+                let video = args.out.join("video.mp4");
+                render::encode_video(&args.out, &frame_paths, fps, &video).map_err(|e| match e {
+                    render::VideoError::FfmpegMissing => CliError::Input(e.to_string()),
+                    e => runtime(&e),
+                })?;
+                if !quiet && !args.json.is_requested() {
+                    println!("wrote {} ({} frames, {fps:.2} fps)", video.display(), frame_paths.len());
+                }
+            }
             template.name
         }
     };
@@ -268,6 +362,15 @@ pub(super) fn run(args: &RenderArgs, threads: Option<usize>, quiet: bool) -> Res
         "integration": args.scene_file.as_ref().map(|_| args.integration),
         "frames": records,
     }))
+}
+
+/// A value's JSON name (a unit enum's serde name).
+fn json_name(value: &impl serde::Serialize) -> String {
+    match serde_json::to_value(value) {
+        Ok(serde_json::Value::String(s)) => s,
+        Ok(other) => other.to_string(),
+        Err(_) => String::new(),
+    }
 }
 
 /// `--cache on|off`.

@@ -53,7 +53,13 @@ pub struct SimulateArgs {
 
 pub(super) fn run(args: &SimulateArgs, quiet: bool) -> Result<(), CliError> {
     let (file, options) = args.scene.load()?;
-    let trajectory = physics::simulate(&file, &options).map_err(physics_error)?;
+    let bar = super::progress::frames_bar(quiet, "simulating", None);
+    let trajectory = physics::simulate_observed(&file, &options, &mut |step| {
+        bar.set_length(u64::from(step.frames));
+        bar.inc(1);
+    })
+    .map_err(physics_error)?;
+    bar.finish_and_clear();
     trajectory.write_atomic(&args.out).map_err(|e| CliError::Runtime(e.to_string()))?;
     let stats = trajectory.island_stats();
     let json = serde_json::json!({ "trajectory": args.out, "islands": stats });

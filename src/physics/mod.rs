@@ -21,7 +21,7 @@ pub use body::{BodyId, BodyInfo, BodyKind, BodyPose, BodyState};
 pub use colliders::ColliderChoice;
 pub use error::PhysicsError;
 pub use island::{IslandCounters, IslandEvent, IslandId, IslandTracker, SleepObservation};
-pub use simulate::{simulate, SimulateOptions};
+pub use simulate::{simulate, simulate_observed, SimulateOptions, SimulatedFrame};
 pub use simulation::{FrameRecord, Simulation, SimulationCounters};
 pub use stats::IslandStats;
 pub use trajectory::{Replay, ReplayFrame, Trajectory, TrajectoryError};

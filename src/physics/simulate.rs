@@ -40,14 +40,35 @@ impl SimulateOptions {
     }
 }
 
+/// One simulated frame, as [`simulate_observed`] reports it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SimulatedFrame {
+    pub index: u32,
+    /// Frames the whole run simulates.
+    pub frames: u32,
+    /// Wall-clock milliseconds of this frame's physics step.
+    pub step_ms: f64,
+}
+
 /// Simulates `file` with `options` and records every frame.
 pub fn simulate(file: &SceneFile, options: &SimulateOptions) -> Result<Trajectory, PhysicsError> {
+    simulate_observed(file, options, &mut |_| {})
+}
+
+/// [`simulate`], calling `on_frame` after each frame (for progress and per-frame timings).
+pub fn simulate_observed(
+    file: &SceneFile,
+    options: &SimulateOptions,
+    on_frame: &mut dyn FnMut(SimulatedFrame),
+) -> Result<Trajectory, PhysicsError> {
     let file = options.effective_scene(file)?;
     let mut sim = Simulation::new(&file)?;
     let frames = file.description.scene.frames;
     let mut records = Vec::with_capacity(frames as usize);
     for f in 0..frames {
+        let t0 = std::time::Instant::now();
         records.push(sim.step());
+        on_frame(SimulatedFrame { index: f, frames, step_ms: t0.elapsed().as_secs_f64() * 1e3 });
         if (f + 1) % 100 == 0 || f + 1 == frames {
             let (present, asleep) = sim.dynamic_counts();
             tracing::info!(

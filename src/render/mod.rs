@@ -13,6 +13,7 @@ mod sampler;
 mod sequence;
 mod texture;
 mod tiles;
+mod video;
 
 pub use aov::{Aov, AovIntegrator};
 pub(crate) use bsdf::sample_cone;
@@ -25,6 +26,7 @@ pub use sampler::PixelSampler;
 pub use sequence::{render_sequence, SequenceFrame, SequenceOptions, SequenceScene};
 pub use texture::sample as sample_texture;
 pub use tiles::{render_frame, RenderSettings, RenderStats};
+pub use video::{encode_video, ffmpeg_available, VideoError, FFMPEG_HINT};
 
 use std::path::PathBuf;
 

@@ -1,0 +1,365 @@
+//! The statistics model of a rendered sequence: one [`FrameRecord`] per frame and a
+//! [`Summary`], written as `stats.json` and `stats.csv` (docs/stats-format.md).
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use serde::Serialize;
+
+use super::ReportError;
+use crate::integrate::{CacheStats, CostModelState, Decision, FrameStats, FRACTION_BUCKETS};
+
+/// `format` field of stats.json.
+pub const STATS_FORMAT: &str = "dormant-stats";
+/// `version` field of stats.json; bumped when a field changes meaning or goes away.
+pub const STATS_VERSION: u32 = 1;
+
+/// One rendered frame.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct FrameRecord {
+    pub frame: u32,
+    /// Physics step of this frame, ms; `None` when the frames are replayed from a trajectory.
+    pub physics_ms: Option<f64>,
+    pub update_ms: f64,
+    pub integrate_ms: f64,
+    pub reactivate_ms: f64,
+    pub commit_ms: f64,
+    pub trace_ms: f64,
+    /// update + integrate + reactivate + commit + trace (physics not included).
+    pub frame_ms: f64,
+    pub rays: u64,
+    pub mrays_per_second: f64,
+    pub committed: bool,
+    pub instances: usize,
+    pub integrated_islands: usize,
+    pub sleeping_islands: usize,
+    pub baked_bodies: usize,
+    pub islands_slept: u32,
+    pub islands_woke: u32,
+    pub islands_integrated: u32,
+    pub islands_reactivated: u32,
+    pub cache_full: u64,
+    pub cache_partial: u64,
+    pub cache_miss: u64,
+    pub decisions: Vec<Decision>,
+}
+
+impl FrameRecord {
+    /// The record of a frame from the manager's statistics, the trace's ray rate and, when
+    /// the simulation ran in this process, its physics step time.
+    pub fn new(stats: &FrameStats, mrays_per_second: f64, physics_ms: Option<f64>) -> Self {
+        FrameRecord {
+            frame: stats.frame,
+            physics_ms,
+            update_ms: stats.update_ms,
+            integrate_ms: stats.integrate_ms,
+            reactivate_ms: stats.reactivate_ms,
+            commit_ms: stats.commit_ms,
+            trace_ms: stats.trace_ms,
+            frame_ms: stats.frame_ms(),
+            rays: stats.rays,
+            mrays_per_second,
+            committed: stats.committed,
+            instances: stats.instances,
+            integrated_islands: stats.integrated_islands,
+            sleeping_islands: stats.sleeping_islands,
+            baked_bodies: stats.baked_bodies,
+            islands_slept: stats.islands_slept,
+            islands_woke: stats.islands_woke,
+            islands_integrated: stats.islands_integrated,
+            islands_reactivated: stats.islands_reactivated,
+            cache_full: stats.cache_full,
+            cache_partial: stats.cache_partial,
+            cache_miss: stats.cache_miss,
+            decisions: stats.decisions.clone(),
+        }
+    }
+
+    /// Decisions to integrate, and to decline.
+    pub fn decision_counts(&self) -> (usize, usize) {
+        let yes = self.decisions.iter().filter(|d| d.integrate).count();
+        (yes, self.decisions.len() - yes)
+    }
+}
+
+/// Where the frames' motion came from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum PhysicsSource {
+    /// Simulated in this run, before rendering: `physics_ms` is filled in.
+    Simulated,
+    /// Replayed from a `--trajectory` file: no physics time.
+    Trajectory,
+}
+
+/// What was rendered, for the header of stats.json.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct RunInfo {
+    pub scene: String,
+    pub backend: String,
+    pub mode: String,
+    pub integration: String,
+    pub cache_enabled: bool,
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
+    pub physics: PhysicsSource,
+}
+
+/// Sums over the run.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct Totals {
+    /// Physics of the whole simulation (every simulated frame, rendered or not), ms; `None`
+    /// when replayed from a trajectory.
+    pub physics_ms: Option<f64>,
+    pub update_ms: f64,
+    pub integrate_ms: f64,
+    pub reactivate_ms: f64,
+    pub commit_ms: f64,
+    pub trace_ms: f64,
+    pub frame_ms: f64,
+    pub rays: u64,
+    pub islands_slept: u64,
+    pub islands_woke: u64,
+    pub islands_integrated: u64,
+    pub islands_reactivated: u64,
+    pub cache_full: u64,
+    pub cache_partial: u64,
+    pub cache_miss: u64,
+    pub decisions_integrate: u64,
+    pub decisions_decline: u64,
+}
+
+/// Per-frame medians of each stage, ms.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct Medians {
+    pub physics_ms: Option<f64>,
+    pub update_ms: f64,
+    pub integrate_ms: f64,
+    pub reactivate_ms: f64,
+    pub commit_ms: f64,
+    pub trace_ms: f64,
+    pub frame_ms: f64,
+}
+
+/// The geometry cache at the end of the run, with the labels of its histogram.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct CacheSummary {
+    #[serde(flatten)]
+    pub stats: CacheStats,
+    /// Labels of `fraction_histogram`'s buckets, in order.
+    pub fraction_buckets: Vec<&'static str>,
+}
+
+/// The `summary` block of stats.json.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Summary {
+    pub frames: usize,
+    pub first_frame: Option<u32>,
+    pub last_frame: Option<u32>,
+    pub totals: Totals,
+    pub median: Medians,
+    pub cache: CacheSummary,
+    pub cost_model: CostModelState,
+}
+
+/// Everything stats.json holds.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct RunStats {
+    pub format: &'static str,
+    pub version: u32,
+    pub run: RunInfo,
+    pub frames: Vec<FrameRecord>,
+    pub summary: Summary,
+}
+
+fn median(mut values: Vec<f64>) -> f64 {
+    if values.is_empty() {
+        return 0.0;
+    }
+    values.sort_by(f64::total_cmp);
+    let n = values.len();
+    if n % 2 == 1 {
+        values[n / 2]
+    } else {
+        0.5 * (values[n / 2 - 1] + values[n / 2])
+    }
+}
+
+/// CSV columns, in order.
+const CSV_COLUMNS: [&str; 26] = [
+    "frame",
+    "physics_ms",
+    "update_ms",
+    "integrate_ms",
+    "reactivate_ms",
+    "commit_ms",
+    "trace_ms",
+    "frame_ms",
+    "rays",
+    "mrays_per_second",
+    "committed",
+    "instances",
+    "integrated_islands",
+    "sleeping_islands",
+    "baked_bodies",
+    "islands_slept",
+    "islands_woke",
+    "islands_integrated",
+    "islands_reactivated",
+    "cache_full",
+    "cache_partial",
+    "cache_miss",
+    "decisions",
+    "decisions_integrate",
+    "decisions_decline",
+    "estimated_net_ms",
+];
+
+impl RunStats {
+    /// The statistics of a run: its frames, the cache and cost model at the end, and the
+    /// physics time of the whole simulation when it ran in this process.
+    pub fn new(
+        run: RunInfo,
+        frames: Vec<FrameRecord>,
+        cache: CacheStats,
+        cost_model: CostModelState,
+        physics_total_ms: Option<f64>,
+    ) -> Self {
+        let mut totals = Totals { physics_ms: physics_total_ms, ..Totals::default() };
+        for f in &frames {
+            totals.update_ms += f.update_ms;
+            totals.integrate_ms += f.integrate_ms;
+            totals.reactivate_ms += f.reactivate_ms;
+            totals.commit_ms += f.commit_ms;
+            totals.trace_ms += f.trace_ms;
+            totals.frame_ms += f.frame_ms;
+            totals.rays += f.rays;
+            totals.islands_slept += u64::from(f.islands_slept);
+            totals.islands_woke += u64::from(f.islands_woke);
+            totals.islands_integrated += u64::from(f.islands_integrated);
+            totals.islands_reactivated += u64::from(f.islands_reactivated);
+            totals.cache_full += f.cache_full;
+            totals.cache_partial += f.cache_partial;
+            totals.cache_miss += f.cache_miss;
+            let (yes, no) = f.decision_counts();
+            totals.decisions_integrate += yes as u64;
+            totals.decisions_decline += no as u64;
+        }
+        let column = |get: fn(&FrameRecord) -> f64| median(frames.iter().map(get).collect());
+        let physics: Vec<f64> = frames.iter().filter_map(|f| f.physics_ms).collect();
+        let median = Medians {
+            physics_ms: (!physics.is_empty()).then(|| self::median(physics)),
+            update_ms: column(|f| f.update_ms),
+            integrate_ms: column(|f| f.integrate_ms),
+            reactivate_ms: column(|f| f.reactivate_ms),
+            commit_ms: column(|f| f.commit_ms),
+            trace_ms: column(|f| f.trace_ms),
+            frame_ms: column(|f| f.frame_ms),
+        };
+        let summary = Summary {
+            frames: frames.len(),
+            first_frame: frames.first().map(|f| f.frame),
+            last_frame: frames.last().map(|f| f.frame),
+            totals,
+            median,
+            cache: CacheSummary { stats: cache, fraction_buckets: FRACTION_BUCKETS.to_vec() },
+            cost_model,
+        };
+        RunStats { format: STATS_FORMAT, version: STATS_VERSION, run, frames, summary }
+    }
+
+    pub fn to_json(&self) -> serde_json::Value {
+        serde_json::to_value(self).expect("run statistics serialise")
+    }
+
+    /// One header line, then one line per frame (decisions as counts).
+    pub fn to_csv(&self) -> String {
+        let mut out = CSV_COLUMNS.join(",");
+        out.push('\n');
+        for f in &self.frames {
+            let (yes, no) = f.decision_counts();
+            let net: f64 =
+                f.decisions.iter().filter_map(|d| d.estimate.map(|e| e.net_ms())).sum::<f64>() + 0.0; // no -0
+            let physics = f.physics_ms.map(|v| format!("{v:.4}")).unwrap_or_default();
+            let _ = writeln!(
+                out,
+                "{},{physics},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{},{:.3},{},{},{},{},{},{},{},{},{},{},{},{},{},{yes},{no},{net:.4}",
+                f.frame,
+                f.update_ms,
+                f.integrate_ms,
+                f.reactivate_ms,
+                f.commit_ms,
+                f.trace_ms,
+                f.frame_ms,
+                f.rays,
+                f.mrays_per_second,
+                f.committed,
+                f.instances,
+                f.integrated_islands,
+                f.sleeping_islands,
+                f.baked_bodies,
+                f.islands_slept,
+                f.islands_woke,
+                f.islands_integrated,
+                f.islands_reactivated,
+                f.cache_full,
+                f.cache_partial,
+                f.cache_miss,
+                f.decisions.len(),
+            );
+        }
+        out
+    }
+
+    /// Writes `stats.json` and `stats.csv` into `dir`, each atomically.
+    pub fn write(&self, dir: &Path) -> Result<(), ReportError> {
+        let json = serde_json::to_string_pretty(self).expect("run statistics serialise");
+        for (name, bytes) in [("stats.json", json.into_bytes()), ("stats.csv", self.to_csv().into_bytes())] {
+            let path = dir.join(name);
+            crate::atomic_file::write_atomic(&path, &bytes)
+                .map_err(|source| ReportError::Write { path, source })?;
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn medians_of_odd_even_and_empty() {
+        assert_eq!(median(vec![3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(median(vec![4.0, 1.0, 2.0, 3.0]), 2.5);
+        assert_eq!(median(Vec::new()), 0.0);
+    }
+
+    #[test]
+    fn csv_has_a_header_and_a_row_per_frame() {
+        let frames: Vec<FrameRecord> = (0..3)
+            .map(|i| {
+                FrameRecord::new(&FrameStats { frame: i, trace_ms: 1.0, ..FrameStats::default() }, 1.0, None)
+            })
+            .collect();
+        let run = RunInfo {
+            scene: "t".into(),
+            backend: "bvh".into(),
+            mode: "path".into(),
+            integration: "auto".into(),
+            cache_enabled: true,
+            width: 1,
+            height: 1,
+            spp: 1,
+            physics: PhysicsSource::Trajectory,
+        };
+        let stats = RunStats::new(run, frames, CacheStats::default(), CostModelState::default(), None);
+        let csv = stats.to_csv();
+        let lines: Vec<&str> = csv.lines().collect();
+        assert_eq!(lines.len(), 4);
+        assert_eq!(lines[0].split(',').count(), CSV_COLUMNS.len());
+        assert!(lines[1..].iter().all(|l| l.split(',').count() == CSV_COLUMNS.len()));
+        assert_eq!(stats.summary.totals.trace_ms, 3.0);
+        assert_eq!(stats.summary.median.trace_ms, 1.0);
+    }
+}

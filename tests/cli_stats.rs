@@ -1,0 +1,291 @@
+//! `dormant render SCENE` writes stats.json (checked against docs/stats-format.md's schema),
+//! stats.csv (a header and one row per frame) and report.png.
+
+use std::process::Command;
+
+use serde_json::Value;
+
+fn dormant() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_dormant"))
+}
+
+/// JSON types as the schema names them.
+fn type_name(v: &Value) -> &'static str {
+    match v {
+        Value::Null => "null",
+        Value::Bool(_) => "boolean",
+        Value::Number(n) if n.is_u64() || n.is_i64() => "integer",
+        Value::Number(_) => "number",
+        Value::String(_) => "string",
+        Value::Array(_) => "array",
+        Value::Object(_) => "object",
+    }
+}
+
+/// `expected` is `"a|b"`: any of the listed types; "number" also accepts integers.
+fn check(path: &str, v: &Value, expected: &str) {
+    let actual = type_name(v);
+    let ok = expected.split('|').any(|t| t == actual || (t == "number" && actual == "integer"));
+    assert!(ok, "{path}: expected {expected}, found {actual} ({v})");
+}
+
+/// Checks `object` has exactly the fields of `schema` (name, type) and no others.
+fn check_object(path: &str, object: &Value, schema: &[(&str, &str)]) {
+    let map = object.as_object().unwrap_or_else(|| panic!("{path}: not an object"));
+    for (name, ty) in schema {
+        let v = map.get(*name).unwrap_or_else(|| panic!("{path}.{name}: missing"));
+        check(&format!("{path}.{name}"), v, ty);
+    }
+    for key in map.keys() {
+        assert!(schema.iter().any(|(n, _)| n == key), "{path}.{key}: not in the documented schema");
+    }
+}
+
+const RUN: &[(&str, &str)] = &[
+    ("scene", "string"),
+    ("backend", "string"),
+    ("mode", "string"),
+    ("integration", "string"),
+    ("cache_enabled", "boolean"),
+    ("width", "integer"),
+    ("height", "integer"),
+    ("spp", "integer"),
+    ("physics", "string"),
+];
+
+const FRAME: &[(&str, &str)] = &[
+    ("frame", "integer"),
+    ("physics_ms", "number|null"),
+    ("update_ms", "number"),
+    ("integrate_ms", "number"),
+    ("reactivate_ms", "number"),
+    ("commit_ms", "number"),
+    ("trace_ms", "number"),
+    ("frame_ms", "number"),
+    ("rays", "integer"),
+    ("mrays_per_second", "number"),
+    ("committed", "boolean"),
+    ("instances", "integer"),
+    ("integrated_islands", "integer"),
+    ("sleeping_islands", "integer"),
+    ("baked_bodies", "integer"),
+    ("islands_slept", "integer"),
+    ("islands_woke", "integer"),
+    ("islands_integrated", "integer"),
+    ("islands_reactivated", "integer"),
+    ("cache_full", "integer"),
+    ("cache_partial", "integer"),
+    ("cache_miss", "integer"),
+    ("decisions", "array"),
+];
+
+const DECISION: &[(&str, &str)] = &[
+    ("island", "integer"),
+    ("bodies", "integer"),
+    ("triangles", "integer"),
+    ("age", "integer"),
+    ("integrate", "boolean"),
+    ("estimate", "object|null"),
+];
+
+const ESTIMATE: &[(&str, &str)] = &[
+    ("build_ms", "number"),
+    ("fixed_ms", "number"),
+    ("gain_ms_per_frame", "number"),
+    ("expected_frames", "number"),
+];
+
+const SUMMARY: &[(&str, &str)] = &[
+    ("frames", "integer"),
+    ("first_frame", "integer|null"),
+    ("last_frame", "integer|null"),
+    ("totals", "object"),
+    ("median", "object"),
+    ("cache", "object"),
+    ("cost_model", "object"),
+];
+
+const TOTALS: &[(&str, &str)] = &[
+    ("physics_ms", "number|null"),
+    ("update_ms", "number"),
+    ("integrate_ms", "number"),
+    ("reactivate_ms", "number"),
+    ("commit_ms", "number"),
+    ("trace_ms", "number"),
+    ("frame_ms", "number"),
+    ("rays", "integer"),
+    ("islands_slept", "integer"),
+    ("islands_woke", "integer"),
+    ("islands_integrated", "integer"),
+    ("islands_reactivated", "integer"),
+    ("cache_full", "integer"),
+    ("cache_partial", "integer"),
+    ("cache_miss", "integer"),
+    ("decisions_integrate", "integer"),
+    ("decisions_decline", "integer"),
+];
+
+const MEDIAN: &[(&str, &str)] = &[
+    ("physics_ms", "number|null"),
+    ("update_ms", "number"),
+    ("integrate_ms", "number"),
+    ("reactivate_ms", "number"),
+    ("commit_ms", "number"),
+    ("trace_ms", "number"),
+    ("frame_ms", "number"),
+];
+
+const CACHE: &[(&str, &str)] = &[
+    ("requests", "integer"),
+    ("full", "integer"),
+    ("partial", "integer"),
+    ("miss", "integer"),
+    ("recorded", "integer"),
+    ("evicted", "integer"),
+    ("invalidated", "integer"),
+    ("fraction_histogram", "array"),
+    ("fraction_buckets", "array"),
+    ("entries", "integer"),
+    ("bytes", "integer"),
+];
+
+const COST_MODEL: &[(&str, &str)] = &[
+    ("build_ms_intercept", "number"),
+    ("build_ms_per_mtriangle", "number"),
+    ("commit_ms_per_instance", "number"),
+    ("trace_ms_per_instance", "number"),
+    ("sleep_samples", "integer"),
+    ("shadow_islands", "integer"),
+];
+
+fn check_stats(stats: &Value, frames: std::ops::Range<u32>, physics: &str) {
+    check_object(
+        "",
+        stats,
+        &[
+            ("format", "string"),
+            ("version", "integer"),
+            ("run", "object"),
+            ("frames", "array"),
+            ("summary", "object"),
+        ],
+    );
+    assert_eq!(stats["format"], "dormant-stats");
+    assert_eq!(stats["version"], 1);
+    check_object("run", &stats["run"], RUN);
+    assert_eq!(stats["run"]["physics"], physics);
+    let records = stats["frames"].as_array().unwrap();
+    assert_eq!(records.len(), frames.len());
+    for (record, frame) in records.iter().zip(frames.clone()) {
+        check_object("frames[]", record, FRAME);
+        assert_eq!(record["frame"], frame);
+        if physics == "trajectory" {
+            assert!(record["physics_ms"].is_null());
+        }
+        for decision in record["decisions"].as_array().unwrap() {
+            check_object("frames[].decisions[]", decision, DECISION);
+            if !decision["estimate"].is_null() {
+                check_object("frames[].decisions[].estimate", &decision["estimate"], ESTIMATE);
+            }
+        }
+    }
+    let summary = &stats["summary"];
+    check_object("summary", summary, SUMMARY);
+    assert_eq!(summary["frames"], frames.len());
+    check_object("summary.totals", &summary["totals"], TOTALS);
+    check_object("summary.median", &summary["median"], MEDIAN);
+    check_object("summary.cache", &summary["cache"], CACHE);
+    check_object("summary.cost_model", &summary["cost_model"], COST_MODEL);
+    assert_eq!(summary["cache"]["fraction_histogram"].as_array().unwrap().len(), 12);
+    assert_eq!(summary["cache"]["fraction_buckets"].as_array().unwrap().len(), 12);
+}
+
+fn check_csv(text: &str, frames: std::ops::Range<u32>) {
+    let lines: Vec<&str> = text.lines().collect();
+    let header: Vec<&str> = lines[0].split(',').collect();
+    assert_eq!(header[0], "frame");
+    for column in ["physics_ms", "trace_ms", "decisions_integrate", "decisions_decline", "cache_full"] {
+        assert!(header.contains(&column), "stats.csv has no {column} column");
+    }
+    assert_eq!(lines.len() - 1, frames.len());
+    for (line, frame) in lines[1..].iter().zip(frames) {
+        let cells: Vec<&str> = line.split(',').collect();
+        assert_eq!(cells.len(), header.len(), "{line}");
+        assert_eq!(cells[0], frame.to_string());
+    }
+}
+
+#[test]
+fn render_writes_stats_csv_and_report_for_a_simulated_scene() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("tiny");
+    let status = dormant()
+        .args(["render", "scenes/tiny.toml", "--size", "64x36", "--spp", "1", "--frames", "0..60", "--quiet"])
+        .arg("--out")
+        .arg(&out)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let stats: Value = serde_json::from_slice(&std::fs::read(out.join("stats.json")).unwrap()).unwrap();
+    check_stats(&stats, 0..60, "simulated");
+    assert!(stats["frames"].as_array().unwrap().iter().all(|f| f["physics_ms"].is_number()));
+    check_csv(&std::fs::read_to_string(out.join("stats.csv")).unwrap(), 0..60);
+    let png = std::fs::metadata(out.join("report.png")).unwrap();
+    assert!(png.len() > 0);
+    let image = image::open(out.join("report.png")).unwrap();
+    assert!(image.width() > 0 && image.height() > 0);
+}
+
+#[test]
+fn replayed_frames_have_no_physics_time() {
+    let dir = tempfile::tempdir().unwrap();
+    let traj = dir.path().join("tiny.traj");
+    let root = env!("CARGO_MANIFEST_DIR");
+    let status = dormant()
+        .args(["simulate", "scenes/tiny.toml", "--quiet", "--out"])
+        .arg(&traj)
+        .current_dir(root)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let out = dir.path().join("slice");
+    let status = dormant()
+        .args([
+            "render",
+            "scenes/tiny.toml",
+            "--size",
+            "32x18",
+            "--spp",
+            "1",
+            "--frames",
+            "100..110",
+            "--quiet",
+        ])
+        .arg("--trajectory")
+        .arg(&traj)
+        .arg("--out")
+        .arg(&out)
+        .current_dir(root)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let stats: Value = serde_json::from_slice(&std::fs::read(out.join("stats.json")).unwrap()).unwrap();
+    check_stats(&stats, 100..110, "trajectory");
+    assert!(stats["summary"]["totals"]["physics_ms"].is_null());
+    check_csv(&std::fs::read_to_string(out.join("stats.csv")).unwrap(), 100..110);
+}
+
+#[test]
+fn built_in_single_frame_writes_no_stats() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("one");
+    let status = dormant()
+        .args(["render", "--size", "16x9", "--spp", "1", "--quiet", "--out"])
+        .arg(&out)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    assert!(out.join("frame_0000.png").is_file());
+    assert!(!out.join("stats.json").exists());
+}
