@@ -144,7 +144,7 @@ fn cache_hits(stats: &RunStats, area: &Area<'_>) -> PlotResult {
     let top = series.iter().map(|s| cumulative(s.2).last().map_or(0.0, |p| p.1)).fold(0.0, f64::max).max(1.0)
         * 1.15;
     let caption = if stats.run.cache_enabled {
-        "Geometry cache: reactivations served, cumulative"
+        "Geometry cache lookups on reactivation, cumulative"
     } else {
         "Geometry cache: off (--cache off)"
     };
