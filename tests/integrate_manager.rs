@@ -339,3 +339,30 @@ fn never_always_and_auto_render_the_same_images() {
         eprintln!("{backend}: largest RMSE between policies {worst:.2e}");
     }
 }
+
+#[test]
+fn baked_debug_view_shows_integrated_bodies_in_orange() {
+    use dormant::render::{render_sequence, Aov, AovIntegrator, SequenceOptions, SequenceScene};
+    let (trajectory, assets, template) = tiny();
+    let sequence = SequenceOptions { start: 0, end: 480, step: 60, width: 96, height: 54, spp: 1 };
+    let scene = SequenceScene { trajectory: &trajectory, assets: &assets, template: &template };
+    let orange = |p: glam::Vec3| p.x > 1.5 * p.z && p.x > 0.1;
+    for (policy, expect_baked) in [(IntegrationPolicy::Never, false), (IntegrationPolicy::Always, true)] {
+        let options = ManagerOptions { policy, ..ManagerOptions::default() };
+        let mut manager = SceneManager::new(
+            accel::create(Backend::Bvh, Some(2)).unwrap(),
+            &template,
+            &trajectory.bodies,
+            options,
+        )
+        .unwrap();
+        let mut baked_pixels = 0;
+        let integrator = AovIntegrator(Aov::Baked);
+        render_sequence(&scene, &mut manager, &integrator, &[], &sequence, &mut |f| {
+            baked_pixels += f.film.pixels.iter().filter(|p| orange(**p)).count();
+            Ok::<(), dormant::render::RenderError>(())
+        })
+        .unwrap();
+        assert_eq!(baked_pixels > 0, expect_baked, "{policy}: {baked_pixels} orange pixels");
+    }
+}

@@ -83,7 +83,8 @@ pub struct RenderArgs {
     #[arg(long)]
     pub exr: bool,
     /// Also write these passes (comma-separated) as frame_NNNN.KIND.png, and as .exr with
-    /// --exr: albedo (textured base colour), normal (shading normal), depth (distance).
+    /// --exr: albedo (textured base colour), normal (shading normal), depth (distance),
+    /// baked (debug: instanced bodies blue, integrated ones orange, environment grey).
     #[arg(long, value_enum, value_delimiter = ',', value_name = "KIND")]
     pub aov: Vec<Aov>,
     #[command(flatten)]

@@ -4,7 +4,7 @@
 
 use glam::Vec3;
 
-use super::{Integrator, PixelSampler, RenderScene};
+use super::{Integrator, PixelSampler, RenderScene, SurfaceKind};
 use crate::accel::SceneQuery;
 use crate::geometry::Ray;
 
@@ -18,6 +18,9 @@ pub enum Aov {
     Normal,
     /// Distance from the camera to the first hit, in scene units (in all three channels).
     Depth,
+    /// Debug view of integration: instanced bodies blue, baked (integrated) bodies orange, the
+    /// environment grey, each shaded by the facing ratio so shapes stay readable.
+    Baked,
 }
 
 impl Aov {
@@ -26,6 +29,7 @@ impl Aov {
             Aov::Albedo => "albedo",
             Aov::Normal => "normal",
             Aov::Depth => "depth",
+            Aov::Baked => "baked",
         }
     }
 }
@@ -53,6 +57,14 @@ impl Integrator for AovIntegrator {
             Aov::Albedo => s.material.base_color,
             Aov::Normal => s.ns,
             Aov::Depth => Vec3::splat((s.p - ray.origin).length()),
+            Aov::Baked => {
+                let colour = match s.kind {
+                    SurfaceKind::Environment => Vec3::splat(0.5),
+                    SurfaceKind::Instanced => Vec3::new(0.15, 0.35, 0.9),
+                    SurfaceKind::Baked => Vec3::new(0.95, 0.55, 0.1),
+                };
+                colour * (0.35 + 0.65 * s.ns.dot(-ray.dir).abs())
+            }
         }
     }
 }

@@ -61,7 +61,9 @@ pub fn write_aov_png_atomic(film: &Film, aov: super::Aov, path: &Path) -> Result
         .flat_map(|&p| {
             let p = if p.is_finite() { p } else { Vec3::ZERO };
             match aov {
-                super::Aov::Albedo => p.to_array().map(|c| srgb_encode(c.clamp(0.0, 1.0))),
+                super::Aov::Albedo | super::Aov::Baked => {
+                    p.to_array().map(|c| srgb_encode(c.clamp(0.0, 1.0)))
+                }
                 super::Aov::Normal => (p * 0.5 + Vec3::splat(0.5)).to_array().map(byte),
                 super::Aov::Depth if p.x <= 0.0 => [255; 3],
                 super::Aov::Depth => [byte(p.x / far); 3],

@@ -21,7 +21,7 @@ pub use bsdf::{sample_cosine, Bsdf, BsdfSample};
 pub use camera::PinholeCamera;
 pub use film::{write_aov_png_atomic, write_exr_atomic, write_png_atomic, Film};
 pub use integrator::{AmbientOcclusion, DirectLighting, Integrator, PathTracer};
-pub use render_scene::{RenderScene, SurfaceHit};
+pub use render_scene::{RenderScene, SurfaceHit, SurfaceKind};
 pub use sampler::PixelSampler;
 pub use sequence::{render_sequence, SequenceFrame, SequenceOptions, SequenceScene};
 pub use texture::sample as sample_texture;

@@ -46,6 +46,16 @@ pub struct SurfaceHit {
     pub material: Material,
     /// Radiance the surface emits (towards either side).
     pub emission: Vec3,
+    /// What was hit, for the debug view: the environment, an instanced body or a baked one.
+    pub kind: SurfaceKind,
+}
+
+/// The kind of object a hit is on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SurfaceKind {
+    Environment,
+    Instanced,
+    Baked,
 }
 
 impl<'a> RenderScene<'a> {
@@ -141,7 +151,8 @@ impl<'a> RenderScene<'a> {
         let Some((obj, (mesh, material))) = resolved else {
             debug_assert!(false, "hit on unknown object {:?}", hit.object);
             let material = Material::diffuse(Vec3::splat(0.5));
-            return SurfaceHit { p, ng, ns: ng, uv: Vec2::ZERO, material, emission: Vec3::ZERO };
+            let (uv, emission, kind) = (Vec2::ZERO, Vec3::ZERO, SurfaceKind::Environment);
+            return SurfaceHit { p, ng, ns: ng, uv, material, emission, kind };
         };
         let prim = obj.prim as usize;
         let tri = mesh.indices.get(prim).copied();
@@ -175,7 +186,12 @@ impl<'a> RenderScene<'a> {
             material.metallic *= mr.z;
         }
         let emission = self.emission(&material, uv);
-        SurfaceHit { p, ng, ns, uv, material, emission }
+        let kind = match (obj.body, obj.baked) {
+            (None, _) => SurfaceKind::Environment,
+            (Some(_), false) => SurfaceKind::Instanced,
+            (Some(_), true) => SurfaceKind::Baked,
+        };
+        SurfaceHit { p, ng, ns, uv, material, emission, kind }
     }
 
     /// Radiance emitted by `material` at `uv` (its emissive factor times its texture).
