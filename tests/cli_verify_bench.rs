@@ -105,6 +105,38 @@ fn bench_accel_reports_the_four_ratios() {
 }
 
 #[test]
+fn bench_integration_reports_the_five_ratios_and_every_configuration() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("integration.json");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/tiny.toml");
+    let status = dormant()
+        .args(["--quiet", "bench", "integration"])
+        .arg(&scene)
+        .args(["--backend", "bvh", "--size", "16x9", "--range", "0..120", "--frame-step", "6", "--json"])
+        .arg(&json)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let report = read_json(&json);
+    for key in [
+        "settled_speedup",
+        "run_speedup",
+        "auto_over_best",
+        "rebuild_over_insert",
+        "partial_hit_90_99_fraction",
+    ] {
+        assert!(report["ratios"][key].as_f64().is_some_and(f64::is_finite), "{key}: {:#}", report["ratios"]);
+    }
+    let runs = report["runs"].as_array().unwrap();
+    let configs: Vec<(String, bool)> = runs
+        .iter()
+        .map(|r| (r["policy"].as_str().unwrap().to_owned(), r["cache"].as_bool().unwrap()))
+        .collect();
+    assert_eq!(configs.len(), 5, "{configs:?}");
+    assert!(runs.iter().all(|r| r["frame_ms"].as_array().unwrap().len() == 20));
+}
+
+#[test]
 fn bench_render_reports_both_backends_and_ratios_per_ray_type() {
     let dir = tempfile::tempdir().unwrap();
     let json = dir.path().join("render.json");

@@ -18,11 +18,11 @@ use serde::Serialize;
 use crate::accel::{self, AccelError, Backend};
 use crate::crosscheck::camera_rays;
 use crate::integrate::{
-    describe_scene, CacheStats, CostModelState, FrameState, FrameStats, IntegrationPolicy, ManagerOptions,
+    describe_scene, CacheStats, CostModelState, FrameStats, IntegrationPolicy, ManagerOptions,
     ReactivationPath, SceneAssets, SceneManager, FRACTION_BUCKETS,
 };
 use crate::physics::{BodyKind, BodyState, Trajectory};
-use crate::render::{render_frame, Integrator, RenderError, RenderScene, RenderSettings, SequenceOptions};
+use crate::render::{render_managed_frame, Integrator, RenderError, SequenceOptions, SequenceScene};
 use crate::scene::{SceneDescription, StaticMesh};
 
 /// What to run.
@@ -134,9 +134,7 @@ fn means<'a>(frames: impl Iterator<Item = &'a FrameStats>) -> StageMeans {
 /// from other processes on a shared machine falls on all of them alike. Returns each one's
 /// per-frame statistics and its manager at the end.
 fn run_lockstep(
-    trajectory: &Trajectory,
-    assets: &SceneAssets,
-    template: &SceneDescription,
+    scene: &SequenceScene<'_>,
     integrator: &dyn Integrator,
     options: &IntegrationBenchOptions,
     configs: &[ManagerOptions],
@@ -145,11 +143,11 @@ fn run_lockstep(
     let mut runs = Vec::with_capacity(configs.len());
     for c in configs {
         let accel = accel::create(options.backend, options.threads)?;
-        runs.push((Vec::new(), SceneManager::new(accel, template, &trajectory.bodies, *c)?));
+        runs.push((Vec::new(), SceneManager::new(accel, scene.template, &scene.trajectory.bodies, *c)?));
     }
     let seq = &options.sequence;
-    let (step, total) = (seq.step.max(1), seq.frame_count());
-    let mut replay = trajectory.replay();
+    let total = seq.frame_count();
+    let mut replay = scene.trajectory.replay();
     let mut rendered = 0;
     while let Some(frame) = replay.next_frame() {
         if frame.index >= seq.end {
@@ -158,23 +156,14 @@ fn run_lockstep(
         for (_, m) in &mut runs {
             m.observe(frame.events);
         }
-        if frame.index % step != 0 || frame.index < seq.start {
+        if !seq.selects(frame.index) {
             continue;
         }
-        let settings =
-            RenderSettings { width: seq.width, height: seq.height, spp: seq.spp, frame: frame.index };
-        let camera = assets.camera_at(frame.index as f32 * trajectory.timestep);
         let n = runs.len();
         for k in 0..n {
             let (frames, manager) = &mut runs[(k + rendered as usize) % n];
-            manager.prepare(FrameState { index: frame.index, states: frame.states, poses: frame.poses })?;
-            let (_, render) = {
-                // No bench scene has emissive prototypes: no bodies to place for light sampling.
-                let mut scene = RenderScene::with_objects(template, &*manager, &[])?;
-                scene.camera = camera;
-                render_frame(&scene, manager.query()?, integrator, &settings)?
-            };
-            frames.push(manager.record_trace(render.seconds * 1e3, render.rays).clone());
+            render_managed_frame(scene, manager, &frame, integrator, &[], seq)?;
+            frames.push(manager.last_frame().clone());
         }
         rendered += 1;
         progress(rendered, total);
@@ -272,14 +261,13 @@ pub fn bench_integration(
 ) -> Result<IntegrationBenchReport, RenderError> {
     let template = describe_scene(assets, 0.0);
     let seq = &options.sequence;
-    let step = seq.step.max(1);
     // Asleep share per rendered frame, from the trajectory itself.
     let dynamic: Vec<bool> = trajectory.bodies.iter().map(|b| b.kind == BodyKind::Dynamic).collect();
     let asleep_fraction: Vec<f64> = trajectory
         .frames
         .iter()
         .enumerate()
-        .filter(|(i, _)| (seq.start..seq.end).contains(&(*i as u32)) && *i as u32 % step == 0)
+        .filter(|(i, _)| seq.selects(*i as u32))
         .map(|(_, f)| {
             let (mut present, mut asleep) = (0usize, 0usize);
             for (s, d) in f.states.iter().zip(&dynamic) {
@@ -314,8 +302,13 @@ pub fn bench_integration(
             ..ManagerOptions::default()
         })
         .collect();
-    let results =
-        run_lockstep(trajectory, assets, &template, integrator, options, &manager_options, progress)?;
+    let results = run_lockstep(
+        &SequenceScene { trajectory, assets, template: &template },
+        integrator,
+        options,
+        &manager_options,
+        progress,
+    )?;
     let mut runs = Vec::new();
     let (mut rebuild_ms, mut rebuild_triangles, mut mean_insert_ms) = (0.0, 0, 0.0);
     let mut variants = Vec::new();

@@ -401,6 +401,11 @@ impl SceneManager {
         Ok(&self.last)
     }
 
+    /// The statistics of the frame last prepared (trace included once recorded).
+    pub fn last_frame(&self) -> &FrameStats {
+        &self.last
+    }
+
     /// Records the trace stage of the frame just prepared; returns its complete statistics.
     pub fn record_trace(&mut self, trace_ms: f64, rays: u64) -> &FrameStats {
         self.last.trace_ms = trace_ms;

@@ -23,7 +23,9 @@ pub use film::{write_aov_png_atomic, write_exr_atomic, write_png_atomic, Film};
 pub use integrator::{AmbientOcclusion, DirectLighting, Integrator, PathTracer};
 pub use render_scene::{RenderScene, SurfaceHit, SurfaceKind};
 pub use sampler::PixelSampler;
-pub use sequence::{render_sequence, SequenceFrame, SequenceOptions, SequenceScene};
+pub use sequence::{
+    render_managed_frame, render_sequence, ManagedFrame, SequenceFrame, SequenceOptions, SequenceScene,
+};
 pub use texture::sample as sample_texture;
 pub use tiles::{render_frame, RenderSettings, RenderStats};
 pub use video::{encode_video, ffmpeg_available, VideoError, FFMPEG_HINT};

@@ -7,7 +7,7 @@ use super::{
     render_frame, Aov, AovIntegrator, Film, Integrator, RenderError, RenderScene, RenderSettings, RenderStats,
 };
 use crate::integrate::{FrameState, FrameStats, SceneAssets, SceneManager};
-use crate::physics::{BodyState, Trajectory};
+use crate::physics::{BodyState, ReplayFrame, Trajectory};
 use crate::scene::{Body, SceneDescription};
 
 /// Which frames to render, and how.
@@ -24,9 +24,18 @@ pub struct SequenceOptions {
 }
 
 impl SequenceOptions {
+    /// Whether frame `index` is rendered.
+    pub fn selects(&self, index: u32) -> bool {
+        (self.start..self.end).contains(&index) && index % self.step.max(1) == 0
+    }
+
     /// Frames this selects.
     pub fn frame_count(&self) -> u32 {
-        (self.start..self.end).filter(|f| f % self.step.max(1) == 0).count() as u32
+        (self.start..self.end).filter(|&f| self.selects(f)).count() as u32
+    }
+
+    fn settings(&self, frame: u32) -> RenderSettings {
+        RenderSettings { width: self.width, height: self.height, spp: self.spp, frame }
     }
 }
 
@@ -62,51 +71,72 @@ pub fn render_sequence<E: From<RenderError>>(
     options: &SequenceOptions,
     on_frame: &mut dyn FnMut(SequenceFrame<'_>) -> Result<(), E>,
 ) -> Result<(), E> {
-    let SequenceScene { trajectory, assets, template } = *scene;
-    let step = options.step.max(1);
-    let emissive_bodies = Emitters::prototypes_emit(template);
-    let mut replay = trajectory.replay();
+    let mut replay = scene.trajectory.replay();
     while let Some(frame) = replay.next_frame() {
         if frame.index >= options.end {
             break;
         }
         manager.observe(frame.events);
-        if frame.index % step != 0 || frame.index < options.start {
+        if !options.selects(frame.index) {
             continue;
         }
-        let state = FrameState { index: frame.index, states: frame.states, poses: frame.poses };
-        manager.prepare(state).map_err(RenderError::from)?;
-        let settings = RenderSettings {
-            width: options.width,
-            height: options.height,
-            spp: options.spp,
-            frame: frame.index,
-        };
-        // Emissive prototypes are light-sampled where their bodies are this frame.
-        let bodies: Vec<Body> = if emissive_bodies {
-            (0..frame.states.len())
-                .filter(|&b| frame.states[b] != BodyState::Absent && frame.poses[b].translation.is_finite())
-                .map(|b| Body {
-                    prototype: trajectory.bodies[b].prototype,
-                    transform: frame.poses[b].to_affine(),
-                })
-                .collect()
-        } else {
-            Vec::new()
-        };
-        let (film, render, aov_films) = {
-            let mut scene = RenderScene::with_objects(template, &*manager, &bodies)?;
-            scene.camera = assets.camera_at(frame.index as f32 * trajectory.timestep);
-            let query = manager.query().map_err(RenderError::from)?;
-            let (film, render) = render_frame(&scene, query, integrator, &settings)?;
-            let mut aov_films = Vec::with_capacity(aovs.len());
-            for &aov in aovs {
-                aov_films.push((aov, render_frame(&scene, query, &AovIntegrator(aov), &settings)?.0));
-            }
-            (film, render, aov_films)
-        };
-        let stats = manager.record_trace(render.seconds * 1e3, render.rays);
-        on_frame(SequenceFrame { index: frame.index, film: &film, render, stats, aovs: aov_films })?;
+        let rendered = render_managed_frame(scene, manager, &frame, integrator, aovs, options)?;
+        on_frame(SequenceFrame {
+            index: frame.index,
+            film: &rendered.film,
+            render: rendered.render,
+            stats: manager.last_frame(),
+            aovs: rendered.aovs,
+        })?;
     }
     Ok(())
+}
+
+/// What [`render_managed_frame`] produced; the manager keeps the frame's statistics
+/// ([`SceneManager::last_frame`]).
+pub struct ManagedFrame {
+    pub film: Film,
+    pub render: RenderStats,
+    pub aovs: Vec<(Aov, Film)>,
+}
+
+/// One frame of a sequence through `manager`, whose island events up to this frame must have
+/// been observed: prepares the accelerator, renders the image and `aovs`, and reports the
+/// trace time back to the manager.
+pub fn render_managed_frame(
+    scene: &SequenceScene<'_>,
+    manager: &mut SceneManager,
+    frame: &ReplayFrame<'_>,
+    integrator: &dyn Integrator,
+    aovs: &[Aov],
+    options: &SequenceOptions,
+) -> Result<ManagedFrame, RenderError> {
+    let SequenceScene { trajectory, assets, template } = *scene;
+    manager.prepare(FrameState { index: frame.index, states: frame.states, poses: frame.poses })?;
+    // Emissive prototypes are light-sampled where their bodies are this frame.
+    let bodies: Vec<Body> = if Emitters::prototypes_emit(template) {
+        (0..frame.states.len())
+            .filter(|&b| frame.states[b] != BodyState::Absent && frame.poses[b].translation.is_finite())
+            .map(|b| Body {
+                prototype: trajectory.bodies[b].prototype,
+                transform: frame.poses[b].to_affine(),
+            })
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let settings = options.settings(frame.index);
+    let (film, render, aov_films) = {
+        let mut render_scene = RenderScene::with_objects(template, &*manager, &bodies)?;
+        render_scene.camera = assets.camera_at(frame.index as f32 * trajectory.timestep);
+        let query = manager.query()?;
+        let (film, render) = render_frame(&render_scene, query, integrator, &settings)?;
+        let mut aov_films = Vec::with_capacity(aovs.len());
+        for &aov in aovs {
+            aov_films.push((aov, render_frame(&render_scene, query, &AovIntegrator(aov), &settings)?.0));
+        }
+        (film, render, aov_films)
+    };
+    manager.record_trace(render.seconds * 1e3, render.rays);
+    Ok(ManagedFrame { film, render, aovs: aov_films })
 }

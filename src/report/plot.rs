@@ -109,9 +109,17 @@ fn stage_times(stats: &RunStats, area: &Area<'_>) -> PlotResult {
             .label(format!("{name} (median {:.2} ms)", median_of(stats, stage)))
             .legend(move |(x, y)| Rectangle::new([(x, y - 6), (x + 14, y + 6)], colour.filled()));
     }
+    draw_legend(&mut chart, SeriesLabelPosition::UpperRight)
+}
+
+/// The legend of `chart`'s labelled series, in the one style every panel uses.
+fn draw_legend<'a, CT: CoordTranslate>(
+    chart: &mut ChartContext<'a, BitMapBackend<'a>, CT>,
+    position: SeriesLabelPosition,
+) -> PlotResult {
     chart
         .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
+        .position(position)
         .label_font((FONT, 14))
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
@@ -175,14 +183,7 @@ fn cache_hits(stats: &RunStats, area: &Area<'_>) -> PlotResult {
             .label(format!("{name} ({total:.0})"))
             .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], colour.stroke_width(3)));
     }
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperLeft)
-        .label_font((FONT, 14))
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .draw()
-        .map_err(err)
+    draw_legend(&mut chart, SeriesLabelPosition::UpperLeft)
 }
 
 /// Tick labels for a count axis up to `top`: at most one per whole number, so none repeats.
@@ -235,12 +236,5 @@ fn fraction_histogram(stats: &RunStats, area: &Area<'_>) -> PlotResult {
         .map_err(err)?
         .label("requests per bucket")
         .legend(move |(x, y)| Rectangle::new([(x, y - 6), (x + 14, y + 6)], colour.filled()));
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperLeft)
-        .label_font((FONT, 14))
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .draw()
-        .map_err(err)
+    draw_legend(&mut chart, SeriesLabelPosition::UpperLeft)
 }
