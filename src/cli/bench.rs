@@ -126,7 +126,7 @@ fn integration(args: &IntegrationArgs, threads: Option<usize>, quiet: bool) -> R
     let (file, simulate) = args.scene.load()?;
     let trajectory = super::render::load_trajectory(&file, &simulate, args.trajectory.as_deref())?;
     let total = trajectory.frames.len() as u32;
-    let range = super::render::check_range(args.range, total)?;
+    let range = super::render::check_range("--range", args.range, total)?;
     let assets = SceneAssets::load(&file).map_err(|e| CliError::Input(e.to_string()))?;
     let sequence = SequenceOptions {
         start: range.start,

@@ -155,11 +155,12 @@ pub(super) fn load_trajectory_timed(
 }
 
 /// `range` (default: every frame) checked against a trajectory of `total` frames.
-pub(super) fn check_range(range: Option<FrameRange>, total: u32) -> Result<FrameRange, CliError> {
+/// `flag` names the option in the error.
+pub(super) fn check_range(flag: &str, range: Option<FrameRange>, total: u32) -> Result<FrameRange, CliError> {
     let range = range.unwrap_or(FrameRange { start: 0, end: total });
     if range.end > total {
         return Err(CliError::Input(format!(
-            "--frames {}..{}: the trajectory has {total} frames (0..{total})",
+            "{flag} {}..{}: the trajectory has {total} frames (0..{total})",
             range.start, range.end
         )));
     }
@@ -267,7 +268,7 @@ pub(super) fn run(args: &RenderArgs, threads: Option<usize>, quiet: bool) -> Res
                 if args.trajectory.is_some() { PhysicsSource::Trajectory } else { PhysicsSource::Simulated };
             let physics_total_ms =
                 (physics_source == PhysicsSource::Simulated).then(|| physics_ms.iter().sum::<f64>());
-            let range = check_range(args.frames, trajectory.frames.len() as u32)?;
+            let range = check_range("--frames", args.frames, trajectory.frames.len() as u32)?;
             let assets = SceneAssets::load(&file).map_err(|e| CliError::Input(e.to_string()))?;
             let template = describe_scene(&assets, 0.0);
             let sequence = SequenceOptions {
