@@ -6,6 +6,7 @@
 mod error;
 mod geometry;
 mod parse;
+mod presets;
 mod schema;
 mod validate;
 
