@@ -30,6 +30,10 @@ pub struct IntegrationBenchOptions {
     pub backend: Backend,
     pub sequence: SequenceOptions,
     pub threads: Option<usize>,
+    /// Also build and trace the backend's alternative static structures (Embree's flat
+    /// MEDIUM and HIGH rebuilds, 10-20 s each on large scenes); the rebuild of
+    /// `rebuild_over_insert` is always measured.
+    pub static_variants: bool,
 }
 
 /// Mean milliseconds per stage over some frames.
@@ -93,6 +97,8 @@ pub struct IntegrationBenchReport {
     pub backend: Backend,
     pub bodies: usize,
     pub frames_rendered: u32,
+    /// Index of each rendered frame in the trajectory.
+    pub frames: Vec<u32>,
     pub settled_frames: usize,
     pub width: u32,
     pub height: u32,
@@ -193,7 +199,11 @@ fn static_variants(
     let scene = SceneDescription { statics, ..template.clone() };
     let rays = camera_rays(&scene, 640, 360);
     let mut built = Vec::new();
-    for (name, make) in variant_factories(options) {
+    let mut factories = variant_factories(options);
+    if !options.static_variants {
+        factories.truncate(1);
+    }
+    for (name, make) in factories {
         let mut accel = make()?;
         let start = Instant::now();
         for s in &scene.statics {
@@ -370,6 +380,7 @@ pub fn bench_integration(
         backend: options.backend,
         bodies: trajectory.bodies.len(),
         frames_rendered: seq.frame_count(),
+        frames: (seq.start..seq.end).filter(|&f| seq.selects(f)).collect(),
         settled_frames: settled.iter().filter(|s| **s).count(),
         width: seq.width,
         height: seq.height,

@@ -4,10 +4,12 @@
 
 pub mod accel;
 pub mod integration;
+pub mod paper;
 pub mod render;
 
 pub use accel::{bench_accel, AccelBenchOptions, AccelBenchReport};
 pub use integration::{bench_integration, IntegrationBenchOptions, IntegrationBenchReport};
+pub use paper::{bench_paper, PaperBenchOptions, PaperError, PaperPreset, PaperReport, RainAssets};
 pub use render::{bench_render, RenderBenchOptions, RenderBenchReport};
 
 use std::time::Instant;

@@ -6,7 +6,10 @@ use std::path::PathBuf;
 use clap::{Args, Subcommand};
 
 use super::{CliError, JsonOutput, SceneSource};
-use crate::bench::{self, AccelBenchOptions, IntegrationBenchOptions, RenderBenchOptions};
+use crate::bench::{
+    self, AccelBenchOptions, IntegrationBenchOptions, PaperBenchOptions, PaperPreset, RainAssets,
+    RenderBenchOptions,
+};
 use crate::integrate::SceneAssets;
 use crate::render::SequenceOptions;
 
@@ -34,9 +37,35 @@ pub enum BenchCommand {
         after_help = "Examples:\n  dormant bench integration scenes/atrium.toml --json out/integration.json\n  dormant bench integration scenes/tiny.toml --backend bvh --size 160x90"
     )]
     Integration(IntegrationArgs),
+    /// The paper's experiments: the atrium with 8,000 objects (and an asset rain over --env
+    /// when given), simulated once and rendered under never/always/auto with the cache on and
+    /// off by every backend; writes paper.json, paper.md and figures into --out.
+    #[command(
+        after_help = "Examples:\n  dormant bench paper --out out/paper                 the atrium, about 15 minutes\n  dormant bench paper --quick --out out/paper-quick   scaled down, about 2 minutes\n  dormant bench paper --env ../shared/assets/monastery.glb --object ../shared/assets/duck.glb \\\n      --object ../shared/assets/teddy.glb --object ../shared/assets/soccerball.glb --out docs/paper"
+    )]
+    Paper(PaperArgs),
     /// Physics step time with every body awake against most asleep.
     #[command(after_help = "Examples:\n  dormant bench physics scenes/atrium.toml --json out/physics.json")]
     Physics(PhysicsArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct PaperArgs {
+    /// Output directory for paper.json, paper.md and figures/.
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+    /// Scaled-down workloads (about 2 minutes) instead of the paper's sizes.
+    #[arg(long)]
+    pub quick: bool,
+    /// Environment glTF of the monastery variant: objects rain onto it (needs --object).
+    #[arg(long, value_name = "GLB", requires = "object")]
+    pub env: Option<PathBuf>,
+    /// Object glTF of the monastery variant; repeat for a mix.
+    #[arg(long, value_name = "GLB", requires = "env")]
+    pub object: Vec<PathBuf>,
+    /// Backends to compare (repeat; default: every compiled one).
+    #[arg(long)]
+    pub backend: Vec<crate::accel::Backend>,
 }
 
 #[derive(Debug, Args)]
@@ -118,7 +147,41 @@ pub(super) fn run(args: &BenchArgs, threads: Option<usize>, quiet: bool) -> Resu
         BenchCommand::Render(r) => render(r, threads, quiet),
         BenchCommand::Physics(p) => physics(p, quiet),
         BenchCommand::Integration(i) => integration(i, threads, quiet),
+        BenchCommand::Paper(p) => paper(p, threads, quiet),
     }
+}
+
+fn paper(args: &PaperArgs, threads: Option<usize>, quiet: bool) -> Result<(), CliError> {
+    let backends = if args.backend.is_empty() {
+        crate::accel::Backend::compiled()
+    } else {
+        args.backend.iter().map(|&b| super::render::choose_backend(Some(b))).collect::<Result<_, _>>()?
+    };
+    let rain = args.env.as_ref().map(|env| RainAssets { env: env.clone(), objects: args.object.clone() });
+    let options = PaperBenchOptions {
+        preset: if args.quick { PaperPreset::Quick } else { PaperPreset::Full },
+        rain,
+        backends,
+        threads,
+    };
+    let start = std::time::Instant::now();
+    let mut log = |line: &str| {
+        if !quiet {
+            eprintln!("bench paper [{:>5.0} s] {line}", start.elapsed().as_secs_f64());
+        }
+    };
+    let report = bench::bench_paper(&options, &mut log).map_err(|e| match e.is_input() {
+        true => CliError::Input(e.to_string()),
+        false => CliError::Runtime(e.to_string()),
+    })?;
+    let written =
+        crate::report::write_paper(&report, &args.out).map_err(|e| CliError::Runtime(e.to_string()))?;
+    if !quiet {
+        for path in written {
+            println!("wrote {}", path.display());
+        }
+    }
+    Ok(())
 }
 
 fn integration(args: &IntegrationArgs, threads: Option<usize>, quiet: bool) -> Result<(), CliError> {
@@ -136,7 +199,7 @@ fn integration(args: &IntegrationArgs, threads: Option<usize>, quiet: bool) -> R
         height: args.size.height,
         spp: args.spp,
     };
-    let options = IntegrationBenchOptions { backend, sequence, threads };
+    let options = IntegrationBenchOptions { backend, sequence, threads, static_variants: true };
     let integrator = super::render::integrator(args.mode, 6);
     let mut progress = |done: u32, total: u32| {
         if !quiet && (done % 50 == 0 || done == total) {

@@ -15,11 +15,11 @@ use crate::integrate::FRACTION_BUCKETS;
 pub const PLOT_WIDTH: u32 = 1200;
 pub const PLOT_HEIGHT: u32 = 1350;
 
-const FONT: &str = "sans-serif";
+pub(super) const FONT: &str = "sans-serif";
 static FONT_BYTES: &[u8] = include_bytes!("../../assets/fonts/DejaVuSansMono.ttf");
 
 /// Stages stacked bottom to top, with their colours.
-const STAGES: [(&str, RGBColor); 5] = [
+pub(super) const STAGES: [(&str, RGBColor); 5] = [
     ("update", RGBColor(31, 119, 180)),
     ("integrate", RGBColor(255, 127, 14)),
     ("reactivate", RGBColor(214, 39, 40)),
@@ -31,23 +31,34 @@ fn stage_ms(f: &FrameRecord, stage: usize) -> f64 {
     [f.update_ms, f.integrate_ms, f.reactivate_ms, f.commit_ms, f.trace_ms][stage]
 }
 
-type Area<'a> = DrawingArea<BitMapBackend<'a>, Shift>;
-type PlotResult = Result<(), String>;
+pub(super) type Area<'a> = DrawingArea<BitMapBackend<'a>, Shift>;
+pub(super) type PlotResult = Result<(), String>;
 /// A per-frame count of a record.
 type Count = fn(&FrameRecord) -> u64;
 
-fn err(e: impl std::fmt::Display) -> String {
+pub(super) fn err(e: impl std::fmt::Display) -> String {
     e.to_string()
 }
 
 /// Draws the report of `stats` and writes it to `path` as PNG.
 pub fn write_report_png(stats: &RunStats, path: &Path) -> Result<(), ReportError> {
+    write_png(path, PLOT_WIDTH, PLOT_HEIGHT, |buffer| draw(stats, buffer))
+}
+
+/// Draws `width` x `height` pixels with `draw` (the embedded font registered) and writes
+/// them to `path` as PNG, atomically.
+pub(super) fn write_png(
+    path: &Path,
+    width: u32,
+    height: u32,
+    draw: impl FnOnce(&mut [u8]) -> PlotResult,
+) -> Result<(), ReportError> {
     let plot_error = |message: String| ReportError::Plot { path: path.to_path_buf(), message };
     plotters::style::register_font(FONT, FontStyle::Normal, FONT_BYTES)
         .map_err(|_| plot_error("the embedded font does not load".into()))?;
-    let mut buffer = vec![0u8; (PLOT_WIDTH * PLOT_HEIGHT * 3) as usize];
-    draw(stats, &mut buffer).map_err(plot_error)?;
-    let image = image::RgbImage::from_raw(PLOT_WIDTH, PLOT_HEIGHT, buffer)
+    let mut buffer = vec![0u8; (width * height * 3) as usize];
+    draw(&mut buffer).map_err(plot_error)?;
+    let image = image::RgbImage::from_raw(width, height, buffer)
         .ok_or_else(|| plot_error("pixel buffer has the wrong size".into()))?;
     let mut png = Vec::new();
     image
@@ -113,7 +124,7 @@ fn stage_times(stats: &RunStats, area: &Area<'_>) -> PlotResult {
 }
 
 /// The legend of `chart`'s labelled series, in the one style every panel uses.
-fn draw_legend<'a, CT: CoordTranslate>(
+pub(super) fn draw_legend<'a, CT: CoordTranslate>(
     chart: &mut ChartContext<'a, BitMapBackend<'a>, CT>,
     position: SeriesLabelPosition,
 ) -> PlotResult {
@@ -187,7 +198,7 @@ fn cache_hits(stats: &RunStats, area: &Area<'_>) -> PlotResult {
 }
 
 /// Tick labels for a count axis up to `top`: at most one per whole number, so none repeats.
-fn count_labels(top: f64) -> usize {
+pub(super) fn count_labels(top: f64) -> usize {
     (top.floor() as usize + 1).clamp(2, 11)
 }
 

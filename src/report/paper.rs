@@ -1,0 +1,267 @@
+//! The output of `dormant bench paper`: `paper.json` (the whole [`PaperReport`]), `paper.md`
+//! (the paper's claims against our numbers, then each workload's tables) and one figure per
+//! workload under `figures/`. Every file is written atomically.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use super::paper_plot::write_workload_png;
+use super::ReportError;
+use crate::bench::integration::PolicyRun;
+use crate::bench::paper::{PaperReport, Verdict, WorkloadReport};
+use crate::integrate::{IntegrationPolicy, FRACTION_BUCKETS};
+
+/// Writes `paper.json`, `paper.md` and `figures/<workload>.png` into `dir` (created if
+/// missing) and returns the paths written.
+pub fn write_paper(report: &PaperReport, dir: &Path) -> Result<Vec<PathBuf>, ReportError> {
+    let figures = dir.join("figures");
+    std::fs::create_dir_all(&figures)
+        .map_err(|source| ReportError::Write { path: figures.clone(), source })?;
+    let mut written = Vec::new();
+    for w in &report.workloads {
+        let path = figures.join(format!("{}.png", w.name));
+        write_workload_png(w, &path)?;
+        written.push(path);
+    }
+    let json = serde_json::to_string_pretty(report).expect("the paper report serialises");
+    let md = paper_markdown(report);
+    for (name, text) in [("paper.json", json), ("paper.md", md)] {
+        let path = dir.join(name);
+        crate::atomic_file::write_atomic(&path, text.as_bytes())
+            .map_err(|source| ReportError::Write { path: path.clone(), source })?;
+        written.push(path);
+    }
+    Ok(written)
+}
+
+fn verdict(v: Verdict) -> &'static str {
+    match v {
+        Verdict::Reproduced => "reproduced",
+        Verdict::Partly => "partly",
+        Verdict::NotReproduced => "not reproduced",
+        Verdict::NoData => "no data",
+    }
+}
+
+/// `paper.md`: generated, so every number in it is measured by the run that wrote it.
+pub fn paper_markdown(report: &PaperReport) -> String {
+    let mut md = String::new();
+    let load = |l: Option<f64>| l.map_or("?".into(), |l| format!("{l:.1}"));
+    let _ = writeln!(md, "# The paper's experiments, reproduced\n");
+    let _ = writeln!(
+        md,
+        "Written by `dormant bench paper` (preset `{:?}`) in {:.1} min on {} threads; 1-minute load \
+         average {} at the start and {} at the end. Each workload was simulated once; every backend \
+         then rendered the same trajectory under `never`, `always` and `auto`, with the geometry cache \
+         on and off, in lockstep (each frame by all five configurations before the next), so machine \
+         load falls on all of them alike. Frame time is the whole frame: reactivate + integrate + \
+         update + commit + trace. Ratios are defined in docs/performance.md.\n",
+        report.preset,
+        report.wall_s / 60.0,
+        report.threads,
+        load(report.load_average[0]),
+        load(report.load_average[1]),
+    );
+
+    let _ = writeln!(md, "## The paper's claims against our measurements\n");
+    let _ = writeln!(md, "| claim | paper | workload | backend | metric | ours | rule | verdict |");
+    let _ = writeln!(md, "| --- | --- | --- | --- | --- | ---: | --- | --- |");
+    for c in &report.claims {
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {} | `{}` | {} | {} | **{}** |",
+            c.claim,
+            c.paper,
+            c.workload,
+            c.backend,
+            c.metric,
+            num(c.measured),
+            c.rule,
+            verdict(c.verdict)
+        );
+    }
+    let _ = writeln!(md);
+    for w in &report.workloads {
+        workload_section(&mut md, w);
+    }
+    md
+}
+
+fn num(v: f64) -> String {
+    if !v.is_finite() {
+        "n/a".into()
+    } else if v.abs() >= 100.0 {
+        format!("{v:.0}")
+    } else if v.abs() >= 10.0 {
+        format!("{v:.1}")
+    } else {
+        format!("{v:.3}")
+    }
+}
+
+fn policy_name(run: &PolicyRun) -> String {
+    let policy = match run.policy {
+        IntegrationPolicy::Never => "never",
+        IntegrationPolicy::Always => "always",
+        IntegrationPolicy::Auto => "auto",
+    };
+    if run.policy == IntegrationPolicy::Never {
+        policy.into()
+    } else {
+        format!("{policy}, cache {}", if run.cache { "on" } else { "off" })
+    }
+}
+
+fn workload_section(md: &mut String, w: &WorkloadReport) {
+    let s = &w.size;
+    let i = &w.islands;
+    let _ = writeln!(md, "## {}: {}\n", w.name, w.description);
+    let _ = writeln!(
+        md,
+        "- {} objects simulated for {} frames in {:.0} s; {:.1}% of the bodies asleep at the end.\n\
+         - Islands: {} formed, {} woken, {} asleep at the end; size mean {:.1}, largest {}; mean \
+         sleep {:.0} frames.\n\
+         - {} rendered ({} frames) at {}x{}, shaded preview (camera and shadow rays), 1 spp.\n",
+        s.count,
+        s.frames,
+        w.simulate_s,
+        100.0 * i.asleep_fraction_at_end,
+        i.islands_formed,
+        i.islands_woken,
+        i.islands_asleep_at_end,
+        i.size_mean,
+        i.size_max,
+        i.mean_sleep_frames_all,
+        every(s.frame_step),
+        w.runs.first().map_or(0, |r| r.integration.frames_rendered),
+        s.width,
+        s.height,
+    );
+    let _ = writeln!(md, "![{}](figures/{}.png)\n", w.name, w.name);
+
+    let _ = writeln!(md, "### Integration ratios\n");
+    let _ = writeln!(
+        md,
+        "| backend | settled_speedup | run_speedup | auto_over_best | rebuild_over_insert | \
+         partial_hit_90_99_fraction | wall (s) |"
+    );
+    let _ = writeln!(md, "| --- | ---: | ---: | ---: | ---: | ---: | ---: |");
+    for run in &w.runs {
+        let r = &run.integration.ratios;
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {} | {} | {} | {:.0} |",
+            run.backend,
+            num(r.settled_speedup),
+            num(r.run_speedup),
+            num(r.auto_over_best),
+            num(r.rebuild_over_insert),
+            num(r.partial_hit_90_99_fraction),
+            run.wall_s
+        );
+    }
+    let _ = writeln!(md);
+
+    let _ = writeln!(md, "### Where the time goes\n");
+    let _ = writeln!(
+        md,
+        "Mean ms per frame over the whole run and over the settled frames (at least 90% of the \
+         bodies present asleep), and the settled frame by stage.\n"
+    );
+    let _ = writeln!(
+        md,
+        "| backend | configuration | frame (all) | frame (settled) | reactivate | integrate | update | \
+         commit | trace | islands integrated | reactivated | from cache | instances at end |"
+    );
+    let _ = writeln!(
+        md,
+        "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
+    );
+    for run in &w.runs {
+        for p in &run.integration.runs {
+            let st = &p.settled;
+            let _ = writeln!(
+                md,
+                "| {} | {} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {} | {} | {} | {} |",
+                run.backend,
+                policy_name(p),
+                p.all.frame_ms,
+                st.frame_ms,
+                st.reactivate_ms,
+                st.integrate_ms,
+                st.update_ms,
+                st.commit_ms,
+                st.trace_ms,
+                p.islands_integrated,
+                p.islands_reactivated,
+                p.reactivations_from_cache,
+                p.instances_at_end
+            );
+        }
+    }
+    let _ = writeln!(md);
+
+    let _ = writeln!(md, "### Geometry cache (`auto`, cache on)\n");
+    let _ = writeln!(
+        md,
+        "Requests by the fraction of the requested islands the served entry held.\n\n| backend | requests | \
+         full | partial | miss | {} |",
+        FRACTION_BUCKETS.join(" | ")
+    );
+    let _ = writeln!(md, "| --- |{}", " ---: |".repeat(4 + FRACTION_BUCKETS.len()));
+    for run in &w.runs {
+        let Some(auto) = run.integration.runs.iter().find(|p| p.policy == IntegrationPolicy::Auto && p.cache)
+        else {
+            continue;
+        };
+        let c = &auto.cache_stats;
+        let buckets: Vec<String> = c.fraction_histogram.iter().map(u64::to_string).collect();
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {} | {} | {} |",
+            run.backend,
+            c.requests,
+            c.full,
+            c.partial,
+            c.miss,
+            buckets.join(" | ")
+        );
+    }
+    let _ = writeln!(md);
+
+    let a = &w.accel;
+    let r = &a.ratios;
+    let _ = writeln!(md, "### Accelerators on the last frame\n");
+    let _ = writeln!(
+        md,
+        "{} static triangles and {} instances ({} instanced triangles); {} primary and {} bounce \
+         rays; the inserted island is 1% of the bodies.\n",
+        a.static_triangles, a.instances, a.instanced_triangles, a.primary_rays, a.bounce_rays
+    );
+    let _ = writeln!(
+        md,
+        "| bvh_over_embree_trace | bvh_over_embree_high_trace | bvh_over_embree_build | \
+         bvh_rebuild_over_insert | bvh_insert_sah_over_rebuild | embree_rebuild_over_insert |"
+    );
+    let _ = writeln!(md, "| ---: | ---: | ---: | ---: | ---: | ---: |");
+    let _ = writeln!(
+        md,
+        "| {} | {} | {} | {} | {} | {} |\n",
+        num(r.bvh_over_embree_trace),
+        num(r.bvh_over_embree_high_trace),
+        num(r.bvh_over_embree_build),
+        num(r.bvh_rebuild_over_insert),
+        num(r.bvh_insert_sah_over_rebuild),
+        num(r.embree_rebuild_over_insert)
+    );
+}
+
+/// "Every frame", "Every 3rd frame".
+fn every(step: u32) -> String {
+    match step {
+        0 | 1 => "Every frame".into(),
+        2 => "Every 2nd frame".into(),
+        3 => "Every 3rd frame".into(),
+        n => format!("Every {n}th frame"),
+    }
+}

@@ -1,0 +1,148 @@
+//! `dormant bench paper`: the quick preset end to end (paper.json against its documented
+//! fields, paper.md's claims table, a non-empty figure), its input errors, and the scene files
+//! it builds: the compiled-in atrium and the asset rain over the shared assets (skipped when
+//! ../shared/assets is absent).
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use dormant::scene::file::{ColliderKind, SceneFile};
+
+fn dormant() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_dormant"))
+}
+
+fn compiled_backends() -> Vec<&'static str> {
+    if cfg!(feature = "embree") {
+        vec!["embree", "bvh"]
+    } else {
+        vec!["bvh"]
+    }
+}
+
+#[test]
+fn quick_paper_run_writes_json_markdown_and_figure() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("paper");
+    let output =
+        dormant().args(["bench", "paper", "--quick", "--quiet", "--out"]).arg(&out).output().unwrap();
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("paper.json")).unwrap()).unwrap();
+    assert_eq!(json["format"], "dormant-paper");
+    assert_eq!(json["version"], 1);
+    assert_eq!(json["preset"], "quick");
+    let atrium = &json["ratios"]["atrium"];
+    for backend in compiled_backends() {
+        let r = &atrium["integration"][backend];
+        for key in [
+            "settled_speedup",
+            "run_speedup",
+            "auto_over_best",
+            "rebuild_over_insert",
+            "partial_hit_90_99_fraction",
+        ] {
+            let v = r[key].as_f64().unwrap_or_else(|| panic!("{backend}.{key} missing in {r:#}"));
+            assert!(v.is_finite() && v >= 0.0, "{backend}.{key} = {v}");
+        }
+        // Integration must pay for itself in build cost, whatever the frame-rate result.
+        assert!(r["rebuild_over_insert"].as_f64().unwrap() > 1.0, "{r:#}");
+    }
+    for key in ["bvh_rebuild_over_insert", "bvh_insert_sah_over_rebuild"] {
+        assert!(atrium["accel"][key].as_f64().unwrap() > 0.0, "{key}");
+    }
+    let workload = &json["workloads"][0];
+    assert_eq!(workload["name"], "atrium");
+    let runs = workload["runs"].as_array().unwrap();
+    assert_eq!(runs.len(), compiled_backends().len());
+    for run in runs {
+        let configs = run["integration"]["runs"].as_array().unwrap();
+        assert_eq!(configs.len(), 5, "never, always and auto with the cache on and off");
+        let frames = run["integration"]["frames"].as_array().unwrap().len();
+        assert!(frames >= 100, "{frames} frames rendered");
+        for c in configs {
+            assert_eq!(c["frame_ms"].as_array().unwrap().len(), frames);
+        }
+    }
+    assert_eq!(json["claims"].as_array().unwrap().len(), 4 * compiled_backends().len());
+
+    let md = std::fs::read_to_string(out.join("paper.md")).unwrap();
+    assert!(md.contains("## The paper's claims against our measurements"), "{md}");
+    assert!(md.contains("52% of requests at 90-99%"));
+    assert!(md.contains("](figures/atrium.png)"));
+
+    let figure = image::open(out.join("figures/atrium.png")).unwrap().to_rgb8();
+    assert!(figure.width() >= 1000 && figure.height() >= 1000);
+    let distinct: std::collections::HashSet<[u8; 3]> = figure.pixels().map(|p| p.0).collect();
+    assert!(distinct.len() > 20, "the figure is nearly blank: {} colours", distinct.len());
+}
+
+#[test]
+fn paper_with_a_missing_environment_names_the_file_and_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("paper");
+    let missing = dir.path().join("no-such-env.glb");
+    let output = dormant()
+        .args(["bench", "paper", "--quick", "--quiet", "--backend", "bvh", "--env"])
+        .arg(&missing)
+        .arg("--object")
+        .arg(&missing)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(output.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(stderr.contains("no-such-env.glb") && stderr.contains("--env"), "{stderr}");
+    assert!(!out.join("paper.json").exists());
+}
+
+#[test]
+fn paper_env_without_object_is_a_usage_error() {
+    let output =
+        dormant().args(["bench", "paper", "--out", "/tmp/unused", "--env", "x.glb"]).output().unwrap();
+    assert_eq!(output.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&output.stderr).contains("--object"));
+}
+
+#[test]
+fn compiled_in_atrium_is_the_scene_file() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/atrium.toml");
+    let on_disk = SceneFile::load(&path).unwrap();
+    let built_in = SceneFile::atrium();
+    assert_eq!(built_in.description, on_disk.description);
+    assert_eq!(built_in.source_hash, on_disk.source_hash);
+}
+
+fn assets() -> Option<PathBuf> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/assets");
+    if dir.join("monastery.glb").is_file() && dir.join("duck.glb").is_file() {
+        Some(dir)
+    } else {
+        eprintln!("skipped: ../shared/assets is absent");
+        None
+    }
+}
+
+#[test]
+fn asset_rain_scales_objects_to_the_environment_and_spawns_above_it() {
+    let Some(dir) = assets() else { return };
+    let objects = [dir.join("duck.glb"), dir.join("soccerball.glb")];
+    let file = SceneFile::asset_rain(&dir.join("monastery.glb"), &objects, 500, 300).unwrap();
+    let d = &file.description;
+    assert_eq!(d.scene.frames, 300);
+    assert_eq!(d.spawners.len(), 1);
+    assert_eq!(d.spawners[0].count, 500);
+    let env = dormant::scene::file::environment_mesh(&file).unwrap().bounds();
+    let width = env.extent().x.max(env.extent().z);
+    for (i, p) in d.prototypes.iter().enumerate() {
+        assert_eq!(p.collider, ColliderKind::ConvexHull);
+        let size = dormant::scene::file::prototype_mesh(&file, i).unwrap().bounds().extent().max_element();
+        assert!((size / width - 1.0 / 150.0).abs() < 1e-4, "{}: {size} in {width}", p.name);
+    }
+    let region = d.spawners[0].region;
+    assert!(region.min[1] > env.max.y, "spawns inside the environment");
+    assert!(region.min[0] > env.min.x && region.max[0] < env.max.x);
+    assert!(region.min[2] > env.min.z && region.max[2] < env.max.z);
+}
