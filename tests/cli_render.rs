@@ -91,30 +91,40 @@ fn usage_errors_exit_2() {
 }
 
 #[test]
-fn trajectory_frames_render_the_same_split_or_whole() {
+fn trajectory_frames_render_the_same_split_whole_or_from_the_trajectory_alone() {
     let dir = tempfile::tempdir().unwrap();
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/tiny.toml");
     let traj = dir.path().join("tiny.traj");
     let status = dormant().args(["simulate", "--quiet", "--out"]).arg(&traj).arg(&scene).status().unwrap();
     assert!(status.success());
-    let render = |frames: &str, out: &Path| {
-        let status = dormant()
-            .args(["render", "--quiet", "--size", "48x27", "--spp", "2", "--frames", frames, "--trajectory"])
+    let render = |frames: &str, out: &Path, scene_file: Option<&Path>| {
+        let mut cmd = dormant();
+        cmd.args(["render", "--quiet", "--size", "48x27", "--spp", "2", "--frames", frames, "--trajectory"])
             .arg(&traj)
             .arg("--out")
-            .arg(out)
-            .arg(&scene)
-            .status()
-            .unwrap();
-        assert!(status.success(), "render --frames {frames}");
+            .arg(out);
+        match scene_file {
+            Some(scene) => cmd.arg(scene),
+            // The trajectory alone, from another directory: the scene is recorded in it.
+            None => cmd.current_dir(dir.path()),
+        };
+        let output = cmd.output().unwrap();
+        assert!(
+            output.status.success(),
+            "render --frames {frames}: {}",
+            String::from_utf8_lossy(&output.stderr)
+        );
     };
-    let (whole, split) = (dir.path().join("whole"), dir.path().join("split"));
-    render("200..202", &whole);
-    render("200..201", &split);
-    render("201..202", &split);
+    let (whole, split, alone) =
+        (dir.path().join("whole"), dir.path().join("split"), dir.path().join("alone"));
+    render("200..202", &whole, Some(&scene));
+    render("200..201", &split, Some(&scene));
+    render("201..202", &split, Some(&scene));
+    render("200..202", &alone, None);
     for name in ["frame_0200.png", "frame_0201.png"] {
         let a = std::fs::read(whole.join(name)).unwrap();
-        assert_eq!(a, std::fs::read(split.join(name)).unwrap(), "{name} differs");
+        assert_eq!(a, std::fs::read(split.join(name)).unwrap(), "{name} differs split");
+        assert_eq!(a, std::fs::read(alone.join(name)).unwrap(), "{name} differs from the trajectory alone");
     }
     assert!(png_is_not_uniform(&whole.join("frame_0200.png")));
 }

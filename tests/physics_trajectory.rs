@@ -4,6 +4,7 @@
 use std::path::Path;
 
 use dormant::physics::{simulate, BodyState, SimulateOptions, Trajectory, TrajectoryError};
+
 use dormant::scene::file::SceneFile;
 
 fn tiny() -> SceneFile {
@@ -114,4 +115,37 @@ fn damaged_or_foreign_files_are_errors_not_panics() {
     assert!(matches!(err, TrajectoryError::NotATrajectory { .. }), "{err}");
     let err = Trajectory::read_unchecked(Path::new("/nonexistent/dir/x.traj")).unwrap_err();
     assert!(matches!(err, TrajectoryError::Io { .. }), "{err}");
+}
+
+#[test]
+fn a_trajectory_records_the_scene_it_was_simulated_from() {
+    let file = tiny();
+    let options = SimulateOptions { count: Some(8), frames: Some(60) };
+    let t = simulate(&file, &options).unwrap();
+    let back = Trajectory::from_bytes(&t.to_bytes(), Path::new("t.traj")).unwrap();
+    let recorded = back.scene.as_ref().expect("recorded scene");
+    assert_eq!(recorded.options, options);
+    assert!(recorded.asset_dir.is_absolute());
+    let again = recorded.scene_file().unwrap();
+    assert_eq!(again.description, file.description);
+    assert_eq!(options.effective_scene(&again).unwrap().source_hash, t.scene_hash);
+}
+
+/// FNV-1a 64, the trajectory checksum.
+fn fnv1a64(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3))
+}
+
+#[test]
+fn version_1_files_still_read_without_a_recorded_scene() {
+    let t = Trajectory { scene: None, ..simulate(&tiny(), &short()).unwrap() };
+    let mut bytes = t.to_bytes();
+    // Version 1 is version 2 without the scene section (one 0 byte after the timestep).
+    bytes.truncate(bytes.len() - 8);
+    bytes[8..12].copy_from_slice(&1u32.to_le_bytes());
+    assert_eq!(bytes.remove(24), 0);
+    let checksum = fnv1a64(&bytes);
+    bytes.extend_from_slice(&checksum.to_le_bytes());
+    let back = Trajectory::from_bytes(&bytes, Path::new("v1.traj")).unwrap();
+    assert_eq!(back, t);
 }

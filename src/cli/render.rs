@@ -53,10 +53,11 @@ pub struct RenderArgs {
     /// Scene file to simulate and render (default: the built-in scene, or --env/--object).
     #[arg(value_name = "SCENE", conflicts_with_all = ["env", "object"])]
     pub scene_file: Option<PathBuf>,
-    /// With SCENE: replay this trajectory (from `dormant simulate`) instead of simulating.
-    #[arg(long, value_name = "FILE")]
+    /// Replay this trajectory (from `dormant simulate`) instead of simulating; without SCENE,
+    /// render the scene recorded in it.
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["env", "object"])]
     pub trajectory: Option<PathBuf>,
-    /// With SCENE: render frames A..B (half-open) of the simulation.
+    /// With SCENE or --trajectory: render frames A..B (half-open) of the simulation.
     #[arg(long, value_name = "A..B")]
     pub frames: Option<FrameRange>,
     #[command(flatten)]
@@ -89,13 +90,13 @@ pub struct RenderArgs {
     pub aov: Vec<Aov>,
     #[command(flatten)]
     pub json: super::JsonOutput,
-    /// With SCENE: when sleeping islands are baked into the static scene.
+    /// With SCENE or --trajectory: when sleeping islands are baked into the static scene.
     #[arg(long, value_enum, default_value_t = IntegrationPolicy::Auto)]
     pub integration: IntegrationPolicy,
-    /// With SCENE: serve reactivations from the geometry cache.
+    /// With SCENE or --trajectory: serve reactivations from the geometry cache.
     #[arg(long, value_enum, default_value_t = CacheSwitch::On)]
     pub cache: CacheSwitch,
-    /// With SCENE: also encode the frames as DIR/video.mp4 (needs ffmpeg on PATH).
+    /// With SCENE or --trajectory: also encode the frames as DIR/video.mp4 (needs ffmpeg on PATH).
     #[arg(long)]
     pub video: bool,
     /// Exposure multiplier applied before tone mapping.
@@ -154,6 +155,31 @@ pub(super) fn load_trajectory_timed(
     }
 }
 
+/// A trajectory and the scene recorded in it, checked against each other.
+fn recorded_scene(path: &Path) -> Result<(SceneFile, SimulateOptions, Trajectory), CliError> {
+    let input = |e: &dyn std::fmt::Display| CliError::Input(e.to_string());
+    let trajectory = Trajectory::read_unchecked(path).map_err(|e| input(&e))?;
+    let Some(recorded) = &trajectory.scene else {
+        return Err(CliError::Input(format!(
+            "{}: scene: the trajectory does not record its scene (format version 1); pass the SCENE \
+             file too",
+            path.display()
+        )));
+    };
+    let file = recorded
+        .scene_file()
+        .map_err(|e| CliError::Input(format!("{}: the scene recorded in it: {e}", path.display())))?;
+    let options = recorded.options.clone();
+    let hash = options.effective_scene(&file).map_err(super::simulate::physics_error)?.source_hash;
+    if hash != trajectory.scene_hash {
+        return Err(CliError::Input(format!(
+            "{}: scene: the recorded scene does not hash to the trajectory's scene_hash (damaged file)",
+            path.display()
+        )));
+    }
+    Ok((file, options, trajectory))
+}
+
 /// `range` (default: every frame) checked against a trajectory of `total` frames.
 /// `flag` names the option in the error.
 pub(super) fn check_range(flag: &str, range: Option<FrameRange>, total: u32) -> Result<FrameRange, CliError> {
@@ -173,8 +199,10 @@ pub(super) fn run(args: &RenderArgs, threads: Option<usize>, quiet: bool) -> Res
         return Err(CliError::Input(format!("--exposure {}: must be a positive number", args.exposure)));
     }
     if args.video {
-        if args.scene_file.is_none() {
-            return Err(CliError::Input("--video needs a SCENE file (a sequence of frames)".into()));
+        if args.scene_file.is_none() && args.trajectory.is_none() {
+            return Err(CliError::Input(
+                "--video needs a SCENE file or --trajectory (a sequence of frames)".into(),
+            ));
         }
         if !render::ffmpeg_available() {
             return Err(CliError::Input(render::VideoError::FfmpegMissing.to_string()));
@@ -231,10 +259,29 @@ pub(super) fn run(args: &RenderArgs, threads: Option<usize>, quiet: bool) -> Res
         Ok::<(), CliError>(())
     };
 
-    let scene_name = match &args.scene_file {
+    // A sequence: a scene file, maybe with a trajectory of it, or a trajectory alone with the
+    // scene recorded in it.
+    let sequence_source = match (&args.scene_file, &args.trajectory) {
+        (Some(path), _) => {
+            let file = SceneFile::load(path).map_err(|e| CliError::Input(e.to_string()))?;
+            Some((file, SimulateOptions { count: args.scene.count, frames: None }, None))
+        }
+        (None, Some(path)) => {
+            let (file, options, trajectory) = recorded_scene(path)?;
+            if args.scene.count.is_some_and(|c| options.count != Some(c)) {
+                return Err(CliError::Input(format!(
+                    "--count: {} was simulated with its own object count; simulate again to change it",
+                    path.display()
+                )));
+            }
+            Some((file, options, Some(trajectory)))
+        }
+        (None, None) => None,
+    };
+    let scene_name = match sequence_source {
         None => {
-            if args.trajectory.is_some() || args.frames.is_some() {
-                return Err(CliError::Input("--trajectory and --frames need a SCENE file".into()));
+            if args.frames.is_some() {
+                return Err(CliError::Input("--frames needs a SCENE file or --trajectory".into()));
             }
             let description = args.scene.load()?;
             let mut accel = accel::create(backend, threads).map_err(|e| runtime(&e))?;
@@ -253,17 +300,21 @@ pub(super) fn run(args: &RenderArgs, threads: Option<usize>, quiet: bool) -> Res
             write_frame(0, &film, &aovs, &stats, None)?;
             description.name
         }
-        Some(scene_path) => {
-            let file = SceneFile::load(scene_path).map_err(|e| CliError::Input(e.to_string()))?;
-            let options = SimulateOptions { count: args.scene.count, frames: None };
-            let simulate_bar = super::progress::frames_bar(quiet, "simulating", None);
-            let trajectory =
-                load_trajectory_timed(&file, &options, args.trajectory.as_deref(), &mut |step| {
-                    simulate_bar.set_length(u64::from(step.frames));
-                    simulate_bar.inc(1);
-                    physics_ms.push(step.step_ms);
-                })?;
-            simulate_bar.finish_and_clear();
+        Some((file, options, preloaded)) => {
+            let trajectory = match preloaded {
+                Some(t) => t,
+                None => {
+                    let simulate_bar = super::progress::frames_bar(quiet, "simulating", None);
+                    let t =
+                        load_trajectory_timed(&file, &options, args.trajectory.as_deref(), &mut |step| {
+                            simulate_bar.set_length(u64::from(step.frames));
+                            simulate_bar.inc(1);
+                            physics_ms.push(step.step_ms);
+                        })?;
+                    simulate_bar.finish_and_clear();
+                    t
+                }
+            };
             let physics_source =
                 if args.trajectory.is_some() { PhysicsSource::Trajectory } else { PhysicsSource::Simulated };
             let physics_total_ms =

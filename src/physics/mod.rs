@@ -24,4 +24,4 @@ pub use island::{IslandCounters, IslandEvent, IslandId, IslandTracker, SleepObse
 pub use simulate::{simulate, simulate_observed, SimulateOptions, SimulatedFrame};
 pub use simulation::{FrameRecord, Simulation, SimulationCounters};
 pub use stats::IslandStats;
-pub use trajectory::{Replay, ReplayFrame, Trajectory, TrajectoryError};
+pub use trajectory::{RecordedScene, Replay, ReplayFrame, Trajectory, TrajectoryError};

@@ -61,6 +61,7 @@ pub fn simulate_observed(
     options: &SimulateOptions,
     on_frame: &mut dyn FnMut(SimulatedFrame),
 ) -> Result<Trajectory, PhysicsError> {
+    let recorded = super::trajectory::RecordedScene::new(file, options);
     let file = options.effective_scene(file)?;
     let mut sim = Simulation::new(&file)?;
     let frames = file.description.scene.frames;
@@ -84,6 +85,7 @@ pub fn simulate_observed(
     Ok(Trajectory {
         scene_hash: file.source_hash,
         timestep: file.description.physics.timestep,
+        scene: Some(recorded),
         prototypes: file.description.prototypes.iter().map(|p| p.name.clone()).collect(),
         bodies: sim.bodies().to_vec(),
         frames: records,

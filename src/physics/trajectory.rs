@@ -2,9 +2,11 @@
 //! versioned binary file that carries the scene's hash. Rendering can replay one instead of
 //! simulating.
 //!
-//! Format (little endian), version 1:
+//! Format (little endian), version 2:
 //! ```text
 //! magic "DORMTRAJ" | version u32 | scene_hash u64 | timestep f32
+//! scene:      u8 recorded [0, 1]; if 1: path, asset_dir, source (each u32 len, utf-8),
+//!             count and frames overrides (each u8 present, u32 value)
 //! prototypes: u32 n, then n x (u32 len, utf-8 name)
 //! bodies:     u32 n, then n x (prototype u32, kind u8 [0 dynamic, 1 kinematic], spawn_frame u32)
 //! frames:     u32 n, then per frame:
@@ -14,6 +16,7 @@
 //!                       slept only: u32 m, m x (body u32, translation, rotation))
 //! checksum u64: FNV-1a 64 of every byte before it
 //! ```
+//! Version 1 is version 2 without the `scene` section; it still reads, with no recorded scene.
 //! A frame stores the poses of bodies awake at its end and of bodies that fell asleep
 //! during it; a sleeping body keeps its last stored pose.
 
@@ -23,8 +26,9 @@ use glam::{Quat, Vec3};
 
 use super::body::{BodyId, BodyInfo, BodyKind, BodyPose, BodyState};
 use super::island::{IslandEvent, IslandId};
+use super::simulate::SimulateOptions;
 use super::simulation::FrameRecord;
-use crate::scene::file::fnv1a64;
+use crate::scene::file::{fnv1a64, SceneError, SceneFile};
 
 const MAGIC: &[u8; 8] = b"DORMTRAJ";
 
@@ -39,12 +43,44 @@ pub enum TrajectoryError {
     },
     #[error("{}: not a dormant trajectory (bad magic)", .file.display())]
     NotATrajectory { file: PathBuf },
-    #[error("{}: version: trajectory format version {found}, this build reads version {expected}", .file.display())]
+    #[error("{}: version: trajectory format version {found}, this build reads versions 1 to {expected}", .file.display())]
     Version { file: PathBuf, found: u32, expected: u32 },
     #[error("{}: scene_hash: trajectory was made from another scene (hash {found:016x}, expected {expected:016x})", .file.display())]
     SceneMismatch { file: PathBuf, found: u64, expected: u64 },
     #[error("{}: {field}: {message}", .file.display())]
     Corrupt { file: PathBuf, field: String, message: String },
+}
+
+/// The scene file a trajectory was simulated from, recorded in it so that the trajectory alone
+/// can be rendered (`dormant render --trajectory FILE`).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct RecordedScene {
+    /// Where the scene file was (names it in messages).
+    pub path: PathBuf,
+    /// The absolute directory its relative asset paths resolved against.
+    pub asset_dir: PathBuf,
+    /// The scene file's text.
+    pub source: String,
+    /// The overrides it was simulated with.
+    pub options: SimulateOptions,
+}
+
+impl RecordedScene {
+    /// Records `file` (as read, before `options` apply).
+    pub fn new(file: &SceneFile, options: &SimulateOptions) -> Self {
+        let absolute = |p: PathBuf| std::path::absolute(&p).unwrap_or(p);
+        Self {
+            path: file.path.clone(),
+            asset_dir: absolute(file.asset_dir()),
+            source: file.source().to_string(),
+            options: options.clone(),
+        }
+    }
+
+    /// The scene file again, its assets resolved where they were when it was simulated.
+    pub fn scene_file(&self) -> Result<SceneFile, SceneError> {
+        SceneFile::parse_with_assets(&self.path, self.source.as_str(), Some(&self.asset_dir))
+    }
 }
 
 /// A recorded simulation.
@@ -54,6 +90,8 @@ pub struct Trajectory {
     pub scene_hash: u64,
     /// Simulated seconds per frame.
     pub timestep: f32,
+    /// The scene it was simulated from; `None` in version-1 files.
+    pub scene: Option<RecordedScene>,
     /// Prototype names, indexed by [`BodyInfo::prototype`].
     pub prototypes: Vec<String>,
     pub bodies: Vec<BodyInfo>,
@@ -61,7 +99,7 @@ pub struct Trajectory {
 }
 
 impl Trajectory {
-    pub const FORMAT_VERSION: u32 = 1;
+    pub const FORMAT_VERSION: u32 = 2;
 
     /// Encodes the trajectory; identical trajectories give identical bytes.
     pub fn to_bytes(&self) -> Vec<u8> {
@@ -70,6 +108,19 @@ impl Trajectory {
         put_u32(&mut w, Self::FORMAT_VERSION);
         w.extend_from_slice(&self.scene_hash.to_le_bytes());
         put_f32(&mut w, self.timestep);
+        match &self.scene {
+            None => w.push(0),
+            Some(scene) => {
+                w.push(1);
+                put_str(&mut w, &scene.path.to_string_lossy());
+                put_str(&mut w, &scene.asset_dir.to_string_lossy());
+                put_str(&mut w, &scene.source);
+                for v in [scene.options.count, scene.options.frames] {
+                    w.push(u8::from(v.is_some()));
+                    put_u32(&mut w, v.unwrap_or(0));
+                }
+            }
+        }
         put_u32(&mut w, self.prototypes.len() as u32);
         for name in &self.prototypes {
             put_u32(&mut w, name.len() as u32);
@@ -131,7 +182,7 @@ impl Trajectory {
         }
         let mut r = Reader { bytes, at: MAGIC.len() };
         let version = r.u32().ok_or_else(|| corrupt("version", "truncated".into()))?;
-        if version != Self::FORMAT_VERSION {
+        if version != Self::FORMAT_VERSION && version != 1 {
             return Err(TrajectoryError::Version {
                 file: file.to_path_buf(),
                 found: version,
@@ -156,6 +207,32 @@ impl Trajectory {
         if !(timestep.is_finite() && timestep > 0.0) {
             return Err(corrupt("timestep", format!("must be positive and finite, got {timestep}")));
         }
+        let scene = match version {
+            1 => None,
+            _ => match r.u8() {
+                Some(0) => None,
+                Some(1) => {
+                    let mut text = |field: &str| -> Result<String, TrajectoryError> {
+                        let len = r.count(1).ok_or_else(|| truncated(field))?;
+                        let raw = r.take(len).ok_or_else(|| truncated(field))?;
+                        String::from_utf8(raw.to_vec()).map_err(|_| corrupt(field, "not UTF-8".into()))
+                    };
+                    let (path, asset_dir, source) =
+                        (text("scene.path")?, text("scene.asset_dir")?, text("scene.source")?);
+                    let mut option = |field: &str| match (r.u8(), r.u32()) {
+                        (Some(0), Some(_)) => Ok(None),
+                        (Some(1), Some(v)) => Ok(Some(v)),
+                        (Some(_), Some(_)) => Err(corrupt(field, "bad presence flag".into())),
+                        _ => Err(truncated(field)),
+                    };
+                    let options =
+                        SimulateOptions { count: option("scene.count")?, frames: option("scene.frames")? };
+                    Some(RecordedScene { path: path.into(), asset_dir: asset_dir.into(), source, options })
+                }
+                Some(_) => return Err(corrupt("scene", "bad presence flag".into())),
+                None => return Err(truncated("scene")),
+            },
+        };
         let n = r.count(4).ok_or_else(|| truncated("prototypes"))?;
         let mut prototypes = Vec::with_capacity(n);
         for i in 0..n {
@@ -248,7 +325,7 @@ impl Trajectory {
                 format!("{} unexpected bytes after the last frame", body_bytes.len() - r.at),
             ));
         }
-        Ok(Self { scene_hash, timestep, prototypes, bodies, frames })
+        Ok(Self { scene_hash, timestep, scene, prototypes, bodies, frames })
     }
 
     /// Writes the trajectory atomically: a temporary file in the same directory, then a
@@ -366,6 +443,11 @@ impl EventChecker {
 
 fn put_u32(w: &mut Vec<u8>, v: u32) {
     w.extend_from_slice(&v.to_le_bytes());
+}
+
+fn put_str(w: &mut Vec<u8>, s: &str) {
+    put_u32(w, s.len() as u32);
+    w.extend_from_slice(s.as_bytes());
 }
 
 fn put_f32(w: &mut Vec<u8>, v: f32) {
