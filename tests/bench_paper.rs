@@ -132,8 +132,8 @@ fn asset_rain_scales_objects_to_the_environment_and_spawns_above_it() {
     let file = SceneFile::asset_rain(&dir.join("monastery.glb"), &objects, 500, 300).unwrap();
     let d = &file.description;
     assert_eq!(d.scene.frames, 300);
-    assert_eq!(d.spawners.len(), 1);
-    assert_eq!(d.spawners[0].count, 500);
+    assert_eq!(d.spawners.len(), 2);
+    assert_eq!(d.spawners.iter().map(|s| s.count).sum::<u32>(), 500);
     let env = dormant::scene::file::environment_mesh(&file).unwrap().bounds();
     let width = env.extent().x.max(env.extent().z);
     for (i, p) in d.prototypes.iter().enumerate() {
@@ -141,8 +141,10 @@ fn asset_rain_scales_objects_to_the_environment_and_spawns_above_it() {
         let size = dormant::scene::file::prototype_mesh(&file, i).unwrap().bounds().extent().max_element();
         assert!((size / width - 1.0 / 150.0).abs() < 1e-4, "{}: {size} in {width}", p.name);
     }
-    let region = d.spawners[0].region;
-    assert!(region.min[1] > env.max.y, "spawns inside the environment");
-    assert!(region.min[0] > env.min.x && region.max[0] < env.max.x);
-    assert!(region.min[2] > env.min.z && region.max[2] < env.max.z);
+    for spawner in &d.spawners {
+        let region = spawner.region;
+        assert!(region.min[1] > env.max.y, "spawns inside the environment");
+        assert!(region.min[0] > env.min.x && region.max[0] < env.max.x);
+        assert!(region.min[2] > env.min.z && region.max[2] < env.max.z);
+    }
 }

@@ -78,7 +78,8 @@ pub struct PolicyRun {
 /// The headline numbers.
 #[derive(Clone, Copy, Debug, Default, Serialize)]
 pub struct IntegrationRatios {
-    /// Settled-phase mean frame time, `never` over `auto` (cache on).
+    /// Settled-phase mean frame time, `never` over `auto` (cache on); NaN without settled
+    /// frames.
     pub settled_speedup: f64,
     /// Whole-run frame time, `never` over `auto` (cache on).
     pub run_speedup: f64,
@@ -369,7 +370,11 @@ pub fn bench_integration(
         find(IntegrationPolicy::Auto, true),
     );
     let ratios = IntegrationRatios {
-        settled_speedup: never.settled.frame_ms / auto.settled.frame_ms.max(1e-9),
+        // NaN (null in JSON) when no frame settled.
+        settled_speedup: match never.settled.frames {
+            0 => f64::NAN,
+            _ => never.settled.frame_ms / auto.settled.frame_ms.max(1e-9),
+        },
         run_speedup: never.total_ms / auto.total_ms.max(1e-9),
         auto_over_best: auto.total_ms / never.total_ms.min(always.total_ms).max(1e-9),
         rebuild_over_insert: rebuild_ms / mean_insert_ms.max(1e-9),

@@ -448,7 +448,9 @@ fn check_claims(w: &WorkloadReport) -> Vec<ClaimCheck> {
 }
 
 fn grade(measured: f64, reproduced: f64, partly: f64) -> Verdict {
-    if measured >= reproduced {
+    if measured.is_nan() {
+        Verdict::NoData
+    } else if measured >= reproduced {
         Verdict::Reproduced
     } else if measured >= partly {
         Verdict::Partly

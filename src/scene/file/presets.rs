@@ -17,6 +17,8 @@ const ATRIUM_TOML: &str = include_str!("../../../scenes/atrium.toml");
 const OBJECT_FRACTION_OF_WIDTH: f32 = 1.0 / 150.0;
 /// Objects spawn over this central fraction of the environment's width and depth.
 const SPAWN_FRACTION: f32 = 0.6;
+/// Gap between the two spawn quadrants and the centre lines, as a fraction of the extent.
+const SPAWN_GAP_FRACTION: f32 = 0.04;
 /// Height of the spawn plane above the environment's top, in object sizes.
 const SPAWN_CLEARANCE_OBJECTS: f32 = 5.0;
 
@@ -27,8 +29,8 @@ impl SceneFile {
             .expect("the compiled-in atrium scene is valid (tests/bench_paper.rs)")
     }
 
-    /// `count` copies of the `objects` glTFs (picked at random) raining in eight waves onto the
-    /// `env` glTF, simulated for `frames` frames: `scenes/monastery-rain.toml` for any assets.
+    /// `count` copies of the `objects` glTFs (picked at random) raining in eight waves over two
+    /// opposite quadrants of the `env` glTF, simulated for `frames` frames: `scenes/monastery-rain.toml` for any assets.
     /// Objects get convex-hull colliders and a scale relative to the environment's width.
     pub fn asset_rain(
         env: &Path,
@@ -84,20 +86,30 @@ impl SceneFile {
             );
             names.push(format!("\"{name}\""));
         }
+        // Two spawners over opposite quadrants of the central area, half the objects each, the
+        // second a little later, as scenes/monastery-rain.toml does: one region over the
+        // centre left 13% of the objects awake (on roofs) after 1,800 frames, against 3%.
         let centre = env_bounds.center();
         let half = env_bounds.extent() * (0.5 * SPAWN_FRACTION);
+        let gap = env_bounds.extent() * SPAWN_GAP_FRACTION;
         let y = env_bounds.max.y + SPAWN_CLEARANCE_OBJECTS * object_size;
-        text += &format!(
-            "[[spawners]]\nprototypes = [{names}]\ncount = {count}\n\
-             region = {{ min = [{x0}, {y}, {z0}], max = [{x1}, {y}, {z1}] }}\n\
-             waves = 8\nwave_interval = 0.75\nposition_jitter = {jitter}\n\n",
-            names = names.join(", "),
-            x0 = centre.x - half.x,
-            x1 = centre.x + half.x,
-            z0 = centre.z - half.z,
-            z1 = centre.z + half.z,
-            jitter = 0.1 * object_size,
-        );
+        let quadrants = [(-1.0f32, -1.0f32, 0.0f32), (1.0, 1.0, 0.3)];
+        for (k, (sx, sz, start)) in quadrants.into_iter().enumerate() {
+            let (xa, xb) = (centre.x + sx * gap.x, centre.x + sx * half.x);
+            let (za, zb) = (centre.z + sz * gap.z, centre.z + sz * half.z);
+            text += &format!(
+                "[[spawners]]\nprototypes = [{names}]\ncount = {count}\n\
+                 region = {{ min = [{x0}, {y}, {z0}], max = [{x1}, {y}, {z1}] }}\n\
+                 waves = 8\nwave_interval = 0.75\nstart_time = {start}\nposition_jitter = {jitter}\n\n",
+                names = names.join(", "),
+                count = count / 2 + (count % 2) * u32::from(k == 0),
+                x0 = xa.min(xb),
+                x1 = xa.max(xb),
+                z0 = za.min(zb),
+                z1 = za.max(zb),
+                jitter = 0.1 * object_size,
+            );
+        }
         let eye = centre + glam::Vec3::new(0.0, 0.55 * width, 0.85 * width);
         text += &format!(
             "[[cameras]]\nname = \"overview\"\nposition = [{}, {}, {}]\nlook_at = [{}, {}, {}]\n\
