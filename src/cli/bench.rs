@@ -66,6 +66,9 @@ pub struct PaperArgs {
     /// Backends to compare (repeat; default: every compiled one).
     #[arg(long)]
     pub backend: Vec<crate::accel::Backend>,
+    /// Also write the report (paper.json's contents) to FILE, or stdout.
+    #[command(flatten)]
+    pub json: JsonOutput,
 }
 
 #[derive(Debug, Args)]
