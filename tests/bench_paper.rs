@@ -3,7 +3,9 @@
 //! it builds: the compiled-in atrium and the asset rain over the shared assets (skipped when
 //! ../shared/assets is absent).
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use std::path::Path;
 use std::process::Command;
 
 use dormant::scene::file::{ColliderKind, SceneFile};
@@ -115,19 +117,9 @@ fn compiled_in_atrium_is_the_scene_file() {
     assert_eq!(built_in.source_hash, on_disk.source_hash);
 }
 
-fn assets() -> Option<PathBuf> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/assets");
-    if dir.join("monastery.glb").is_file() && dir.join("duck.glb").is_file() {
-        Some(dir)
-    } else {
-        eprintln!("skipped: ../shared/assets is absent");
-        None
-    }
-}
-
 #[test]
 fn asset_rain_scales_objects_to_the_environment_and_spawns_above_it() {
-    let Some(dir) = assets() else { return };
+    let Some(dir) = common::shared_assets() else { return };
     let objects = [dir.join("duck.glb"), dir.join("soccerball.glb")];
     let file = SceneFile::asset_rain(&dir.join("monastery.glb"), &objects, 500, 300).unwrap();
     let d = &file.description;

@@ -2,22 +2,13 @@
 //! ../shared/assets exists) on the monastery with ducks.
 #![cfg(feature = "embree")]
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use std::path::Path;
 use std::process::Command;
 
 fn dormant() -> Command {
     Command::new(env!("CARGO_BIN_EXE_dormant"))
-}
-
-/// The shared real assets, or `None` (and a note) when this checkout does not have them.
-fn assets() -> Option<PathBuf> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/assets");
-    if dir.join("monastery.glb").is_file() && dir.join("duck.glb").is_file() {
-        Some(dir)
-    } else {
-        eprintln!("skipped: ../shared/assets is absent");
-        None
-    }
 }
 
 fn read_json(path: &Path) -> serde_json::Value {
@@ -62,7 +53,7 @@ fn verify_simulated_frames_of_a_scene_file_has_no_mismatches() {
 
 #[test]
 fn verify_monastery_with_ducks_has_no_mismatches() {
-    let Some(assets) = assets() else { return };
+    let Some(assets) = common::shared_assets() else { return };
     let dir = tempfile::tempdir().unwrap();
     let json = dir.path().join("verify.json");
     let status = dormant()

@@ -3,6 +3,8 @@
 //! data), the duck from ../shared/assets when present, and punctual lights against their
 //! closed forms.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -290,19 +292,9 @@ fn malformed_geometry_is_an_error_naming_file_and_element() {
     assert!(err.contains("bad-accessor.gltf") && err.contains("accessors[0]"), "{err}");
 }
 
-fn shared_asset(name: &str) -> Option<PathBuf> {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/assets").join(name);
-    if path.is_file() {
-        Some(path)
-    } else {
-        eprintln!("skipped: ../shared/assets is absent");
-        None
-    }
-}
-
 #[test]
 fn duck_in_a_scene_file_renders_with_its_texture_not_the_palette() {
-    let Some(duck) = shared_asset("duck.glb") else { return };
+    let Some(duck) = common::shared_assets().map(|d| d.join("duck.glb")) else { return };
     let dir = tempfile::tempdir().unwrap();
     let toml = format!(
         "[scene]\nname = \"duck\"\nframes = 1\n\n[environment]\ngenerator = \"ground\"\n\n\
