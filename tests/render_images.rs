@@ -1,11 +1,14 @@
 //! Renderer tests: analytic scenes (white furnace, a directly lit plane), deterministic output
-//! across thread counts, and equal images from both backends.
+//! across thread counts, equal images from both backends, and from camera-ray packets and
+//! single rays.
 
 use std::process::Command;
 
-use dormant::accel::{self, Backend};
-use dormant::geometry::primitives;
-use dormant::render::{render_frame, Film, Integrator, PathTracer, RenderScene, RenderSettings};
+use dormant::accel::{self, Backend, Hit, SceneQuery};
+use dormant::geometry::{primitives, Ray};
+use dormant::render::{
+    render_frame, AmbientOcclusion, DirectLighting, Film, Integrator, PathTracer, RenderScene, RenderSettings,
+};
 use dormant::scene::{Body, Camera, Material, Prototype, SceneDescription, Sky, StaticMesh, Sun};
 use glam::{Affine3A, Vec3};
 
@@ -126,4 +129,38 @@ fn png_is_byte_identical_with_one_and_two_threads() {
         pngs.push(std::fs::read(out.join("frame_0000.png")).unwrap());
     }
     assert!(pngs[0] == pngs[1], "images differ between 1 and 2 threads");
+}
+
+/// Forwards the single-ray queries only, so the renderer's camera-ray packets fall back to
+/// the per-ray loop.
+struct SingleRays<'a>(&'a dyn SceneQuery);
+
+impl SceneQuery for SingleRays<'_> {
+    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        self.0.intersect(ray)
+    }
+
+    fn intersect_p(&self, ray: &Ray) -> bool {
+        self.0.intersect_p(ray)
+    }
+}
+
+#[test]
+fn camera_ray_packets_give_the_same_image_as_single_rays() {
+    let desc = dormant::scene::default_scene();
+    let integrators: [&dyn Integrator; 3] =
+        [&PathTracer::default(), &DirectLighting, &AmbientOcclusion { radius: 1.0 }];
+    for backend in Backend::compiled() {
+        let mut a = accel::create(backend, Some(2)).unwrap();
+        let scene = RenderScene::build(&desc, a.as_mut()).unwrap();
+        let q = a.query().unwrap();
+        // Odd sizes leave partial 16x16 tiles and partial packets at the borders.
+        for (integrator, spp) in integrators.into_iter().zip([3, 1, 2]) {
+            let settings = RenderSettings { width: 37, height: 23, spp, frame: 1 };
+            let (packets, p_stats) = render_frame(&scene, q, integrator, &settings).unwrap();
+            let (single, s_stats) = render_frame(&scene, &SingleRays(q), integrator, &settings).unwrap();
+            assert!(packets.pixels == single.pixels, "{backend}: packets changed the image");
+            assert_eq!(p_stats.rays, s_stats.rays);
+        }
+    }
 }

@@ -76,6 +76,31 @@ pub trait SceneQuery: Sync {
     fn intersect(&self, ray: &Ray) -> Option<Hit>;
     /// Whether anything blocks `ray` within `[t_min, t_max]` (shadow and occlusion rays).
     fn intersect_p(&self, ray: &Ray) -> bool;
+
+    /// Closest hits of a group of rays, `hits[i]` for `rays[i]`, equal to [`Self::intersect`]
+    /// per ray. For coherent groups (neighbouring pixels): Embree traces up to 16 at a time as
+    /// one packet; the default (the BVH) loops over the rays.
+    ///
+    /// # Panics
+    /// If `rays` and `hits` differ in length.
+    fn intersect_packet(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
+        assert_eq!(rays.len(), hits.len(), "one hit slot per ray");
+        for (ray, hit) in rays.iter().zip(hits) {
+            *hit = self.intersect(ray);
+        }
+    }
+
+    /// Occlusion of a group of rays, `occluded[i]` for `rays[i]`, equal to
+    /// [`Self::intersect_p`] per ray; packets as in [`Self::intersect_packet`].
+    ///
+    /// # Panics
+    /// If `rays` and `occluded` differ in length.
+    fn intersect_p_packet(&self, rays: &[Ray], occluded: &mut [bool]) {
+        assert_eq!(rays.len(), occluded.len(), "one result slot per ray");
+        for (ray, o) in rays.iter().zip(occluded) {
+            *o = self.intersect_p(ray);
+        }
+    }
 }
 
 /// A two-level ray tracing scene: prototypes, static geometry and instances.

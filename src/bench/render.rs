@@ -5,7 +5,11 @@
 //!   camera rays (one per pixel, closest hit), shadow rays (from each camera hit towards a
 //!   point on the sun's disc, any hit) and bounce rays (cosine-distributed from each camera
 //!   hit, closest hit); rayon over all cores, best of N runs;
-//! - **frame**: a whole frame of the path tracer (as `dormant render`), best of N runs, as
+//! - **packets**: the camera and shadow rays regrouped by pixel tiles (2x2, 4x2, 8x1, 4x4),
+//!   traced one by one and as packets ([`SceneQuery::intersect_packet`]) on the same rays in
+//!   the same order, runs interleaved, with the packet-over-single ratio;
+//! - **frame**: a whole frame of the path tracer (as `dormant render`, camera rays in packets),
+//!   and the same frame through single rays only, runs interleaved, best of N runs each, as
 //!   samples per second and the integrator's rays per second (all types together).
 
 use glam::Vec2;
@@ -63,6 +67,17 @@ pub struct FrameTiming {
     pub rays: u64,
 }
 
+impl FrameTiming {
+    fn new(ms: f64, samples: f64, rays: u64) -> Self {
+        Self {
+            ms,
+            samples_per_s: samples / ms.max(1e-9) * 1e3,
+            mrays_per_s: rays as f64 / ms.max(1e-9) / 1e3,
+            rays,
+        }
+    }
+}
+
 #[derive(Clone, Debug, Serialize)]
 pub struct BackendRenderTiming {
     pub backend: Backend,
@@ -71,7 +86,30 @@ pub struct BackendRenderTiming {
     pub camera: RayTiming,
     pub shadow: RayTiming,
     pub bounce: RayTiming,
+    pub packets: PacketTimings,
     pub frame: FrameTiming,
+    /// The same frame with every ray traced alone (packet queries fall back to the per-ray
+    /// loop): what packets of camera rays gain on a whole frame.
+    pub frame_single_rays: FrameTiming,
+}
+
+/// One ray set grouped by one pixel tile, traced ray by ray and as packets.
+#[derive(Clone, Debug, Serialize)]
+pub struct PacketTiming {
+    /// Pixels per packet, columns x rows (shadow packets hold only the tile's pixels that
+    /// have a shadow ray).
+    pub tile: String,
+    pub packets: usize,
+    pub single: RayTiming,
+    pub packet: RayTiming,
+    /// Packet over single-ray throughput: above 1 means packets pay.
+    pub packet_over_single: f64,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct PacketTimings {
+    pub camera: Vec<PacketTiming>,
+    pub shadow: Vec<PacketTiming>,
 }
 
 /// BVH over Embree: ratios of throughput (Mrays/s or samples/s), so below 1 means the BVH is
@@ -82,6 +120,8 @@ pub struct RenderRatios {
     pub bvh_over_embree_shadow: Option<f64>,
     pub bvh_over_embree_bounce: Option<f64>,
     pub bvh_over_embree_frame_samples: Option<f64>,
+    /// Embree's frame with camera-ray packets over the same frame in single rays.
+    pub embree_frame_packets_over_single: Option<f64>,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -98,9 +138,56 @@ pub struct RenderBenchReport {
 
 /// The three ray sets, made from the camera hits of the first backend.
 struct RaySets {
+    width: u32,
+    height: u32,
+    /// Row-major, one per pixel.
     camera: Vec<Ray>,
     shadow: Vec<Ray>,
+    /// The pixel (row-major index) each shadow ray belongs to.
+    shadow_pixel: Vec<u32>,
     bounce: Vec<Ray>,
+}
+
+/// Pixel tiles (columns, rows) the packet measurement groups rays by.
+const PACKET_TILES: [(u32, u32); 4] = [(2, 2), (4, 2), (8, 1), (4, 4)];
+
+/// A ray set regrouped into packets of neighbouring pixels: packet `k` is
+/// `rays[ranges[k].0..ranges[k].1]`.
+struct Packets {
+    rays: Vec<Ray>,
+    ranges: Vec<(usize, usize)>,
+}
+
+impl Packets {
+    /// Groups `rays` (with `pixel[i]` the row-major pixel of `rays[i]`) by `tile`-sized pixel
+    /// tiles, tiles in row-major order, pixels row-major within a tile.
+    fn by_tiles(
+        rays: &[Ray],
+        pixel: impl Fn(usize) -> u32,
+        width: u32,
+        height: u32,
+        tile: (u32, u32),
+    ) -> Self {
+        let mut of_pixel = vec![None; (width * height) as usize];
+        for i in 0..rays.len() {
+            of_pixel[pixel(i) as usize] = Some(i);
+        }
+        let (mut out, mut ranges) = (Vec::with_capacity(rays.len()), Vec::new());
+        for ty in (0..height).step_by(tile.1 as usize) {
+            for tx in (0..width).step_by(tile.0 as usize) {
+                let start = out.len();
+                for y in ty..(ty + tile.1).min(height) {
+                    for x in tx..(tx + tile.0).min(width) {
+                        out.extend(of_pixel[(y * width + x) as usize].map(|i| rays[i]));
+                    }
+                }
+                if out.len() > start {
+                    ranges.push((start, out.len()));
+                }
+            }
+        }
+        Self { rays: out, ranges }
+    }
 }
 
 impl RaySets {
@@ -110,16 +197,32 @@ impl RaySets {
             camera.par_iter().map(|r| query.intersect(r).map(|h| (r.at(h.t), h.ng, r.dir))).collect();
         let mut rng = SplitMix64::new(11);
         let cos_max = desc.sun.angular_radius_deg.max(0.01).to_radians().cos();
-        let (mut shadow, mut bounce) = (Vec::new(), Vec::new());
-        for (p, ng, dir) in hits.into_iter().flatten() {
+        let (mut shadow, mut shadow_pixel, mut bounce) = (Vec::new(), Vec::new(), Vec::new());
+        for (pixel, hit) in hits.into_iter().enumerate() {
+            let Some((p, ng, dir)) = hit else { continue };
             let n = if ng.dot(dir) > 0.0 { -ng } else { ng };
             let l = sample_cone(desc.sun.direction, cos_max, Vec2::new(rng.unit(), rng.unit()));
             if n.dot(l) > 0.0 {
                 shadow.push(Ray::spawn(p, n, l));
+                shadow_pixel.push(pixel as u32);
             }
             bounce.push(Ray::spawn(p, n, sample_cosine(n, Vec2::new(rng.unit(), rng.unit()))));
         }
-        Self { camera, shadow, bounce }
+        Self { width, height, camera, shadow, shadow_pixel, bounce }
+    }
+}
+
+/// Forwards the single-ray queries only, so packet queries take the trait's per-ray loop:
+/// the renderer without packets, for the side-by-side frame timing.
+struct SingleRays<'a>(&'a dyn SceneQuery);
+
+impl SceneQuery for SingleRays<'_> {
+    fn intersect(&self, ray: &Ray) -> Option<crate::accel::Hit> {
+        self.0.intersect(ray)
+    }
+
+    fn intersect_p(&self, ray: &Ray) -> bool {
+        self.0.intersect_p(ray)
     }
 }
 
@@ -143,6 +246,69 @@ fn trace_any(query: &dyn SceneQuery, rays: &[Ray]) -> f64 {
     ms
 }
 
+/// Closest hits (`closest`) or occlusion of every packet, ray by ray or as packets, over
+/// rayon with one packet per work item either way.
+fn trace_packets(query: &dyn SceneQuery, packets: &Packets, closest: bool, as_packets: bool) -> f64 {
+    let (sum, ms) = timed(|| {
+        packets
+            .ranges
+            .par_iter()
+            .map(|&(a, b)| {
+                let rays = &packets.rays[a..b];
+                let (mut hits, mut occluded) = ([None; 16], [false; 16]);
+                let mut sum = 0.0;
+                for (rays, hits) in rays.chunks(16).zip(hits.chunks_mut(16)) {
+                    let hits = &mut hits[..rays.len()];
+                    let occluded = &mut occluded[..rays.len()];
+                    match (closest, as_packets) {
+                        (true, true) => query.intersect_packet(rays, hits),
+                        (true, false) => hits.iter_mut().zip(rays).for_each(|(h, r)| *h = query.intersect(r)),
+                        (false, true) => query.intersect_p_packet(rays, occluded),
+                        (false, false) => {
+                            occluded.iter_mut().zip(rays).for_each(|(o, r)| *o = query.intersect_p(r))
+                        }
+                    }
+                    sum += hits.iter().map(|h| h.map_or(0.0, |h| h.t as f64)).sum::<f64>();
+                    sum += occluded.iter().filter(|&&o| o).count() as f64;
+                }
+                sum
+            })
+            .sum::<f64>()
+    });
+    std::hint::black_box(sum);
+    ms
+}
+
+/// Single rays against packets on every tile shape, runs interleaved so load changes hit both.
+fn bench_packets(query: &dyn SceneQuery, sets: &RaySets, runs: u32) -> PacketTimings {
+    let measure = |rays: &[Ray], pixel: &dyn Fn(usize) -> u32, closest: bool| {
+        PACKET_TILES
+            .iter()
+            .map(|&tile| {
+                let packets = Packets::by_tiles(rays, pixel, sets.width, sets.height, tile);
+                let (mut single, mut packet) = (f64::INFINITY, f64::INFINITY);
+                for _ in 0..runs.max(1) {
+                    single = single.min(trace_packets(query, &packets, closest, false));
+                    packet = packet.min(trace_packets(query, &packets, closest, true));
+                }
+                let (single, packet) =
+                    (RayTiming::new(packets.rays.len(), single), RayTiming::new(packets.rays.len(), packet));
+                PacketTiming {
+                    tile: format!("{}x{}", tile.0, tile.1),
+                    packets: packets.ranges.len(),
+                    packet_over_single: packet.mrays_per_s / single.mrays_per_s.max(1e-12),
+                    single,
+                    packet,
+                }
+            })
+            .collect()
+    };
+    PacketTimings {
+        camera: measure(&sets.camera, &|i| i as u32, true),
+        shadow: measure(&sets.shadow, &|i| sets.shadow_pixel[i], false),
+    }
+}
+
 pub fn bench_render(
     desc: &SceneDescription,
     opts: &RenderBenchOptions,
@@ -162,35 +328,29 @@ pub fn bench_render(
         let camera = best_of(opts.runs, || trace_closest(query, &sets.camera));
         let shadow = best_of(opts.runs, || trace_any(query, &sets.shadow));
         let bounce = best_of(opts.runs, || trace_closest(query, &sets.bounce));
-        let mut rays = 0;
-        let mut frame_err = None;
-        let frame_ms = best_of(opts.runs, || match render_frame(&scene, query, &integrator, &settings) {
-            Ok((_, stats)) => {
-                rays = stats.rays;
-                stats.seconds * 1e3
-            }
-            Err(e) => {
-                frame_err = Some(e);
-                f64::INFINITY
-            }
-        });
-        if let Some(e) = frame_err {
-            return Err(e);
+        let packets = bench_packets(query, sets, opts.runs);
+        // The renderer as it is (camera rays in packets) and through single rays only, runs
+        // interleaved.
+        let (mut rays, mut frame_ms, mut single_ms) = (0, f64::INFINITY, f64::INFINITY);
+        for _ in 0..opts.runs.max(1) {
+            let (_, stats) = render_frame(&scene, query, &integrator, &settings)?;
+            (rays, frame_ms) = (stats.rays, frame_ms.min(stats.seconds * 1e3));
+            let (_, stats) = render_frame(&scene, &SingleRays(query), &integrator, &settings)?;
+            single_ms = single_ms.min(stats.seconds * 1e3);
         }
         let samples = opts.width as f64 * opts.height as f64 * opts.spp as f64;
-        tracing::info!("bench render: {backend} frame in {frame_ms:.1} ms");
+        tracing::info!(
+            "bench render: {backend} frame in {frame_ms:.1} ms ({single_ms:.1} ms in single rays)"
+        );
         backends.push(BackendRenderTiming {
             backend,
             build_ms,
             camera: RayTiming::new(sets.camera.len(), camera),
             shadow: RayTiming::new(sets.shadow.len(), shadow),
             bounce: RayTiming::new(sets.bounce.len(), bounce),
-            frame: FrameTiming {
-                ms: frame_ms,
-                samples_per_s: samples / frame_ms.max(1e-9) * 1e3,
-                mrays_per_s: rays as f64 / frame_ms.max(1e-9) / 1e3,
-                rays,
-            },
+            packets,
+            frame: FrameTiming::new(frame_ms, samples, rays),
+            frame_single_rays: FrameTiming::new(single_ms, samples, rays),
         });
     }
     let find = |b: Backend| backends.iter().find(|t| t.backend == b);
@@ -203,6 +363,8 @@ pub fn bench_render(
         bvh_over_embree_shadow: ratio(|t| t.shadow.mrays_per_s),
         bvh_over_embree_bounce: ratio(|t| t.bounce.mrays_per_s),
         bvh_over_embree_frame_samples: ratio(|t| t.frame.samples_per_s),
+        embree_frame_packets_over_single: find(Backend::Embree)
+            .map(|t| t.frame.samples_per_s / t.frame_single_rays.samples_per_s.max(1e-12)),
     };
     Ok(RenderBenchReport {
         scene: desc.name.clone(),
@@ -232,6 +394,14 @@ mod tests {
             assert_eq!(b.shadow.rays, report.backends[0].shadow.rays);
             assert_eq!(b.bounce.rays, report.backends[0].bounce.rays);
             assert!(b.frame.samples_per_s.is_finite() && b.frame.samples_per_s > 0.0);
+            let tiles: Vec<&str> = b.packets.camera.iter().map(|p| p.tile.as_str()).collect();
+            assert_eq!(tiles, ["2x2", "4x2", "8x1", "4x4"]);
+            for (camera, shadow) in b.packets.camera.iter().zip(&b.packets.shadow) {
+                assert_eq!(camera.packet.rays, 24 * 16);
+                assert_eq!(shadow.single.rays, b.shadow.rays);
+                assert!(camera.packet_over_single.is_finite() && camera.packet_over_single > 0.0);
+            }
+            assert_eq!(b.packets.camera[3].packets, 6 * 4);
         }
         assert_eq!(report.ratios.bvh_over_embree_frame_samples.is_some(), Backend::Embree.is_compiled());
     }

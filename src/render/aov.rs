@@ -5,7 +5,7 @@
 use glam::Vec3;
 
 use super::{Integrator, PixelSampler, RenderScene, SurfaceKind};
-use crate::accel::SceneQuery;
+use crate::accel::{Hit, SceneQuery};
 use crate::geometry::Ray;
 
 /// What an AOV pass records. Pixels whose camera ray escapes are 0.
@@ -39,17 +39,18 @@ impl Aov {
 pub struct AovIntegrator(pub Aov);
 
 impl Integrator for AovIntegrator {
-    fn li(
+    fn li_from_hit(
         &self,
         scene: &RenderScene,
-        query: &dyn SceneQuery,
+        _query: &dyn SceneQuery,
         ray: &Ray,
+        first: Option<Hit>,
         _sampler: &PixelSampler,
         _index: u32,
         rays: &mut u64,
     ) -> Vec3 {
         *rays += 1;
-        let Some(hit) = query.intersect(ray) else {
+        let Some(hit) = first else {
             return Vec3::ZERO;
         };
         let s = scene.surface(ray, &hit);

@@ -7,13 +7,28 @@ use glam::Vec3;
 
 use super::bsdf::{sample_cone, sample_cosine, Bsdf};
 use super::{PixelSampler, RenderScene};
-use crate::accel::SceneQuery;
+use crate::accel::{Hit, SceneQuery};
 use crate::geometry::{offset_origin, Ray};
 use crate::scene::Light;
 
 /// Computes the radiance arriving along a camera ray.
 pub trait Integrator: Sync {
-    /// Radiance along `ray` for sample `index` of `sampler`; adds the rays it traced to `rays`.
+    /// Radiance along camera ray `ray` whose closest hit `first` the caller traced (as
+    /// `query.intersect(ray)`, possibly in a packet with neighbouring pixels), for sample
+    /// `index` of `sampler`; adds the rays it traced to `rays`, the camera ray included.
+    #[allow(clippy::too_many_arguments)]
+    fn li_from_hit(
+        &self,
+        scene: &RenderScene,
+        query: &dyn SceneQuery,
+        ray: &Ray,
+        first: Option<Hit>,
+        sampler: &PixelSampler,
+        index: u32,
+        rays: &mut u64,
+    ) -> Vec3;
+
+    /// Radiance along `ray`: traces its first hit, then [`Self::li_from_hit`].
     fn li(
         &self,
         scene: &RenderScene,
@@ -22,7 +37,9 @@ pub trait Integrator: Sync {
         sampler: &PixelSampler,
         index: u32,
         rays: &mut u64,
-    ) -> Vec3;
+    ) -> Vec3 {
+        self.li_from_hit(scene, query, ray, query.intersect(ray), sampler, index, rays)
+    }
 }
 
 /// Light from a punctual light reaching point `p`: the unit direction towards the light, the
@@ -83,17 +100,18 @@ pub(crate) mod dims {
 }
 
 impl Integrator for DirectLighting {
-    fn li(
+    fn li_from_hit(
         &self,
         scene: &RenderScene,
         query: &dyn SceneQuery,
         ray: &Ray,
+        first: Option<Hit>,
         sampler: &PixelSampler,
         index: u32,
         rays: &mut u64,
     ) -> Vec3 {
         *rays += 1;
-        let Some(hit) = query.intersect(ray) else {
+        let Some(hit) = first else {
             return scene.sky.radiance(ray.dir.normalize());
         };
         let s = scene.surface(ray, &hit);
@@ -200,11 +218,12 @@ impl SunLight {
 }
 
 impl Integrator for PathTracer {
-    fn li(
+    fn li_from_hit(
         &self,
         scene: &RenderScene,
         query: &dyn SceneQuery,
         camera_ray: &Ray,
+        first: Option<Hit>,
         sampler: &PixelSampler,
         index: u32,
         rays: &mut u64,
@@ -223,7 +242,8 @@ impl Integrator for PathTracer {
         let mut came_from: Option<(f32, Vec3)> = None;
         for depth in 0..self.max_depth {
             *rays += 1;
-            let Some(hit) = query.intersect(&ray) else {
+            let hit = if depth == 0 { first } else { query.intersect(&ray) };
+            let Some(hit) = hit else {
                 let d = ray.dir.normalize();
                 let sky = scene.sky.radiance(d);
                 let sun_l = if sun.contains(d) { sun.radiance } else { Vec3::ZERO };
@@ -272,7 +292,12 @@ impl Integrator for PathTracer {
                 }
             }
 
-            // Sun: sample its disc.
+            // Sun: sample its disc. Shadow rays stay single rays: in `dormant bench render`,
+            // sun shadow rays of neighbouring pixels traced as Embree packets ran 0.9-1.1x as
+            // fast as single rays on the monastery at 2x2-8x1 (1.2-1.5x at 4x4; 1.6-3.8x on
+            // the small default scene), and packing them would mean shading a whole pixel
+            // block's first vertex before any of its shadow rays (docs/performance.md, "Ray
+            // packets").
             let l = sample_cone(sun.dir, sun.cos_max, sampler.get_2d(index, dim));
             let f = bsdf.eval(wo, l);
             if f != Vec3::ZERO && s.ng.dot(l) > 0.0 {
@@ -345,17 +370,18 @@ pub struct AmbientOcclusion {
 }
 
 impl Integrator for AmbientOcclusion {
-    fn li(
+    fn li_from_hit(
         &self,
         scene: &RenderScene,
         query: &dyn SceneQuery,
         ray: &Ray,
+        first: Option<Hit>,
         sampler: &PixelSampler,
         index: u32,
         rays: &mut u64,
     ) -> Vec3 {
         *rays += 1;
-        let Some(hit) = query.intersect(ray) else {
+        let Some(hit) = first else {
             return Vec3::ONE;
         };
         let s = scene.surface(ray, &hit);

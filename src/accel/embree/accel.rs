@@ -2,7 +2,9 @@ use std::sync::Arc;
 
 use glam::{Affine3A, Mat3, Vec3};
 
-use super::{BuildQuality, Device, FrozenScene, InstanceGeometry, Scene, SceneFlags, TriangleGeometry};
+use super::{
+    BuildQuality, Coherence, Device, FrozenScene, InstanceGeometry, Scene, SceneFlags, TriangleGeometry,
+};
 use crate::accel::{
     AccelError, Accelerator, Backend, CommitReport, Hit, HitObject, InstanceId, PrototypeId, SceneQuery,
     StaticId,
@@ -269,4 +271,53 @@ impl SceneQuery for EmbreeAccel {
             view.occluded1(ray.origin.to_array(), ray.dir.to_array(), ray.t_min, ray.t_max)
         })
     }
+
+    /// Chunks of up to 16 rays, each as one packet of the smallest width that holds it.
+    fn intersect_packet(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
+        assert_eq!(rays.len(), hits.len(), "one hit slot per ray");
+        let Some(view) = self.top.view() else {
+            hits.fill(None);
+            return;
+        };
+        // Closest-hit packets are camera rays of neighbouring pixels: the COHERENT hint measured
+        // equal or faster than INCOHERENT (monastery, 4x2 tiles: 1.3-1.4x over single rays
+        // either way; default scene: 2.4-3.4x against 1.6x).
+        let c = Coherence::Coherent;
+        for (rays, hits) in rays.chunks(16).zip(hits.chunks_mut(16)) {
+            let mut put = |found: &[Option<super::EmbreeHit>]| {
+                for (slot, h) in hits.iter_mut().zip(found) {
+                    *slot = h.map(|h| self.to_hit(h));
+                }
+            };
+            match rays.len() {
+                0..=4 => put(&view.intersect4(&lanes(rays), c)),
+                5..=8 => put(&view.intersect8(&lanes(rays), c)),
+                _ => put(&view.intersect16(&lanes(rays), c)),
+            }
+        }
+    }
+
+    fn intersect_p_packet(&self, rays: &[Ray], occluded: &mut [bool]) {
+        assert_eq!(rays.len(), occluded.len(), "one result slot per ray");
+        let Some(view) = self.top.view() else {
+            occluded.fill(false);
+            return;
+        };
+        // Shadow rays towards the sun: COHERENT measured slower than INCOHERENT on the
+        // monastery (0.83x against 1.1x of single rays, 4x2 tiles), so Embree's default.
+        let c = Coherence::Incoherent;
+        for (rays, out) in rays.chunks(16).zip(occluded.chunks_mut(16)) {
+            let n = rays.len();
+            match n {
+                0..=4 => out.copy_from_slice(&view.occluded4(&lanes(rays), c)[..n]),
+                5..=8 => out.copy_from_slice(&view.occluded8(&lanes(rays), c)[..n]),
+                _ => out.copy_from_slice(&view.occluded16(&lanes(rays), c)[..n]),
+            }
+        }
+    }
+}
+
+/// A packet's lanes: `rays` first, the rest inactive.
+fn lanes<const N: usize>(rays: &[Ray]) -> [Option<Ray>; N] {
+    std::array::from_fn(|i| rays.get(i).copied())
 }

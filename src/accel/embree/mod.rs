@@ -13,10 +13,12 @@ mod accel;
 mod device;
 mod error;
 mod geometry;
+mod packet;
 mod scene;
 
 pub use accel::{EmbreeAccel, EmbreeBuildParams};
 pub use device::{Device, Version};
 pub use error::EmbreeError;
 pub use geometry::{InstanceGeometry, TriangleGeometry};
+pub use packet::{Coherence, PACKET_WIDTHS};
 pub use scene::{BuildQuality, EmbreeHit, FrozenScene, Geometry, Scene, SceneFlags, SceneView};

@@ -281,7 +281,7 @@ impl FrozenScene {
 /// Ray queries on a committed scene. Borrowing the scene keeps it unchanged while rays run.
 #[derive(Clone, Copy)]
 pub struct SceneView<'a> {
-    raw: sys::RTCScene,
+    pub(super) raw: sys::RTCScene,
     _scene: PhantomData<&'a Scene>,
 }
 
