@@ -113,7 +113,8 @@ fn frame_times(report: &IntegrationBenchReport, area: &Area<'_>) -> PlotResult {
             .label(format!("{name} (mean {mean:.1} ms)"))
             .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], colour.stroke_width(3)));
     }
-    draw_legend(&mut chart, SeriesLabelPosition::UpperRight)
+    // Upper left: the asleep share is near zero there, and near 100% at the right.
+    draw_legend(&mut chart, SeriesLabelPosition::UpperLeft)
 }
 
 /// Settled-phase mean ms per stage, stacked, for each backend and policy (cache on).
