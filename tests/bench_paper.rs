@@ -26,12 +26,20 @@ fn compiled_backends() -> Vec<&'static str> {
 fn quick_paper_run_writes_json_markdown_and_figure() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("paper");
-    let output =
-        dormant().args(["bench", "paper", "--quick", "--quiet", "--out"]).arg(&out).output().unwrap();
+    let also = dir.path().join("also.json");
+    let output = dormant()
+        .args(["bench", "paper", "--quick", "--quiet", "--out"])
+        .arg(&out)
+        .arg("--json")
+        .arg(&also)
+        .output()
+        .unwrap();
     assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let also: serde_json::Value = serde_json::from_slice(&std::fs::read(&also).unwrap()).unwrap();
 
     let json: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("paper.json")).unwrap()).unwrap();
+    assert_eq!(json, also, "--json writes the same report as paper.json");
     assert_eq!(json["format"], "dormant-paper");
     assert_eq!(json["version"], 1);
     assert_eq!(json["preset"], "quick");

@@ -152,3 +152,16 @@ fn trajectory_of_another_scene_is_an_input_error() {
     assert_eq!(output.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&output.stderr).contains("tiny.traj"));
 }
+
+#[test]
+fn json_is_a_global_flag_before_or_after_the_command() {
+    let dir = tempfile::tempdir().unwrap();
+    let (before, after) = (dir.path().join("before.json"), dir.path().join("after.json"));
+    let status = dormant().arg("--json").arg(&before).arg("info").status().unwrap();
+    assert!(status.success());
+    let status = dormant().arg("info").arg("--json").arg(&after).status().unwrap();
+    assert!(status.success());
+    let read = |p: &Path| serde_json::from_slice::<serde_json::Value>(&std::fs::read(p).unwrap()).unwrap();
+    assert_eq!(read(&before), read(&after));
+    assert!(read(&before)["backends"].is_array(), "{:#}", read(&before));
+}

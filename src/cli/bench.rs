@@ -66,9 +66,6 @@ pub struct PaperArgs {
     /// Backends to compare (repeat; default: every compiled one).
     #[arg(long)]
     pub backend: Vec<crate::accel::Backend>,
-    /// Also write the report (paper.json's contents) to FILE, or stdout.
-    #[command(flatten)]
-    pub json: JsonOutput,
 }
 
 #[derive(Debug, Args)]
@@ -78,8 +75,6 @@ pub struct PhysicsArgs {
     /// Frames measured in each phase.
     #[arg(long, value_name = "N", default_value_t = 60)]
     pub measure_frames: u32,
-    #[command(flatten)]
-    pub json: JsonOutput,
 }
 
 #[derive(Debug, Args)]
@@ -109,8 +104,6 @@ pub struct IntegrationArgs {
     /// where structure updates are a sizeable part of a frame.
     #[arg(long, value_enum, default_value_t = super::render::RenderMode::Shaded)]
     pub mode: super::render::RenderMode,
-    #[command(flatten)]
-    pub json: JsonOutput,
 }
 
 #[derive(Debug, Args)]
@@ -123,8 +116,6 @@ pub struct AccelArgs {
     /// Repetitions of each trace measurement; the best is reported.
     #[arg(long, value_name = "N", default_value_t = 3)]
     pub runs: u32,
-    #[command(flatten)]
-    pub json: JsonOutput,
 }
 
 #[derive(Debug, Args)]
@@ -140,21 +131,24 @@ pub struct RenderBenchArgs {
     /// Repetitions of each measurement; the best is reported.
     #[arg(long, value_name = "N", default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
     pub runs: u32,
-    #[command(flatten)]
-    pub json: JsonOutput,
 }
 
-pub(super) fn run(args: &BenchArgs, threads: Option<usize>, quiet: bool) -> Result<(), CliError> {
+pub(super) fn run(
+    args: &BenchArgs,
+    threads: Option<usize>,
+    quiet: bool,
+    json: &JsonOutput,
+) -> Result<(), CliError> {
     match &args.which {
-        BenchCommand::Accel(a) => accel(a, threads, quiet),
-        BenchCommand::Render(r) => render(r, threads, quiet),
-        BenchCommand::Physics(p) => physics(p, quiet),
-        BenchCommand::Integration(i) => integration(i, threads, quiet),
-        BenchCommand::Paper(p) => paper(p, threads, quiet),
+        BenchCommand::Accel(a) => accel(a, threads, quiet, json),
+        BenchCommand::Render(r) => render(r, threads, quiet, json),
+        BenchCommand::Physics(p) => physics(p, quiet, json),
+        BenchCommand::Integration(i) => integration(i, threads, quiet, json),
+        BenchCommand::Paper(p) => paper(p, threads, quiet, json),
     }
 }
 
-fn paper(args: &PaperArgs, threads: Option<usize>, quiet: bool) -> Result<(), CliError> {
+fn paper(args: &PaperArgs, threads: Option<usize>, quiet: bool, json: &JsonOutput) -> Result<(), CliError> {
     let backends = if args.backend.is_empty() {
         crate::accel::Backend::compiled()
     } else {
@@ -179,7 +173,8 @@ fn paper(args: &PaperArgs, threads: Option<usize>, quiet: bool) -> Result<(), Cl
     })?;
     let written =
         crate::report::write_paper(&report, &args.out).map_err(|e| CliError::Runtime(e.to_string()))?;
-    if !quiet {
+    json.emit(&serde_json::to_value(&report).expect("the paper report serialises"))?;
+    if !quiet && !json.is_requested() {
         for path in written {
             println!("wrote {}", path.display());
         }
@@ -187,7 +182,12 @@ fn paper(args: &PaperArgs, threads: Option<usize>, quiet: bool) -> Result<(), Cl
     Ok(())
 }
 
-fn integration(args: &IntegrationArgs, threads: Option<usize>, quiet: bool) -> Result<(), CliError> {
+fn integration(
+    args: &IntegrationArgs,
+    threads: Option<usize>,
+    quiet: bool,
+    json: &JsonOutput,
+) -> Result<(), CliError> {
     let backend = super::render::choose_backend(args.backend)?;
     let (file, simulate) = args.scene.load()?;
     let trajectory = super::render::load_trajectory(&file, &simulate, args.trajectory.as_deref())?;
@@ -211,14 +211,14 @@ fn integration(args: &IntegrationArgs, threads: Option<usize>, quiet: bool) -> R
     };
     let report = bench::bench_integration(&trajectory, &assets, integrator.as_ref(), &options, &mut progress)
         .map_err(|e| CliError::Runtime(e.to_string()))?;
-    emit(&serde_json::to_value(&report).expect("bench report serialises"), &args.json, quiet)
+    emit(&serde_json::to_value(&report).expect("bench report serialises"), json, quiet)
 }
 
-fn physics(args: &PhysicsArgs, quiet: bool) -> Result<(), CliError> {
+fn physics(args: &PhysicsArgs, quiet: bool, json: &JsonOutput) -> Result<(), CliError> {
     let (file, simulate) = args.scene.load()?;
     let options = crate::physics::PhysicsBenchOptions { simulate, measure_frames: args.measure_frames };
     let report = crate::physics::bench(&file, &options).map_err(super::simulate::physics_error)?;
-    emit(&serde_json::to_value(&report).expect("bench report serialises"), &args.json, quiet)
+    emit(&serde_json::to_value(&report).expect("bench report serialises"), json, quiet)
 }
 
 fn emit(json: &serde_json::Value, out: &JsonOutput, quiet: bool) -> Result<(), CliError> {
@@ -229,7 +229,7 @@ fn emit(json: &serde_json::Value, out: &JsonOutput, quiet: bool) -> Result<(), C
     Ok(())
 }
 
-fn accel(args: &AccelArgs, threads: Option<usize>, quiet: bool) -> Result<(), CliError> {
+fn accel(args: &AccelArgs, threads: Option<usize>, quiet: bool, json: &JsonOutput) -> Result<(), CliError> {
     let desc = args.scene.load()?;
     let opts = AccelBenchOptions {
         width: args.size.width,
@@ -239,10 +239,15 @@ fn accel(args: &AccelArgs, threads: Option<usize>, quiet: bool) -> Result<(), Cl
         ..AccelBenchOptions::default()
     };
     let report = bench::bench_accel(&desc, &opts).map_err(|e| CliError::Runtime(e.to_string()))?;
-    emit(&serde_json::to_value(&report).expect("bench report serialises"), &args.json, quiet)
+    emit(&serde_json::to_value(&report).expect("bench report serialises"), json, quiet)
 }
 
-fn render(args: &RenderBenchArgs, threads: Option<usize>, quiet: bool) -> Result<(), CliError> {
+fn render(
+    args: &RenderBenchArgs,
+    threads: Option<usize>,
+    quiet: bool,
+    json: &JsonOutput,
+) -> Result<(), CliError> {
     let desc = args.scene.load()?;
     let opts = RenderBenchOptions {
         width: args.size.width,
@@ -252,5 +257,5 @@ fn render(args: &RenderBenchArgs, threads: Option<usize>, quiet: bool) -> Result
         threads,
     };
     let report = bench::bench_render(&desc, &opts).map_err(|e| CliError::Runtime(e.to_string()))?;
-    emit(&serde_json::to_value(&report).expect("bench report serialises"), &args.json, quiet)
+    emit(&serde_json::to_value(&report).expect("bench report serialises"), json, quiet)
 }

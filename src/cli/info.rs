@@ -49,9 +49,13 @@ fn embree_info(_threads: Option<usize>) -> Result<Option<EmbreeInfo>, CliError> 
     Ok(None)
 }
 
-pub(super) fn run(threads: Option<usize>) -> Result<(), CliError> {
-    let report = InfoReport::collect(threads)?;
-    let json = serde_json::to_string_pretty(&report).expect("info report serialises");
-    println!("{json}");
-    Ok(())
+/// Prints the report as JSON, or writes it where `--json FILE` says.
+pub(super) fn run(threads: Option<usize>, json: &super::JsonOutput) -> Result<(), CliError> {
+    let report = serde_json::to_value(InfoReport::collect(threads)?).expect("info report serialises");
+    if json.is_requested() {
+        json.emit(&report)
+    } else {
+        println!("{report:#}");
+        Ok(())
+    }
 }

@@ -59,6 +59,8 @@ pub struct Cli {
     /// Print only errors.
     #[arg(long, short, global = true)]
     pub quiet: bool,
+    #[command(flatten)]
+    pub json: JsonOutput,
     #[command(subcommand)]
     pub command: Command,
 }
@@ -116,11 +118,11 @@ pub fn run(cli: &Cli) -> Result<(), CliError> {
     }
     let threads = cli.threads.map(|n| n as usize);
     match &cli.command {
-        Command::Render(args) => render::run(args, threads, cli.quiet),
-        Command::Simulate(args) => simulate::run(args, cli.quiet),
-        Command::Verify(args) => verify::run(args, threads, cli.quiet),
-        Command::Bench(args) => bench::run(args, threads, cli.quiet),
-        Command::Info => info::run(threads),
+        Command::Render(args) => render::run(args, threads, cli.quiet, &cli.json),
+        Command::Simulate(args) => simulate::run(args, cli.quiet, &cli.json),
+        Command::Verify(args) => verify::run(args, threads, cli.quiet, &cli.json),
+        Command::Bench(args) => bench::run(args, threads, cli.quiet, &cli.json),
+        Command::Info => info::run(threads, &cli.json),
     }
 }
 
@@ -162,12 +164,12 @@ pub(crate) fn write_json_atomic(path: &Path, value: &serde_json::Value) -> Resul
         .map_err(|e| CliError::Runtime(format!("cannot write {}: {e}", path.display())))
 }
 
-/// `--json [FILE]`: write the command's report as JSON to FILE, or to stdout when FILE is
-/// omitted or `-`.
+/// `--json [FILE]` (global: before or after the command): write the command's report as JSON
+/// to FILE, or to stdout when FILE is omitted or `-`.
 #[derive(Debug, Args)]
 pub struct JsonOutput {
     /// Write the report as JSON to FILE (stdout if FILE is omitted or -).
-    #[arg(long = "json", value_name = "FILE", num_args = 0..=1, default_missing_value = "-")]
+    #[arg(long = "json", value_name = "FILE", num_args = 0..=1, default_missing_value = "-", global = true)]
     pub path: Option<PathBuf>,
 }
 

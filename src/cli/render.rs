@@ -88,8 +88,6 @@ pub struct RenderArgs {
     /// baked (debug: instanced bodies blue, integrated ones orange, environment grey).
     #[arg(long, value_enum, value_delimiter = ',', value_name = "KIND")]
     pub aov: Vec<Aov>,
-    #[command(flatten)]
-    pub json: super::JsonOutput,
     /// With SCENE or --trajectory: when sleeping islands are baked into the static scene.
     #[arg(long, value_enum, default_value_t = IntegrationPolicy::Auto)]
     pub integration: IntegrationPolicy,
@@ -193,7 +191,12 @@ pub(super) fn check_range(flag: &str, range: Option<FrameRange>, total: u32) -> 
     Ok(range)
 }
 
-pub(super) fn run(args: &RenderArgs, threads: Option<usize>, quiet: bool) -> Result<(), CliError> {
+pub(super) fn run(
+    args: &RenderArgs,
+    threads: Option<usize>,
+    quiet: bool,
+    json: &super::JsonOutput,
+) -> Result<(), CliError> {
     let backend = choose_backend(args.backend)?;
     if !args.exposure.is_finite() || args.exposure <= 0.0 {
         return Err(CliError::Input(format!("--exposure {}: must be a positive number", args.exposure)));
@@ -238,7 +241,7 @@ pub(super) fn run(args: &RenderArgs, threads: Option<usize>, quiet: bool) -> Res
             }
             aov_paths.push(aov_path);
         }
-        if !quiet && !args.json.is_requested() {
+        if !quiet && !json.is_requested() {
             progress.suspend(|| {
                 println!(
                     "rendered {} ({}x{}, {} spp, {:?} mode, {backend}): {:.2} s, {} rays, {:.1} Mrays/s",
@@ -398,14 +401,14 @@ pub(super) fn run(args: &RenderArgs, threads: Option<usize>, quiet: bool) -> Res
                     render::VideoError::FfmpegMissing => CliError::Input(e.to_string()),
                     e => runtime(&e),
                 })?;
-                if !quiet && !args.json.is_requested() {
+                if !quiet && !json.is_requested() {
                     println!("wrote {} ({} frames, {fps:.2} fps)", video.display(), frame_paths.len());
                 }
             }
             template.name
         }
     };
-    args.json.emit(&serde_json::json!({
+    json.emit(&serde_json::json!({
         "scene": scene_name,
         "backend": backend,
         "width": args.size.width,

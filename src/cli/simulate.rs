@@ -47,11 +47,9 @@ pub struct SimulateArgs {
     /// Trajectory file to write (poses, sleep states and island events of every frame).
     #[arg(long, value_name = "FILE")]
     pub out: PathBuf,
-    #[command(flatten)]
-    pub json: JsonOutput,
 }
 
-pub(super) fn run(args: &SimulateArgs, quiet: bool) -> Result<(), CliError> {
+pub(super) fn run(args: &SimulateArgs, quiet: bool, json_out: &JsonOutput) -> Result<(), CliError> {
     let (file, options) = args.scene.load()?;
     let bar = super::progress::frames_bar(quiet, "simulating", None);
     let trajectory = physics::simulate_observed(&file, &options, &mut |step| {
@@ -63,8 +61,8 @@ pub(super) fn run(args: &SimulateArgs, quiet: bool) -> Result<(), CliError> {
     trajectory.write_atomic(&args.out).map_err(|e| CliError::Runtime(e.to_string()))?;
     let stats = trajectory.island_stats();
     let json = serde_json::json!({ "trajectory": args.out, "islands": stats });
-    args.json.emit(&json)?;
-    if !quiet && !args.json.is_requested() {
+    json_out.emit(&json)?;
+    if !quiet && !json_out.is_requested() {
         println!(
             "wrote {}: {} frames, {} of {} bodies asleep at the end ({:.1}%), {} islands formed, {} woken, \
              {} asleep at the end; island size mean {:.1} (max {}); mean sleep {:.0} frames",

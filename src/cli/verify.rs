@@ -33,11 +33,14 @@ pub struct VerifyArgs {
     /// Seed for the surface rays.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    #[command(flatten)]
-    pub json: JsonOutput,
 }
 
-pub(super) fn run(args: &VerifyArgs, threads: Option<usize>, quiet: bool) -> Result<(), CliError> {
+pub(super) fn run(
+    args: &VerifyArgs,
+    threads: Option<usize>,
+    quiet: bool,
+    json_out: &JsonOutput,
+) -> Result<(), CliError> {
     for b in [Backend::Embree, Backend::Bvh] {
         if !b.is_compiled() {
             return Err(CliError::Input(format!(
@@ -88,8 +91,8 @@ pub(super) fn run(args: &VerifyArgs, threads: Option<usize>, quiet: bool) -> Res
         "max_t_rel_err": report.max_t_rel_err,
         "examples": report.examples,
     });
-    args.json.emit(&json)?;
-    if !quiet && !args.json.is_requested() {
+    json_out.emit(&json)?;
+    if !quiet && !json_out.is_requested() {
         println!(
             "verify {}: {} rays ({} camera, {} surface): {} hits, {} misses, {} ties, {} precision ties, {} mismatches, max t rel err {:.2e}",
             desc.name,

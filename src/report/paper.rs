@@ -23,7 +23,9 @@ pub fn write_paper(report: &PaperReport, dir: &Path) -> Result<Vec<PathBuf>, Rep
         write_workload_png(w, &path)?;
         written.push(path);
     }
-    let json = serde_json::to_string_pretty(report).expect("the paper report serialises");
+    // Through a Value, as `--json` writes it, so both print f32 fields alike.
+    let value = serde_json::to_value(report).expect("the paper report serialises");
+    let json = serde_json::to_string_pretty(&value).expect("JSON values serialise");
     let md = paper_markdown(report);
     for (name, text) in [("paper.json", json), ("paper.md", md)] {
         let path = dir.join(name);
