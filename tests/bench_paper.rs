@@ -83,7 +83,9 @@ fn quick_paper_run_writes_json_markdown_and_figure() {
     assert!(md.contains("](figures/atrium.png)"));
 
     let figure = image::open(out.join("figures/atrium.png")).unwrap().to_rgb8();
-    assert!(figure.width() >= 1000 && figure.height() >= 1000);
+    // One 480-pixel row per backend plus the row of stage costs and cache hits.
+    let rows = compiled_backends().len() as u32 + 1;
+    assert!(figure.width() >= 1000 && figure.height() >= 480 * rows, "{:?}", figure.dimensions());
     let distinct: std::collections::HashSet<[u8; 3]> = figure.pixels().map(|p| p.0).collect();
     assert!(distinct.len() > 20, "the figure is nearly blank: {} colours", distinct.len());
 }
