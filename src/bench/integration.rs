@@ -117,6 +117,18 @@ pub struct IntegrationBenchReport {
     pub cache_histogram_buckets: [&'static str; 12],
 }
 
+impl IntegrationBenchReport {
+    /// The run of `policy` with the cache on; `never` has only one run (the cache plays no
+    /// part in it).
+    pub fn cache_on(&self, policy: IntegrationPolicy) -> Option<&PolicyRun> {
+        find_run(&self.runs, policy, policy != IntegrationPolicy::Never)
+    }
+}
+
+fn find_run(runs: &[PolicyRun], policy: IntegrationPolicy, cache: bool) -> Option<&PolicyRun> {
+    runs.iter().find(|r| r.policy == policy && r.cache == cache)
+}
+
 fn means<'a>(frames: impl Iterator<Item = &'a FrameStats>) -> StageMeans {
     let mut m = StageMeans::default();
     for f in frames {
@@ -362,8 +374,7 @@ pub fn bench_integration(
         }
         runs.push(run);
     }
-    let find =
-        |p: IntegrationPolicy, c: bool| runs.iter().find(|r| r.policy == p && r.cache == c).expect("ran");
+    let find = |p: IntegrationPolicy, c: bool| find_run(&runs, p, c).expect("ran");
     let (never, always, auto) = (
         find(IntegrationPolicy::Never, false),
         find(IntegrationPolicy::Always, true),

@@ -425,9 +425,7 @@ fn check_claims(w: &WorkloadReport) -> Vec<ClaimCheck> {
         ));
         let requests = run
             .integration
-            .runs
-            .iter()
-            .find(|p| p.policy == crate::integrate::IntegrationPolicy::Auto && p.cache)
+            .cache_on(crate::integrate::IntegrationPolicy::Auto)
             .map_or(0, |p| p.cache_stats.requests);
         claims.push(check(
             "Most cache requests find 90-99% of the requested islands already integrated",

@@ -105,19 +105,24 @@ pub fn render_frame(
             let mut sums = vec![Vec3::ZERO; (tw * (y1 - y0)) as usize];
             for by in (y0..y1).step_by(BLOCK.1 as usize) {
                 for bx in (x0..x1).step_by(BLOCK.0 as usize) {
-                    let block: Vec<(u32, u32, PixelSampler)> = (by..(by + BLOCK.1).min(y1))
-                        .flat_map(|y| (bx..(bx + BLOCK.0).min(x1)).map(move |x| (x, y)))
-                        .map(|(x, y)| (x, y, PixelSampler::new(x, y, settings.frame)))
-                        .collect();
+                    // A fixed array, not a Vec: one block per 8 pixels is on the hot path.
+                    let mut cells = [(0, 0, PixelSampler::new(0, 0, 0)); BLOCK_PIXELS];
+                    let mut n = 0;
+                    for y in by..(by + BLOCK.1).min(y1) {
+                        for x in bx..(bx + BLOCK.0).min(x1) {
+                            cells[n] = (x, y, PixelSampler::new(x, y, settings.frame));
+                            n += 1;
+                        }
+                    }
+                    let block = &cells[..n];
                     let mut camera_rays = [Ray::new(Vec3::ZERO, Vec3::Z); BLOCK_PIXELS];
                     let mut hits = [None; BLOCK_PIXELS];
-                    let n = block.len();
                     for i in 0..settings.spp {
-                        for (ray, (x, y, sampler)) in camera_rays.iter_mut().zip(&block) {
+                        for (ray, (x, y, sampler)) in camera_rays.iter_mut().zip(block) {
                             *ray = camera_ray(&camera, settings.spp, *x, *y, sampler, i);
                         }
                         query.intersect_packet(&camera_rays[..n], &mut hits[..n]);
-                        for ((ray, hit), (x, y, sampler)) in camera_rays.iter().zip(hits).zip(&block) {
+                        for ((ray, hit), (x, y, sampler)) in camera_rays.iter().zip(hits).zip(block) {
                             sums[((y - y0) * tw + (x - x0)) as usize] +=
                                 integrator.li_from_hit(scene, query, ray, hit, sampler, i, &mut rays);
                         }

@@ -116,15 +116,9 @@ fn num(v: f64) -> String {
 }
 
 fn policy_name(run: &PolicyRun) -> String {
-    let policy = match run.policy {
-        IntegrationPolicy::Never => "never",
-        IntegrationPolicy::Always => "always",
-        IntegrationPolicy::Auto => "auto",
-    };
-    if run.policy == IntegrationPolicy::Never {
-        policy.into()
-    } else {
-        format!("{policy}, cache {}", if run.cache { "on" } else { "off" })
+    match run.policy {
+        IntegrationPolicy::Never => run.policy.to_string(),
+        policy => format!("{policy}, cache {}", if run.cache { "on" } else { "off" }),
     }
 }
 
@@ -217,12 +211,7 @@ fn workload_section(md: &mut String, w: &WorkloadReport) {
     }
     let _ = writeln!(md);
     for run in &w.runs {
-        let find = |policy: IntegrationPolicy| {
-            run.integration
-                .runs
-                .iter()
-                .find(|p| p.policy == policy && (p.cache || policy == IntegrationPolicy::Never))
-        };
+        let find = |policy| run.integration.cache_on(policy);
         let (Some(never), Some(auto)) = (find(IntegrationPolicy::Never), find(IntegrationPolicy::Auto))
         else {
             continue;
@@ -260,8 +249,7 @@ fn workload_section(md: &mut String, w: &WorkloadReport) {
     );
     let _ = writeln!(md, "| --- |{}", " ---: |".repeat(4 + FRACTION_BUCKETS.len()));
     for run in &w.runs {
-        let Some(auto) = run.integration.runs.iter().find(|p| p.policy == IntegrationPolicy::Auto && p.cache)
-        else {
+        let Some(auto) = run.integration.cache_on(IntegrationPolicy::Auto) else {
             continue;
         };
         let c = &auto.cache_stats;

@@ -9,7 +9,7 @@ use plotters::prelude::*;
 
 use super::plot::{count_labels, draw_legend, err, write_png, Area, PlotResult, FONT, STAGES};
 use super::ReportError;
-use crate::bench::integration::{IntegrationBenchReport, PolicyRun};
+use crate::bench::integration::IntegrationBenchReport;
 use crate::bench::paper::WorkloadReport;
 use crate::integrate::{IntegrationPolicy, FRACTION_BUCKETS};
 
@@ -45,10 +45,6 @@ fn draw(w: &WorkloadReport, buffer: &mut [u8], rows: u32) -> PlotResult {
     stage_bars(w, &bottom[0])?;
     fraction_histogram(w, &bottom[1])?;
     root.present().map_err(err)
-}
-
-fn cache_on(report: &IntegrationBenchReport, policy: IntegrationPolicy) -> Option<&PolicyRun> {
-    report.runs.iter().find(|r| r.policy == policy && (r.cache || policy == IntegrationPolicy::Never))
 }
 
 /// Frame time per policy (cache on) over the run, with the asleep share on the right axis.
@@ -102,7 +98,7 @@ fn frame_times(report: &IntegrationBenchReport, area: &Area<'_>) -> PlotResult {
         .label("bodies asleep (%, right axis)")
         .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], grey.stroke_width(2)));
     for (policy, name, colour) in POLICIES {
-        let Some(run) = cache_on(report, policy) else { continue };
+        let Some(run) = report.cache_on(policy) else { continue };
         let mean = run.total_ms / run.frame_ms.len().max(1) as f64;
         chart
             .draw_series(LineSeries::new(
@@ -122,7 +118,7 @@ fn stage_bars(w: &WorkloadReport, area: &Area<'_>) -> PlotResult {
     let mut bars: Vec<(String, [f64; 5])> = Vec::new();
     for run in &w.runs {
         for (policy, name, _) in POLICIES {
-            if let Some(p) = cache_on(&run.integration, policy) {
+            if let Some(p) = run.integration.cache_on(policy) {
                 let s = &p.settled;
                 bars.push((
                     format!("{}:{name}", run.backend),
@@ -179,7 +175,7 @@ fn fraction_histogram(w: &WorkloadReport, area: &Area<'_>) -> PlotResult {
         .runs
         .iter()
         .filter_map(|run| {
-            let auto = cache_on(&run.integration, IntegrationPolicy::Auto)?;
+            let auto = run.integration.cache_on(IntegrationPolicy::Auto)?;
             let s = &auto.cache_stats;
             Some((format!("{} ({} requests)", run.backend, s.requests), s.fraction_histogram))
         })
