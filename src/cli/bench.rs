@@ -161,6 +161,10 @@ fn paper(args: &PaperArgs, threads: Option<usize>, quiet: bool, json: &JsonOutpu
         backends,
         threads,
     };
+    // Before minutes of benchmarking, not after.
+    std::fs::create_dir_all(&args.out).map_err(|e| {
+        CliError::Runtime(format!("cannot create output directory {}: {e}", args.out.display()))
+    })?;
     let start = std::time::Instant::now();
     let mut log = |line: &str| {
         if !quiet {
