@@ -19,7 +19,7 @@ use crate::accel::{self, AccelError, Backend};
 use crate::crosscheck::camera_rays;
 use crate::integrate::{
     describe_scene, CacheStats, CostModelState, FrameStats, IntegrationPolicy, ManagerOptions,
-    ReactivationPath, SceneAssets, SceneManager, FRACTION_BUCKETS,
+    ReactivationPath, SceneAssets, SceneManager, StageTimes, FRACTION_BUCKETS,
 };
 use crate::physics::{BodyKind, BodyState, Trajectory};
 use crate::render::{render_managed_frame, Integrator, RenderError, SequenceOptions, SequenceScene};
@@ -40,11 +40,8 @@ pub struct IntegrationBenchOptions {
 #[derive(Clone, Copy, Debug, Default, Serialize)]
 pub struct StageMeans {
     pub frames: usize,
-    pub reactivate_ms: f64,
-    pub integrate_ms: f64,
-    pub update_ms: f64,
-    pub commit_ms: f64,
-    pub trace_ms: f64,
+    #[serde(flatten)]
+    pub stages: StageTimes,
     pub frame_ms: f64,
 }
 
@@ -130,23 +127,8 @@ fn find_run(runs: &[PolicyRun], policy: IntegrationPolicy, cache: bool) -> Optio
 }
 
 fn means<'a>(frames: impl Iterator<Item = &'a FrameStats>) -> StageMeans {
-    let mut m = StageMeans::default();
-    for f in frames {
-        m.frames += 1;
-        m.reactivate_ms += f.reactivate_ms;
-        m.integrate_ms += f.integrate_ms;
-        m.update_ms += f.update_ms;
-        m.commit_ms += f.commit_ms;
-        m.trace_ms += f.trace_ms;
-        m.frame_ms += f.frame_ms();
-    }
-    let n = m.frames.max(1) as f64;
-    for v in [&mut m.reactivate_ms, &mut m.integrate_ms, &mut m.update_ms, &mut m.commit_ms, &mut m.trace_ms]
-    {
-        *v /= n;
-    }
-    m.frame_ms /= n;
-    m
+    let (stages, frames) = StageTimes::mean(frames.map(|f| &f.stages));
+    StageMeans { frames, stages, frame_ms: stages.frame_ms() }
 }
 
 /// Runs every configuration in lockstep, frame by frame (rotating which goes first), so load
@@ -348,10 +330,10 @@ pub fn bench_integration(
             islands_reactivated: sum(&|f| u64::from(f.islands_reactivated)),
             integrate_ms_per_island: match sum(&|f| u64::from(f.islands_integrated)) {
                 0 => 0.0,
-                n => frames.iter().map(|f| f.integrate_ms).sum::<f64>() / n as f64,
+                n => frames.iter().map(|f| f.stages.integrate_ms).sum::<f64>() / n as f64,
             },
             reactivate_ms_per_frame_with_wakes: means(frames.iter().filter(|f| f.islands_reactivated > 0))
-                .reactivate_ms,
+                .stages.reactivate_ms,
             reactivations_by_removal: sum(&|f| {
                 u64::from(f.reactivation_path == Some(ReactivationPath::Removal))
             }),

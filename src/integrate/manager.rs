@@ -27,6 +27,7 @@ use super::cache::{CacheBudget, CacheOutcome, CacheStats, GeometryCache};
 use super::cost_model::{choose_batch, CostEstimate, CostModel, CostModelState};
 use super::object_map::{normal_matrix, MeshRef, ObjectMap, ResolvedHit};
 use super::policy::IntegrationPolicy;
+use super::stage_times::StageTimes;
 use crate::accel::{
     AccelError, Accelerator, HitObject, InstanceId, PrototypeId, SceneQuery, StaticId, StaticSceneSnapshot,
 };
@@ -172,11 +173,9 @@ pub struct Decision {
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
 pub struct FrameStats {
     pub frame: u32,
-    pub reactivate_ms: f64,
-    pub integrate_ms: f64,
-    pub update_ms: f64,
-    pub commit_ms: f64,
-    pub trace_ms: f64,
+    /// Milliseconds per stage; the trace once [`SceneManager::record_trace`] reported it.
+    #[serde(flatten)]
+    pub stages: StageTimes,
     pub rays: u64,
     /// Whether the frame committed (false: nothing changed since the last frame).
     pub committed: bool,
@@ -201,9 +200,9 @@ pub struct FrameStats {
 }
 
 impl FrameStats {
-    /// Commit plus trace: the per-frame time the integration policies compete on.
+    /// Every stage, the trace included: the per-frame time the integration policies compete on.
     pub fn frame_ms(&self) -> f64 {
-        self.reactivate_ms + self.integrate_ms + self.update_ms + self.commit_ms + self.trace_ms
+        self.stages.frame_ms()
     }
 }
 
@@ -368,15 +367,15 @@ impl SceneManager {
 
         let t = Instant::now();
         let reactivated = self.reactivate(&mut stats)?;
-        stats.reactivate_ms = ms(t);
+        stats.stages.reactivate_ms = ms(t);
 
         let t = Instant::now();
         let integrated = self.integrate(&mut stats)?;
-        stats.integrate_ms = ms(t);
+        stats.stages.integrate_ms = ms(t);
 
         let t = Instant::now();
         let moved = self.update(frame, &mut stats)?;
-        stats.update_ms = ms(t);
+        stats.stages.update_ms = ms(t);
 
         let t = Instant::now();
         if reactivated || integrated || moved || self.accel.query().is_err() {
@@ -386,8 +385,8 @@ impl SceneManager {
         } else {
             stats.instances = self.instance_owner.iter().flatten().count();
         }
-        stats.commit_ms = ms(t);
-        self.last_commit_ms = stats.committed.then_some(stats.commit_ms);
+        stats.stages.commit_ms = ms(t);
+        self.last_commit_ms = stats.committed.then_some(stats.stages.commit_ms);
 
         let cache = self.cache_stats();
         stats.cache_full = cache.full - cache_before.full;
@@ -408,7 +407,7 @@ impl SceneManager {
 
     /// Records the trace stage of the frame just prepared; returns its complete statistics.
     pub fn record_trace(&mut self, trace_ms: f64, rays: u64) -> &FrameStats {
-        self.last.trace_ms = trace_ms;
+        self.last.stages.trace_ms = trace_ms;
         self.last.rays = rays;
         self.cost.record_frame(self.last.instances, self.last_commit_ms, trace_ms);
         &self.last

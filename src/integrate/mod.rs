@@ -15,6 +15,7 @@ mod frame;
 mod manager;
 mod object_map;
 mod policy;
+mod stage_times;
 
 pub use baked::{BakedIsland, BakedPart};
 pub use cache::{CacheBudget, CacheHit, CacheOutcome, CacheStats, GeometryCache, FRACTION_BUCKETS};
@@ -25,3 +26,4 @@ pub use manager::{
 };
 pub use object_map::{normal_matrix, LoadedObjectMap, MeshRef, ObjectMap, ResolvedHit};
 pub use policy::IntegrationPolicy;
+pub use stage_times::{StageColumn, StageTimes};

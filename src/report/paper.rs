@@ -197,11 +197,11 @@ fn workload_section(md: &mut String, w: &WorkloadReport) {
                 policy_name(p),
                 p.all.frame_ms,
                 st.frame_ms,
-                st.reactivate_ms,
-                st.integrate_ms,
-                st.update_ms,
-                st.commit_ms,
-                st.trace_ms,
+                st.stages.reactivate_ms,
+                st.stages.integrate_ms,
+                st.stages.update_ms,
+                st.stages.commit_ms,
+                st.stages.trace_ms,
                 p.islands_integrated,
                 p.islands_reactivated,
                 p.reactivations_from_cache,
@@ -220,9 +220,7 @@ fn workload_section(md: &mut String, w: &WorkloadReport) {
             let _ = writeln!(md, "- {}: no rendered frame settled (90% of the bodies asleep).", run.backend);
             continue;
         }
-        let (n, a) = (&never.settled, &auto.settled);
-        let other =
-            |p: &crate::bench::integration::StageMeans| p.reactivate_ms + p.integrate_ms + p.update_ms;
+        let (n, a) = (&never.settled.stages, &auto.settled.stages);
         let _ = writeln!(
             md,
             "- {}, settled frames: `never` commits the top level in {:.2} ms and traces in {:.2} ms; \
@@ -233,7 +231,7 @@ fn workload_section(md: &mut String, w: &WorkloadReport) {
             n.trace_ms,
             a.commit_ms,
             a.trace_ms,
-            other(a),
+            a.structure_ms(),
             saves_or_costs(n.commit_ms - a.commit_ms),
             saves_or_costs(n.trace_ms - a.trace_ms),
         );

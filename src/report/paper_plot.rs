@@ -11,7 +11,7 @@ use super::plot::{count_labels, draw_legend, err, write_png, Area, PlotResult, F
 use super::ReportError;
 use crate::bench::integration::IntegrationBenchReport;
 use crate::bench::paper::WorkloadReport;
-use crate::integrate::{IntegrationPolicy, FRACTION_BUCKETS};
+use crate::integrate::{IntegrationPolicy, StageTimes, FRACTION_BUCKETS};
 
 const WIDTH: u32 = 1400;
 const ROW_HEIGHT: u32 = 480;
@@ -122,7 +122,7 @@ fn stage_bars(w: &WorkloadReport, area: &Area<'_>) -> PlotResult {
                 let s = &p.settled;
                 bars.push((
                     format!("{}:{name}", run.backend),
-                    [s.update_ms, s.integrate_ms, s.reactivate_ms, s.commit_ms, s.trace_ms],
+                    StageTimes::STAGES.map(|(_, get)| get(&s.stages)),
                 ));
             }
         }

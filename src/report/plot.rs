@@ -10,7 +10,7 @@ use plotters::prelude::*;
 
 use super::stats::{FrameRecord, RunStats};
 use super::ReportError;
-use crate::integrate::FRACTION_BUCKETS;
+use crate::integrate::{StageTimes, FRACTION_BUCKETS};
 
 pub const PLOT_WIDTH: u32 = 1200;
 pub const PLOT_HEIGHT: u32 = 1350;
@@ -28,7 +28,7 @@ pub(super) const STAGES: [(&str, RGBColor); 5] = [
 ];
 
 fn stage_ms(f: &FrameRecord, stage: usize) -> f64 {
-    [f.update_ms, f.integrate_ms, f.reactivate_ms, f.commit_ms, f.trace_ms][stage]
+    (StageTimes::STAGES[stage].1)(&f.stages)
 }
 
 pub(super) type Area<'a> = DrawingArea<BitMapBackend<'a>, Shift>;
@@ -139,8 +139,7 @@ pub(super) fn draw_legend<'a, CT: CoordTranslate>(
 }
 
 fn median_of(stats: &RunStats, stage: usize) -> f64 {
-    let m = &stats.summary.median;
-    [m.update_ms, m.integrate_ms, m.reactivate_ms, m.commit_ms, m.trace_ms][stage]
+    (StageTimes::STAGES[stage].1)(&stats.summary.median.stages)
 }
 
 fn cache_hits(stats: &RunStats, area: &Area<'_>) -> PlotResult {

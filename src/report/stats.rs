@@ -1,13 +1,12 @@
 //! The statistics model of a rendered sequence: one [`FrameRecord`] per frame and a
 //! [`Summary`], written as `stats.json` and `stats.csv` (docs/stats-format.md).
 
-use std::fmt::Write as _;
 use std::path::Path;
 
 use serde::Serialize;
 
 use super::ReportError;
-use crate::integrate::{CacheStats, CostModelState, Decision, FrameStats, FRACTION_BUCKETS};
+use crate::integrate::{CacheStats, CostModelState, Decision, FrameStats, StageTimes, FRACTION_BUCKETS};
 
 /// `format` field of stats.json.
 pub const STATS_FORMAT: &str = "dormant-stats";
@@ -20,11 +19,8 @@ pub struct FrameRecord {
     pub frame: u32,
     /// Physics step of this frame, ms; `None` when the frames are replayed from a trajectory.
     pub physics_ms: Option<f64>,
-    pub update_ms: f64,
-    pub integrate_ms: f64,
-    pub reactivate_ms: f64,
-    pub commit_ms: f64,
-    pub trace_ms: f64,
+    #[serde(flatten)]
+    pub stages: StageTimes,
     /// update + integrate + reactivate + commit + trace (physics not included).
     pub frame_ms: f64,
     pub rays: u64,
@@ -51,11 +47,7 @@ impl FrameRecord {
         FrameRecord {
             frame: stats.frame,
             physics_ms,
-            update_ms: stats.update_ms,
-            integrate_ms: stats.integrate_ms,
-            reactivate_ms: stats.reactivate_ms,
-            commit_ms: stats.commit_ms,
-            trace_ms: stats.trace_ms,
+            stages: stats.stages,
             frame_ms: stats.frame_ms(),
             rays: stats.rays,
             mrays_per_second,
@@ -79,6 +71,12 @@ impl FrameRecord {
     pub fn decision_counts(&self) -> (usize, usize) {
         let yes = self.decisions.iter().filter(|d| d.integrate).count();
         (yes, self.decisions.len() - yes)
+    }
+
+    /// The cost model's estimated net saving summed over this frame's decisions, ms.
+    pub fn estimated_net_ms(&self) -> f64 {
+        // `+ 0.0` turns an empty sum's -0 into 0.
+        self.decisions.iter().filter_map(|d| d.estimate.map(|e| e.net_ms())).sum::<f64>() + 0.0
     }
 }
 
@@ -112,11 +110,8 @@ pub struct Totals {
     /// Physics of the whole simulation (every simulated frame, rendered or not), ms; `None`
     /// when replayed from a trajectory.
     pub physics_ms: Option<f64>,
-    pub update_ms: f64,
-    pub integrate_ms: f64,
-    pub reactivate_ms: f64,
-    pub commit_ms: f64,
-    pub trace_ms: f64,
+    #[serde(flatten)]
+    pub stages: StageTimes,
     pub frame_ms: f64,
     pub rays: u64,
     pub islands_slept: u64,
@@ -134,11 +129,10 @@ pub struct Totals {
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct Medians {
     pub physics_ms: Option<f64>,
-    pub update_ms: f64,
-    pub integrate_ms: f64,
-    pub reactivate_ms: f64,
-    pub commit_ms: f64,
-    pub trace_ms: f64,
+    /// Each stage's own median.
+    #[serde(flatten)]
+    pub stages: StageTimes,
+    /// The median frame (not the sum of the stages' medians).
     pub frame_ms: f64,
 }
 
@@ -186,35 +180,45 @@ fn median(mut values: Vec<f64>) -> f64 {
     }
 }
 
-/// CSV columns, in order.
-const CSV_COLUMNS: [&str; 26] = [
-    "frame",
-    "physics_ms",
-    "update_ms",
-    "integrate_ms",
-    "reactivate_ms",
-    "commit_ms",
-    "trace_ms",
-    "frame_ms",
-    "rays",
-    "mrays_per_second",
-    "committed",
-    "instances",
-    "integrated_islands",
-    "sleeping_islands",
-    "baked_bodies",
-    "islands_slept",
-    "islands_woke",
-    "islands_integrated",
-    "islands_reactivated",
-    "cache_full",
-    "cache_partial",
-    "cache_miss",
-    "decisions",
-    "decisions_integrate",
-    "decisions_decline",
-    "estimated_net_ms",
-];
+/// How a CSV column's cell is written from a frame.
+#[derive(Clone, Copy)]
+enum Cell {
+    /// A stage time, ms.
+    Stage(fn(&StageTimes) -> f64),
+    Text(fn(&FrameRecord) -> String),
+}
+
+/// The CSV columns, in order: the one list both the header and every row come from.
+fn csv_columns() -> Vec<(&'static str, Cell)> {
+    let mut columns: Vec<(&'static str, Cell)> = vec![
+        ("frame", Cell::Text(|f| f.frame.to_string())),
+        ("physics_ms", Cell::Text(|f| f.physics_ms.map(|v| format!("{v:.4}")).unwrap_or_default())),
+    ];
+    columns.extend(StageTimes::STAGES.map(|(name, get)| (name, Cell::Stage(get))));
+    let rest: [(&'static str, Cell); 18] = [
+        ("frame_ms", Cell::Text(|f| format!("{:.4}", f.frame_ms))),
+        ("rays", Cell::Text(|f| f.rays.to_string())),
+        ("mrays_per_second", Cell::Text(|f| format!("{:.3}", f.mrays_per_second))),
+        ("committed", Cell::Text(|f| f.committed.to_string())),
+        ("instances", Cell::Text(|f| f.instances.to_string())),
+        ("integrated_islands", Cell::Text(|f| f.integrated_islands.to_string())),
+        ("sleeping_islands", Cell::Text(|f| f.sleeping_islands.to_string())),
+        ("baked_bodies", Cell::Text(|f| f.baked_bodies.to_string())),
+        ("islands_slept", Cell::Text(|f| f.islands_slept.to_string())),
+        ("islands_woke", Cell::Text(|f| f.islands_woke.to_string())),
+        ("islands_integrated", Cell::Text(|f| f.islands_integrated.to_string())),
+        ("islands_reactivated", Cell::Text(|f| f.islands_reactivated.to_string())),
+        ("cache_full", Cell::Text(|f| f.cache_full.to_string())),
+        ("cache_partial", Cell::Text(|f| f.cache_partial.to_string())),
+        ("cache_miss", Cell::Text(|f| f.cache_miss.to_string())),
+        ("decisions", Cell::Text(|f| f.decisions.len().to_string())),
+        ("decisions_integrate", Cell::Text(|f| f.decision_counts().0.to_string())),
+        ("decisions_decline", Cell::Text(|f| f.decision_counts().1.to_string())),
+    ];
+    columns.extend(rest);
+    columns.push(("estimated_net_ms", Cell::Text(|f| format!("{:.4}", f.estimated_net_ms()))));
+    columns
+}
 
 impl RunStats {
     /// The statistics of a run: its frames, the cache and cost model at the end, and the
@@ -228,11 +232,7 @@ impl RunStats {
     ) -> Self {
         let mut totals = Totals { physics_ms: physics_total_ms, ..Totals::default() };
         for f in &frames {
-            totals.update_ms += f.update_ms;
-            totals.integrate_ms += f.integrate_ms;
-            totals.reactivate_ms += f.reactivate_ms;
-            totals.commit_ms += f.commit_ms;
-            totals.trace_ms += f.trace_ms;
+            totals.stages += f.stages;
             totals.frame_ms += f.frame_ms;
             totals.rays += f.rays;
             totals.islands_slept += u64::from(f.islands_slept);
@@ -246,16 +246,11 @@ impl RunStats {
             totals.decisions_integrate += yes as u64;
             totals.decisions_decline += no as u64;
         }
-        let column = |get: fn(&FrameRecord) -> f64| median(frames.iter().map(get).collect());
         let physics: Vec<f64> = frames.iter().filter_map(|f| f.physics_ms).collect();
         let median = Medians {
             physics_ms: (!physics.is_empty()).then(|| self::median(physics)),
-            update_ms: column(|f| f.update_ms),
-            integrate_ms: column(|f| f.integrate_ms),
-            reactivate_ms: column(|f| f.reactivate_ms),
-            commit_ms: column(|f| f.commit_ms),
-            trace_ms: column(|f| f.trace_ms),
-            frame_ms: column(|f| f.frame_ms),
+            stages: StageTimes::from_fn(|get| self::median(frames.iter().map(|f| get(&f.stages)).collect())),
+            frame_ms: self::median(frames.iter().map(|f| f.frame_ms).collect()),
         };
         let summary = Summary {
             frames: frames.len(),
@@ -275,39 +270,19 @@ impl RunStats {
 
     /// One header line, then one line per frame (decisions as counts).
     pub fn to_csv(&self) -> String {
-        let mut out = CSV_COLUMNS.join(",");
+        let columns = csv_columns();
+        let mut out = columns.iter().map(|(name, _)| *name).collect::<Vec<_>>().join(",");
         out.push('\n');
         for f in &self.frames {
-            let (yes, no) = f.decision_counts();
-            let net: f64 =
-                f.decisions.iter().filter_map(|d| d.estimate.map(|e| e.net_ms())).sum::<f64>() + 0.0; // no -0
-            let physics = f.physics_ms.map(|v| format!("{v:.4}")).unwrap_or_default();
-            let _ = writeln!(
-                out,
-                "{},{physics},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{},{:.3},{},{},{},{},{},{},{},{},{},{},{},{},{},{yes},{no},{net:.4}",
-                f.frame,
-                f.update_ms,
-                f.integrate_ms,
-                f.reactivate_ms,
-                f.commit_ms,
-                f.trace_ms,
-                f.frame_ms,
-                f.rays,
-                f.mrays_per_second,
-                f.committed,
-                f.instances,
-                f.integrated_islands,
-                f.sleeping_islands,
-                f.baked_bodies,
-                f.islands_slept,
-                f.islands_woke,
-                f.islands_integrated,
-                f.islands_reactivated,
-                f.cache_full,
-                f.cache_partial,
-                f.cache_miss,
-                f.decisions.len(),
-            );
+            let cells: Vec<String> = columns
+                .iter()
+                .map(|(_, cell)| match cell {
+                    Cell::Stage(get) => format!("{:.4}", get(&f.stages)),
+                    Cell::Text(text) => text(f),
+                })
+                .collect();
+            out.push_str(&cells.join(","));
+            out.push('\n');
         }
         out
     }
@@ -339,7 +314,15 @@ mod tests {
     fn csv_has_a_header_and_a_row_per_frame() {
         let frames: Vec<FrameRecord> = (0..3)
             .map(|i| {
-                FrameRecord::new(&FrameStats { frame: i, trace_ms: 1.0, ..FrameStats::default() }, 1.0, None)
+                FrameRecord::new(
+                    &FrameStats {
+                        frame: i,
+                        stages: StageTimes { trace_ms: 1.0, ..StageTimes::default() },
+                        ..FrameStats::default()
+                    },
+                    1.0,
+                    None,
+                )
             })
             .collect();
         let run = RunInfo {
@@ -357,9 +340,11 @@ mod tests {
         let csv = stats.to_csv();
         let lines: Vec<&str> = csv.lines().collect();
         assert_eq!(lines.len(), 4);
-        assert_eq!(lines[0].split(',').count(), CSV_COLUMNS.len());
-        assert!(lines[1..].iter().all(|l| l.split(',').count() == CSV_COLUMNS.len()));
-        assert_eq!(stats.summary.totals.trace_ms, 3.0);
-        assert_eq!(stats.summary.median.trace_ms, 1.0);
+        let n = csv_columns().len();
+        assert_eq!(n, 26);
+        assert_eq!(lines[0].split(',').count(), n);
+        assert!(lines[1..].iter().all(|l| l.split(',').count() == n));
+        assert_eq!(stats.summary.totals.stages.trace_ms, 3.0);
+        assert_eq!(stats.summary.median.stages.trace_ms, 1.0);
     }
 }
