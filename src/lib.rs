@@ -17,3 +17,4 @@ pub mod render;
 pub mod report;
 pub(crate) mod rng;
 pub mod scene;
+pub mod sequence;

@@ -165,3 +165,40 @@ fn json_is_a_global_flag_before_or_after_the_command() {
     assert_eq!(read(&before), read(&after));
     assert!(read(&before)["backends"].is_array(), "{:#}", read(&before));
 }
+
+#[test]
+fn render_of_a_trajectory_alone_reports_its_integration_policy() {
+    // Bug: `render --trajectory F` without SCENE wrote "integration": null in its JSON although
+    // the policy applies.
+    let dir = tempfile::tempdir().unwrap();
+    let traj = dir.path().join("tiny.traj");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/tiny.toml");
+    let status = dormant().args(["simulate", "--quiet", "--out"]).arg(&traj).arg(&scene).status().unwrap();
+    assert!(status.success());
+    let json = dir.path().join("render.json");
+    let status = dormant()
+        .args(["render", "--quiet", "--size", "16x9", "--spp", "1", "--frames", "10..11"])
+        .args(["--frame-step", "1", "--integration", "never", "--trajectory"])
+        .arg(&traj)
+        .arg("--out")
+        .arg(dir.path().join("out"))
+        .arg("--json")
+        .arg(&json)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let report: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    assert_eq!(report["integration"], "never", "{report:#}");
+    assert_eq!(report["frames"].as_array().map(Vec::len), Some(1));
+}
+
+#[test]
+fn frame_flags_without_a_sequence_are_input_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    for flags in [["--frames", "0..2"], ["--frame-step", "2"]] {
+        let output = dormant().arg("render").args(flags).arg("--out").arg(dir.path()).output().unwrap();
+        assert_eq!(output.status.code(), Some(2), "{flags:?}");
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(stderr.contains(flags[0]) && stderr.contains("SCENE"), "{stderr}");
+    }
+}

@@ -103,7 +103,7 @@ fn bench_integration_reports_the_five_ratios_and_every_configuration() {
     let status = dormant()
         .args(["--quiet", "bench", "integration"])
         .arg(&scene)
-        .args(["--backend", "bvh", "--size", "16x9", "--range", "0..120", "--frame-step", "6", "--json"])
+        .args(["--backend", "bvh", "--size", "16x9", "--frames", "0..120", "--frame-step", "6", "--json"])
         .arg(&json)
         .status()
         .unwrap();
@@ -170,4 +170,20 @@ fn missing_asset_is_an_input_error() {
     assert_eq!(output.status.code(), Some(2));
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(stderr.contains("/nonexistent/env.glb"), "{stderr}");
+}
+
+#[test]
+fn bench_integration_takes_the_old_range_spelling_and_names_the_flag_in_errors() {
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/tiny.toml");
+    for flag in ["--frames", "--range"] {
+        let output = dormant()
+            .args(["--quiet", "bench", "integration"])
+            .arg(&scene)
+            .args(["--backend", "bvh", "--frame-count", "30", flag, "0..40"])
+            .output()
+            .unwrap();
+        assert_eq!(output.status.code(), Some(2), "{flag}");
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(stderr.contains("--frames 0..40: the trajectory has 30 frames"), "{flag}: {stderr}");
+    }
 }

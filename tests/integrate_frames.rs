@@ -2,8 +2,8 @@
 
 use std::path::Path;
 
-use dormant::integrate::{describe_frame, SceneAssets};
 use dormant::scene::file::SceneFile;
+use dormant::scene::SceneAssets;
 
 fn forest_walk() -> SceneFile {
     SceneFile::load(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/forest-walk.toml")).unwrap()
@@ -15,7 +15,7 @@ fn keyframed_camera_moves_between_frames_regression() {
     let mut file = forest_walk();
     file.description.render.camera = Some("follow".into());
     let assets = SceneAssets::load(&file).unwrap();
-    let at = |t: f32| describe_frame(&assets, t, &[], &[], &[]).camera;
+    let at = |t: f32| assets.describe(t).camera;
     assert_ne!(at(0.0).eye, at(4.0).eye);
     assert_eq!(at(0.0), at(0.0));
 }
@@ -25,7 +25,7 @@ fn fixed_camera_stays_put() {
     let mut file = forest_walk();
     file.description.render.camera = Some("high".into());
     let assets = SceneAssets::load(&file).unwrap();
-    let at = |t: f32| describe_frame(&assets, t, &[], &[], &[]).camera;
+    let at = |t: f32| assets.describe(t).camera;
     assert_eq!(at(0.0), at(4.0));
 }
 
@@ -37,7 +37,7 @@ fn scene_file_sky_reaches_the_description() {
         std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/tiny.toml")).unwrap();
     let sky_of = |extra: &str| {
         let file = SceneFile::parse("scenes/tiny.toml", format!("{base}\n{extra}")).unwrap();
-        dormant::integrate::describe_scene(&SceneAssets::load(&file).unwrap(), 0.0).sky
+        SceneAssets::load(&file).unwrap().describe(0.0).sky
     };
     assert_eq!(sky_of(""), Sky::DAYLIGHT);
     assert_eq!(sky_of("[sky]\ncolor = [0.5, 0.5, 0.5]\nintensity = 2.0"), Sky::constant(Vec3::ONE));

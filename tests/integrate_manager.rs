@@ -11,14 +11,15 @@ use dormant::accel::{self, load_scene, Backend};
 use dormant::crosscheck::{camera_rays, compare_mapped, surface_rays, MappedQuery, Tolerance, VerifyReport};
 use dormant::geometry::{primitives, Ray};
 use dormant::integrate::{
-    describe_frame, describe_scene, CacheBudget, FrameState, IntegrationPolicy, LoadedObjectMap,
-    ManagerOptions, ReactivationPath, ReactivationStrategy, SceneAssets, SceneManager,
+    CacheBudget, IntegrationPolicy, LoadedObjectMap, ManagerOptions, ReactivationPath, ReactivationStrategy,
+    SceneManager,
 };
 use dormant::physics::{
-    self, BodyId, BodyInfo, BodyKind, BodyPose, BodyState, IslandEvent, IslandId, SimulateOptions,
+    BodyId, BodyInfo, BodyKind, BodyPose, BodyState, IslandEvent, IslandId, ReplayFrame, SimulateOptions,
 };
 use dormant::scene::file::SceneFile;
 use dormant::scene::{Body, Camera, Material, Prototype, SceneDescription, Sky, StaticMesh, Sun};
+use dormant::sequence::{FrameRange, FrameRenderer, Sequence, SequenceError, SequenceSource};
 use glam::{Quat, Vec3};
 use proptest::prelude::*;
 
@@ -29,12 +30,13 @@ fn backends() -> Vec<Backend> {
 /// Compares the manager's committed scene with `reference` (every body an instance).
 /// `body_ids[i]` is the body of `reference.bodies[i]`.
 fn check_against(
+    backend: Backend,
     manager: &SceneManager,
     reference: &SceneDescription,
     body_ids: &[BodyId],
     rays: &[Ray],
 ) -> VerifyReport {
-    let mut fresh = accel::create(manager.accel().backend(), Some(2)).unwrap();
+    let mut fresh = accel::create(backend, Some(2)).unwrap();
     let loaded = load_scene(reference, fresh.as_mut()).unwrap();
     fresh.commit().unwrap();
     let map = LoadedObjectMap::with_body_ids(reference, &loaded, body_ids);
@@ -51,51 +53,40 @@ fn assert_agrees(report: &VerifyReport, what: &str) {
     assert!(report.ties * 100 <= report.rays, "{what}: {} ties in {} rays", report.ties, report.rays);
 }
 
-/// `scenes/tiny.toml` simulated: its trajectory, assets and body-less description.
-fn tiny() -> (physics::Trajectory, SceneAssets, SceneDescription) {
+/// `scenes/tiny.toml`, simulated.
+fn tiny() -> Sequence {
     let file = SceneFile::load(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/tiny.toml")).unwrap();
-    let trajectory = physics::simulate(&file, &SimulateOptions::default()).unwrap();
-    let assets = SceneAssets::load(&file).unwrap();
-    let template = describe_scene(&assets, 0.0);
-    (trajectory, assets, template)
+    let source = SequenceSource::Scene { file, options: SimulateOptions::default(), trajectory: None };
+    Sequence::load(source, &mut |_| {}).unwrap()
 }
 
 #[test]
 fn integrated_frames_hit_like_all_instanced_frames() {
-    let (trajectory, assets, template) = tiny();
+    let sequence = tiny();
+    let every_fourth = sequence.select(None, Some(4)).unwrap();
     for backend in backends() {
         for policy in [IntegrationPolicy::Always, IntegrationPolicy::Auto] {
             let options = ManagerOptions { policy, ..ManagerOptions::default() };
-            let accel = accel::create(backend, Some(2)).unwrap();
-            let mut manager = SceneManager::new(accel, &template, &trajectory.bodies, options).unwrap();
+            let mut manager = sequence.manager(backend, Some(2), options).unwrap();
             let (mut compared, mut integrated_seen, mut reactivated) = (0, 0, 0);
-            let mut replay = trajectory.replay();
-            while let Some(f) = replay.next_frame() {
-                manager.observe(f.events);
-                if f.index % 4 != 0 {
-                    continue;
-                }
-                let stats = manager
-                    .prepare(FrameState { index: f.index, states: f.states, poses: f.poses })
-                    .unwrap()
-                    .clone();
+            let mut check = |f: &ReplayFrame<'_>, managers: &mut [SceneManager]| {
+                let manager = &mut managers[0];
+                let stats = manager.prepare(f).unwrap().clone();
                 manager.record_trace(0.0, 0);
                 reactivated += stats.islands_reactivated;
                 if f.index % 40 == 0 {
-                    let time = f.index as f32 * trajectory.timestep;
-                    let reference = describe_frame(&assets, time, &trajectory.bodies, f.states, f.poses);
+                    let reference = sequence.describe_frame(f);
                     let mut rays = camera_rays(&reference, 48, 32);
                     rays.extend(surface_rays(&reference, 1500, u64::from(f.index)));
-                    let present: Vec<BodyId> = (0..f.states.len())
-                        .filter(|&b| f.states[b] != BodyState::Absent && f.poses[b].translation.is_finite())
-                        .map(|b| BodyId(b as u32))
-                        .collect();
-                    let report = check_against(&manager, &reference, &present, &rays);
+                    let present: Vec<BodyId> = f.present_bodies().collect();
+                    let report = check_against(backend, manager, &reference, &present, &rays);
                     assert_agrees(&report, &format!("{backend} {policy} frame {}", f.index));
                     compared += 1;
                     integrated_seen = integrated_seen.max(stats.integrated_islands);
                 }
-            }
+                Ok::<(), SequenceError>(())
+            };
+            sequence.replay(&every_fourth, std::slice::from_mut(&mut manager), &mut check).unwrap();
             assert!(compared >= 10);
             // (`auto` may rightly decline everything in a scene this small.)
             if policy == IntegrationPolicy::Always {
@@ -256,10 +247,8 @@ fn run_sleep_wake(
         let evs = world.step(&mut rng);
         seen += evs.len();
         manager.observe(&evs);
-        let stats = manager
-            .prepare(FrameState { index: frame, states: &world.states, poses: &world.poses })
-            .unwrap()
-            .clone();
+        let replayed = ReplayFrame { index: frame, states: &world.states, poses: &world.poses, events: &evs };
+        let stats = manager.prepare(&replayed).unwrap().clone();
         manager.record_trace(0.0, 0);
         let from_cache = matches!(stats.reactivation_path, Some(ReactivationPath::Cache(_)));
         served += u32::from(from_cache);
@@ -268,7 +257,7 @@ fn run_sleep_wake(
             let mut rays = surface_rays(&reference, 600, u64::from(frame) ^ seed);
             rays.extend(camera_rays(&reference, 24, 16));
             let ids: Vec<BodyId> = (0..bodies as u32).map(BodyId).collect();
-            let report = check_against(&manager, &reference, &ids, &rays);
+            let report = check_against(backend, &manager, &reference, &ids, &rays);
             assert_agrees(&report, &format!("{backend} seed {seed} frame {frame}"));
             checks += 1;
         }
@@ -297,26 +286,26 @@ proptest! {
 
 #[test]
 fn never_always_and_auto_render_the_same_images() {
-    use dormant::render::{render_sequence, Film, PathTracer, SequenceOptions, SequenceScene};
-    let (trajectory, assets, template) = tiny();
-    let sequence = SequenceOptions { start: 0, end: 480, step: 40, width: 64, height: 36, spp: 4 };
+    use dormant::render::{Film, PathTracer};
+    let sequence = tiny();
+    let frames = sequence.select(Some(FrameRange { start: 0, end: 480 }), Some(40)).unwrap();
     let integrator = PathTracer::default();
+    let renderer = FrameRenderer { integrator: &integrator, aovs: &[], width: 64, height: 36, spp: 4 };
     for backend in backends() {
         let mut films: Vec<Vec<Film>> = Vec::new();
         let mut integrated = 0;
         for policy in [IntegrationPolicy::Never, IntegrationPolicy::Always, IntegrationPolicy::Auto] {
             let options = ManagerOptions { policy, ..ManagerOptions::default() };
-            let accel = accel::create(backend, Some(2)).unwrap();
-            let mut manager = SceneManager::new(accel, &template, &trajectory.bodies, options).unwrap();
-            let mut frames = Vec::new();
-            let scene = SequenceScene { trajectory: &trajectory, assets: &assets, template: &template };
-            render_sequence(&scene, &mut manager, &integrator, &[], &sequence, &mut |f| {
-                integrated = integrated.max(f.stats.integrated_islands);
-                frames.push(f.film.clone());
-                Ok::<(), dormant::render::RenderError>(())
-            })
-            .unwrap();
-            films.push(frames);
+            let mut manager = sequence.manager(backend, Some(2), options).unwrap();
+            let mut images = Vec::new();
+            sequence
+                .render(&frames, &mut manager, &renderer, &mut |f, stats| {
+                    integrated = integrated.max(stats.integrated_islands);
+                    images.push(f.film.clone());
+                    Ok::<(), SequenceError>(())
+                })
+                .unwrap();
+            films.push(images);
         }
         assert!(integrated > 0);
         // Integrated and instanced bodies are hit alike up to float tolerance, so the images
@@ -332,7 +321,7 @@ fn never_always_and_auto_render_the_same_images() {
                     .map(|(p, q)| f64::from((*p - *q).length_squared()) / 3.0)
                     .sum();
                 let rmse = (se / a.pixels.len() as f64).sqrt();
-                assert!(rmse < 1e-5, "{backend} frame {}: RMSE {rmse}", i as u32 * sequence.step);
+                assert!(rmse < 1e-5, "{backend} frame {}: RMSE {rmse}", i as u32 * 40);
                 worst = worst.max(rmse);
             }
         }
@@ -342,27 +331,22 @@ fn never_always_and_auto_render_the_same_images() {
 
 #[test]
 fn baked_debug_view_shows_integrated_bodies_in_orange() {
-    use dormant::render::{render_sequence, Aov, AovIntegrator, SequenceOptions, SequenceScene};
-    let (trajectory, assets, template) = tiny();
-    let sequence = SequenceOptions { start: 0, end: 480, step: 60, width: 96, height: 54, spp: 1 };
-    let scene = SequenceScene { trajectory: &trajectory, assets: &assets, template: &template };
+    use dormant::render::{Aov, AovIntegrator};
+    let sequence = tiny();
+    let frames = sequence.select(Some(FrameRange { start: 0, end: 480 }), Some(60)).unwrap();
+    let integrator = AovIntegrator(Aov::Baked);
+    let renderer = FrameRenderer { integrator: &integrator, aovs: &[], width: 96, height: 54, spp: 1 };
     let orange = |p: glam::Vec3| p.x > 1.5 * p.z && p.x > 0.1;
     for (policy, expect_baked) in [(IntegrationPolicy::Never, false), (IntegrationPolicy::Always, true)] {
         let options = ManagerOptions { policy, ..ManagerOptions::default() };
-        let mut manager = SceneManager::new(
-            accel::create(Backend::Bvh, Some(2)).unwrap(),
-            &template,
-            &trajectory.bodies,
-            options,
-        )
-        .unwrap();
+        let mut manager = sequence.manager(Backend::Bvh, Some(2), options).unwrap();
         let mut baked_pixels = 0;
-        let integrator = AovIntegrator(Aov::Baked);
-        render_sequence(&scene, &mut manager, &integrator, &[], &sequence, &mut |f| {
-            baked_pixels += f.film.pixels.iter().filter(|p| orange(**p)).count();
-            Ok::<(), dormant::render::RenderError>(())
-        })
-        .unwrap();
+        sequence
+            .render(&frames, &mut manager, &renderer, &mut |f, _| {
+                baked_pixels += f.film.pixels.iter().filter(|p| orange(**p)).count();
+                Ok::<(), SequenceError>(())
+            })
+            .unwrap();
         assert_eq!(baked_pixels > 0, expect_baked, "{policy}: {baked_pixels} orange pixels");
     }
 }

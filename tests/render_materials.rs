@@ -10,12 +10,12 @@ use std::process::Command;
 
 use dormant::accel::{self, Backend};
 use dormant::geometry::{primitives, Ray};
-use dormant::integrate::{describe_frame, SceneAssets};
 use dormant::render::{
     render_frame, DirectLighting, Film, Integrator, PathTracer, PinholeCamera, RenderScene, RenderSettings,
 };
 use dormant::scene::file::SceneFile;
 use dormant::scene::gltf::{load_gltf, load_gltf_mesh};
+use dormant::scene::SceneAssets;
 use dormant::scene::{Body, Camera, Light, Material, SceneDescription, Sky, StaticMesh, Sun};
 use glam::{Affine3A, Vec3};
 use serde_json::json;
@@ -304,7 +304,7 @@ fn duck_in_a_scene_file_renders_with_its_texture_not_the_palette() {
     );
     let file = SceneFile::parse(dir.path().join("duck.toml"), toml).unwrap();
     let assets = SceneAssets::load(&file).unwrap();
-    let mut desc = describe_frame(&assets, 0.0, &[], &[], &[]);
+    let mut desc = assets.describe(0.0);
     // The duck keeps its glTF material and texture; the box still gets a palette colour.
     let duck_material = desc.materials[desc.prototypes[0].material as usize];
     assert!(duck_material.base_color_texture.is_some());
@@ -417,7 +417,7 @@ fn scene_file_point_and_spot_lights_reach_the_description() {
         format!("{base}inner_cone_degrees = 10.0\nouter_cone_degrees = 30.0\n"),
     )
     .unwrap();
-    let desc = describe_frame(&SceneAssets::load(&file).unwrap(), 0.0, &[], &[], &[]);
+    let desc = SceneAssets::load(&file).unwrap().describe(0.0);
     assert_eq!(desc.lights.len(), 2, "{:?}", desc.lights);
     assert_eq!(
         desc.lights[0],
@@ -487,7 +487,7 @@ fn scene_file_camera_aperture_reaches_the_description() {
         format!("{base}aperture_radius = 0.05\nfocus_distance = 4.0\n"),
     )
     .unwrap();
-    let camera = describe_frame(&SceneAssets::load(&file).unwrap(), 0.0, &[], &[], &[]).camera;
+    let camera = SceneAssets::load(&file).unwrap().describe(0.0).camera;
     assert_eq!((camera.aperture_radius, camera.focus_distance), (0.05, Some(4.0)));
     let bad =
         SceneFile::parse(dir.path().join("bad.toml"), format!("{base}focus_distance = -1.0\n")).unwrap_err();
@@ -686,7 +686,7 @@ fn gltf_cameras_are_imported_and_frame_a_scene_file_without_cameras() {
         path.display()
     );
     let file = SceneFile::parse(dir.path().join("cam.toml"), text).unwrap();
-    let camera = describe_frame(&SceneAssets::load(&file).unwrap(), 0.0, &[], &[], &[]).camera;
+    let camera = SceneAssets::load(&file).unwrap().describe(0.0).camera;
     assert_eq!(camera.eye, Vec3::new(1.0, 6.0, 10.0));
     assert!((camera.target - Vec3::new(1.0, 6.0, 9.0)).length() < 1e-5);
     assert!((camera.vfov_deg - 0.5f32.to_degrees()).abs() < 1e-4);

@@ -18,17 +18,22 @@ use serde::Serialize;
 use crate::accel::{self, AccelError, Backend};
 use crate::crosscheck::camera_rays;
 use crate::integrate::{
-    describe_scene, CacheStats, CostModelState, FrameStats, IntegrationPolicy, ManagerOptions,
-    ReactivationPath, SceneAssets, SceneManager, StageTimes, FRACTION_BUCKETS,
+    CacheStats, CostModelState, FrameStats, IntegrationPolicy, ManagerOptions, ReactivationPath,
+    SceneManager, StageTimes, FRACTION_BUCKETS,
 };
-use crate::physics::{BodyKind, BodyState, Trajectory};
-use crate::render::{render_managed_frame, Integrator, RenderError, SequenceOptions, SequenceScene};
+use crate::physics::{BodyKind, BodyState};
+use crate::render::Integrator;
 use crate::scene::{SceneDescription, StaticMesh};
+use crate::sequence::{FrameRenderer, FrameSelection, Sequence, SequenceError};
 
 /// What to run.
 pub struct IntegrationBenchOptions {
     pub backend: Backend,
-    pub sequence: SequenceOptions,
+    pub frames: FrameSelection,
+    /// Image of every traced frame.
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
     pub threads: Option<usize>,
     /// Also build and trace the backend's alternative static structures (Embree's flat
     /// MEDIUM and HIGH rebuilds, 10-20 s each on large scenes); the rebuild of
@@ -135,41 +140,31 @@ fn means<'a>(frames: impl Iterator<Item = &'a FrameStats>) -> StageMeans {
 /// from other processes on a shared machine falls on all of them alike. Returns each one's
 /// per-frame statistics and its manager at the end.
 fn run_lockstep(
-    scene: &SequenceScene<'_>,
-    integrator: &dyn Integrator,
+    sequence: &Sequence,
+    renderer: &FrameRenderer<'_>,
     options: &IntegrationBenchOptions,
     configs: &[ManagerOptions],
     progress: &mut dyn FnMut(u32, u32),
-) -> Result<Vec<(Vec<FrameStats>, SceneManager)>, RenderError> {
-    let mut runs = Vec::with_capacity(configs.len());
+) -> Result<Vec<(Vec<FrameStats>, SceneManager)>, SequenceError> {
+    let mut managers = Vec::with_capacity(configs.len());
     for c in configs {
-        let accel = accel::create(options.backend, options.threads)?;
-        runs.push((Vec::new(), SceneManager::new(accel, scene.template, &scene.trajectory.bodies, *c)?));
+        managers.push(sequence.manager(options.backend, options.threads, *c)?);
     }
-    let seq = &options.sequence;
-    let total = seq.frame_count();
-    let mut replay = scene.trajectory.replay();
+    let mut frames = vec![Vec::new(); configs.len()];
+    let total = options.frames.count();
     let mut rendered = 0;
-    while let Some(frame) = replay.next_frame() {
-        if frame.index >= seq.end {
-            break;
-        }
-        for (_, m) in &mut runs {
-            m.observe(frame.events);
-        }
-        if !seq.selects(frame.index) {
-            continue;
-        }
-        let n = runs.len();
+    sequence.replay(&options.frames, &mut managers, &mut |frame, managers| {
+        let n = managers.len();
         for k in 0..n {
-            let (frames, manager) = &mut runs[(k + rendered as usize) % n];
-            render_managed_frame(scene, manager, &frame, integrator, &[], seq)?;
-            frames.push(manager.last_frame().clone());
+            let i = (k + rendered as usize) % n;
+            sequence.render_frame(&mut managers[i], frame, renderer)?;
+            frames[i].push(managers[i].last_frame().clone());
         }
         rendered += 1;
         progress(rendered, total);
-    }
-    Ok(runs)
+        Ok::<(), SequenceError>(())
+    })?;
+    Ok(frames.into_iter().zip(managers).collect())
 }
 
 /// One way to hold a final static scene: its from-scratch build time and primary-ray trace.
@@ -256,23 +251,85 @@ fn variant_factories(options: &IntegrationBenchOptions) -> Vec<(String, Factory)
     }
 }
 
+/// The configurations run, in report order: `never` (the cache plays no part in it), then
+/// `always` and `auto`, each with the cache on and off.
+const CONFIGS: [(IntegrationPolicy, bool); 5] = [
+    (IntegrationPolicy::Never, false),
+    (IntegrationPolicy::Always, true),
+    (IntegrationPolicy::Always, false),
+    (IntegrationPolicy::Auto, true),
+    (IntegrationPolicy::Auto, false),
+];
+
 /// See the module docs. `progress` gets (frames rendered, frames planned) after each frame.
 pub fn bench_integration(
-    trajectory: &Trajectory,
-    assets: &SceneAssets,
+    sequence: &Sequence,
     integrator: &dyn Integrator,
     options: &IntegrationBenchOptions,
     progress: &mut dyn FnMut(u32, u32),
-) -> Result<IntegrationBenchReport, RenderError> {
-    let template = describe_scene(assets, 0.0);
-    let seq = &options.sequence;
-    // Asleep share per rendered frame, from the trajectory itself.
+) -> Result<IntegrationBenchReport, SequenceError> {
+    let asleep_fraction = asleep_fractions(sequence, &options.frames);
+    let settled: Vec<bool> = asleep_fraction.iter().map(|&a| a >= 0.9).collect();
+    let manager_options: Vec<ManagerOptions> = CONFIGS
+        .iter()
+        .map(|&(policy, cache)| ManagerOptions {
+            policy,
+            cache,
+            planned_frames: Some(options.frames.count()),
+            ..ManagerOptions::default()
+        })
+        .collect();
+    let renderer = FrameRenderer {
+        integrator,
+        aovs: &[],
+        width: options.width,
+        height: options.height,
+        spp: options.spp,
+    };
+    let results = run_lockstep(sequence, &renderer, options, &manager_options, progress)?;
+    let mut runs = Vec::new();
+    let (mut rebuild_ms, mut rebuild_triangles, mut mean_insert_ms) = (0.0, 0, 0.0);
+    let mut variants = Vec::new();
+    for ((policy, cache), (frames, manager)) in CONFIGS.into_iter().zip(results) {
+        let run = policy_run(policy, cache, &frames, &settled, &manager);
+        if policy == IntegrationPolicy::Always && cache {
+            (variants, rebuild_triangles) = static_variants(&manager, &sequence.template, options)?;
+            rebuild_ms = variants.first().map_or(0.0, |v| v.build_ms);
+            mean_insert_ms = run.integrate_ms_per_island;
+        }
+        runs.push(run);
+    }
+    let ratios = ratios(&runs, rebuild_ms, mean_insert_ms);
+    Ok(IntegrationBenchReport {
+        scene: sequence.template.name.clone(),
+        backend: options.backend,
+        bodies: sequence.trajectory.bodies.len(),
+        frames_rendered: options.frames.count(),
+        frames: options.frames.frames(),
+        settled_frames: settled.iter().filter(|s| **s).count(),
+        width: options.width,
+        height: options.height,
+        spp: options.spp,
+        asleep_fraction,
+        runs,
+        static_variants: variants,
+        rebuild_ms,
+        rebuild_triangles,
+        mean_insert_ms,
+        ratios,
+        cache_histogram_buckets: FRACTION_BUCKETS,
+    })
+}
+
+/// Per rendered frame, the share of the present dynamic bodies asleep, from the trajectory.
+fn asleep_fractions(sequence: &Sequence, selection: &FrameSelection) -> Vec<f64> {
+    let trajectory = &sequence.trajectory;
     let dynamic: Vec<bool> = trajectory.bodies.iter().map(|b| b.kind == BodyKind::Dynamic).collect();
-    let asleep_fraction: Vec<f64> = trajectory
+    trajectory
         .frames
         .iter()
         .enumerate()
-        .filter(|(i, _)| seq.selects(*i as u32))
+        .filter(|(i, _)| selection.selects(*i as u32))
         .map(|(_, f)| {
             let (mut present, mut asleep) = (0usize, 0usize);
             for (s, d) in f.states.iter().zip(&dynamic) {
@@ -287,82 +344,59 @@ pub fn bench_integration(
                 asleep as f64 / present as f64
             }
         })
-        .collect();
-    let settled: Vec<bool> = asleep_fraction.iter().map(|&a| a >= 0.9).collect();
+        .collect()
+}
 
-    let planned = Some(seq.frame_count());
-    let configs = [
-        (IntegrationPolicy::Never, false),
-        (IntegrationPolicy::Always, true),
-        (IntegrationPolicy::Always, false),
-        (IntegrationPolicy::Auto, true),
-        (IntegrationPolicy::Auto, false),
-    ];
-    let manager_options: Vec<ManagerOptions> = configs
-        .iter()
-        .map(|&(policy, cache)| ManagerOptions {
-            policy,
-            cache,
-            planned_frames: planned,
-            ..ManagerOptions::default()
-        })
-        .collect();
-    let results = run_lockstep(
-        &SequenceScene { trajectory, assets, template: &template },
-        integrator,
-        options,
-        &manager_options,
-        progress,
-    )?;
-    let mut runs = Vec::new();
-    let (mut rebuild_ms, mut rebuild_triangles, mut mean_insert_ms) = (0.0, 0, 0.0);
-    let mut variants = Vec::new();
-    for ((policy, cache), (frames, manager)) in configs.into_iter().zip(results) {
-        let total_ms = frames.iter().map(|f| f.frame_ms()).sum();
-        let sum = |f: &dyn Fn(&FrameStats) -> u64| frames.iter().map(f).sum::<u64>();
-        let run = PolicyRun {
-            policy,
-            cache,
-            total_ms,
-            all: means(frames.iter()),
-            settled: means(frames.iter().zip(&settled).filter(|(_, s)| **s).map(|(f, _)| f)),
-            islands_integrated: sum(&|f| u64::from(f.islands_integrated)),
-            islands_reactivated: sum(&|f| u64::from(f.islands_reactivated)),
-            integrate_ms_per_island: match sum(&|f| u64::from(f.islands_integrated)) {
-                0 => 0.0,
-                n => frames.iter().map(|f| f.stages.integrate_ms).sum::<f64>() / n as f64,
-            },
-            reactivate_ms_per_frame_with_wakes: means(frames.iter().filter(|f| f.islands_reactivated > 0))
-                .stages.reactivate_ms,
-            reactivations_by_removal: sum(&|f| {
-                u64::from(f.reactivation_path == Some(ReactivationPath::Removal))
-            }),
-            reactivations_from_cache: sum(&|f| {
-                u64::from(matches!(f.reactivation_path, Some(ReactivationPath::Cache(_))))
-            }),
-            integrated_at_end: frames.last().map_or(0, |f| f.integrated_islands),
-            instances_at_end: frames.last().map_or(0, |f| f.instances),
-            rays: sum(&|f| f.rays),
-            decisions_integrate: sum(&|f| f.decisions.iter().filter(|d| d.integrate).count() as u64),
-            decisions_decline: sum(&|f| f.decisions.iter().filter(|d| !d.integrate).count() as u64),
-            cache_stats: manager.cache_stats(),
-            cost_model: manager.cost_model(),
-            frame_ms: frames.iter().map(|f| f.frame_ms()).collect(),
-        };
-        if policy == IntegrationPolicy::Always && cache {
-            (variants, rebuild_triangles) = static_variants(&manager, &template, options)?;
-            rebuild_ms = variants.first().map_or(0.0, |v| v.build_ms);
-            mean_insert_ms = run.integrate_ms_per_island;
-        }
-        runs.push(run);
+/// One configuration's report from its frames (`settled` marks the settled ones) and its
+/// manager at the end.
+fn policy_run(
+    policy: IntegrationPolicy,
+    cache: bool,
+    frames: &[FrameStats],
+    settled: &[bool],
+    manager: &SceneManager,
+) -> PolicyRun {
+    let sum = |f: &dyn Fn(&FrameStats) -> u64| frames.iter().map(f).sum::<u64>();
+    let integrated = sum(&|f| u64::from(f.islands_integrated));
+    PolicyRun {
+        policy,
+        cache,
+        total_ms: frames.iter().map(|f| f.frame_ms()).sum(),
+        all: means(frames.iter()),
+        settled: means(frames.iter().zip(settled).filter(|(_, s)| **s).map(|(f, _)| f)),
+        islands_integrated: integrated,
+        islands_reactivated: sum(&|f| u64::from(f.islands_reactivated)),
+        integrate_ms_per_island: match integrated {
+            0 => 0.0,
+            n => frames.iter().map(|f| f.stages.integrate_ms).sum::<f64>() / n as f64,
+        },
+        reactivate_ms_per_frame_with_wakes: means(frames.iter().filter(|f| f.islands_reactivated > 0))
+            .stages
+            .reactivate_ms,
+        reactivations_by_removal: sum(&|f| u64::from(f.reactivation_path == Some(ReactivationPath::Removal))),
+        reactivations_from_cache: sum(&|f| {
+            u64::from(matches!(f.reactivation_path, Some(ReactivationPath::Cache(_))))
+        }),
+        integrated_at_end: frames.last().map_or(0, |f| f.integrated_islands),
+        instances_at_end: frames.last().map_or(0, |f| f.instances),
+        rays: sum(&|f| f.rays),
+        decisions_integrate: sum(&|f| f.decisions.iter().filter(|d| d.integrate).count() as u64),
+        decisions_decline: sum(&|f| f.decisions.iter().filter(|d| !d.integrate).count() as u64),
+        cache_stats: manager.cache_stats(),
+        cost_model: manager.cost_model(),
+        frame_ms: frames.iter().map(|f| f.frame_ms()).collect(),
     }
-    let find = |p: IntegrationPolicy, c: bool| find_run(&runs, p, c).expect("ran");
+}
+
+/// The headline ratios from the runs (every configuration ran).
+fn ratios(runs: &[PolicyRun], rebuild_ms: f64, mean_insert_ms: f64) -> IntegrationRatios {
+    let find = |p: IntegrationPolicy, c: bool| find_run(runs, p, c).expect("every configuration ran");
     let (never, always, auto) = (
         find(IntegrationPolicy::Never, false),
         find(IntegrationPolicy::Always, true),
         find(IntegrationPolicy::Auto, true),
     );
-    let ratios = IntegrationRatios {
+    IntegrationRatios {
         // NaN (null in JSON) when no frame settled.
         settled_speedup: match never.settled.frames {
             0 => f64::NAN,
@@ -372,24 +406,5 @@ pub fn bench_integration(
         auto_over_best: auto.total_ms / never.total_ms.min(always.total_ms).max(1e-9),
         rebuild_over_insert: rebuild_ms / mean_insert_ms.max(1e-9),
         partial_hit_90_99_fraction: auto.cache_stats.partial_90_99_fraction(),
-    };
-    Ok(IntegrationBenchReport {
-        scene: template.name.clone(),
-        backend: options.backend,
-        bodies: trajectory.bodies.len(),
-        frames_rendered: seq.frame_count(),
-        frames: (seq.start..seq.end).filter(|&f| seq.selects(f)).collect(),
-        settled_frames: settled.iter().filter(|s| **s).count(),
-        width: seq.width,
-        height: seq.height,
-        spp: seq.spp,
-        asleep_fraction,
-        runs,
-        static_variants: variants,
-        rebuild_ms,
-        rebuild_triangles,
-        mean_insert_ms,
-        ratios,
-        cache_histogram_buckets: FRACTION_BUCKETS,
-    })
+    }
 }

@@ -17,10 +17,10 @@ use super::integration::{
     bench_integration, IntegrationBenchOptions, IntegrationBenchReport, IntegrationRatios,
 };
 use crate::accel::Backend;
-use crate::integrate::{describe_frame, SceneAssets};
-use crate::physics::{self, IslandStats, SimulateOptions, Trajectory};
-use crate::render::{DirectLighting, SequenceOptions};
+use crate::physics::{self, IslandStats, SimulateOptions};
+use crate::render::DirectLighting;
 use crate::scene::file::SceneFile;
+use crate::sequence::{FrameRange, Sequence, SequenceError, SequenceSource};
 
 /// How big a run is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, clap::ValueEnum)]
@@ -279,19 +279,34 @@ struct Workload {
     size: WorkloadSize,
 }
 
+impl Workload {
+    /// A failure to simulate or replay this workload.
+    fn error(&self, e: SequenceError) -> PaperError {
+        let workload = self.name.clone();
+        match e {
+            SequenceError::Scene(source) => PaperError::Scene { workload, source },
+            SequenceError::Physics(source) => PaperError::Physics { workload, source },
+            e => PaperError::Run { workload, backend: "all".into(), message: e.to_string() },
+        }
+    }
+}
+
 fn run_workload(
     w: &Workload,
     options: &PaperBenchOptions,
     log: &mut dyn FnMut(&str),
 ) -> Result<WorkloadReport, PaperError> {
     let size = w.size;
-    let physics_error = |source| PaperError::Physics { workload: w.name.clone(), source };
-    let simulate = SimulateOptions { count: Some(size.count), frames: Some(size.frames) };
     log(&format!("{}: simulating {} objects for {} frames", w.name, size.count, size.frames));
     let t = Instant::now();
-    let trajectory = physics::simulate(&w.file, &simulate).map_err(physics_error)?;
+    let source = SequenceSource::Scene {
+        file: w.file.clone(),
+        options: SimulateOptions { count: Some(size.count), frames: Some(size.frames) },
+        trajectory: None,
+    };
+    let sequence = Sequence::load(source, &mut |_| {}).map_err(|e| w.error(e))?;
     let simulate_s = t.elapsed().as_secs_f64();
-    let islands = trajectory.island_stats();
+    let islands = sequence.trajectory.island_stats();
     log(&format!(
         "{}: simulated in {simulate_s:.0} s; {:.0}% asleep at the end, {} islands formed, {} woken",
         w.name,
@@ -299,48 +314,19 @@ fn run_workload(
         islands.islands_formed,
         islands.islands_woken
     ));
-    let assets = SceneAssets::load(&w.file)
-        .map_err(|source| PaperError::Scene { workload: w.name.clone(), source })?;
-
-    let sequence = SequenceOptions {
-        start: 0,
-        end: trajectory.frames.len() as u32,
-        step: size.frame_step,
-        width: size.width,
-        height: size.height,
-        spp: 1,
-    };
     let mut runs = Vec::new();
     for &backend in &options.backends {
-        let run_error = |message: String| PaperError::Run {
-            workload: w.name.clone(),
-            backend: backend.to_string(),
-            message,
-        };
-        let bench_options =
-            IntegrationBenchOptions { backend, sequence, threads: options.threads, static_variants: false };
-        let t = Instant::now();
-        let mut progress = |done: u32, total: u32| {
-            if done % 100 == 0 {
-                log(&format!("{}, {backend}: frame {done} of {total}, 5 configurations each", w.name));
-            }
-        };
-        let integration =
-            bench_integration(&trajectory, &assets, &DirectLighting, &bench_options, &mut progress)
-                .map_err(|e| run_error(e.to_string()))?;
-        let wall_s = t.elapsed().as_secs_f64();
-        log(&format!(
-            "{}, {backend}: {} frames in {wall_s:.0} s; settled speedup {:.2}, run speedup {:.2}",
-            w.name,
-            integration.frames_rendered,
-            integration.ratios.settled_speedup,
-            integration.ratios.run_speedup
-        ));
-        runs.push(BackendRun { backend, wall_s, integration });
+        runs.push(run_backend(w, &sequence, backend, options, log)?);
     }
-
     log(&format!("{}: accelerator benchmark on the last frame", w.name));
-    let last = last_frame_scene(&trajectory, &assets);
+    let mut last = None;
+    sequence
+        .replay(&sequence.last_frame(), &mut [], &mut |frame, _| {
+            last = Some(sequence.describe_frame(frame));
+            Ok::<(), SequenceError>(())
+        })
+        .map_err(|e| w.error(e))?;
+    let last = last.unwrap_or_else(|| sequence.assets.describe(0.0));
     let accel_options = AccelBenchOptions {
         width: size.accel_width,
         height: size.accel_height,
@@ -363,7 +349,7 @@ fn run_workload(
         name: w.name.clone(),
         description: w.description.clone(),
         size,
-        bodies: trajectory.bodies.len(),
+        bodies: sequence.trajectory.bodies.len(),
         simulate_s,
         islands,
         runs,
@@ -373,15 +359,46 @@ fn run_workload(
     })
 }
 
-/// The trajectory's last frame with every present body an instance.
-fn last_frame_scene(trajectory: &Trajectory, assets: &SceneAssets) -> crate::scene::SceneDescription {
-    let mut replay = trajectory.replay();
-    let mut last = None;
-    while let Some(frame) = replay.next_frame() {
-        last = Some((frame.index, frame.states.to_vec(), frame.poses.to_vec()));
-    }
-    let (index, states, poses) = last.unwrap_or_default();
-    describe_frame(assets, index as f32 * trajectory.timestep, &trajectory.bodies, &states, &poses)
+/// One backend's integration benchmark of a workload's sequence.
+fn run_backend(
+    w: &Workload,
+    sequence: &Sequence,
+    backend: Backend,
+    options: &PaperBenchOptions,
+    log: &mut dyn FnMut(&str),
+) -> Result<BackendRun, PaperError> {
+    let size = w.size;
+    let frames = sequence
+        .select(Some(FrameRange { start: 0, end: sequence.frame_count() }), Some(size.frame_step))
+        .map_err(|e| w.error(e))?;
+    let bench_options = IntegrationBenchOptions {
+        backend,
+        frames,
+        width: size.width,
+        height: size.height,
+        spp: 1,
+        threads: options.threads,
+        static_variants: false,
+    };
+    let t = Instant::now();
+    let mut progress = |done: u32, total: u32| {
+        if done % 100 == 0 {
+            log(&format!("{}, {backend}: frame {done} of {total}, 5 configurations each", w.name));
+        }
+    };
+    let integration =
+        bench_integration(sequence, &DirectLighting, &bench_options, &mut progress).map_err(|e| {
+            PaperError::Run { workload: w.name.clone(), backend: backend.to_string(), message: e.to_string() }
+        })?;
+    let wall_s = t.elapsed().as_secs_f64();
+    log(&format!(
+        "{}, {backend}: {} frames in {wall_s:.0} s; settled speedup {:.2}, run speedup {:.2}",
+        w.name,
+        integration.frames_rendered,
+        integration.ratios.settled_speedup,
+        integration.ratios.run_speedup
+    ));
+    Ok(BackendRun { backend, wall_s, integration })
 }
 
 /// The paper's three claims against one workload's measurements, for every backend run.

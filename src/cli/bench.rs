@@ -10,8 +10,7 @@ use crate::bench::{
     self, AccelBenchOptions, IntegrationBenchOptions, PaperBenchOptions, PaperPreset, RainAssets,
     RenderBenchOptions,
 };
-use crate::integrate::SceneAssets;
-use crate::render::SequenceOptions;
+use crate::sequence::{FrameRange, SequenceSource};
 
 #[derive(Debug, Args)]
 pub struct BenchArgs {
@@ -88,9 +87,9 @@ pub struct IntegrationArgs {
     /// Ray tracing backend (default: the first compiled in, Embree preferred).
     #[arg(long)]
     pub backend: Option<crate::accel::Backend>,
-    /// Render frames A..B (half-open) of the simulation.
-    #[arg(long = "range", value_name = "A..B")]
-    pub range: Option<super::render::FrameRange>,
+    /// Render frames A..B (half-open) of the simulation (`--range` is the old spelling).
+    #[arg(long, value_name = "A..B", alias = "range")]
+    pub frames: Option<FrameRange>,
     /// Render every N-th frame (default: the scene's render.frame_step).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     pub frame_step: Option<u32>,
@@ -193,28 +192,28 @@ fn integration(
     json: &JsonOutput,
 ) -> Result<(), CliError> {
     let backend = super::render::choose_backend(args.backend)?;
-    let (file, simulate) = args.scene.load()?;
-    let trajectory = super::render::load_trajectory(&file, &simulate, args.trajectory.as_deref())?;
-    let total = trajectory.frames.len() as u32;
-    let range = super::render::check_range("--range", args.range, total)?;
-    let assets = SceneAssets::load(&file).map_err(|e| CliError::Input(e.to_string()))?;
-    let sequence = SequenceOptions {
-        start: range.start,
-        end: range.end,
-        step: args.frame_step.unwrap_or(file.description.render.frame_step.max(1)),
+    let (file, options) = args.scene.load()?;
+    let source = SequenceSource::Scene { file, options, trajectory: args.trajectory.clone() };
+    let sequence = super::render::load_sequence(source, quiet)?;
+    let frames = sequence
+        .select(args.frames, args.frame_step)
+        .map_err(|e| super::render::sequence_error(e, "--frames"))?;
+    let options = IntegrationBenchOptions {
+        backend,
+        frames,
         width: args.size.width,
         height: args.size.height,
         spp: args.spp,
+        threads,
+        static_variants: true,
     };
-    let options = IntegrationBenchOptions { backend, sequence, threads, static_variants: true };
     let integrator = super::render::integrator(args.mode, 6);
     let mut progress = |done: u32, total: u32| {
         if !quiet && (done % 50 == 0 || done == total) {
             eprintln!("bench integration: frame {done} of {total}, 5 configurations each");
         }
     };
-    let report = bench::bench_integration(&trajectory, &assets, integrator.as_ref(), &options, &mut progress)
-        .map_err(|e| CliError::Runtime(e.to_string()))?;
+    let report = bench::bench_integration(&sequence, integrator.as_ref(), &options, &mut progress)?;
     emit(&serde_json::to_value(&report).expect("bench report serialises"), json, quiet)
 }
 

@@ -36,6 +36,17 @@ impl From<crate::render::RenderError> for CliError {
     }
 }
 
+/// Bad scenes, trajectories and options are input; a failed render or build is runtime.
+impl From<crate::sequence::SequenceError> for CliError {
+    fn from(e: crate::sequence::SequenceError) -> Self {
+        if e.is_input() {
+            CliError::Input(e.to_string())
+        } else {
+            CliError::Runtime(e.to_string())
+        }
+    }
+}
+
 impl CliError {
     pub fn exit_code(&self) -> u8 {
         match self {

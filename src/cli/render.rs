@@ -1,19 +1,22 @@
+//! `dormant render`: a still of a built-in or asset scene, or a sequence of a scene file or
+//! trajectory; the files each frame writes and the run's statistics.
+
 use std::path::{Path, PathBuf};
 
 use clap::Args;
+use indicatif::ProgressBar;
 
 use super::CliError;
 use crate::accel::{self, Backend};
-use crate::integrate::{
-    describe_scene, FrameStats, IntegrationPolicy, ManagerOptions, SceneAssets, SceneManager,
-};
-use crate::physics::{self, SimulateOptions, Trajectory};
+use crate::integrate::{FrameStats, IntegrationPolicy, ManagerOptions};
+use crate::physics::SimulateOptions;
 use crate::render::{
-    self, AmbientOcclusion, Aov, AovIntegrator, DirectLighting, Integrator, PathTracer, RenderScene,
-    RenderSettings, RenderStats, SequenceOptions, SequenceScene,
+    self, AmbientOcclusion, Aov, AovIntegrator, DirectLighting, Film, Integrator, PathTracer, RenderScene,
+    RenderSettings, RenderStats,
 };
-use crate::report::{self, FrameRecord, PhysicsSource, RunInfo, RunStats};
+use crate::report::{self, FrameRecord, RunInfo, RunStats};
 use crate::scene::file::SceneFile;
+use crate::sequence::{FrameRange, FrameRenderer, RenderedFrame, Sequence, SequenceError, SequenceSource};
 
 /// Image size as `WIDTHxHEIGHT`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -60,6 +63,10 @@ pub struct RenderArgs {
     /// With SCENE or --trajectory: render frames A..B (half-open) of the simulation.
     #[arg(long, value_name = "A..B")]
     pub frames: Option<FrameRange>,
+    /// With SCENE or --trajectory: render every N-th frame, counted from frame 0 (default:
+    /// the scene's render.frame_step).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    pub frame_step: Option<u32>,
     #[command(flatten)]
     pub scene: super::SceneSource,
     /// Output directory; frames are written as frame_NNNN.png.
@@ -128,67 +135,25 @@ pub(super) fn integrator(mode: RenderMode, max_depth: u32) -> Box<dyn Integrator
     }
 }
 
-/// The scene's simulation: read from `path` (checked against the scene) or run now.
-pub(super) fn load_trajectory(
-    file: &SceneFile,
-    options: &SimulateOptions,
-    path: Option<&Path>,
-) -> Result<Trajectory, CliError> {
-    load_trajectory_timed(file, options, path, &mut |_| {})
-}
-
-/// [`load_trajectory`], calling `on_step` with each simulated frame (nothing when read).
-pub(super) fn load_trajectory_timed(
-    file: &SceneFile,
-    options: &SimulateOptions,
-    path: Option<&Path>,
-    on_step: &mut dyn FnMut(physics::SimulatedFrame),
-) -> Result<Trajectory, CliError> {
-    match path {
-        Some(path) => {
-            let expected = options.effective_scene(file).map_err(super::simulate::physics_error)?.source_hash;
-            Trajectory::read(path, expected).map_err(|e| CliError::Input(e.to_string()))
-        }
-        None => physics::simulate_observed(file, options, on_step).map_err(super::simulate::physics_error),
+/// A sequence error as the CLI reports it; `flag` names the option that gave a frame range.
+pub(super) fn sequence_error(e: SequenceError, flag: &str) -> CliError {
+    match e {
+        SequenceError::Range { .. } => CliError::Input(format!("{flag} {e}")),
+        e if e.is_input() => CliError::Input(e.to_string()),
+        e => CliError::Runtime(e.to_string()),
     }
 }
 
-/// A trajectory and the scene recorded in it, checked against each other.
-fn recorded_scene(path: &Path) -> Result<(SceneFile, SimulateOptions, Trajectory), CliError> {
-    let input = |e: &dyn std::fmt::Display| CliError::Input(e.to_string());
-    let trajectory = Trajectory::read_unchecked(path).map_err(|e| input(&e))?;
-    let Some(recorded) = &trajectory.scene else {
-        return Err(CliError::Input(format!(
-            "{}: scene: the trajectory does not record its scene (format version 1); pass the SCENE \
-             file too",
-            path.display()
-        )));
-    };
-    let file = recorded
-        .scene_file()
-        .map_err(|e| CliError::Input(format!("{}: the scene recorded in it: {e}", path.display())))?;
-    let options = recorded.options.clone();
-    let hash = options.effective_scene(&file).map_err(super::simulate::physics_error)?.source_hash;
-    if hash != trajectory.scene_hash {
-        return Err(CliError::Input(format!(
-            "{}: scene: the recorded scene does not hash to the trajectory's scene_hash (damaged file)",
-            path.display()
-        )));
-    }
-    Ok((file, options, trajectory))
-}
-
-/// `range` (default: every frame) checked against a trajectory of `total` frames.
-/// `flag` names the option in the error.
-pub(super) fn check_range(flag: &str, range: Option<FrameRange>, total: u32) -> Result<FrameRange, CliError> {
-    let range = range.unwrap_or(FrameRange { start: 0, end: total });
-    if range.end > total {
-        return Err(CliError::Input(format!(
-            "{flag} {}..{}: the trajectory has {total} frames (0..{total})",
-            range.start, range.end
-        )));
-    }
-    Ok(range)
+/// Loads a sequence from `source`, with a progress bar while it simulates.
+pub(super) fn load_sequence(source: SequenceSource, quiet: bool) -> Result<Sequence, CliError> {
+    let bar = super::progress::frames_bar(quiet, "simulating", None);
+    let sequence = Sequence::load(source, &mut |step| {
+        bar.set_length(u64::from(step.frames));
+        bar.inc(1);
+    })
+    .map_err(|e| sequence_error(e, ""))?;
+    bar.finish_and_clear();
+    Ok(sequence)
 }
 
 pub(super) fn run(
@@ -198,214 +163,20 @@ pub(super) fn run(
     json: &super::JsonOutput,
 ) -> Result<(), CliError> {
     let backend = choose_backend(args.backend)?;
-    if !args.exposure.is_finite() || args.exposure <= 0.0 {
-        return Err(CliError::Input(format!("--exposure {}: must be a positive number", args.exposure)));
-    }
-    if args.video {
-        if args.scene_file.is_none() && args.trajectory.is_none() {
-            return Err(CliError::Input(
-                "--video needs a SCENE file or --trajectory (a sequence of frames)".into(),
-            ));
-        }
-        if !render::ffmpeg_available() {
-            return Err(CliError::Input(render::VideoError::FfmpegMissing.to_string()));
-        }
-    }
+    check_flags(args)?;
     std::fs::create_dir_all(&args.out).map_err(|e| {
         CliError::Runtime(format!("cannot create output directory {}: {e}", args.out.display()))
     })?;
     let integrator = integrator(args.mode, args.max_depth);
-    let runtime = |e: &dyn std::fmt::Display| CliError::Runtime(e.to_string());
-    let mut records = Vec::new();
-    // Per-frame statistics of a sequence (stats.json / stats.csv), and the physics step time of
-    // each simulated frame when the simulation runs in this process.
-    let mut frame_records: Vec<FrameRecord> = Vec::new();
-    let mut physics_ms: Vec<f64> = Vec::new();
-    let progress = super::progress::hidden();
-    let mut write_frame = |index: u32,
-                           film: &render::Film,
-                           aovs: &[(Aov, render::Film)],
-                           stats: &RenderStats,
-                           scene_stats: Option<&FrameStats>| {
-        let path = args.out.join(format!("frame_{index:04}.png"));
-        render::write_png_atomic(film, args.exposure, &path).map_err(|e| runtime(&e))?;
-        if args.exr {
-            render::write_exr_atomic(film, &path.with_extension("exr")).map_err(|e| runtime(&e))?;
-        }
-        let mut aov_paths = Vec::new();
-        for (aov, film) in aovs {
-            let aov_path = args.out.join(format!("frame_{index:04}.{}.png", aov.name()));
-            render::write_aov_png_atomic(film, *aov, &aov_path).map_err(|e| runtime(&e))?;
-            if args.exr {
-                render::write_exr_atomic(film, &aov_path.with_extension("exr")).map_err(|e| runtime(&e))?;
-            }
-            aov_paths.push(aov_path);
-        }
-        if !quiet && !json.is_requested() {
-            progress.suspend(|| {
-                println!(
-                    "rendered {} ({}x{}, {} spp, {:?} mode, {backend}): {:.2} s, {} rays, {:.1} Mrays/s",
-                    path.display(),
-                    args.size.width,
-                    args.size.height,
-                    args.spp,
-                    args.mode,
-                    stats.seconds,
-                    stats.rays,
-                    stats.mrays_per_second()
-                )
-            });
-        }
-        records.push(serde_json::json!({ "frame": index, "path": path, "rays": stats.rays,
-            "seconds": stats.seconds, "mrays_per_second": stats.mrays_per_second(), "aovs": aov_paths,
-            "scene": scene_stats }));
-        Ok::<(), CliError>(())
-    };
-
-    // A sequence: a scene file, maybe with a trajectory of it, or a trajectory alone with the
-    // scene recorded in it.
-    let sequence_source = match (&args.scene_file, &args.trajectory) {
-        (Some(path), _) => {
-            let file = SceneFile::load(path).map_err(|e| CliError::Input(e.to_string()))?;
-            Some((file, SimulateOptions { count: args.scene.count, frames: None }, None))
-        }
-        (None, Some(path)) => {
-            let (file, options, trajectory) = recorded_scene(path)?;
-            if args.scene.count.is_some_and(|c| options.count != Some(c)) {
-                return Err(CliError::Input(format!(
-                    "--count: {} was simulated with its own object count; simulate again to change it",
-                    path.display()
-                )));
-            }
-            Some((file, options, Some(trajectory)))
-        }
-        (None, None) => None,
-    };
-    let scene_name = match sequence_source {
-        None => {
-            if args.frames.is_some() {
-                return Err(CliError::Input("--frames needs a SCENE file or --trajectory".into()));
-            }
-            let description = args.scene.load()?;
-            let mut accel = accel::create(backend, threads).map_err(|e| runtime(&e))?;
-            let scene = RenderScene::build(&description, accel.as_mut()).map_err(|e| runtime(&e))?;
-            let query = accel.query().map_err(|e| runtime(&e))?;
-            let settings =
-                RenderSettings { width: args.size.width, height: args.size.height, spp: args.spp, frame: 0 };
-            let (film, stats) = render::render_frame(&scene, query, integrator.as_ref(), &settings)
-                .map_err(|e| runtime(&e))?;
-            let mut aovs = Vec::new();
-            for &aov in &args.aov {
-                let (film, _) = render::render_frame(&scene, query, &AovIntegrator(aov), &settings)
-                    .map_err(|e| runtime(&e))?;
-                aovs.push((aov, film));
-            }
-            write_frame(0, &film, &aovs, &stats, None)?;
-            description.name
-        }
-        Some((file, options, preloaded)) => {
-            let trajectory = match preloaded {
-                Some(t) => t,
-                None => {
-                    let simulate_bar = super::progress::frames_bar(quiet, "simulating", None);
-                    let t =
-                        load_trajectory_timed(&file, &options, args.trajectory.as_deref(), &mut |step| {
-                            simulate_bar.set_length(u64::from(step.frames));
-                            simulate_bar.inc(1);
-                            physics_ms.push(step.step_ms);
-                        })?;
-                    simulate_bar.finish_and_clear();
-                    t
-                }
-            };
-            let physics_source =
-                if args.trajectory.is_some() { PhysicsSource::Trajectory } else { PhysicsSource::Simulated };
-            let physics_total_ms =
-                (physics_source == PhysicsSource::Simulated).then(|| physics_ms.iter().sum::<f64>());
-            let range = check_range("--frames", args.frames, trajectory.frames.len() as u32)?;
-            let assets = SceneAssets::load(&file).map_err(|e| CliError::Input(e.to_string()))?;
-            let template = describe_scene(&assets, 0.0);
-            let sequence = SequenceOptions {
-                start: range.start,
-                end: range.end,
-                step: file.description.render.frame_step.max(1),
-                width: args.size.width,
-                height: args.size.height,
-                spp: args.spp,
-            };
-            let manager_options = ManagerOptions {
-                policy: args.integration,
-                cache: args.cache == CacheSwitch::On,
-                planned_frames: Some(sequence.frame_count()),
-                ..ManagerOptions::default()
-            };
-            let accel = accel::create(backend, threads).map_err(|e| runtime(&e))?;
-            let mut manager = SceneManager::new(accel, &template, &trajectory.bodies, manager_options)
-                .map_err(|e| runtime(&e))?;
-            let scene = SequenceScene { trajectory: &trajectory, assets: &assets, template: &template };
-            super::progress::become_frames_bar(
-                &progress,
-                quiet,
-                "rendering",
-                u64::from(sequence.frame_count()),
-            );
-            let (mut rays, mut trace_seconds) = (0u64, 0.0f64);
-            let mut frame_paths = Vec::new();
-            render::render_sequence(
-                &scene,
-                &mut manager,
-                integrator.as_ref(),
-                &args.aov,
-                &sequence,
-                &mut |f| {
-                    write_frame(f.index, f.film, &f.aovs, &f.render, Some(f.stats))?;
-                    frame_paths.push(args.out.join(format!("frame_{:04}.png", f.index)));
-                    let physics = physics_ms.get(f.index as usize).copied();
-                    frame_records.push(FrameRecord::new(f.stats, f.render.mrays_per_second(), physics));
-                    rays += f.render.rays;
-                    trace_seconds += f.render.seconds;
-                    let mrays = if trace_seconds > 0.0 { rays as f64 / trace_seconds / 1e6 } else { 0.0 };
-                    progress.set_message(format!(
-                        "frame {} | {mrays:.1} Mrays/s | {} islands integrated",
-                        f.index, f.stats.integrated_islands
-                    ));
-                    progress.inc(1);
-                    Ok::<(), CliError>(())
-                },
-            )?;
-            progress.finish_and_clear();
-            let info = RunInfo {
-                scene: template.name.clone(),
-                backend: backend.to_string(),
-                mode: json_name(&args.mode),
-                integration: json_name(&args.integration),
-                cache_enabled: args.cache == CacheSwitch::On,
-                width: args.size.width,
-                height: args.size.height,
-                spp: args.spp,
-                physics: physics_source,
-            };
-            let run_stats = RunStats::new(
-                info,
-                std::mem::take(&mut frame_records),
-                manager.cache_stats(),
-                manager.cost_model(),
-                physics_total_ms,
-            );
-            run_stats.write(&args.out).map_err(|e| runtime(&e))?;
-            report::write_report_png(&run_stats, &args.out.join("report.png")).map_err(|e| runtime(&e))?;
-            if args.video {
-                let fps = 1.0 / (f64::from(trajectory.timestep) * f64::from(sequence.step));
-                let video = args.out.join("video.mp4");
-                render::encode_video(&args.out, &frame_paths, fps, &video).map_err(|e| match e {
-                    render::VideoError::FfmpegMissing => CliError::Input(e.to_string()),
-                    e => runtime(&e),
-                })?;
-                if !quiet && !json.is_requested() {
-                    println!("wrote {} ({} frames, {fps:.2} fps)", video.display(), frame_paths.len());
-                }
-            }
-            template.name
+    let mut writer = FrameWriter { args, backend, quiet: quiet || json.is_requested(), records: Vec::new() };
+    let (scene_name, is_sequence) = match sequence_source(args)? {
+        None => (render_still(args, backend, threads, integrator.as_ref(), &mut writer)?, false),
+        Some(source) => {
+            let sequence = load_sequence(source, quiet)?;
+            (
+                render_sequence(args, &sequence, backend, threads, integrator.as_ref(), &mut writer, quiet)?,
+                true,
+            )
         }
     };
     json.emit(&serde_json::json!({
@@ -415,9 +186,230 @@ pub(super) fn run(
         "height": args.size.height,
         "spp": args.spp,
         "mode": args.mode,
-        "integration": args.scene_file.as_ref().map(|_| args.integration),
-        "frames": records,
+        "integration": is_sequence.then_some(args.integration),
+        "frames": writer.records,
     }))
+}
+
+/// Flags that are wrong whatever the scene.
+fn check_flags(args: &RenderArgs) -> Result<(), CliError> {
+    if !args.exposure.is_finite() || args.exposure <= 0.0 {
+        return Err(CliError::Input(format!("--exposure {}: must be a positive number", args.exposure)));
+    }
+    let sequence = args.scene_file.is_some() || args.trajectory.is_some();
+    if !sequence {
+        for (flag, given) in
+            [("--frames", args.frames.is_some()), ("--frame-step", args.frame_step.is_some())]
+        {
+            if given {
+                return Err(CliError::Input(format!("{flag} needs a SCENE file or --trajectory")));
+            }
+        }
+    }
+    if args.video {
+        if !sequence {
+            return Err(CliError::Input(
+                "--video needs a SCENE file or --trajectory (a sequence of frames)".into(),
+            ));
+        }
+        if !render::ffmpeg_available() {
+            return Err(CliError::Input(render::VideoError::FfmpegMissing.to_string()));
+        }
+    }
+    Ok(())
+}
+
+/// A sequence: a scene file, maybe with a trajectory of it, or a trajectory alone with the
+/// scene recorded in it; `None` for a still.
+fn sequence_source(args: &RenderArgs) -> Result<Option<SequenceSource>, CliError> {
+    Ok(match (&args.scene_file, &args.trajectory) {
+        (Some(path), trajectory) => {
+            let file = SceneFile::load(path).map_err(|e| CliError::Input(e.to_string()))?;
+            let options = SimulateOptions { count: args.scene.count, frames: None };
+            Some(SequenceSource::Scene { file, options, trajectory: trajectory.clone() })
+        }
+        (None, Some(path)) => {
+            Some(SequenceSource::Recorded { trajectory: path.clone(), count: args.scene.count })
+        }
+        (None, None) => None,
+    })
+}
+
+/// The built-in scene or an asset pile, as one frame; returns the scene's name.
+fn render_still(
+    args: &RenderArgs,
+    backend: Backend,
+    threads: Option<usize>,
+    integrator: &dyn Integrator,
+    writer: &mut FrameWriter<'_>,
+) -> Result<String, CliError> {
+    let runtime = |e: &dyn std::fmt::Display| CliError::Runtime(e.to_string());
+    let description = args.scene.load()?;
+    let mut accel = accel::create(backend, threads).map_err(|e| runtime(&e))?;
+    let scene = RenderScene::build(&description, accel.as_mut()).map_err(|e| runtime(&e))?;
+    let query = accel.query().map_err(|e| runtime(&e))?;
+    let settings =
+        RenderSettings { width: args.size.width, height: args.size.height, spp: args.spp, frame: 0 };
+    let (film, stats) =
+        render::render_frame(&scene, query, integrator, &settings).map_err(|e| runtime(&e))?;
+    let mut aovs = Vec::new();
+    for &aov in &args.aov {
+        let (film, _) =
+            render::render_frame(&scene, query, &AovIntegrator(aov), &settings).map_err(|e| runtime(&e))?;
+        aovs.push((aov, film));
+    }
+    let frame = RenderedFrame { index: 0, film, render: stats, aovs };
+    writer.write(&frame, None, &ProgressBar::hidden())?;
+    Ok(description.name)
+}
+
+/// The selected frames of `sequence` through one scene manager, then `stats.json`,
+/// `stats.csv`, `report.png` and, with `--video`, `video.mp4`; returns the scene's name.
+fn render_sequence(
+    args: &RenderArgs,
+    sequence: &Sequence,
+    backend: Backend,
+    threads: Option<usize>,
+    integrator: &dyn Integrator,
+    writer: &mut FrameWriter<'_>,
+    quiet: bool,
+) -> Result<String, CliError> {
+    let frames = sequence.select(args.frames, args.frame_step).map_err(|e| sequence_error(e, "--frames"))?;
+    let manager_options = ManagerOptions {
+        policy: args.integration,
+        cache: args.cache == CacheSwitch::On,
+        planned_frames: Some(frames.count()),
+        ..ManagerOptions::default()
+    };
+    let mut manager =
+        sequence.manager(backend, threads, manager_options).map_err(|e| sequence_error(e, "--frames"))?;
+    let renderer = FrameRenderer {
+        integrator,
+        aovs: &args.aov,
+        width: args.size.width,
+        height: args.size.height,
+        spp: args.spp,
+    };
+    let progress = super::progress::frames_bar(quiet, "rendering", Some(u64::from(frames.count())));
+    let (mut records, mut frame_paths) = (Vec::new(), Vec::new());
+    let (mut rays, mut trace_seconds) = (0u64, 0.0f64);
+    sequence.render(&frames, &mut manager, &renderer, &mut |frame, stats| {
+        frame_paths.push(writer.write(frame, Some(stats), &progress)?);
+        let physics = sequence.physics_ms.get(frame.index as usize).copied();
+        records.push(FrameRecord::new(stats, frame.render.mrays_per_second(), physics));
+        rays += frame.render.rays;
+        trace_seconds += frame.render.seconds;
+        let mrays = if trace_seconds > 0.0 { rays as f64 / trace_seconds / 1e6 } else { 0.0 };
+        progress.set_message(format!(
+            "frame {} | {mrays:.1} Mrays/s | {} islands integrated",
+            frame.index, stats.integrated_islands
+        ));
+        progress.inc(1);
+        Ok::<(), CliError>(())
+    })?;
+    progress.finish_and_clear();
+    let info = RunInfo {
+        scene: sequence.template.name.clone(),
+        backend: backend.to_string(),
+        mode: json_name(&args.mode),
+        integration: json_name(&args.integration),
+        cache_enabled: args.cache == CacheSwitch::On,
+        width: args.size.width,
+        height: args.size.height,
+        spp: args.spp,
+        physics: sequence.physics,
+    };
+    let physics_total_ms = (!sequence.physics_ms.is_empty()).then(|| sequence.physics_ms.iter().sum::<f64>());
+    let run_stats =
+        RunStats::new(info, records, manager.cache_stats(), manager.cost_model(), physics_total_ms);
+    let runtime = |e: &dyn std::fmt::Display| CliError::Runtime(e.to_string());
+    run_stats.write(&args.out).map_err(|e| runtime(&e))?;
+    report::write_report_png(&run_stats, &args.out.join("report.png")).map_err(|e| runtime(&e))?;
+    if args.video {
+        let fps = 1.0 / (f64::from(sequence.trajectory.timestep) * f64::from(frames.step()));
+        encode_video(args, &frame_paths, fps, writer.quiet)?;
+    }
+    Ok(sequence.template.name.clone())
+}
+
+/// `video.mp4` from the written frames.
+fn encode_video(args: &RenderArgs, frame_paths: &[PathBuf], fps: f64, quiet: bool) -> Result<(), CliError> {
+    let video = args.out.join("video.mp4");
+    render::encode_video(&args.out, frame_paths, fps, &video).map_err(|e| match e {
+        render::VideoError::FfmpegMissing => CliError::Input(e.to_string()),
+        e => CliError::Runtime(e.to_string()),
+    })?;
+    if !quiet {
+        println!("wrote {} ({} frames, {fps:.2} fps)", video.display(), frame_paths.len());
+    }
+    Ok(())
+}
+
+/// Writes each rendered frame's files (image, EXR, AOVs) and keeps its JSON record.
+struct FrameWriter<'a> {
+    args: &'a RenderArgs,
+    backend: Backend,
+    /// No per-frame line on stdout (`--quiet`, or the JSON report goes there).
+    quiet: bool,
+    records: Vec<serde_json::Value>,
+}
+
+impl FrameWriter<'_> {
+    /// Writes `frame`'s files atomically; returns the image's path.
+    fn write(
+        &mut self,
+        frame: &RenderedFrame,
+        scene_stats: Option<&FrameStats>,
+        progress: &ProgressBar,
+    ) -> Result<PathBuf, CliError> {
+        let (args, index) = (self.args, frame.index);
+        let runtime = |e: &dyn std::fmt::Display| CliError::Runtime(e.to_string());
+        let path = args.out.join(format!("frame_{index:04}.png"));
+        render::write_png_atomic(&frame.film, args.exposure, &path).map_err(|e| runtime(&e))?;
+        if args.exr {
+            render::write_exr_atomic(&frame.film, &path.with_extension("exr")).map_err(|e| runtime(&e))?;
+        }
+        let mut aov_paths = Vec::new();
+        for (aov, film) in &frame.aovs {
+            aov_paths.push(write_aov(&args.out, index, *aov, film, args.exr)?);
+        }
+        let stats = &frame.render;
+        if !self.quiet {
+            progress.suspend(|| println!("{}", self.summary(&path, stats)));
+        }
+        self.records.push(serde_json::json!({ "frame": index, "path": path, "rays": stats.rays,
+            "seconds": stats.seconds, "mrays_per_second": stats.mrays_per_second(), "aovs": aov_paths,
+            "scene": scene_stats }));
+        Ok(path)
+    }
+
+    /// The line printed for a written frame.
+    fn summary(&self, path: &Path, stats: &RenderStats) -> String {
+        let args = self.args;
+        format!(
+            "rendered {} ({}x{}, {} spp, {:?} mode, {}): {:.2} s, {} rays, {:.1} Mrays/s",
+            path.display(),
+            args.size.width,
+            args.size.height,
+            args.spp,
+            args.mode,
+            self.backend,
+            stats.seconds,
+            stats.rays,
+            stats.mrays_per_second()
+        )
+    }
+}
+
+/// Writes one AOV pass (PNG, and EXR with `exr`); returns the PNG's path.
+fn write_aov(out: &Path, index: u32, aov: Aov, film: &Film, exr: bool) -> Result<PathBuf, CliError> {
+    let runtime = |e: &dyn std::fmt::Display| CliError::Runtime(e.to_string());
+    let path = out.join(format!("frame_{index:04}.{}.png", aov.name()));
+    render::write_aov_png_atomic(film, aov, &path).map_err(|e| runtime(&e))?;
+    if exr {
+        render::write_exr_atomic(film, &path.with_extension("exr")).map_err(|e| runtime(&e))?;
+    }
+    Ok(path)
 }
 
 /// A value's JSON name (a unit enum's serde name).
@@ -436,39 +428,9 @@ pub enum CacheSwitch {
     Off,
 }
 
-/// A half-open range of frames, `A..B`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct FrameRange {
-    pub start: u32,
-    pub end: u32,
-}
-
-impl std::str::FromStr for FrameRange {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        let (a, b) = s.split_once("..").ok_or_else(|| format!("'{s}': expected A..B, e.g. 0..120"))?;
-        let parse =
-            |v: &str| v.trim().parse::<u32>().map_err(|_| format!("'{s}': '{v}' is not a frame number"));
-        let range = FrameRange { start: parse(a)?, end: parse(b)? };
-        if range.start >= range.end {
-            return Err(format!("'{s}': the range is empty (A must be less than B)"));
-        }
-        Ok(range)
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::Size;
-
-    #[test]
-    fn frame_ranges_parse_and_reject() {
-        use super::FrameRange;
-        assert_eq!("3..10".parse::<FrameRange>(), Ok(FrameRange { start: 3, end: 10 }));
-        for bad in ["10..3", "5..5", "a..3", "3", "-1..4"] {
-            assert!(bad.parse::<FrameRange>().is_err(), "{bad}");
-        }
-    }
 
     #[test]
     fn size_parses_and_rejects() {

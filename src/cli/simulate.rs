@@ -17,7 +17,7 @@ pub struct PhysicsScene {
     pub count: Option<u32>,
     /// Frames to simulate instead of the scene's own count.
     #[arg(long, value_name = "N")]
-    pub frames: Option<u32>,
+    pub frame_count: Option<u32>,
     /// Directory that relative asset paths in the scene resolve against.
     #[arg(long, value_name = "DIR")]
     pub assets: Option<PathBuf>,
@@ -27,7 +27,7 @@ impl PhysicsScene {
     pub fn load(&self) -> Result<(SceneFile, SimulateOptions), CliError> {
         let file = SceneFile::load_with_assets(&self.scene, self.assets.as_deref())
             .map_err(|e| CliError::Input(e.to_string()))?;
-        Ok((file, SimulateOptions { count: self.count, frames: self.frames }))
+        Ok((file, SimulateOptions { count: self.count, frames: self.frame_count }))
     }
 }
 

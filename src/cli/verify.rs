@@ -5,10 +5,10 @@ use clap::Args;
 use super::{CliError, JsonOutput, SceneSource};
 use crate::accel::{self, Backend};
 use crate::crosscheck::{self, Tolerance, VerifyReport};
-use crate::integrate::{describe_frame, SceneAssets};
-use crate::physics::{self, SimulateOptions};
+use crate::physics::SimulateOptions;
 use crate::scene::file::SceneFile;
 use crate::scene::SceneDescription;
+use crate::sequence::{SequenceError, SequenceSource};
 
 #[derive(Debug, Args)]
 pub struct VerifyArgs {
@@ -16,9 +16,9 @@ pub struct VerifyArgs {
     /// scene, or --env/--object).
     #[arg(value_name = "SCENE", conflicts_with_all = ["env", "object"])]
     pub scene_file: Option<PathBuf>,
-    /// With SCENE: frames to simulate.
+    /// With SCENE: frames to simulate (default: the scene's own count).
     #[arg(long, value_name = "N")]
-    pub frames: Option<u32>,
+    pub frame_count: Option<u32>,
     /// With SCENE: how many frames, evenly spaced and ending with the last, to check.
     #[arg(long, value_name = "N", default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=1000))]
     pub check_frames: u32,
@@ -49,7 +49,7 @@ pub(super) fn run(
         }
     }
     let (descs, frames) = match &args.scene_file {
-        Some(path) => simulated_frames(path, args)?,
+        Some(path) => simulated_frames(path, args, quiet)?,
         None => (vec![args.scene.load()?], Vec::new()),
     };
     let runtime = |e: &dyn std::fmt::Display| CliError::Runtime(e.to_string());
@@ -121,26 +121,17 @@ pub(super) fn run(
 fn simulated_frames(
     path: &std::path::Path,
     args: &VerifyArgs,
+    quiet: bool,
 ) -> Result<(Vec<SceneDescription>, Vec<u32>), CliError> {
     let file = SceneFile::load(path).map_err(|e| CliError::Input(e.to_string()))?;
-    let options = SimulateOptions { count: args.scene.count, frames: args.frames };
-    let trajectory = physics::simulate(&file, &options).map_err(super::simulate::physics_error)?;
-    let assets = SceneAssets::load(&file).map_err(|e| CliError::Input(e.to_string()))?;
-    let n = trajectory.frames.len() as u32;
-    let k = args.check_frames.min(n.max(1));
-    let wanted: Vec<u32> = (1..=k).map(|i| (i * n).div_ceil(k).saturating_sub(1)).collect();
-    let mut replay = trajectory.replay();
+    let options = SimulateOptions { count: args.scene.count, frames: args.frame_count };
+    let sequence =
+        super::render::load_sequence(SequenceSource::Scene { file, options, trajectory: None }, quiet)?;
+    let selection = sequence.evenly_spaced(args.check_frames);
     let mut descs = Vec::new();
-    while let Some(frame) = replay.next_frame() {
-        if wanted.contains(&frame.index) {
-            descs.push(describe_frame(
-                &assets,
-                frame.index as f32 * trajectory.timestep,
-                &trajectory.bodies,
-                frame.states,
-                frame.poses,
-            ));
-        }
-    }
-    Ok((descs, wanted))
+    sequence.replay(&selection, &mut [], &mut |frame, _| {
+        descs.push(sequence.describe_frame(frame));
+        Ok::<(), SequenceError>(())
+    })?;
+    Ok((descs, selection.frames()))
 }

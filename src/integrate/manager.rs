@@ -32,7 +32,7 @@ use crate::accel::{
     AccelError, Accelerator, HitObject, InstanceId, PrototypeId, SceneQuery, StaticId, StaticSceneSnapshot,
 };
 use crate::geometry::TriangleMesh;
-use crate::physics::{BodyId, BodyInfo, BodyPose, BodyState, IslandEvent, IslandId};
+use crate::physics::{BodyId, BodyInfo, BodyPose, IslandEvent, IslandId, ReplayFrame};
 use crate::scene::SceneDescription;
 
 /// How a reactivation leaves the static scene.
@@ -206,14 +206,6 @@ impl FrameStats {
     }
 }
 
-/// A frame's body states and poses (`poses[i]` is meaningful while body `i` is present).
-#[derive(Clone, Copy, Debug)]
-pub struct FrameState<'a> {
-    pub index: u32,
-    pub states: &'a [BodyState],
-    pub poses: &'a [BodyPose],
-}
-
 /// Keeps an accelerator in step with a simulation; see the module docs.
 pub struct SceneManager {
     accel: Box<dyn Accelerator>,
@@ -354,7 +346,7 @@ impl SceneManager {
 
     /// Brings the accelerator to `frame` (see the module docs) and commits. Events up to and
     /// including this frame must have been [`observe`](Self::observe)d.
-    pub fn prepare(&mut self, frame: FrameState<'_>) -> Result<&FrameStats, AccelError> {
+    pub fn prepare(&mut self, frame: &ReplayFrame<'_>) -> Result<&FrameStats, AccelError> {
         debug_assert_eq!(frame.states.len(), self.bodies.len());
         let mut stats = FrameStats {
             frame: frame.index,
@@ -549,6 +541,16 @@ impl SceneManager {
         if chosen.is_empty() {
             return Ok(false);
         }
+        self.insert_islands(chosen, stats)?;
+        Ok(true)
+    }
+
+    /// Bakes `chosen` into the static scene and takes their bodies out of the top level.
+    fn insert_islands(
+        &mut self,
+        chosen: Vec<(IslandId, Arc<BakedIsland>)>,
+        stats: &mut FrameStats,
+    ) -> Result<(), AccelError> {
         // With snapshots, each island goes in with its own static build, so the cache can
         // record the scene before it; without (Embree), one build takes them all and the cache
         // records key-only entries: it answers lookups but never restores (docs/design.md).
@@ -588,14 +590,14 @@ impl SceneManager {
             self.accel.commit_static()?;
             self.cost.record_build(batch, ms(t));
         }
-        Ok(true)
+        Ok(())
     }
 
     /// Instances follow the frame: returns whether any changed.
-    fn update(&mut self, frame: FrameState<'_>, stats: &mut FrameStats) -> Result<bool, AccelError> {
+    fn update(&mut self, frame: &ReplayFrame<'_>, stats: &mut FrameStats) -> Result<bool, AccelError> {
         let mut changed = false;
         for (b, slot) in self.bodies.iter_mut().enumerate() {
-            let present = frame.states[b] != BodyState::Absent && frame.poses[b].translation.is_finite();
+            let present = frame.is_present(b);
             let pose = frame.poses[b];
             match slot.placement {
                 Placement::Baked(island) if self.integrated.contains_key(&island) => {}

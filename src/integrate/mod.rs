@@ -1,7 +1,5 @@
 //! Integration: from simulated frames to the scenes the accelerators hold.
 //!
-//! - [`SceneAssets`] loads a scene file's meshes once; [`describe_frame`] describes any frame
-//!   with every body an instance (the reference the integrated scenes are checked against).
 //! - [`SceneManager`] keeps one accelerator in step with a simulation: awake bodies are
 //!   instances, sleeping islands the [`IntegrationPolicy`] accepts are baked into the static
 //!   scene ([`BakedIsland`]), woken ones leave it through the [`GeometryCache`] or by removal.
@@ -11,7 +9,6 @@
 mod baked;
 mod cache;
 mod cost_model;
-mod frame;
 mod manager;
 mod object_map;
 mod policy;
@@ -20,9 +17,8 @@ mod stage_times;
 pub use baked::{BakedIsland, BakedPart};
 pub use cache::{CacheBudget, CacheHit, CacheOutcome, CacheStats, GeometryCache, FRACTION_BUCKETS};
 pub use cost_model::{choose_batch, CostEstimate, CostModel, CostModelState, Outlook};
-pub use frame::{describe_frame, describe_scene, SceneAssets};
 pub use manager::{
-    Decision, FrameState, FrameStats, ManagerOptions, ReactivationPath, ReactivationStrategy, SceneManager,
+    Decision, FrameStats, ManagerOptions, ReactivationPath, ReactivationStrategy, SceneManager,
 };
 pub use object_map::{normal_matrix, LoadedObjectMap, MeshRef, ObjectMap, ResolvedHit};
 pub use policy::IntegrationPolicy;

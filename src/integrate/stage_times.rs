@@ -92,7 +92,13 @@ mod tests {
 
     #[test]
     fn sums_means_and_columns_agree() {
-        let a = StageTimes { update_ms: 1.0, integrate_ms: 2.0, reactivate_ms: 3.0, commit_ms: 4.0, trace_ms: 5.0 };
+        let a = StageTimes {
+            update_ms: 1.0,
+            integrate_ms: 2.0,
+            reactivate_ms: 3.0,
+            commit_ms: 4.0,
+            trace_ms: 5.0,
+        };
         let b = StageTimes { trace_ms: 7.0, ..StageTimes::default() };
         let (mean, n) = StageTimes::mean([&a, &b]);
         assert_eq!(n, 2);

@@ -381,6 +381,19 @@ pub struct ReplayFrame<'a> {
     pub events: &'a [IslandEvent],
 }
 
+impl ReplayFrame<'_> {
+    /// Whether body `b` is in the world this frame: spawned, not removed, at a finite pose.
+    /// The one place that decides which bodies a frame shows.
+    pub fn is_present(&self, b: usize) -> bool {
+        self.states[b] != BodyState::Absent && self.poses[b].translation.is_finite()
+    }
+
+    /// The bodies present this frame, ascending.
+    pub fn present_bodies(&self) -> impl Iterator<Item = BodyId> + '_ {
+        (0..self.states.len()).filter(|&b| self.is_present(b)).map(|b| BodyId(b as u32))
+    }
+}
+
 impl Replay<'_> {
     pub fn next_frame(&mut self) -> Option<ReplayFrame<'_>> {
         let frame = self.trajectory.frames.get(self.next)?;

@@ -1,6 +1,6 @@
 //! Turning a committed scene into pixels: camera rays, shading, tiles over rayon, the film and
-//! image output, and image sequences of simulations ([`render_sequence`]). Talks to geometry
-//! only through [`crate::accel::SceneQuery`] and the scene manager's hit mapping.
+//! image output. Talks to geometry only through [`crate::accel::SceneQuery`] and the scene
+//! manager's hit mapping; image sequences of simulations are `crate::sequence`'s.
 
 mod aov;
 mod bsdf;
@@ -10,7 +10,6 @@ mod film;
 mod integrator;
 mod render_scene;
 mod sampler;
-mod sequence;
 mod texture;
 mod tiles;
 mod video;
@@ -19,13 +18,11 @@ pub use aov::{Aov, AovIntegrator};
 pub(crate) use bsdf::sample_cone;
 pub use bsdf::{sample_cosine, Bsdf, BsdfSample};
 pub use camera::PinholeCamera;
+pub(crate) use emitters::Emitters;
 pub use film::{write_aov_png_atomic, write_exr_atomic, write_png_atomic, Film};
 pub use integrator::{AmbientOcclusion, DirectLighting, Integrator, PathTracer};
 pub use render_scene::{RenderScene, SurfaceHit, SurfaceKind};
 pub use sampler::PixelSampler;
-pub use sequence::{
-    render_managed_frame, render_sequence, ManagedFrame, SequenceFrame, SequenceOptions, SequenceScene,
-};
 pub use texture::sample as sample_texture;
 pub use tiles::{render_frame, RenderSettings, RenderStats};
 pub use video::{encode_video, ffmpeg_available, VideoError, FFMPEG_HINT};

@@ -13,7 +13,7 @@ mod stats;
 pub use paper::{paper_markdown, write_paper};
 pub use paper_plot::write_workload_png;
 pub use plot::{write_report_png, PLOT_HEIGHT, PLOT_WIDTH};
-pub use stats::{FrameRecord, PhysicsSource, RunInfo, RunStats, Summary, STATS_FORMAT, STATS_VERSION};
+pub use stats::{FrameRecord, RunInfo, RunStats, Summary, STATS_FORMAT, STATS_VERSION};
 
 /// Failures writing a report file.
 #[derive(Debug, thiserror::Error)]

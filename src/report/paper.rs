@@ -123,6 +123,16 @@ fn policy_name(run: &PolicyRun) -> String {
 }
 
 fn workload_section(md: &mut String, w: &WorkloadReport) {
+    workload_summary(md, w);
+    ratios_table(md, w);
+    stage_table(md, w);
+    settled_stages(md, w);
+    cache_table(md, w);
+    accel_table(md, w);
+}
+
+/// The workload's size, islands, rendered frames and figure.
+fn workload_summary(md: &mut String, w: &WorkloadReport) {
     let s = &w.size;
     let i = &w.islands;
     let _ = writeln!(md, "## {}: {}\n", w.name, w.description);
@@ -148,7 +158,10 @@ fn workload_section(md: &mut String, w: &WorkloadReport) {
         s.height,
     );
     let _ = writeln!(md, "![{}](figures/{}.png)\n", w.name, w.name);
+}
 
+/// The integration ratios per backend.
+fn ratios_table(md: &mut String, w: &WorkloadReport) {
     let _ = writeln!(md, "### Integration ratios\n");
     let _ = writeln!(
         md,
@@ -171,7 +184,10 @@ fn workload_section(md: &mut String, w: &WorkloadReport) {
         );
     }
     let _ = writeln!(md);
+}
 
+/// Mean frame and settled stage times per backend and configuration.
+fn stage_table(md: &mut String, w: &WorkloadReport) {
     let _ = writeln!(md, "### Where the time goes\n");
     let _ = writeln!(
         md,
@@ -210,6 +226,10 @@ fn workload_section(md: &mut String, w: &WorkloadReport) {
         }
     }
     let _ = writeln!(md);
+}
+
+/// What `auto` saves or costs against `never` per settled frame, by stage.
+fn settled_stages(md: &mut String, w: &WorkloadReport) {
     for run in &w.runs {
         let find = |policy| run.integration.cache_on(policy);
         let (Some(never), Some(auto)) = (find(IntegrationPolicy::Never), find(IntegrationPolicy::Auto))
@@ -237,7 +257,10 @@ fn workload_section(md: &mut String, w: &WorkloadReport) {
         );
     }
     let _ = writeln!(md);
+}
 
+/// The geometry cache's requests by served fraction (`auto`, cache on).
+fn cache_table(md: &mut String, w: &WorkloadReport) {
     let _ = writeln!(md, "### Geometry cache (`auto`, cache on)\n");
     let _ = writeln!(
         md,
@@ -264,7 +287,10 @@ fn workload_section(md: &mut String, w: &WorkloadReport) {
         );
     }
     let _ = writeln!(md);
+}
 
+/// The accelerator benchmark on the last frame.
+fn accel_table(md: &mut String, w: &WorkloadReport) {
     let a = &w.accel;
     let r = &a.ratios;
     let _ = writeln!(md, "### Accelerators on the last frame\n");

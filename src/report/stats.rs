@@ -7,6 +7,7 @@ use serde::Serialize;
 
 use super::ReportError;
 use crate::integrate::{CacheStats, CostModelState, Decision, FrameStats, StageTimes, FRACTION_BUCKETS};
+use crate::sequence::PhysicsSource;
 
 /// `format` field of stats.json.
 pub const STATS_FORMAT: &str = "dormant-stats";
@@ -78,16 +79,6 @@ impl FrameRecord {
         // `+ 0.0` turns an empty sum's -0 into 0.
         self.decisions.iter().filter_map(|d| d.estimate.map(|e| e.net_ms())).sum::<f64>() + 0.0
     }
-}
-
-/// Where the frames' motion came from.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum PhysicsSource {
-    /// Simulated in this run, before rendering: `physics_ms` is filled in.
-    Simulated,
-    /// Replayed from a `--trajectory` file: no physics time.
-    Trajectory,
 }
 
 /// What was rendered, for the header of stats.json.

@@ -1,6 +1,7 @@
 //! Scene descriptions: plain data saying what is in a scene (meshes, materials, bodies,
 //! camera, lights). Nothing here builds physics, acceleration or render objects.
 
+mod assets;
 mod builtin;
 mod description;
 pub mod file;
@@ -8,6 +9,7 @@ pub mod gltf;
 mod pile;
 pub mod texture;
 
+pub use assets::SceneAssets;
 pub use builtin::default_scene;
 pub use description::{Body, Camera, Light, Material, Prototype, SceneDescription, Sky, StaticMesh, Sun};
 pub use pile::asset_pile;

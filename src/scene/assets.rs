@@ -1,17 +1,14 @@
-//! Scene files to render descriptions: [`SceneAssets`] loads a scene file's meshes,
-//! materials, textures and lights once; [`describe_frame`] places every present body of a
-//! simulated frame.
+//! A scene file's render assets: [`SceneAssets`] loads its meshes, materials, textures,
+//! camera and lights once, and describes the scene at any time without its bodies (which
+//! come from a simulation: `sequence` places them).
 
 use std::sync::Arc;
 
-use glam::{Vec3, Vec3A};
+use glam::Vec3;
 
+use super::file::{environment_asset, prototype_asset, CameraDef, LightKind, SceneError, SceneFile};
+use super::{Camera, Light, Material, Prototype, SceneDescription, Sky, StaticMesh, Sun, Texture};
 use crate::geometry::TriangleMesh;
-use crate::physics::{BodyInfo, BodyPose, BodyState};
-use crate::scene::file::{environment_asset, prototype_asset, CameraDef, LightKind, SceneError, SceneFile};
-use crate::scene::{
-    Body, Camera, Light, Material, Prototype, SceneDescription, Sky, StaticMesh, Sun, Texture,
-};
 
 /// A scene file's meshes, loaded once: the environment and one mesh per prototype.
 pub struct SceneAssets {
@@ -208,66 +205,41 @@ fn push_materials(materials: &mut Vec<Material>, own: &[Material], fallback: Mat
     first
 }
 
-/// One frame, at `time` seconds, as a render description: the environment as the only static
-/// mesh, every body that is present (awake or asleep) as an instance of its prototype at its
-/// pose, and the camera where its keyframes put it.
-pub fn describe_frame(
-    assets: &SceneAssets,
-    time: f32,
-    bodies: &[BodyInfo],
-    states: &[BodyState],
-    poses: &[BodyPose],
-) -> SceneDescription {
-    debug_assert_eq!(bodies.len(), states.len());
-    SceneDescription {
-        bodies: bodies
-            .iter()
-            .zip(states)
-            .zip(poses)
-            .filter(|((_, state), pose)| {
-                **state != BodyState::Absent && Vec3A::from(pose.translation).is_finite()
-            })
-            .map(|((info, _), pose)| Body { prototype: info.prototype, transform: pose.to_affine() })
-            .collect(),
-        ..describe_scene(assets, time)
-    }
-}
-
-/// The scene at `time` seconds without its bodies: environment, prototypes, materials,
-/// textures, camera and lights (the scene manager's template).
-pub fn describe_scene(assets: &SceneAssets, time: f32) -> SceneDescription {
-    let mut materials = Vec::new();
-    let env_material =
-        push_materials(&mut materials, &assets.materials[0], Material::diffuse(Vec3::splat(0.6)));
-    let prototypes = assets
-        .prototypes
-        .iter()
-        .enumerate()
-        .map(|(i, (name, mesh))| Prototype {
-            name: name.clone(),
-            mesh: mesh.clone(),
-            material: push_materials(
-                &mut materials,
-                &assets.materials[i + 1],
-                Material::diffuse(PALETTE[i % PALETTE.len()]),
-            ),
-        })
-        .collect();
-    SceneDescription {
-        name: assets.name.clone(),
-        materials,
-        textures: assets.textures.clone(),
-        statics: vec![StaticMesh { mesh: assets.environment.clone(), material: env_material }],
-        prototypes,
-        bodies: Vec::new(),
-        camera: assets.camera_at(time),
-        sun: assets.sun,
-        sky: assets.sky,
-        lights: assets.lights.clone(),
-    }
-}
-
 impl SceneAssets {
+    /// The scene at `time` seconds without its bodies: environment, prototypes, materials,
+    /// textures, camera and lights (the scene manager's template).
+    pub fn describe(&self, time: f32) -> SceneDescription {
+        let mut materials = Vec::new();
+        let env_material =
+            push_materials(&mut materials, &self.materials[0], Material::diffuse(Vec3::splat(0.6)));
+        let prototypes = self
+            .prototypes
+            .iter()
+            .enumerate()
+            .map(|(i, (name, mesh))| Prototype {
+                name: name.clone(),
+                mesh: mesh.clone(),
+                material: push_materials(
+                    &mut materials,
+                    &self.materials[i + 1],
+                    Material::diffuse(PALETTE[i % PALETTE.len()]),
+                ),
+            })
+            .collect();
+        SceneDescription {
+            name: self.name.clone(),
+            materials,
+            textures: self.textures.clone(),
+            statics: vec![StaticMesh { mesh: self.environment.clone(), material: env_material }],
+            prototypes,
+            bodies: Vec::new(),
+            camera: self.camera_at(time),
+            sun: self.sun,
+            sky: self.sky,
+            lights: self.lights.clone(),
+        }
+    }
+
     /// The camera at `time` seconds.
     pub fn camera_at(&self, time: f32) -> Camera {
         camera_at(self.camera.as_ref(), &self.environment, time)

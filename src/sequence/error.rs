@@ -1,0 +1,51 @@
+//! What can stop a sequence: bad input (scene, trajectory, frame range) or a failed render.
+
+use std::path::PathBuf;
+
+use crate::accel::AccelError;
+use crate::physics::{PhysicsError, TrajectoryError};
+use crate::render::RenderError;
+use crate::scene::file::SceneError;
+
+#[derive(Debug, thiserror::Error)]
+pub enum SequenceError {
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    #[error(transparent)]
+    Physics(#[from] PhysicsError),
+    #[error(transparent)]
+    Trajectory(#[from] TrajectoryError),
+    #[error(
+        "{}: scene: the trajectory does not record its scene (format version 1); pass the SCENE file too",
+        .0.display()
+    )]
+    SceneNotRecorded(PathBuf),
+    #[error("{}: the scene recorded in it: {source}", .path.display())]
+    RecordedScene {
+        path: PathBuf,
+        #[source]
+        source: SceneError,
+    },
+    #[error(
+        "{}: scene: the recorded scene does not hash to the trajectory's scene_hash (damaged file)",
+        .0.display()
+    )]
+    RecordedSceneHash(PathBuf),
+    #[error("--count: {} was simulated with its own object count; simulate again to change it", .0.display())]
+    CountOverride(PathBuf),
+    /// A frame range past the trajectory's end (callers name the flag that gave it).
+    #[error("{start}..{end}: the trajectory has {total} frames (0..{total})")]
+    Range { start: u32, end: u32, total: u32 },
+    #[error(transparent)]
+    Render(#[from] RenderError),
+    #[error(transparent)]
+    Accel(#[from] AccelError),
+}
+
+impl SequenceError {
+    /// Whether the input (scene, trajectory, options) was at fault rather than the run.
+    pub fn is_input(&self) -> bool {
+        // A trajectory that cannot be read is input too, like a missing scene file.
+        !matches!(self, SequenceError::Render(_) | SequenceError::Accel(_))
+    }
+}

@@ -1,0 +1,27 @@
+//! Sequences: a simulation replayed into rendered frames. This module owns the way from a
+//! scene file (or a trajectory) to frames:
+//!
+//! - [`Sequence`]: the trajectory (simulated now, or read from a file and checked against its
+//!   scene), the scene file's render assets and the frame template;
+//! - [`FrameSelection`]: which frames are rendered (a range and a step, or a list);
+//! - [`Sequence::replay`]: the one replay loop, which feeds every frame's island events to
+//!   the scene managers and hands each selected frame to the caller;
+//! - [`Sequence::render_frame`] and [`Sequence::render`]: the per-frame call into the
+//!   renderer through a [`SceneManager`](crate::integrate::SceneManager), whose trace time
+//!   goes back to its cost model;
+//! - [`Sequence::describe_frame`]: a frame with every present body an instance, the
+//!   reference integrated scenes are checked against.
+//!
+//! The CLI, `dormant verify` and the integration benchmarks all replay through here.
+
+mod describe;
+mod error;
+mod render;
+mod replay;
+mod selection;
+mod source;
+
+pub use error::SequenceError;
+pub use render::{FrameRenderer, RenderedFrame};
+pub use selection::{FrameRange, FrameSelection};
+pub use source::{PhysicsSource, Sequence, SequenceSource};

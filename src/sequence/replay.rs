@@ -1,0 +1,32 @@
+//! The one replay loop: every frame of a trajectory, in order, up to the last selected one.
+
+use super::{FrameSelection, Sequence};
+use crate::integrate::SceneManager;
+use crate::physics::ReplayFrame;
+
+impl Sequence {
+    /// Replays the trajectory from its first frame (every island event must be seen) to the
+    /// last frame `selection` can select: each frame's island events go to every manager in
+    /// `managers` (none for callers that only describe frames), and each selected frame goes
+    /// to `on_frame` with the managers.
+    pub fn replay<E>(
+        &self,
+        selection: &FrameSelection,
+        managers: &mut [SceneManager],
+        on_frame: &mut dyn FnMut(&ReplayFrame<'_>, &mut [SceneManager]) -> Result<(), E>,
+    ) -> Result<(), E> {
+        let mut replay = self.trajectory.replay();
+        while let Some(frame) = replay.next_frame() {
+            if frame.index >= selection.end() {
+                break;
+            }
+            for manager in managers.iter_mut() {
+                manager.observe(frame.events);
+            }
+            if selection.selects(frame.index) {
+                on_frame(&frame, managers)?;
+            }
+        }
+        Ok(())
+    }
+}

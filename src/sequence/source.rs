@@ -1,0 +1,161 @@
+//! Where a sequence's motion comes from: a scene file simulated now, a scene file with a
+//! trajectory of it, or a trajectory alone with the scene recorded in it.
+
+use std::path::{Path, PathBuf};
+
+use serde::Serialize;
+
+use super::selection::{FrameRange, FrameSelection};
+use super::SequenceError;
+use crate::accel::{self, Backend};
+use crate::integrate::{ManagerOptions, SceneManager};
+use crate::physics::{self, SimulateOptions, SimulatedFrame, Trajectory};
+use crate::scene::file::SceneFile;
+use crate::scene::{SceneAssets, SceneDescription};
+
+/// What a sequence is made from.
+pub enum SequenceSource {
+    /// A scene file with command-line overrides: simulated now, or replayed from
+    /// `trajectory`, which must have been simulated from the same scene and overrides.
+    Scene { file: SceneFile, options: SimulateOptions, trajectory: Option<PathBuf> },
+    /// A trajectory alone: the scene recorded in it. `count`, if given, must be the count it
+    /// was simulated with.
+    Recorded { trajectory: PathBuf, count: Option<u32> },
+}
+
+/// Where the frames' motion came from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum PhysicsSource {
+    /// Simulated in this run, before rendering: the step times are known.
+    Simulated,
+    /// Replayed from a trajectory file: no physics time.
+    Trajectory,
+}
+
+/// A simulation ready to be replayed into frames; see the module docs.
+pub struct Sequence {
+    pub trajectory: Trajectory,
+    pub assets: SceneAssets,
+    /// The scene without bodies at time 0: the scene managers' template.
+    pub template: SceneDescription,
+    /// The scene file's `render.frame_step`: the step when a run names none.
+    pub frame_step: u32,
+    pub physics: PhysicsSource,
+    /// Wall-clock ms of each simulated frame's physics step (empty when replayed).
+    pub physics_ms: Vec<f64>,
+}
+
+impl Sequence {
+    /// Simulates or reads the trajectory of `source` and loads the scene's assets.
+    /// `on_step` sees each simulated frame (nothing when the trajectory is read).
+    pub fn load(
+        source: SequenceSource,
+        on_step: &mut dyn FnMut(SimulatedFrame),
+    ) -> Result<Self, SequenceError> {
+        match source {
+            SequenceSource::Scene { file, options, trajectory: Some(path) } => {
+                let expected = options.effective_scene(&file)?.source_hash;
+                let trajectory = Trajectory::read(&path, expected)?;
+                Self::new(&file, trajectory, PhysicsSource::Trajectory, Vec::new())
+            }
+            SequenceSource::Scene { file, options, trajectory: None } => {
+                let mut physics_ms = Vec::new();
+                let trajectory = physics::simulate_observed(&file, &options, &mut |step| {
+                    physics_ms.push(step.step_ms);
+                    on_step(step);
+                })?;
+                Self::new(&file, trajectory, PhysicsSource::Simulated, physics_ms)
+            }
+            SequenceSource::Recorded { trajectory, count } => {
+                let (file, options, t) = recorded_scene(&trajectory)?;
+                if count.is_some_and(|c| options.count != Some(c)) {
+                    return Err(SequenceError::CountOverride(trajectory));
+                }
+                Self::new(&file, t, PhysicsSource::Trajectory, Vec::new())
+            }
+        }
+    }
+
+    fn new(
+        file: &SceneFile,
+        trajectory: Trajectory,
+        physics: PhysicsSource,
+        physics_ms: Vec<f64>,
+    ) -> Result<Self, SequenceError> {
+        let assets = SceneAssets::load(file)?;
+        let template = assets.describe(0.0);
+        Ok(Self {
+            trajectory,
+            assets,
+            template,
+            frame_step: file.description.render.frame_step.max(1),
+            physics,
+            physics_ms,
+        })
+    }
+
+    /// Frames the trajectory holds.
+    pub fn frame_count(&self) -> u32 {
+        self.trajectory.frames.len() as u32
+    }
+
+    /// Seconds of simulated time at the start of frame `index`.
+    pub fn time_of(&self, index: u32) -> f32 {
+        index as f32 * self.trajectory.timestep
+    }
+
+    /// Frames `range` (default: all) every `step` (default: the scene's frame step), checked
+    /// against the trajectory's length.
+    pub fn select(
+        &self,
+        range: Option<FrameRange>,
+        step: Option<u32>,
+    ) -> Result<FrameSelection, SequenceError> {
+        let total = self.frame_count();
+        let range = range.unwrap_or(FrameRange { start: 0, end: total });
+        if range.end > total {
+            return Err(SequenceError::Range { start: range.start, end: range.end, total });
+        }
+        Ok(FrameSelection::stepped(range, step.unwrap_or(self.frame_step).max(1)))
+    }
+
+    /// `count` frames, evenly spaced and ending with the last.
+    pub fn evenly_spaced(&self, count: u32) -> FrameSelection {
+        let n = self.frame_count();
+        let k = count.min(n.max(1));
+        FrameSelection::list((1..=k).map(|i| (i * n).div_ceil(k).saturating_sub(1)).collect())
+    }
+
+    /// The trajectory's last frame.
+    pub fn last_frame(&self) -> FrameSelection {
+        FrameSelection::list(vec![self.frame_count().saturating_sub(1)])
+    }
+
+    /// A scene manager over a new accelerator of `backend`, loaded with the template.
+    pub fn manager(
+        &self,
+        backend: Backend,
+        threads: Option<usize>,
+        options: ManagerOptions,
+    ) -> Result<SceneManager, SequenceError> {
+        let accel = accel::create(backend, threads)?;
+        Ok(SceneManager::new(accel, &self.template, &self.trajectory.bodies, options)?)
+    }
+}
+
+/// A trajectory and the scene recorded in it, checked against each other.
+fn recorded_scene(path: &Path) -> Result<(SceneFile, SimulateOptions, Trajectory), SequenceError> {
+    let trajectory = Trajectory::read_unchecked(path)?;
+    let Some(recorded) = &trajectory.scene else {
+        return Err(SequenceError::SceneNotRecorded(path.to_path_buf()));
+    };
+    let file = recorded
+        .scene_file()
+        .map_err(|source| SequenceError::RecordedScene { path: path.to_path_buf(), source })?;
+    let options = recorded.options.clone();
+    if options.effective_scene(&file)?.source_hash != trajectory.scene_hash {
+        return Err(SequenceError::RecordedSceneHash(path.to_path_buf()));
+    }
+    Ok((file, options, trajectory))
+}
