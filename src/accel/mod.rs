@@ -54,6 +54,8 @@ pub enum AccelError {
     ForeignSnapshot { backend: Backend, from: Backend },
     #[error("the {0} backend does not take static scene snapshots")]
     SnapshotsUnsupported(Backend),
+    #[error("the {0} backend has no resting scene")]
+    RestingUnsupported(Backend),
     #[cfg(feature = "embree")]
     #[error(transparent)]
     Embree(#[from] embree::EmbreeError),
@@ -68,6 +70,10 @@ pub struct CommitReport {
     pub instances: usize,
     /// Triangles skipped because they were degenerate or not finite.
     pub skipped_triangles: usize,
+    /// Whether the resting scene was rebuilt (its set of instances changed).
+    pub resting_rebuilt: bool,
+    /// Instances in the resting scene after the commit.
+    pub resting_instances: usize,
 }
 
 /// Closest-hit and any-hit queries on a committed scene. Safe to call from many threads.
@@ -123,6 +129,15 @@ pub trait Accelerator: Send + Sync {
     fn set_instance_transform(&mut self, id: InstanceId, transform: Affine3A) -> Result<(), AccelError>;
 
     fn remove_instance(&mut self, id: InstanceId) -> Result<(), AccelError>;
+
+    /// Moves instance `id` into (`resting`) or out of the resting scene: instances the
+    /// per-frame top level no longer holds, in a scene of their own that is rebuilt only when
+    /// its set changes (at the next [`Accelerator::commit_static`], which reports it). Rays
+    /// see both scenes; hits on resting instances are [`HitObject::Instance`] as before.
+    fn set_instance_resting(&mut self, id: InstanceId, resting: bool) -> Result<(), AccelError> {
+        let _ = (id, resting);
+        Err(AccelError::RestingUnsupported(self.backend()))
+    }
 
     /// Makes all staged changes visible to rays.
     fn commit(&mut self) -> Result<CommitReport, AccelError>;

@@ -1,7 +1,8 @@
 //! `dormant bench integration`: one simulated scene rendered under the integration policies
-//! `never`, `always` and `auto`, with the geometry cache on and off, in one process on the
-//! same trajectory, frames and rays, in lockstep (each frame is rendered by every
-//! configuration before the next frame).
+//! `never`, `always` and `auto`, for each integration form (baked, resting), `auto` with and
+//! without lookahead, and optionally the baked form with the geometry cache off, in one
+//! process on the same trajectory, frames and rays, in lockstep (each frame is rendered by
+//! every configuration before the next frame).
 //!
 //! Per configuration it keeps every frame's stage times; the ratios compare whole frames
 //! (reactivate + integrate + update + commit + trace), so integration's own costs count
@@ -10,6 +11,7 @@
 //! instance BVH (rebuilt only when something moved; see docs/performance.md for the top
 //! level qualities tried) and it commits nothing when nothing moved.
 
+use std::collections::BTreeMap;
 use std::time::Instant;
 
 use rayon::prelude::*;
@@ -18,8 +20,8 @@ use serde::Serialize;
 use crate::accel::{self, AccelError, Backend};
 use crate::crosscheck::camera_rays;
 use crate::integrate::{
-    CacheStats, CostModelState, FrameStats, IntegrationPolicy, ManagerOptions, ReactivationPath,
-    SceneManager, StageTimes, FRACTION_BUCKETS,
+    CacheStats, CostModelState, FrameStats, IntegrationForm, IntegrationPolicy, IntegrationSettings,
+    ManagerOptions, ReactivationPath, SceneManager, StageTimes, FRACTION_BUCKETS,
 };
 use crate::physics::{BodyKind, BodyState};
 use crate::render::Integrator;
@@ -39,6 +41,74 @@ pub struct IntegrationBenchOptions {
     /// MEDIUM and HIGH rebuilds, 10-20 s each on large scenes); the rebuild of
     /// `rebuild_over_insert` is always measured.
     pub static_variants: bool,
+    /// Integration forms compared; the first is the one `ratios` describes.
+    pub forms: Vec<IntegrationForm>,
+    /// Also run the baked form's `always` and `auto` with the geometry cache off.
+    pub cache_variants: bool,
+}
+
+/// One configuration of the benchmark.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub struct BenchConfig {
+    pub policy: IntegrationPolicy,
+    pub form: IntegrationForm,
+    pub cache: bool,
+    /// `auto` knows each island's wake frame (else it estimates).
+    pub lookahead: bool,
+}
+
+impl BenchConfig {
+    const NEVER: BenchConfig = BenchConfig {
+        policy: IntegrationPolicy::Never,
+        form: IntegrationForm::Baked,
+        cache: false,
+        lookahead: false,
+    };
+
+    /// A short name for tables: `never`, `auto resting`, `auto baked, cache off`, `auto resting, online`.
+    pub fn name(&self) -> String {
+        if self.policy == IntegrationPolicy::Never {
+            return self.policy.to_string();
+        }
+        let mut name = format!("{} {}", self.policy, self.form);
+        if self.form == IntegrationForm::Baked && !self.cache {
+            name.push_str(", cache off");
+        }
+        if self.policy == IntegrationPolicy::Auto && !self.lookahead {
+            name.push_str(", online");
+        }
+        name
+    }
+
+    fn settings(&self) -> IntegrationSettings {
+        IntegrationSettings {
+            policy: self.policy,
+            form: self.form,
+            cache: self.cache,
+            lookahead: self.lookahead,
+        }
+    }
+}
+
+/// The configurations run, in report order: `never`; per form `always` and `auto` (cache on,
+/// lookahead); `auto` without lookahead for the first form; with `cache_variants`, the baked
+/// form's `always` and `auto` with the cache off.
+fn configs(options: &IntegrationBenchOptions) -> Vec<BenchConfig> {
+    let mut configs = vec![BenchConfig::NEVER];
+    for &form in &options.forms {
+        let on = BenchConfig { policy: IntegrationPolicy::Always, form, cache: true, lookahead: true };
+        configs.push(on);
+        configs.push(BenchConfig { policy: IntegrationPolicy::Auto, ..on });
+    }
+    if let Some(&form) = options.forms.first() {
+        configs.push(BenchConfig { policy: IntegrationPolicy::Auto, form, cache: true, lookahead: false });
+    }
+    if options.cache_variants && options.forms.contains(&IntegrationForm::Baked) {
+        for policy in [IntegrationPolicy::Always, IntegrationPolicy::Auto] {
+            configs.push(BenchConfig { policy, form: IntegrationForm::Baked, cache: false, lookahead: true });
+        }
+    }
+    configs
 }
 
 /// Mean milliseconds per stage over some frames.
@@ -53,8 +123,9 @@ pub struct StageMeans {
 /// One configuration's run.
 #[derive(Clone, Debug, Serialize)]
 pub struct PolicyRun {
-    pub policy: IntegrationPolicy,
-    pub cache: bool,
+    #[serde(flatten)]
+    pub config: BenchConfig,
+    pub name: String,
     pub total_ms: f64,
     pub all: StageMeans,
     pub settled: StageMeans,
@@ -68,6 +139,9 @@ pub struct PolicyRun {
     pub reactivations_from_cache: u64,
     pub integrated_at_end: usize,
     pub instances_at_end: usize,
+    pub resting_at_end: usize,
+    /// Frames that rebuilt the resting scene.
+    pub rest_rebuilds: u64,
     pub rays: u64,
     pub decisions_integrate: u64,
     pub decisions_decline: u64,
@@ -92,6 +166,18 @@ pub struct IntegrationRatios {
     pub rebuild_over_insert: f64,
     /// Share of `auto`'s cache requests whose entry held 90-99% of the requested islands.
     pub partial_hit_90_99_fraction: f64,
+    /// What integration could reach on the settled frames: `never`'s frame over its trace
+    /// plus its commit times the awake share (the frame if sleeping bodies cost nothing to
+    /// commit and traced as fast as instanced ones); NaN without settled frames.
+    pub ceiling: f64,
+    /// `settled_speedup` over `ceiling`.
+    pub of_ceiling: f64,
+    /// The form's trace penalty: `always`'s settled trace over `never`'s (whole run without
+    /// settled frames).
+    pub trace_penalty: f64,
+    /// `auto` without lookahead over `auto` with it, whole run: what knowing the future gains
+    /// (NaN when not run).
+    pub lookahead_gain: f64,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -108,6 +194,8 @@ pub struct IntegrationBenchReport {
     pub spp: u32,
     /// Per-frame share of present dynamic bodies asleep.
     pub asleep_fraction: Vec<f64>,
+    /// Integration forms compared; `ratios` describes the first.
+    pub forms: Vec<IntegrationForm>,
     pub runs: Vec<PolicyRun>,
     /// From-scratch builds of `always`'s final static scene: the first is the rebuild of
     /// `rebuild_over_insert`; the others are the alternatives docs/design.md weighs.
@@ -116,19 +204,26 @@ pub struct IntegrationBenchReport {
     pub rebuild_triangles: usize,
     pub mean_insert_ms: f64,
     pub ratios: IntegrationRatios,
+    /// The same ratios for every form compared.
+    pub ratios_by_form: BTreeMap<String, IntegrationRatios>,
     pub cache_histogram_buckets: [&'static str; 12],
 }
 
 impl IntegrationBenchReport {
-    /// The run of `policy` with the cache on; `never` has only one run (the cache plays no
-    /// part in it).
+    /// The run of `policy` in the first form, cache on, with lookahead; `never` has only one
+    /// run (form, cache and lookahead play no part in it).
     pub fn cache_on(&self, policy: IntegrationPolicy) -> Option<&PolicyRun> {
-        find_run(&self.runs, policy, policy != IntegrationPolicy::Never)
+        self.forms.first().and_then(|&form| find_run(&self.runs, policy, form))
     }
 }
 
-fn find_run(runs: &[PolicyRun], policy: IntegrationPolicy, cache: bool) -> Option<&PolicyRun> {
-    runs.iter().find(|r| r.policy == policy && r.cache == cache)
+/// The run of `policy` in `form` with the cache on and lookahead (`never`: its only run).
+fn find_run(runs: &[PolicyRun], policy: IntegrationPolicy, form: IntegrationForm) -> Option<&PolicyRun> {
+    let want = match policy {
+        IntegrationPolicy::Never => BenchConfig::NEVER,
+        policy => BenchConfig { policy, form, cache: true, lookahead: true },
+    };
+    runs.iter().find(|r| r.config == want)
 }
 
 fn means<'a>(frames: impl Iterator<Item = &'a FrameStats>) -> StageMeans {
@@ -148,7 +243,7 @@ fn run_lockstep(
 ) -> Result<Vec<(Vec<FrameStats>, SceneManager)>, SequenceError> {
     let mut managers = Vec::with_capacity(configs.len());
     for c in configs {
-        managers.push(sequence.manager(options.backend, options.threads, *c)?);
+        managers.push(sequence.manager(options.backend, options.threads, c.clone())?);
     }
     let mut frames = vec![Vec::new(); configs.len()];
     let total = options.frames.count();
@@ -251,16 +346,6 @@ fn variant_factories(options: &IntegrationBenchOptions) -> Vec<(String, Factory)
     }
 }
 
-/// The configurations run, in report order: `never` (the cache plays no part in it), then
-/// `always` and `auto`, each with the cache on and off.
-const CONFIGS: [(IntegrationPolicy, bool); 5] = [
-    (IntegrationPolicy::Never, false),
-    (IntegrationPolicy::Always, true),
-    (IntegrationPolicy::Always, false),
-    (IntegrationPolicy::Auto, true),
-    (IntegrationPolicy::Auto, false),
-];
-
 /// See the module docs. `progress` gets (frames rendered, frames planned) after each frame.
 pub fn bench_integration(
     sequence: &Sequence,
@@ -270,15 +355,9 @@ pub fn bench_integration(
 ) -> Result<IntegrationBenchReport, SequenceError> {
     let asleep_fraction = asleep_fractions(sequence, &options.frames);
     let settled: Vec<bool> = asleep_fraction.iter().map(|&a| a >= 0.9).collect();
-    let manager_options: Vec<ManagerOptions> = CONFIGS
-        .iter()
-        .map(|&(policy, cache)| ManagerOptions {
-            policy,
-            cache,
-            planned_frames: Some(options.frames.count()),
-            ..ManagerOptions::default()
-        })
-        .collect();
+    let configs = configs(options);
+    let manager_options: Vec<ManagerOptions> =
+        configs.iter().map(|c| sequence.manager_options(&options.frames, c.settings())).collect();
     let renderer = FrameRenderer {
         integrator,
         aovs: &[],
@@ -290,16 +369,30 @@ pub fn bench_integration(
     let mut runs = Vec::new();
     let (mut rebuild_ms, mut rebuild_triangles, mut mean_insert_ms) = (0.0, 0, 0.0);
     let mut variants = Vec::new();
-    for ((policy, cache), (frames, manager)) in CONFIGS.into_iter().zip(results) {
-        let run = policy_run(policy, cache, &frames, &settled, &manager);
-        if policy == IntegrationPolicy::Always && cache {
+    for (config, (frames, manager)) in configs.into_iter().zip(results) {
+        let run = policy_run(config, &frames, &settled, &manager);
+        if config
+            == (BenchConfig {
+                policy: IntegrationPolicy::Always,
+                form: IntegrationForm::Baked,
+                cache: true,
+                lookahead: true,
+            })
+        {
             (variants, rebuild_triangles) = static_variants(&manager, &sequence.template, options)?;
             rebuild_ms = variants.first().map_or(0.0, |v| v.build_ms);
             mean_insert_ms = run.integrate_ms_per_island;
         }
         runs.push(run);
     }
-    let ratios = ratios(&runs, rebuild_ms, mean_insert_ms);
+    let awake = settled_awake_share(&asleep_fraction, &settled);
+    let ratios_by_form: BTreeMap<String, IntegrationRatios> = options
+        .forms
+        .iter()
+        .map(|&form| (form.to_string(), ratios(&runs, form, awake, rebuild_ms / mean_insert_ms.max(1e-9))))
+        .collect();
+    let ratios =
+        options.forms.first().map_or_else(IntegrationRatios::default, |f| ratios_by_form[&f.to_string()]);
     Ok(IntegrationBenchReport {
         scene: sequence.template.name.clone(),
         backend: options.backend,
@@ -311,14 +404,26 @@ pub fn bench_integration(
         height: options.height,
         spp: options.spp,
         asleep_fraction,
+        forms: options.forms.clone(),
         runs,
         static_variants: variants,
         rebuild_ms,
         rebuild_triangles,
         mean_insert_ms,
         ratios,
+        ratios_by_form,
         cache_histogram_buckets: FRACTION_BUCKETS,
     })
+}
+
+/// The mean awake share (of present dynamic bodies) over the settled frames, or over all
+/// frames when none settled.
+fn settled_awake_share(asleep_fraction: &[f64], settled: &[bool]) -> f64 {
+    let pick: Vec<f64> =
+        asleep_fraction.iter().zip(settled).filter(|(_, s)| **s).map(|(a, _)| 1.0 - a).collect();
+    let all: Vec<f64> = asleep_fraction.iter().map(|a| 1.0 - a).collect();
+    let v = if pick.is_empty() { &all } else { &pick };
+    v.iter().sum::<f64>() / v.len().max(1) as f64
 }
 
 /// Per rendered frame, the share of the present dynamic bodies asleep, from the trajectory.
@@ -350,8 +455,7 @@ fn asleep_fractions(sequence: &Sequence, selection: &FrameSelection) -> Vec<f64>
 /// One configuration's report from its frames (`settled` marks the settled ones) and its
 /// manager at the end.
 fn policy_run(
-    policy: IntegrationPolicy,
-    cache: bool,
+    config: BenchConfig,
     frames: &[FrameStats],
     settled: &[bool],
     manager: &SceneManager,
@@ -359,8 +463,8 @@ fn policy_run(
     let sum = |f: &dyn Fn(&FrameStats) -> u64| frames.iter().map(f).sum::<u64>();
     let integrated = sum(&|f| u64::from(f.islands_integrated));
     PolicyRun {
-        policy,
-        cache,
+        config,
+        name: config.name(),
         total_ms: frames.iter().map(|f| f.frame_ms()).sum(),
         all: means(frames.iter()),
         settled: means(frames.iter().zip(settled).filter(|(_, s)| **s).map(|(f, _)| f)),
@@ -379,6 +483,8 @@ fn policy_run(
         }),
         integrated_at_end: frames.last().map_or(0, |f| f.integrated_islands),
         instances_at_end: frames.last().map_or(0, |f| f.instances),
+        resting_at_end: frames.last().map_or(0, |f| f.resting_bodies),
+        rest_rebuilds: sum(&|f| u64::from(f.rest_rebuilt)),
         rays: sum(&|f| f.rays),
         decisions_integrate: sum(&|f| f.decisions.iter().filter(|d| d.integrate).count() as u64),
         decisions_decline: sum(&|f| f.decisions.iter().filter(|d| !d.integrate).count() as u64),
@@ -388,23 +494,44 @@ fn policy_run(
     }
 }
 
-/// The headline ratios from the runs (every configuration ran).
-fn ratios(runs: &[PolicyRun], rebuild_ms: f64, mean_insert_ms: f64) -> IntegrationRatios {
-    let find = |p: IntegrationPolicy, c: bool| find_run(runs, p, c).expect("every configuration ran");
-    let (never, always, auto) = (
-        find(IntegrationPolicy::Never, false),
-        find(IntegrationPolicy::Always, true),
-        find(IntegrationPolicy::Auto, true),
-    );
+/// The headline ratios of `form` from the runs; `awake` is the settled frames' mean awake
+/// share, `rebuild_over_insert` the baked form's.
+fn ratios(
+    runs: &[PolicyRun],
+    form: IntegrationForm,
+    awake: f64,
+    rebuild_over_insert: f64,
+) -> IntegrationRatios {
+    let nan = f64::NAN;
+    let (Some(never), Some(always), Some(auto)) = (
+        find_run(runs, IntegrationPolicy::Never, form),
+        find_run(runs, IntegrationPolicy::Always, form),
+        find_run(runs, IntegrationPolicy::Auto, form),
+    ) else {
+        return IntegrationRatios::default();
+    };
+    let settled = never.settled.frames > 0;
+    // NaN (null in JSON) when no frame settled.
+    let settled_speedup =
+        if settled { never.settled.frame_ms / auto.settled.frame_ms.max(1e-9) } else { nan };
+    let n = &never.settled.stages;
+    let ceiling =
+        if settled { never.settled.frame_ms / (n.trace_ms + n.commit_ms * awake).max(1e-9) } else { nan };
+    let (never_trace, always_trace) = if settled {
+        (n.trace_ms, always.settled.stages.trace_ms)
+    } else {
+        (never.all.stages.trace_ms, always.all.stages.trace_ms)
+    };
+    let online = runs.iter().find(|r| r.config == BenchConfig { lookahead: false, ..auto.config });
     IntegrationRatios {
-        // NaN (null in JSON) when no frame settled.
-        settled_speedup: match never.settled.frames {
-            0 => f64::NAN,
-            _ => never.settled.frame_ms / auto.settled.frame_ms.max(1e-9),
-        },
+        settled_speedup,
         run_speedup: never.total_ms / auto.total_ms.max(1e-9),
         auto_over_best: auto.total_ms / never.total_ms.min(always.total_ms).max(1e-9),
-        rebuild_over_insert: rebuild_ms / mean_insert_ms.max(1e-9),
+        rebuild_over_insert: if form == IntegrationForm::Baked { rebuild_over_insert } else { nan },
         partial_hit_90_99_fraction: auto.cache_stats.partial_90_99_fraction(),
+        ceiling,
+        of_ceiling: settled_speedup / ceiling,
+        trace_penalty: always_trace / never_trace.max(1e-9),
+        lookahead_gain: online.map_or(nan, |o| o.total_ms / auto.total_ms.max(1e-9)),
     }
 }

@@ -17,6 +17,7 @@ use super::integration::{
     bench_integration, IntegrationBenchOptions, IntegrationBenchReport, IntegrationRatios,
 };
 use crate::accel::Backend;
+use crate::integrate::IntegrationForm;
 use crate::physics::{self, IslandStats, SimulateOptions};
 use crate::render::DirectLighting;
 use crate::scene::file::SceneFile;
@@ -379,11 +380,13 @@ fn run_backend(
         spp: 1,
         threads: options.threads,
         static_variants: false,
+        forms: IntegrationForm::ALL.to_vec(),
+        cache_variants: true,
     };
     let t = Instant::now();
     let mut progress = |done: u32, total: u32| {
         if done % 100 == 0 {
-            log(&format!("{}, {backend}: frame {done} of {total}, 5 configurations each", w.name));
+            log(&format!("{}, {backend}: frame {done} of {total}, every configuration", w.name));
         }
     };
     let integration =

@@ -103,6 +103,15 @@ pub struct IntegrationArgs {
     /// where structure updates are a sizeable part of a frame.
     #[arg(long, value_enum, default_value_t = super::render::RenderMode::Shaded)]
     pub mode: super::render::RenderMode,
+    /// The integration form the ratios describe; the other form runs too (`always`, `auto`).
+    #[arg(long, value_enum, default_value_t = crate::integrate::IntegrationForm::default())]
+    pub integrate_as: crate::integrate::IntegrationForm,
+    /// Compare this form only.
+    #[arg(long)]
+    pub one_form: bool,
+    /// Also run the baked form's `always` and `auto` with the geometry cache off.
+    #[arg(long)]
+    pub cache_variants: bool,
 }
 
 #[derive(Debug, Args)]
@@ -206,11 +215,17 @@ fn integration(
         spp: args.spp,
         threads,
         static_variants: true,
+        forms: if args.one_form {
+            vec![args.integrate_as]
+        } else {
+            crate::integrate::IntegrationForm::starting_with(args.integrate_as)
+        },
+        cache_variants: args.cache_variants,
     };
     let integrator = super::render::integrator(args.mode, 6);
     let mut progress = |done: u32, total: u32| {
         if !quiet && (done % 50 == 0 || done == total) {
-            eprintln!("bench integration: frame {done} of {total}, 5 configurations each");
+            eprintln!("bench integration: frame {done} of {total}");
         }
     };
     let report = bench::bench_integration(&sequence, integrator.as_ref(), &options, &mut progress)?;

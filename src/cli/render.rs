@@ -8,7 +8,7 @@ use indicatif::ProgressBar;
 
 use super::CliError;
 use crate::accel::{self, Backend};
-use crate::integrate::{FrameStats, IntegrationPolicy, ManagerOptions};
+use crate::integrate::{FrameStats, IntegrationForm, IntegrationPolicy, IntegrationSettings};
 use crate::physics::SimulateOptions;
 use crate::render::{
     self, AmbientOcclusion, Aov, AovIntegrator, DirectLighting, Film, Integrator, PathTracer, RenderScene,
@@ -98,9 +98,17 @@ pub struct RenderArgs {
     /// With SCENE or --trajectory: when sleeping islands are baked into the static scene.
     #[arg(long, value_enum, default_value_t = IntegrationPolicy::Auto)]
     pub integration: IntegrationPolicy,
-    /// With SCENE or --trajectory: serve reactivations from the geometry cache.
-    #[arg(long, value_enum, default_value_t = CacheSwitch::On)]
-    pub cache: CacheSwitch,
+    /// With SCENE or --trajectory: how integrated islands are held: baked into the static
+    /// scene, or as instances in a resting scene rebuilt only when its set changes.
+    #[arg(long, value_enum, default_value_t = IntegrationForm::default())]
+    pub integrate_as: IntegrationForm,
+    /// With SCENE or --trajectory: serve reactivations of baked islands from the geometry cache.
+    #[arg(long, value_enum, default_value_t = Switch::On)]
+    pub cache: Switch,
+    /// With SCENE or --trajectory: let `auto` use the run's known future (each island's true
+    /// remaining sleep over the rendered frames) instead of estimating it.
+    #[arg(long, value_enum, default_value_t = Switch::On)]
+    pub lookahead: Switch,
     /// With SCENE or --trajectory: also encode the frames as DIR/video.mp4 (needs ffmpeg on PATH).
     #[arg(long)]
     pub video: bool,
@@ -275,12 +283,13 @@ fn render_sequence(
     quiet: bool,
 ) -> Result<String, CliError> {
     let frames = sequence.select(args.frames, args.frame_step).map_err(|e| sequence_error(e, "--frames"))?;
-    let manager_options = ManagerOptions {
+    let settings = IntegrationSettings {
         policy: args.integration,
-        cache: args.cache == CacheSwitch::On,
-        planned_frames: Some(frames.count()),
-        ..ManagerOptions::default()
+        form: args.integrate_as,
+        cache: args.cache == Switch::On,
+        lookahead: args.lookahead == Switch::On,
     };
+    let manager_options = sequence.manager_options(&frames, settings);
     let mut manager =
         sequence.manager(backend, threads, manager_options).map_err(|e| sequence_error(e, "--frames"))?;
     let renderer = FrameRenderer {
@@ -313,7 +322,7 @@ fn render_sequence(
         backend: backend.to_string(),
         mode: json_name(&args.mode),
         integration: json_name(&args.integration),
-        cache_enabled: args.cache == CacheSwitch::On,
+        cache_enabled: args.cache == Switch::On,
         width: args.size.width,
         height: args.size.height,
         spp: args.spp,
@@ -421,9 +430,9 @@ fn json_name(value: &impl serde::Serialize) -> String {
     }
 }
 
-/// `--cache on|off`.
+/// `--cache on|off`, `--lookahead on|off`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum CacheSwitch {
+pub enum Switch {
     On,
     Off,
 }

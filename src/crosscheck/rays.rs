@@ -7,11 +7,7 @@ use crate::scene::SceneDescription;
 
 /// One primary ray through each pixel centre of a `width x height` image.
 pub fn camera_rays(desc: &SceneDescription, width: u32, height: u32) -> Vec<Ray> {
-    let camera = PinholeCamera::new(&desc.camera, width, height);
-    (0..height)
-        .flat_map(|y| (0..width).map(move |x| (x, y)))
-        .map(|(x, y)| camera.ray(x as f32 + 0.5, y as f32 + 0.5))
-        .collect()
+    PinholeCamera::pixel_centre_rays(&desc.camera, width, height)
 }
 
 /// `count` rays leaving random points on the scene's triangles (static meshes and bodies, in

@@ -1,16 +1,28 @@
-//! The cost model: integrate an island only when its estimated build cost `C_i` is less than
-//! the time it is expected to save before it wakes, `t_n = gain per frame x expected frames`.
+//! The cost model: integrate an island only when what it saves before it wakes exceeds what
+//! it costs. Per island `i`, over the `n_i` rendered frames it will still sleep:
 //!
-//! Every estimate comes from measurements of this run:
-//! - **build cost**: a least-squares line `ms = a + b * triangles` over recent static builds;
-//! - **gain per frame**: what one instance fewer saves: commit ms per instance (the top
-//!   level's rebuild is linear in its instances) weighted by how often frames commit at all,
-//!   plus the least-squares slope of trace time over instance count once the counts spread
-//!   enough to measure it (negative where baked geometry traces slower than instances);
-//! - **expected remaining sleep**: the mean residual sleep of islands that slept as long as
-//!   this one already has, over every island seen (integrated or not: declined islands are
-//!   "shadow" samples, so the estimate does not learn only from its own choices). Islands still
-//!   asleep count with their current age, a lower bound.
+//! `net_i = n_i * (commit gain_i - trace penalty_i) - build_i - wake_i`
+//!
+//! and one frame's candidates go in together when their positive nets pay the frame's shared
+//! fixed cost (a static build's overhead, or rebuilding the resting scene).
+//!
+//! - **`n_i`**: exact when the future is known ([`super::Lookahead`]: an offline render
+//!   simulates first), counting only the frames that will be rendered; otherwise the mean
+//!   residual sleep of islands that slept as long as this one already has, over every island
+//!   seen (integrated or not: declined islands are "shadow" samples, so the estimate does not
+//!   learn only from its own choices; islands still asleep count with their current age).
+//! - **commit gain**: commit ms per top-level instance (the top level's rebuild is linear in
+//!   its instances) times the island's bodies, weighted by how often frames commit at all.
+//! - **trace penalty**: what integrated bodies cost the trace, measured by the scene manager's
+//!   probes (the same rays traced just before and just after an integration):
+//!   - baked: world-space triangles of rotated bodies are bounded more loosely than an
+//!     instance's object-space BVH bounds them: a fraction of the trace per baked share of
+//!     the bodies;
+//!   - resting: a second scene per ray, a fixed fraction of the trace while it is non-empty.
+//! - **build**: a least-squares line over recent builds, `a + b * triangles` (baked) or
+//!   `c + d * instances` (rebuilding the resting scene);
+//! - **wake**: resting islands that wake while rendering force a rebuild of the resting
+//!   scene then, unless one is due that frame anyway; baked islands leave by a detach.
 //!
 //! Before there are enough samples the model uses priors (below), which the measurements
 //! replace as soon as they exist.
@@ -25,6 +37,13 @@ const PRIOR_BUILD_MS: (f64, f64) = (0.5, 2.5e-4);
 const PRIOR_GAIN_MS_PER_INSTANCE: f64 = 2e-3;
 /// Prior expected sleep, in frames, before any island has slept.
 const PRIOR_SLEEP_FRAMES: f64 = 30.0;
+/// Prior rebuild of the resting scene: 1 ms plus 0.7 us per instance (Embree 4.4, HIGH top
+/// level, ../shared/notes/embree.md).
+const PRIOR_REST_MS: (f64, f64) = (1.0, 7e-4);
+/// Prior trace penalties until a probe measured them: a second scene per ray costs a few
+/// percent of the trace; baking every body about 15% (docs/performance.md).
+const PRIOR_RESTING_PENALTY: f64 = 0.05;
+const PRIOR_BAKED_PENALTY: f64 = 0.15;
 
 /// A running least-squares line over the last [`WINDOW`] samples.
 #[derive(Clone, Debug, Default)]
@@ -78,71 +97,180 @@ impl LineFit {
 
 /// Build samples before the fitted line replaces the prior.
 const MIN_BUILD_SAMPLES: usize = 6;
-/// Trace samples, and the relative spread of their instance counts, before the trace slope
-/// counts: the trace time of a frame varies with much more than the instance count, so a slope
-/// over a narrow range is noise (and when `auto` integrates nothing the range stays narrow).
-const MIN_TRACE_SAMPLES: usize = 16;
-const MIN_TRACE_SPREAD: f64 = 0.2;
+/// Weight of the newest trace time in the running mean of a frame's trace.
+const TRACE_EMA: f64 = 0.2;
+
+/// How integrated islands are held (`--integrate-as`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum IntegrationForm {
+    /// The island's triangles in world space, in the static scene (one incremental insert).
+    #[default]
+    Baked,
+    /// The island's bodies stay instances, in a resting scene beside the per-frame top level:
+    /// rebuilt only when its set changes, traced as a second scene per ray.
+    Resting,
+}
+
+impl IntegrationForm {
+    /// Every form, the default first.
+    pub const ALL: [IntegrationForm; 2] = [IntegrationForm::Baked, IntegrationForm::Resting];
+
+    /// Every form with `first` first.
+    pub fn starting_with(first: IntegrationForm) -> Vec<IntegrationForm> {
+        let mut forms = vec![first];
+        forms.extend(Self::ALL.into_iter().filter(|f| *f != first));
+        forms
+    }
+}
+
+impl std::fmt::Display for IntegrationForm {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            IntegrationForm::Baked => "baked",
+            IntegrationForm::Resting => "resting",
+        })
+    }
+}
 
 /// The numbers behind one decision.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct CostEstimate {
-    /// Estimated build cost of this island's triangles, ms: `C_i` without the fixed cost of
-    /// a static build, which one frame's integrations share.
+    /// This island's own share of the build, ms (baked: its triangles; resting: its
+    /// instances in the rebuilt resting scene); the frame's shared cost is apart.
     pub build_ms: f64,
-    /// Fixed cost of the frame's static build (commit overhead), ms.
-    pub fixed_ms: f64,
-    /// Estimated saving per rendered frame while integrated, ms.
+    /// The cost its wake adds while rendering, ms (resting: a rebuild of the resting scene not
+    /// already due that frame; baked: nothing, removal is a detach).
+    pub wake_ms: f64,
+    /// Estimated saving per rendered frame while integrated, ms: commit gain minus trace
+    /// penalty.
     pub gain_ms_per_frame: f64,
-    /// Expected further frames asleep.
+    /// Rendered frames it will still sleep: exact with lookahead, else expected.
     pub expected_frames: f64,
+    /// Whether `expected_frames` is known (lookahead) rather than estimated.
+    pub exact: bool,
 }
 
 impl CostEstimate {
-    /// `t_n`: the total expected saving.
+    /// The total saving over the frames it sleeps.
     pub fn gain_ms(&self) -> f64 {
         self.gain_ms_per_frame * self.expected_frames
     }
 
-    /// `t_n - C_i` without the fixed cost.
+    /// Saving minus its own costs (the frame's shared cost is not included).
     pub fn net_ms(&self) -> f64 {
-        self.gain_ms() - self.build_ms
+        self.gain_ms() - self.build_ms - self.wake_ms
     }
 }
 
 /// Which of one frame's candidates to integrate: those with a positive net saving, if
-/// together they also pay the static build's fixed cost (`estimates` share one `fixed_ms`).
-/// Islands one by one would each pay the fixed cost and many small islands that pay off
-/// together would be declined.
-pub fn choose_batch(estimates: &[CostEstimate]) -> Vec<bool> {
-    let fixed = estimates.first().map_or(0.0, |e| e.fixed_ms);
+/// together they also pay the frame's shared cost `fixed_ms`. Islands one by one would each
+/// pay it, and many small islands that pay off together would be declined.
+pub fn choose_batch(estimates: &[CostEstimate], fixed_ms: f64) -> Vec<bool> {
     let net: f64 = estimates.iter().map(|e| e.net_ms().max(0.0)).sum();
-    let go = net > fixed;
+    let go = net > fixed_ms;
     estimates.iter().map(|e| go && e.net_ms() > 0.0).collect()
+}
+
+/// A sleeping island the manager could integrate this frame.
+#[derive(Clone, Copy, Debug)]
+pub struct Candidate {
+    pub bodies: usize,
+    pub triangles: usize,
+    /// Rendered frames it has slept so far.
+    pub age: u32,
+    /// Rendered frames it will still sleep, this one included (lookahead); `None`: estimate.
+    pub remaining: Option<u32>,
+    /// Whether it wakes while the run still renders (lookahead); `None`: estimate.
+    pub wakes_while_rendering: Option<bool>,
+    /// Whether a rebuild of the resting scene is due at its wake frame anyway (another
+    /// resting island wakes then).
+    pub wake_rebuild_due: bool,
+}
+
+/// The scene the candidates would join.
+#[derive(Clone, Copy, Debug)]
+pub struct Situation {
+    pub form: IntegrationForm,
+    /// Dynamic bodies present this frame (baked penalty is per share of them).
+    pub present_bodies: usize,
+    /// Instances in the resting scene now.
+    pub resting_instances: usize,
+    /// Whether the resting scene is rebuilt this frame anyway (a resting island woke).
+    pub rest_rebuild_due: bool,
+    /// Rendered frames left in the run, this one included.
+    pub frames_left: f64,
 }
 
 /// The cost model's estimates for one frame (see [`CostModel::outlook`]).
 #[derive(Clone, Debug)]
 pub struct Outlook {
-    fixed_ms: f64,
-    ms_per_triangle: f64,
-    gain_ms_per_instance: f64,
+    situation: Situation,
+    build_line: (f64, f64),
+    rest_line: (f64, f64),
+    /// Commit ms saved per instance and rendered frame.
+    commit_gain_per_instance: f64,
+    /// Trace ms of a frame (running mean).
+    trace_ms: f64,
+    penalty: Penalties,
     /// Sleep durations of ended islands and ages of live ones, ascending.
     durations: Vec<f64>,
     suffix: Vec<f64>,
-    frames_left: f64,
 }
 
 impl Outlook {
-    /// The estimate for an island of `bodies` bodies and `triangles` triangles asleep for
-    /// `age` rendered frames.
-    pub fn estimate(&self, bodies: usize, triangles: usize, age: f64) -> CostEstimate {
+    /// The estimate for one candidate.
+    pub fn estimate(&self, c: &Candidate) -> CostEstimate {
+        let sit = &self.situation;
+        let frames = match c.remaining {
+            Some(n) => f64::from(n),
+            None => self.expected_frames(f64::from(c.age)),
+        };
+        let commit_gain = self.commit_gain_per_instance * c.bodies as f64;
+        let (build_ms, penalty, wake_ms) = match sit.form {
+            IntegrationForm::Baked => {
+                let share = c.bodies as f64 / sit.present_bodies.max(1) as f64;
+                (self.build_line.1 * c.triangles as f64, self.penalty.baked * self.trace_ms * share, 0.0)
+            }
+            IntegrationForm::Resting => {
+                let wakes = c.wakes_while_rendering.unwrap_or(frames < sit.frames_left);
+                let wake_ms = if wakes && !c.wake_rebuild_due { self.rest_rebuild_ms(c.bodies) } else { 0.0 };
+                (self.rest_line.1 * c.bodies as f64, 0.0, wake_ms)
+            }
+        };
         CostEstimate {
-            build_ms: self.ms_per_triangle * triangles as f64,
-            fixed_ms: self.fixed_ms,
-            gain_ms_per_frame: self.gain_ms_per_instance * bodies as f64,
-            expected_frames: self.expected_frames(age),
+            build_ms,
+            wake_ms,
+            gain_ms_per_frame: commit_gain - penalty,
+            expected_frames: frames,
+            exact: c.remaining.is_some(),
         }
+    }
+
+    /// The frame's shared cost of integrating `chosen` (estimates of the candidates that net
+    /// a saving): a static build's overhead, or rebuilding the resting scene now (unless due
+    /// anyway) plus, when it was empty, the second scene's trace penalty while it stays in use.
+    pub fn fixed_ms(&self, chosen: &[CostEstimate]) -> f64 {
+        let sit = &self.situation;
+        match sit.form {
+            IntegrationForm::Baked => self.build_line.0,
+            IntegrationForm::Resting => {
+                let rebuild = if sit.rest_rebuild_due { 0.0 } else { self.rest_rebuild_ms(0) };
+                let frames = chosen.iter().map(|e| e.expected_frames).fold(0.0, f64::max);
+                let penalty = if sit.resting_instances == 0 {
+                    self.penalty.resting * self.trace_ms * frames
+                } else {
+                    0.0
+                };
+                rebuild + penalty
+            }
+        }
+    }
+
+    /// Rebuilding the resting scene with `extra` more instances than it has now.
+    fn rest_rebuild_ms(&self, extra: usize) -> f64 {
+        let (c, d) = self.rest_line;
+        c + d * (self.situation.resting_instances + extra) as f64
     }
 
     /// Expected further rendered frames of sleep for an island asleep for `age` frames: the
@@ -152,7 +280,24 @@ impl Outlook {
         let n = self.durations.len() - first;
         let expected =
             if n == 0 { PRIOR_SLEEP_FRAMES } else { (self.suffix[first] - age * n as f64) / n as f64 };
-        expected.min(self.frames_left.max(0.0))
+        expected.min(self.situation.frames_left.max(0.0))
+    }
+}
+
+/// Measured trace penalties of the integration forms, as fractions of a frame's trace.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Penalties {
+    /// With every present body baked (scaled by the baked share).
+    pub baked: f64,
+    /// With a non-empty resting scene.
+    pub resting: f64,
+    /// Probes that measured them.
+    pub probes: u32,
+}
+
+impl Default for Penalties {
+    fn default() -> Self {
+        Self { baked: PRIOR_BAKED_PENALTY, resting: PRIOR_RESTING_PENALTY, probes: 0 }
     }
 }
 
@@ -161,8 +306,11 @@ impl Outlook {
 pub struct CostModelState {
     pub build_ms_intercept: f64,
     pub build_ms_per_mtriangle: f64,
+    pub rest_ms_intercept: f64,
+    pub rest_ms_per_kinstance: f64,
     pub commit_ms_per_instance: f64,
-    pub trace_ms_per_instance: f64,
+    pub trace_ms_mean: f64,
+    pub penalty: Penalties,
     pub sleep_samples: usize,
     pub shadow_islands: u64,
 }
@@ -171,8 +319,11 @@ pub struct CostModelState {
 #[derive(Clone, Debug, Default)]
 pub struct CostModel {
     build: LineFit,
+    rest: LineFit,
     commit: LineFit,
-    trace: LineFit,
+    /// Running mean of a frame's trace, ms.
+    trace_ms: Option<f64>,
+    penalty: Penalties,
     /// Whether each recent frame committed (a frame where nothing moved commits nothing, so
     /// an instance fewer saves nothing there).
     committed: VecDeque<bool>,
@@ -193,6 +344,11 @@ impl CostModel {
         }
     }
 
+    /// A rebuild of the resting scene with `instances` took `ms`.
+    pub fn record_rest_build(&mut self, instances: usize, ms: f64) {
+        self.rest.push(instances as f64, ms);
+    }
+
     /// A frame with `instances` in the top level took `commit_ms` to commit (only frames that
     /// rebuilt the top level) and `trace_ms` to trace.
     pub fn record_frame(&mut self, instances: usize, commit_ms: Option<f64>, trace_ms: f64) {
@@ -203,7 +359,24 @@ impl CostModel {
             self.committed.pop_front();
         }
         self.committed.push_back(commit_ms.is_some());
-        self.trace.push(instances as f64, trace_ms);
+        if trace_ms.is_finite() {
+            self.trace_ms = Some(self.trace_ms.map_or(trace_ms, |m| m + TRACE_EMA * (trace_ms - m)));
+        }
+    }
+
+    /// A probe traced the same rays in `before_ms` and, after integrating, in `after_ms`;
+    /// `share` is the share of present bodies the integration moved (baked), or 1 (the
+    /// resting scene went from empty to in use).
+    pub fn record_probe(&mut self, form: IntegrationForm, before_ms: f64, after_ms: f64, share: f64) {
+        if !(before_ms > 0.0 && after_ms.is_finite() && share > 0.0) {
+            return;
+        }
+        let penalty = ((after_ms / before_ms - 1.0) / share).clamp(-0.5, 2.0);
+        match form {
+            IntegrationForm::Baked => self.penalty.baked = penalty,
+            IntegrationForm::Resting => self.penalty.resting = penalty,
+        }
+        self.penalty.probes += 1;
     }
 
     /// An island ended after sleeping `frames` rendered frames; `integrated` says whether it
@@ -218,26 +391,25 @@ impl CostModel {
         }
     }
 
-    /// The build line in use: the fit once it has enough samples (intercept clamped to the
+    /// A build line in use: the fit once it has enough samples (intercept clamped to the
     /// cheapest build seen, so one slow outlier cannot make every build look expensive), else
     /// the prior.
-    fn build_line(&self) -> (f64, f64) {
-        match self.build.fit_with(MIN_BUILD_SAMPLES, 0.0) {
-            Some((a, b)) if b >= 0.0 => (a.clamp(0.0, self.build.min_y()), b),
-            _ => PRIOR_BUILD_MS,
+    fn line(fit: &LineFit, prior: (f64, f64)) -> (f64, f64) {
+        match fit.fit_with(MIN_BUILD_SAMPLES, 0.0) {
+            Some((a, b)) if b >= 0.0 => (a.clamp(0.0, fit.min_y()), b),
+            _ => prior,
         }
     }
 
     /// Estimated ms to build `triangles` into the static scene.
     pub fn build_ms(&self, triangles: usize) -> f64 {
-        let (a, b) = self.build_line();
+        let (a, b) = Self::line(&self.build, PRIOR_BUILD_MS);
         (a + b * triangles as f64).max(0.0)
     }
 
     /// The model's current estimates, fixed for one frame's decisions: the fits are computed
     /// once and the sleep durations sorted, so each island's estimate is O(log n).
-    pub fn outlook(&self, live_ages: impl Iterator<Item = f64>, frames_left: f64) -> Outlook {
-        let (fixed_ms, ms_per_triangle) = self.build_line();
+    pub fn outlook(&self, situation: Situation, live_ages: impl Iterator<Item = f64>) -> Outlook {
         let mut durations: Vec<f64> = self.sleeps.iter().copied().chain(live_ages).collect();
         durations.sort_by(f64::total_cmp);
         // suffix[i] = sum of durations[i..].
@@ -246,48 +418,39 @@ impl CostModel {
             suffix[i] = suffix[i + 1] + durations[i];
         }
         Outlook {
-            fixed_ms,
-            ms_per_triangle,
-            gain_ms_per_instance: self.gain_ms_per_frame(1),
+            situation,
+            build_line: Self::line(&self.build, PRIOR_BUILD_MS),
+            rest_line: Self::line(&self.rest, PRIOR_REST_MS),
+            commit_gain_per_instance: self.commit_gain_per_instance(),
+            trace_ms: self.trace_ms.unwrap_or(0.0),
+            penalty: self.penalty,
             durations,
             suffix,
-            frames_left,
         }
     }
 
-    /// Commit ms per instance: the top level's rebuild is linear in its instances.
-    fn commit_per_instance(&self) -> Option<f64> {
-        self.commit.ratio()
-    }
-
-    /// Trace ms per top-level instance. Not floored at 0: where baked geometry traces slower
-    /// than instances (the BVH backend's many-block static tree), fewer instances cost time
-    /// and integration must pay for that too.
-    fn trace_per_instance(&self) -> Option<f64> {
-        self.trace.fit_with(MIN_TRACE_SAMPLES, MIN_TRACE_SPREAD).map(|(_, b)| b)
-    }
-
-    /// Estimated ms saved per rendered frame by removing `instances` from the top level.
-    pub fn gain_ms_per_frame(&self, instances: usize) -> f64 {
+    /// Commit ms one instance fewer saves per rendered frame: the top level's rebuild is
+    /// linear in its instances, and frames where nothing moved commit nothing.
+    fn commit_gain_per_instance(&self) -> f64 {
         let commit_rate = if self.committed.is_empty() {
             1.0
         } else {
             self.committed.iter().filter(|c| **c).count() as f64 / self.committed.len() as f64
         };
-        let per_instance = match (self.commit_per_instance(), self.trace_per_instance()) {
-            (None, None) => PRIOR_GAIN_MS_PER_INSTANCE,
-            (c, t) => c.unwrap_or(0.0) * commit_rate + t.unwrap_or(0.0),
-        };
-        per_instance * instances as f64
+        self.commit.ratio().unwrap_or(PRIOR_GAIN_MS_PER_INSTANCE) * commit_rate
     }
 
     pub fn state(&self) -> CostModelState {
-        let (a, b) = self.build_line();
+        let (a, b) = Self::line(&self.build, PRIOR_BUILD_MS);
+        let (c, d) = Self::line(&self.rest, PRIOR_REST_MS);
         CostModelState {
             build_ms_intercept: a,
             build_ms_per_mtriangle: b * 1e6,
-            commit_ms_per_instance: self.commit_per_instance().unwrap_or(0.0),
-            trace_ms_per_instance: self.trace_per_instance().unwrap_or(0.0),
+            rest_ms_intercept: c,
+            rest_ms_per_kinstance: d * 1e3,
+            commit_ms_per_instance: self.commit.ratio().unwrap_or(0.0),
+            trace_ms_mean: self.trace_ms.unwrap_or(0.0),
+            penalty: self.penalty,
             sleep_samples: self.sleeps.len(),
             shadow_islands: self.shadow_islands,
         }
@@ -327,17 +490,22 @@ mod tests {
     fn small_islands_pay_off_together() {
         let e = |build_ms, gain_ms_per_frame| CostEstimate {
             build_ms,
-            fixed_ms: 2.0,
+            wake_ms: 0.0,
             gain_ms_per_frame,
             expected_frames: 10.0,
+            exact: false,
         };
         // Each nets 0.9 ms, less than the 2 ms fixed cost alone, but three together pay it.
-        assert_eq!(choose_batch(&[e(0.1, 0.1), e(0.1, 0.1)]), [false, false]);
+        assert_eq!(choose_batch(&[e(0.1, 0.1), e(0.1, 0.1)], 2.0), [false, false]);
         assert_eq!(
-            choose_batch(&[e(0.1, 0.1), e(0.1, 0.1), e(0.1, 0.1), e(5.0, 0.1)]),
+            choose_batch(&[e(0.1, 0.1), e(0.1, 0.1), e(0.1, 0.1), e(5.0, 0.1)], 2.0),
             [true, true, true, false]
         );
-        assert!(choose_batch(&[]).is_empty());
+        assert!(choose_batch(&[], 2.0).is_empty());
+    }
+
+    fn situation(form: IntegrationForm, frames_left: f64) -> Situation {
+        Situation { form, present_bodies: 1000, resting_instances: 0, rest_rebuild_due: false, frames_left }
     }
 
     #[test]
@@ -347,10 +515,48 @@ mod tests {
             m.record_sleep(d, true);
         }
         let none = || std::iter::empty();
-        assert_eq!(m.outlook(none(), 1e9).expected_frames(0.0), 40.0);
-        assert_eq!(m.outlook(none(), 1e9).expected_frames(15.0), 40.0, "(5 + 75) / 2");
-        assert_eq!(m.outlook([115.0].into_iter(), 1e9).expected_frames(15.0), 60.0, "(5 + 75 + 100) / 3");
-        assert_eq!(m.outlook(none(), 7.0).expected_frames(15.0), 7.0, "capped by the run");
-        assert_eq!(m.outlook(none(), 1e9).expected_frames(90.0), PRIOR_SLEEP_FRAMES, "older than all");
+        let s = situation(IntegrationForm::Baked, 1e9);
+        assert_eq!(m.outlook(s, none()).expected_frames(0.0), 40.0);
+        assert_eq!(m.outlook(s, none()).expected_frames(15.0), 40.0, "(5 + 75) / 2");
+        assert_eq!(m.outlook(s, [115.0].into_iter()).expected_frames(15.0), 60.0, "(5 + 75 + 100) / 3");
+        let short = situation(IntegrationForm::Baked, 7.0);
+        assert_eq!(m.outlook(short, none()).expected_frames(15.0), 7.0, "capped by the run");
+        assert_eq!(m.outlook(s, none()).expected_frames(90.0), PRIOR_SLEEP_FRAMES, "older than all");
+    }
+
+    #[test]
+    fn lookahead_replaces_the_estimate_and_prices_resting_wakes() {
+        let mut m = CostModel::new();
+        for k in 0..8 {
+            m.record_frame(1000 + 100 * k, Some(1.0 + 0.1 * k as f64), 20.0);
+        }
+        let sit = situation(IntegrationForm::Resting, 100.0);
+        let outlook = m.outlook(sit, std::iter::empty());
+        let c = Candidate {
+            bodies: 100,
+            triangles: 1200,
+            age: 0,
+            remaining: Some(50),
+            wakes_while_rendering: Some(true),
+            wake_rebuild_due: false,
+        };
+        let e = outlook.estimate(&c);
+        assert!(e.exact && e.expected_frames == 50.0);
+        assert!(e.wake_ms > 0.0, "a wake while rendering rebuilds the resting scene");
+        let due = outlook.estimate(&Candidate { wake_rebuild_due: true, ..c });
+        assert_eq!(due.wake_ms, 0.0, "unless a rebuild is due that frame anyway");
+        let never = outlook.estimate(&Candidate { wakes_while_rendering: Some(false), ..c });
+        assert_eq!(never.wake_ms, 0.0);
+        // The second scene's penalty is a shared cost while the resting scene is empty.
+        assert!(outlook.fixed_ms(&[e]) > outlook.rest_rebuild_ms(0));
+    }
+
+    #[test]
+    fn probes_set_the_penalty_of_their_form() {
+        let mut m = CostModel::new();
+        m.record_probe(IntegrationForm::Baked, 10.0, 10.5, 0.25);
+        m.record_probe(IntegrationForm::Resting, 10.0, 10.2, 1.0);
+        let p = m.state().penalty;
+        assert!((p.baked - 0.2).abs() < 1e-9 && (p.resting - 0.02).abs() < 1e-9 && p.probes == 2);
     }
 }

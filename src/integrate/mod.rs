@@ -9,6 +9,7 @@
 mod baked;
 mod cache;
 mod cost_model;
+mod lookahead;
 mod manager;
 mod object_map;
 mod policy;
@@ -16,10 +17,14 @@ mod stage_times;
 
 pub use baked::{BakedIsland, BakedPart};
 pub use cache::{CacheBudget, CacheHit, CacheOutcome, CacheStats, GeometryCache, FRACTION_BUCKETS};
-pub use cost_model::{choose_batch, CostEstimate, CostModel, CostModelState, Outlook};
+pub use cost_model::{
+    choose_batch, Candidate, CostEstimate, CostModel, CostModelState, IntegrationForm, Outlook, Penalties,
+    Situation,
+};
+pub use lookahead::Lookahead;
 pub use manager::{
     Decision, FrameStats, ManagerOptions, ReactivationPath, ReactivationStrategy, SceneManager,
 };
 pub use object_map::{normal_matrix, LoadedObjectMap, MeshRef, ObjectMap, ResolvedHit};
-pub use policy::IntegrationPolicy;
+pub use policy::{IntegrationPolicy, IntegrationSettings};
 pub use stage_times::{StageColumn, StageTimes};

@@ -26,8 +26,9 @@ pub struct ResolvedHit {
     pub body: Option<BodyId>,
     /// Object-to-world transform for normals (identity for static meshes).
     pub normal_matrix: Mat3,
-    /// Whether the hit was on baked (integrated) geometry: the debug view colours it.
-    pub baked: bool,
+    /// Whether the hit was on an integrated body (baked, or in the resting scene): the debug
+    /// view colours it.
+    pub integrated: bool,
 }
 
 /// Resolves the accelerator's hit ids to scene objects.
@@ -86,7 +87,7 @@ impl ObjectMap for LoadedObjectMap {
                     prim,
                     body: None,
                     normal_matrix: Mat3::IDENTITY,
-                    baked: false,
+                    integrated: false,
                 })
             }
             HitObject::Instance(id) => {
@@ -95,7 +96,7 @@ impl ObjectMap for LoadedObjectMap {
                     prim,
                     body: Some(body),
                     normal_matrix: m,
-                    baked: false,
+                    integrated: false,
                 })
             }
         }

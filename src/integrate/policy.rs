@@ -1,4 +1,4 @@
-//! When to integrate a sleeping island.
+//! When and how to integrate sleeping islands: the policy and the settings a run chooses.
 
 /// The integration policy (`--integration`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, clap::ValueEnum, serde::Serialize)]
@@ -19,5 +19,28 @@ impl std::fmt::Display for IntegrationPolicy {
             IntegrationPolicy::Always => "always",
             IntegrationPolicy::Auto => "auto",
         })
+    }
+}
+
+/// A run's integration settings, as a user chooses them (`--integration`, `--integrate-as`,
+/// `--cache`, `--lookahead`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+pub struct IntegrationSettings {
+    pub policy: IntegrationPolicy,
+    pub form: super::IntegrationForm,
+    /// Serve reactivations of baked islands from the geometry cache.
+    pub cache: bool,
+    /// Let the cost model use the run's known future (each island's true remaining sleep).
+    pub lookahead: bool,
+}
+
+impl Default for IntegrationSettings {
+    fn default() -> Self {
+        Self {
+            policy: IntegrationPolicy::Auto,
+            form: super::IntegrationForm::default(),
+            cache: true,
+            lookahead: true,
+        }
     }
 }

@@ -88,6 +88,16 @@ impl PinholeCamera {
         let origin = self.eye + d.x * self.lens_u + d.y * self.lens_v;
         Ray::new(origin, (in_focus - origin).normalize())
     }
+
+    /// One pinhole ray through each pixel centre of a `width x height` image of `camera`, row
+    /// by row (cross-checks and probes; renders sample the pixel area instead).
+    pub fn pixel_centre_rays(camera: &Camera, width: u32, height: u32) -> Vec<Ray> {
+        let camera = PinholeCamera::new(camera, width, height);
+        (0..height)
+            .flat_map(|y| (0..width).map(move |x| (x, y)))
+            .map(|(x, y)| camera.ray(x as f32 + 0.5, y as f32 + 0.5))
+            .collect()
+    }
 }
 
 #[cfg(test)]

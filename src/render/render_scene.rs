@@ -186,7 +186,7 @@ impl<'a> RenderScene<'a> {
             material.metallic *= mr.z;
         }
         let emission = self.emission(&material, uv);
-        let kind = match (obj.body, obj.baked) {
+        let kind = match (obj.body, obj.integrated) {
             (None, _) => SurfaceKind::Environment,
             (Some(_), false) => SurfaceKind::Instanced,
             (Some(_), true) => SurfaceKind::Baked,

@@ -7,7 +7,6 @@ use std::path::{Path, PathBuf};
 
 use super::paper_plot::write_workload_png;
 use super::ReportError;
-use crate::bench::integration::PolicyRun;
 use crate::bench::paper::{PaperReport, Verdict, WorkloadReport};
 use crate::integrate::{IntegrationPolicy, FRACTION_BUCKETS};
 
@@ -115,13 +114,6 @@ fn num(v: f64) -> String {
     }
 }
 
-fn policy_name(run: &PolicyRun) -> String {
-    match run.policy {
-        IntegrationPolicy::Never => run.policy.to_string(),
-        policy => format!("{policy}, cache {}", if run.cache { "on" } else { "off" }),
-    }
-}
-
 fn workload_section(md: &mut String, w: &WorkloadReport) {
     workload_summary(md, w);
     ratios_table(md, w);
@@ -210,7 +202,7 @@ fn stage_table(md: &mut String, w: &WorkloadReport) {
                 md,
                 "| {} | {} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {} | {} | {} | {} |",
                 run.backend,
-                policy_name(p),
+                p.name,
                 p.all.frame_ms,
                 st.frame_ms,
                 st.stages.reactivate_ms,

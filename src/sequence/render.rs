@@ -6,9 +6,13 @@ use super::{FrameSelection, Sequence, SequenceError};
 use crate::integrate::{FrameStats, SceneManager};
 use crate::physics::ReplayFrame;
 use crate::render::{
-    render_frame, Aov, AovIntegrator, Emitters, Film, Integrator, RenderError, RenderScene, RenderSettings,
-    RenderStats,
+    render_frame, Aov, AovIntegrator, Emitters, Film, Integrator, PinholeCamera, RenderError, RenderScene,
+    RenderSettings, RenderStats,
 };
+
+/// Camera rays (one per pixel of this image) of the manager's trace-penalty probes: enough
+/// rays for a stable time, few enough to cost a few ms.
+const PROBE_SIZE: (u32, u32) = (128, 72);
 
 /// How every frame of a run is rendered.
 #[derive(Clone, Copy)]
@@ -46,6 +50,8 @@ impl Sequence {
         frame: &ReplayFrame<'_>,
         renderer: &FrameRenderer<'_>,
     ) -> Result<RenderedFrame, RenderError> {
+        let camera = self.assets.camera_at(self.time_of(frame.index));
+        manager.set_probe_rays(PinholeCamera::pixel_centre_rays(&camera, PROBE_SIZE.0, PROBE_SIZE.1));
         manager.prepare(frame)?;
         // Emissive prototypes are light-sampled where their bodies are this frame.
         let bodies =
@@ -53,7 +59,7 @@ impl Sequence {
         let settings = renderer.settings(frame.index);
         let (film, render, aovs) = {
             let mut scene = RenderScene::with_objects(&self.template, &*manager, &bodies)?;
-            scene.camera = self.assets.camera_at(self.time_of(frame.index));
+            scene.camera = camera;
             let query = manager.query()?;
             let (film, render) = render_frame(&scene, query, renderer.integrator, &settings)?;
             let mut aovs = Vec::with_capacity(renderer.aovs.len());

@@ -8,7 +8,9 @@ use serde::Serialize;
 use super::selection::{FrameRange, FrameSelection};
 use super::SequenceError;
 use crate::accel::{self, Backend};
-use crate::integrate::{ManagerOptions, SceneManager};
+use std::sync::Arc;
+
+use crate::integrate::{IntegrationSettings, Lookahead, ManagerOptions, SceneManager};
 use crate::physics::{self, SimulateOptions, SimulatedFrame, Trajectory};
 use crate::scene::file::SceneFile;
 use crate::scene::{SceneAssets, SceneDescription};
@@ -130,6 +132,35 @@ impl Sequence {
     /// The trajectory's last frame.
     pub fn last_frame(&self) -> FrameSelection {
         FrameSelection::list(vec![self.frame_count().saturating_sub(1)])
+    }
+
+    /// What the run knows of its future: the frames `selection` renders and when each island
+    /// wakes.
+    pub fn lookahead(&self, selection: &FrameSelection) -> Lookahead {
+        let events = self
+            .trajectory
+            .frames
+            .iter()
+            .enumerate()
+            .flat_map(|(i, f)| f.events.iter().map(move |e| (i as u32, e)));
+        Lookahead::new(events, selection.frames())
+    }
+
+    /// The scene manager's options for rendering `selection` under `settings`: the run's
+    /// length and, with lookahead, its future.
+    pub fn manager_options(
+        &self,
+        selection: &FrameSelection,
+        settings: IntegrationSettings,
+    ) -> ManagerOptions {
+        ManagerOptions {
+            policy: settings.policy,
+            form: settings.form,
+            cache: settings.cache,
+            planned_frames: Some(selection.count()),
+            lookahead: settings.lookahead.then(|| Arc::new(self.lookahead(selection))),
+            ..ManagerOptions::default()
+        }
     }
 
     /// A scene manager over a new accelerator of `backend`, loaded with the template.

@@ -11,12 +11,15 @@ use crate::accel::{
 };
 use crate::geometry::{Ray, TriangleMesh};
 
-/// Geometry id of the static scene's instance in the top level; instance `i` is `i + 1`.
+/// Geometry id of the static scene's instance (in the top level, or in the resting scene
+/// while that holds instances); instance `i` is `i + 1` in whichever of the two holds it.
 const STATIC_SLOT: u32 = 0;
 
 struct InstanceSlot {
     /// Object-to-world normal transform: Embree reports instanced normals in object space.
     normal_matrix: Mat3,
+    /// In the resting scene rather than the top level.
+    resting: bool,
 }
 
 /// Build qualities of the backend's three kinds of scene, with named presets.
@@ -59,19 +62,28 @@ impl Default for EmbreeBuildParams {
     }
 }
 
-/// The Embree backend: a top-level scene of instances, one of which is the static scene.
+/// The Embree backend: a top-level scene of instances, one of which is the static scene, and
+/// a resting scene of instances beside it.
 ///
 /// - Prototypes are frozen one-mesh scenes shared by their instances.
 /// - The static scene (environment plus baked islands) is a DYNAMIC scene owned by an identity
-///   instance at top-level id 0, so adding a baked mesh commits it incrementally and the
-///   per-frame top-level rebuild never touches its triangles.
+///   instance at id 0, so adding a baked mesh commits it incrementally and the per-frame
+///   top-level rebuild never touches its triangles.
 /// - The top level is rebuilt at HIGH quality at each commit that changed an instance; it
 ///   holds only instances.
+/// - Resting instances (integrated islands kept as instances) live in a second instance
+///   scene, rebuilt only when its set changes. While it holds any, the static scene's
+///   instance moves there too, so the top level keeps only the awake bodies: a ray traces the
+///   resting scene (environment and resting bodies, like one top level without the awake
+///   ones) and then the small top level up to the first hit. With no resting instance every
+///   ray traces the top level alone, as before.
 pub struct EmbreeAccel {
     device: Device,
     params: EmbreeBuildParams,
     prototypes: Vec<Arc<FrozenScene>>,
     top: Scene,
+    resting: Scene,
+    resting_count: usize,
     instances: Vec<Option<InstanceSlot>>,
     free_instances: Vec<u32>,
     static_triangles: Vec<Option<usize>>,
@@ -90,11 +102,15 @@ impl EmbreeAccel {
         let mut top =
             Scene::new(&device, SceneFlags { dynamic: true, ..SceneFlags::default() }, params.top_level)?;
         top.attach_by_id(InstanceGeometry::owning(&device, static_scene, &Affine3A::IDENTITY)?, STATIC_SLOT)?;
+        let mut resting = Scene::new(&device, SceneFlags::default(), params.top_level)?;
+        resting.commit()?;
         Ok(Self {
             device,
             params,
             prototypes: Vec::new(),
             top,
+            resting,
+            resting_count: 0,
             instances: Vec::new(),
             free_instances: Vec::new(),
             static_triangles: Vec::new(),
@@ -107,9 +123,34 @@ impl EmbreeAccel {
         &self.device
     }
 
+    /// The scene holding the static scene's instance: the resting scene while it holds
+    /// instances, else the top level.
+    fn static_holder(&mut self) -> &mut Scene {
+        if self.resting_count > 0 {
+            &mut self.resting
+        } else {
+            &mut self.top
+        }
+    }
+
     fn static_scene(&mut self) -> Result<&mut Scene, AccelError> {
-        let inst = self.top.instance_mut(STATIC_SLOT)?;
+        let inst = self.static_holder().instance_mut(STATIC_SLOT)?;
         Ok(inst.child_mut().expect("the static slot owns its scene"))
+    }
+
+    /// The scene holding instance `id`.
+    fn holder(&mut self, id: InstanceId) -> Result<&mut Scene, AccelError> {
+        Ok(if self.slot(id)?.resting { &mut self.resting } else { &mut self.top })
+    }
+
+    /// Moves the static scene's instance into the resting scene (`true`) or back to the top
+    /// level.
+    fn move_static(&mut self, to_resting: bool) -> Result<(), AccelError> {
+        let (from, to) =
+            if to_resting { (&mut self.top, &mut self.resting) } else { (&mut self.resting, &mut self.top) };
+        let geometry = from.detach(STATIC_SLOT)?;
+        to.attach_by_id(geometry, STATIC_SLOT)?;
+        Ok(())
     }
 
     fn triangle_geometry(
@@ -195,38 +236,71 @@ impl Accelerator for EmbreeAccel {
         if id as usize == self.instances.len() {
             self.instances.push(None);
         }
-        self.instances[id as usize] = Some(InstanceSlot { normal_matrix });
+        self.instances[id as usize] = Some(InstanceSlot { normal_matrix, resting: false });
         Ok(InstanceId(id))
     }
 
     fn set_instance_transform(&mut self, id: InstanceId, transform: Affine3A) -> Result<(), AccelError> {
-        self.slot(id)?;
         let normal_matrix = checked_transform(id.0, &transform)?;
-        self.top.instance_mut(id.0 + 1)?.set_transform(&transform)?;
-        self.instances[id.0 as usize] = Some(InstanceSlot { normal_matrix });
+        self.holder(id)?.instance_mut(id.0 + 1)?.set_transform(&transform)?;
+        if let Some(slot) = self.instances[id.0 as usize].as_mut() {
+            slot.normal_matrix = normal_matrix;
+        }
         Ok(())
     }
 
     fn remove_instance(&mut self, id: InstanceId) -> Result<(), AccelError> {
-        self.slot(id)?;
+        if self.slot(id)?.resting {
+            self.set_instance_resting(id, false)?;
+        }
         self.top.detach(id.0 + 1)?;
         self.instances[id.0 as usize] = None;
         self.free_instances.push(id.0);
         Ok(())
     }
 
+    fn set_instance_resting(&mut self, id: InstanceId, resting: bool) -> Result<(), AccelError> {
+        if self.slot(id)?.resting == resting {
+            return Ok(());
+        }
+        if resting && self.resting_count == 0 {
+            self.move_static(true)?;
+        }
+        let (from, to) =
+            if resting { (&mut self.top, &mut self.resting) } else { (&mut self.resting, &mut self.top) };
+        let geometry = from.detach(id.0 + 1)?;
+        to.attach_by_id(geometry, id.0 + 1)?;
+        if let Some(slot) = self.instances[id.0 as usize].as_mut() {
+            slot.resting = resting;
+        }
+        if resting {
+            self.resting_count += 1;
+        } else {
+            self.resting_count -= 1;
+            if self.resting_count == 0 {
+                self.move_static(false)?;
+            }
+        }
+        Ok(())
+    }
+
     fn commit(&mut self) -> Result<CommitReport, AccelError> {
+        let resting = self.commit_resting()?;
         self.top.commit()?;
         let mut report = std::mem::take(&mut self.pending);
-        report.instances = self.top.geometry_count() - 1;
+        report.instances = self.instances.iter().flatten().filter(|s| !s.resting).count();
+        report.resting_rebuilt |= resting.resting_rebuilt;
+        report.resting_instances = self.resting_count;
         Ok(report)
     }
 
     fn commit_static(&mut self) -> Result<CommitReport, AccelError> {
-        // Committing the owned child scene now leaves the top level dirty (the instance
-        // changed), so nothing is visible before `commit`; the report waits for it too.
-        self.top.instance_mut(STATIC_SLOT)?.commit_child()?;
-        Ok(CommitReport::default())
+        // Committing the owned child scene now leaves its holder dirty (the instance changed),
+        // so nothing is visible before `commit`; the report waits for it too.
+        self.static_holder().instance_mut(STATIC_SLOT)?.commit_child()?;
+        let report = self.commit_resting()?;
+        self.pending.resting_rebuilt |= report.resting_rebuilt;
+        Ok(report)
     }
 
     /// Removal is a detach: the two-level builder keeps every other mesh's BVH and rebuilds
@@ -236,7 +310,7 @@ impl Accelerator for EmbreeAccel {
     }
 
     fn query(&self) -> Result<&dyn SceneQuery, AccelError> {
-        if self.top.is_dirty() {
+        if self.top.is_dirty() || self.resting.is_dirty() {
             Err(AccelError::NotCommitted)
         } else {
             Ok(self)
@@ -245,6 +319,29 @@ impl Accelerator for EmbreeAccel {
 }
 
 impl EmbreeAccel {
+    /// Rebuilds the resting scene if its set changed (the static scene's instance in it
+    /// committed first).
+    fn commit_resting(&mut self) -> Result<CommitReport, AccelError> {
+        if !self.resting.is_dirty() {
+            return Ok(CommitReport { resting_instances: self.resting_count, ..CommitReport::default() });
+        }
+        self.resting.commit()?;
+        Ok(CommitReport {
+            resting_rebuilt: true,
+            resting_instances: self.resting_count,
+            ..CommitReport::default()
+        })
+    }
+
+    /// The resting scene, when it holds instances (rays then trace it and the top level).
+    fn resting_view(&self) -> Option<super::SceneView<'_>> {
+        if self.resting_count == 0 {
+            None
+        } else {
+            self.resting.view()
+        }
+    }
+
     fn to_hit(&self, h: super::EmbreeHit) -> Hit {
         let ng = Vec3::from_array(h.ng);
         let (object, ng) = match h.inst_id {
@@ -260,25 +357,96 @@ impl EmbreeAccel {
 }
 
 impl SceneQuery for EmbreeAccel {
+    /// With a resting scene: its closest hit, then the top level's awake bodies up to it.
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
-        let view = self.top.view()?;
-        view.intersect1(ray.origin.to_array(), ray.dir.to_array(), ray.t_min, ray.t_max)
-            .map(|h| self.to_hit(h))
+        let top = self.top.view()?;
+        let (o, d) = (ray.origin.to_array(), ray.dir.to_array());
+        let Some(resting) = self.resting_view() else {
+            return top.intersect1(o, d, ray.t_min, ray.t_max).map(|h| self.to_hit(h));
+        };
+        let first = resting.intersect1(o, d, ray.t_min, ray.t_max);
+        let awake = match self.awake_in_top() {
+            true => top.intersect1(o, d, ray.t_min, first.map_or(ray.t_max, |h| h.t)),
+            false => None,
+        };
+        awake.or(first).map(|h| self.to_hit(h))
     }
 
     fn intersect_p(&self, ray: &Ray) -> bool {
-        self.top.view().is_some_and(|view| {
-            view.occluded1(ray.origin.to_array(), ray.dir.to_array(), ray.t_min, ray.t_max)
-        })
+        let (o, d) = (ray.origin.to_array(), ray.dir.to_array());
+        let Some(top) = self.top.view() else { return false };
+        match self.resting_view() {
+            None => top.occluded1(o, d, ray.t_min, ray.t_max),
+            Some(resting) => {
+                resting.occluded1(o, d, ray.t_min, ray.t_max)
+                    || (self.awake_in_top() && top.occluded1(o, d, ray.t_min, ray.t_max))
+            }
+        }
     }
 
-    /// Chunks of up to 16 rays, each as one packet of the smallest width that holds it.
+    /// Chunks of up to 16 rays, each as one packet of the smallest width that holds it; with a
+    /// resting scene, its packet first, then the top level's up to each lane's hit.
     fn intersect_packet(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
         assert_eq!(rays.len(), hits.len(), "one hit slot per ray");
-        let Some(view) = self.top.view() else {
+        let Some(top) = self.top.view() else {
             hits.fill(None);
             return;
         };
+        let Some(resting) = self.resting_view() else {
+            self.intersect_chunks(top, rays, hits);
+            return;
+        };
+        self.intersect_chunks(resting, rays, hits);
+        if !self.awake_in_top() {
+            return;
+        }
+        for (rays, hits) in rays.chunks(16).zip(hits.chunks_mut(16)) {
+            let mut cut = [Ray::new(glam::Vec3::ZERO, glam::Vec3::Z); 16];
+            for ((c, r), h) in cut.iter_mut().zip(rays).zip(hits.iter()) {
+                *c = Ray { t_max: h.map_or(r.t_max, |h| h.t), ..*r };
+            }
+            let mut awake = [None; 16];
+            let n = rays.len();
+            self.intersect_chunks(top, &cut[..n], &mut awake[..n]);
+            for (h, a) in hits.iter_mut().zip(awake) {
+                if a.is_some() {
+                    *h = a;
+                }
+            }
+        }
+    }
+
+    fn intersect_p_packet(&self, rays: &[Ray], occluded: &mut [bool]) {
+        assert_eq!(rays.len(), occluded.len(), "one result slot per ray");
+        let Some(top) = self.top.view() else {
+            occluded.fill(false);
+            return;
+        };
+        match self.resting_view() {
+            None => occluded_chunks(top, rays, occluded),
+            Some(resting) => {
+                occluded_chunks(resting, rays, occluded);
+                if self.awake_in_top() {
+                    let mut awake = vec![false; rays.len()];
+                    occluded_chunks(top, rays, &mut awake);
+                    for (o, a) in occluded.iter_mut().zip(awake) {
+                        *o |= a;
+                    }
+                }
+            }
+        }
+    }
+}
+
+impl EmbreeAccel {
+    /// Whether the top level holds awake bodies while the resting scene is in use (an empty
+    /// top level need not be traced).
+    fn awake_in_top(&self) -> bool {
+        self.top.geometry_count() > 0
+    }
+
+    /// Closest hits of `rays` in `view`, in packets of up to 16.
+    fn intersect_chunks(&self, view: super::SceneView<'_>, rays: &[Ray], hits: &mut [Option<Hit>]) {
         // Closest-hit packets are camera rays of neighbouring pixels: the COHERENT hint measured
         // equal or faster than INCOHERENT (monastery, 4x2 tiles: 1.3-1.4x over single rays
         // either way; default scene: 2.4-3.4x against 1.6x).
@@ -296,23 +464,19 @@ impl SceneQuery for EmbreeAccel {
             }
         }
     }
+}
 
-    fn intersect_p_packet(&self, rays: &[Ray], occluded: &mut [bool]) {
-        assert_eq!(rays.len(), occluded.len(), "one result slot per ray");
-        let Some(view) = self.top.view() else {
-            occluded.fill(false);
-            return;
-        };
-        // Shadow rays towards the sun: COHERENT measured slower than INCOHERENT on the
-        // monastery (0.83x against 1.1x of single rays, 4x2 tiles), so Embree's default.
-        let c = Coherence::Incoherent;
-        for (rays, out) in rays.chunks(16).zip(occluded.chunks_mut(16)) {
-            let n = rays.len();
-            match n {
-                0..=4 => out.copy_from_slice(&view.occluded4(&lanes(rays), c)[..n]),
-                5..=8 => out.copy_from_slice(&view.occluded8(&lanes(rays), c)[..n]),
-                _ => out.copy_from_slice(&view.occluded16(&lanes(rays), c)[..n]),
-            }
+/// Occlusion of `rays` in `view`, in packets of up to 16.
+fn occluded_chunks(view: super::SceneView<'_>, rays: &[Ray], occluded: &mut [bool]) {
+    // Shadow rays towards the sun: COHERENT measured slower than INCOHERENT on the monastery
+    // (0.83x against 1.1x of single rays, 4x2 tiles), so Embree's default.
+    let c = Coherence::Incoherent;
+    for (rays, out) in rays.chunks(16).zip(occluded.chunks_mut(16)) {
+        let n = rays.len();
+        match n {
+            0..=4 => out.copy_from_slice(&view.occluded4(&lanes(rays), c)[..n]),
+            5..=8 => out.copy_from_slice(&view.occluded8(&lanes(rays), c)[..n]),
+            _ => out.copy_from_slice(&view.occluded16(&lanes(rays), c)[..n]),
         }
     }
 }

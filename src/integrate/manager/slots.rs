@@ -1,0 +1,134 @@
+//! The scene manager's bookkeeping: where each body is, which islands sleep, and who owns
+//! each static mesh and instance (every hit looks here).
+
+use std::collections::BTreeMap;
+use std::sync::Arc;
+
+use glam::Mat3;
+
+use crate::accel::{InstanceId, StaticId, StaticSceneSnapshot};
+use crate::integrate::baked::BakedIsland;
+use crate::physics::{BodyId, BodyPose, IslandId};
+
+/// A body's place in the accelerator.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) enum Placement {
+    Absent,
+    /// In the per-frame top level.
+    Instance {
+        id: InstanceId,
+        pose: BodyPose,
+    },
+    /// Baked into the static scene with its island.
+    Baked(IslandId),
+    /// An instance in the resting scene with its island.
+    Resting {
+        island: IslandId,
+        id: InstanceId,
+        pose: BodyPose,
+    },
+}
+
+pub(super) struct BodySlot {
+    pub prototype: u32,
+    pub placement: Placement,
+}
+
+pub(super) struct SleepingIsland {
+    pub bodies: Vec<BodyId>,
+    pub poses: Vec<BodyPose>,
+    /// Rendered-frame counter when it fell asleep.
+    pub slept_at: u32,
+    /// Whether a decision about it was logged.
+    pub decided: bool,
+}
+
+/// A baked island in the static scene.
+#[derive(Clone)]
+pub(super) struct Integrated {
+    pub id: StaticId,
+    pub baked: Arc<BakedIsland>,
+}
+
+/// What a static mesh belongs to.
+#[derive(Clone)]
+pub(super) enum StaticOwner {
+    Environment(u32),
+    Island(Arc<BakedIsland>),
+}
+
+/// Owners by static id: a dense table, because every hit on static geometry looks here.
+#[derive(Default)]
+pub(super) struct StaticOwners(Vec<Option<StaticOwner>>);
+
+impl StaticOwners {
+    pub fn insert(&mut self, id: StaticId, owner: StaticOwner) {
+        let i = id.0 as usize;
+        if self.0.len() <= i {
+            self.0.resize(i + 1, None);
+        }
+        self.0[i] = Some(owner);
+    }
+
+    pub fn remove(&mut self, id: StaticId) {
+        if let Some(slot) = self.0.get_mut(id.0 as usize) {
+            *slot = None;
+        }
+    }
+
+    pub fn get(&self, id: StaticId) -> Option<&StaticOwner> {
+        self.0.get(id.0 as usize)?.as_ref()
+    }
+
+    pub fn retain_environment(&mut self) {
+        for slot in &mut self.0 {
+            if matches!(slot, Some(StaticOwner::Island(_))) {
+                *slot = None;
+            }
+        }
+    }
+}
+
+/// Who an instance is: its body, prototype, normal matrix, and whether it rests (integrated
+/// into the resting scene).
+#[derive(Clone, Copy)]
+pub(super) struct InstanceOwner {
+    pub body: BodyId,
+    pub prototype: u32,
+    pub normal_matrix: Mat3,
+    pub resting: bool,
+}
+
+/// Owners by instance id (dense, like [`StaticOwners`]).
+#[derive(Default)]
+pub(super) struct InstanceOwners(Vec<Option<InstanceOwner>>);
+
+impl InstanceOwners {
+    pub fn set(&mut self, id: InstanceId, owner: Option<InstanceOwner>) {
+        let i = id.0 as usize;
+        if self.0.len() <= i {
+            self.0.resize(i + 1, None);
+        }
+        self.0[i] = owner;
+    }
+
+    pub fn get(&self, id: InstanceId) -> Option<&InstanceOwner> {
+        self.0.get(id.0 as usize)?.as_ref()
+    }
+
+    pub fn get_mut(&mut self, id: InstanceId) -> Option<&mut InstanceOwner> {
+        self.0.get_mut(id.0 as usize)?.as_mut()
+    }
+
+    /// Instances in the per-frame top level.
+    pub fn awake(&self) -> usize {
+        self.0.iter().flatten().filter(|o| !o.resting).count()
+    }
+}
+
+/// A cache entry: a saved static scene and the static ids its islands had in it.
+#[derive(Clone)]
+pub(super) struct CachedScene {
+    pub snapshot: Option<StaticSceneSnapshot>,
+    pub ids: BTreeMap<IslandId, StaticId>,
+}

@@ -1,0 +1,58 @@
+//! Stage 3, update: instances in the top level follow the awake bodies.
+
+use super::slots::{InstanceOwner, Placement};
+use super::{FrameStats, SceneManager};
+use crate::accel::AccelError;
+use crate::integrate::object_map::normal_matrix;
+use crate::physics::{BodyId, ReplayFrame};
+
+impl SceneManager {
+    /// Instances follow the frame: added, moved or removed. Returns whether any changed.
+    pub(super) fn update(
+        &mut self,
+        frame: &ReplayFrame<'_>,
+        stats: &mut FrameStats,
+    ) -> Result<bool, AccelError> {
+        let mut changed = false;
+        for (b, slot) in self.bodies.iter_mut().enumerate() {
+            let present = frame.is_present(b);
+            let (pose, prototype) = (frame.poses[b], slot.prototype);
+            let owner = |resting| InstanceOwner {
+                body: BodyId(b as u32),
+                prototype,
+                normal_matrix: normal_matrix(&pose.to_affine()),
+                resting,
+            };
+            match slot.placement {
+                Placement::Baked(island) if self.integrated.contains_key(&island) => {}
+                Placement::Resting { island, .. } if self.resting.contains_key(&island) => {}
+                Placement::Instance { id, pose: old } if present => {
+                    if old != pose {
+                        self.accel.set_instance_transform(id, pose.to_affine())?;
+                        self.instance_owner.set(id, Some(owner(false)));
+                        slot.placement = Placement::Instance { id, pose };
+                        stats.instances_moved += 1;
+                        changed = true;
+                    }
+                }
+                Placement::Instance { id, .. } | Placement::Resting { id, .. } => {
+                    self.accel.remove_instance(id)?;
+                    self.instance_owner.set(id, None);
+                    slot.placement = Placement::Absent;
+                    stats.instances_removed += 1;
+                    changed = true;
+                }
+                Placement::Absent | Placement::Baked(_) if present => {
+                    let id =
+                        self.accel.add_instance(self.prototype_ids[prototype as usize], pose.to_affine())?;
+                    self.instance_owner.set(id, Some(owner(false)));
+                    slot.placement = Placement::Instance { id, pose };
+                    stats.instances_added += 1;
+                    changed = true;
+                }
+                Placement::Absent | Placement::Baked(_) => slot.placement = Placement::Absent,
+            }
+        }
+        Ok(changed)
+    }
+}
