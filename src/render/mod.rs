@@ -20,7 +20,9 @@ pub(crate) use bsdf::sample_cone;
 pub use bsdf::{sample_cosine, Bsdf, BsdfSample};
 pub use camera::PinholeCamera;
 pub use film::{write_aov_png_atomic, write_exr_atomic, write_png_atomic, Film};
-pub use integrator::{AmbientOcclusion, DirectLighting, Integrator, PathTracer};
+pub use integrator::{
+    AmbientOcclusion, DirectLighting, FrameContext, FrameIntegrator, Integrator, PathTracer,
+};
 pub use render_scene::{RenderScene, SurfaceHit, SurfaceKind};
 pub use sampler::PixelSampler;
 pub use sequence::{

@@ -4,7 +4,7 @@ use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
 use super::integrator::dims;
-use super::{Film, Integrator, PinholeCamera, PixelSampler, RenderError, RenderScene};
+use super::{Film, FrameContext, Integrator, PinholeCamera, PixelSampler, RenderError, RenderScene};
 use crate::accel::SceneQuery;
 use crate::geometry::Ray;
 
@@ -91,6 +91,7 @@ pub fn render_frame(
     let start = Instant::now();
     let (w, h) = (settings.width, settings.height);
     let camera = PinholeCamera::new(&scene.camera, w, h);
+    let integrator = integrator.bind(FrameContext { scene, query });
     let tiles_x = w.div_ceil(TILE);
     let tiles: Vec<(u32, u32)> =
         (0..tiles_x * h.div_ceil(TILE)).map(|t| ((t % tiles_x) * TILE, (t / tiles_x) * TILE)).collect();
@@ -124,7 +125,7 @@ pub fn render_frame(
                         query.intersect_packet(&camera_rays[..n], &mut hits[..n]);
                         for ((ray, hit), (x, y, sampler)) in camera_rays.iter().zip(hits).zip(block) {
                             sums[((y - y0) * tw + (x - x0)) as usize] +=
-                                integrator.li_from_hit(scene, query, ray, hit, sampler, i, &mut rays);
+                                integrator.li_from_hit(ray, hit, sampler, i, &mut rays);
                         }
                     }
                 }
