@@ -1,10 +1,16 @@
+//! One frame from camera to film: camera rays per pixel sample (tent filter), 16x16 tiles
+//! over rayon, camera rays of each pixel block traced as one packet, and the integrator bound
+//! to the frame finishing each sample.
+
 use std::time::Instant;
 
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
 use super::integrator::dims;
-use super::{Film, FrameContext, Integrator, PinholeCamera, PixelSampler, RenderError, RenderScene};
+use super::{
+    Film, FrameContext, FrameIntegrator, Integrator, PinholeCamera, PixelSampler, RenderError, RenderScene,
+};
 use crate::accel::SceneQuery;
 use crate::geometry::Ray;
 
@@ -90,47 +96,19 @@ pub fn render_frame(
     settings.validate()?;
     let start = Instant::now();
     let (w, h) = (settings.width, settings.height);
-    let camera = PinholeCamera::new(&scene.camera, w, h);
-    let integrator = integrator.bind(FrameContext { scene, query });
+    let renderer = TileRenderer {
+        camera: PinholeCamera::new(&scene.camera, w, h),
+        query,
+        integrator: &*integrator.bind(FrameContext { scene, query }),
+        settings,
+    };
     let tiles_x = w.div_ceil(TILE);
     let tiles: Vec<(u32, u32)> =
         (0..tiles_x * h.div_ceil(TILE)).map(|t| ((t % tiles_x) * TILE, (t / tiles_x) * TILE)).collect();
     let rendered: Vec<(u32, u32, Vec<Vec3>, u64)> = tiles
         .par_iter()
         .map(|&(x0, y0)| {
-            let (x1, y1) = ((x0 + TILE).min(w), (y0 + TILE).min(h));
-            let tw = x1 - x0;
-            let mut rays = 0u64;
-            // Per pixel, samples are summed in index order whatever the blocking, so the image
-            // is the same as tracing pixel by pixel.
-            let mut sums = vec![Vec3::ZERO; (tw * (y1 - y0)) as usize];
-            for by in (y0..y1).step_by(BLOCK.1 as usize) {
-                for bx in (x0..x1).step_by(BLOCK.0 as usize) {
-                    // A fixed array, not a Vec: one block per 8 pixels is on the hot path.
-                    let mut cells = [(0, 0, PixelSampler::new(0, 0, 0)); BLOCK_PIXELS];
-                    let mut n = 0;
-                    for y in by..(by + BLOCK.1).min(y1) {
-                        for x in bx..(bx + BLOCK.0).min(x1) {
-                            cells[n] = (x, y, PixelSampler::new(x, y, settings.frame));
-                            n += 1;
-                        }
-                    }
-                    let block = &cells[..n];
-                    let mut camera_rays = [Ray::new(Vec3::ZERO, Vec3::Z); BLOCK_PIXELS];
-                    let mut hits = [None; BLOCK_PIXELS];
-                    for i in 0..settings.spp {
-                        for (ray, (x, y, sampler)) in camera_rays.iter_mut().zip(block) {
-                            *ray = camera_ray(&camera, settings.spp, *x, *y, sampler, i);
-                        }
-                        query.intersect_packet(&camera_rays[..n], &mut hits[..n]);
-                        for ((ray, hit), (x, y, sampler)) in camera_rays.iter().zip(hits).zip(block) {
-                            sums[((y - y0) * tw + (x - x0)) as usize] +=
-                                integrator.li_from_hit(ray, hit, sampler, i, &mut rays);
-                        }
-                    }
-                }
-            }
-            let pixels = sums.into_iter().map(|sum| sum / settings.spp as f32).collect();
+            let (pixels, rays) = renderer.render(x0, y0);
             (x0, y0, pixels, rays)
         })
         .collect();
@@ -145,4 +123,55 @@ pub fn render_frame(
         rays += tile_rays;
     }
     Ok((film, RenderStats { rays, seconds: start.elapsed().as_secs_f64() }))
+}
+
+/// What every tile of a frame is rendered with.
+struct TileRenderer<'a> {
+    camera: PinholeCamera,
+    /// Traces the camera-ray packets; the integrator traces the rest.
+    query: &'a dyn SceneQuery,
+    integrator: &'a dyn FrameIntegrator,
+    settings: &'a RenderSettings,
+}
+
+impl TileRenderer<'_> {
+    /// The pixels of the tile whose top-left pixel is `(x0, y0)`, row by row, and the rays
+    /// traced for them.
+    fn render(&self, x0: u32, y0: u32) -> (Vec<Vec3>, u64) {
+        let (w, h, spp) = (self.settings.width, self.settings.height, self.settings.spp);
+        let (x1, y1) = ((x0 + TILE).min(w), (y0 + TILE).min(h));
+        let tw = x1 - x0;
+        let mut rays = 0u64;
+        // Per pixel, samples are summed in index order whatever the blocking, so the image is
+        // the same as tracing pixel by pixel.
+        let mut sums = vec![Vec3::ZERO; (tw * (y1 - y0)) as usize];
+        for by in (y0..y1).step_by(BLOCK.1 as usize) {
+            for bx in (x0..x1).step_by(BLOCK.0 as usize) {
+                // A fixed array, not a Vec: one block per 8 pixels is on the hot path.
+                let mut cells = [(0, 0, PixelSampler::new(0, 0, 0)); BLOCK_PIXELS];
+                let mut n = 0;
+                for y in by..(by + BLOCK.1).min(y1) {
+                    for x in bx..(bx + BLOCK.0).min(x1) {
+                        cells[n] = (x, y, PixelSampler::new(x, y, self.settings.frame));
+                        n += 1;
+                    }
+                }
+                let block = &cells[..n];
+                let mut camera_rays = [Ray::new(Vec3::ZERO, Vec3::Z); BLOCK_PIXELS];
+                let mut hits = [None; BLOCK_PIXELS];
+                for i in 0..spp {
+                    for (ray, (x, y, sampler)) in camera_rays.iter_mut().zip(block) {
+                        *ray = camera_ray(&self.camera, spp, *x, *y, sampler, i);
+                    }
+                    self.query.intersect_packet(&camera_rays[..n], &mut hits[..n]);
+                    for ((ray, hit), (x, y, sampler)) in camera_rays.iter().zip(hits).zip(block) {
+                        sums[((y - y0) * tw + (x - x0)) as usize] +=
+                            self.integrator.li_from_hit(ray, hit, sampler, i, &mut rays);
+                    }
+                }
+            }
+        }
+        let pixels = sums.into_iter().map(|sum| sum / spp as f32).collect();
+        (pixels, rays)
+    }
 }
