@@ -70,7 +70,8 @@ impl RenderStats {
 
 /// Sample `i` of pixel `(x, y)`'s camera ray.
 fn camera_ray(camera: &PinholeCamera, spp: u32, x: u32, y: u32, sampler: &PixelSampler, i: u32) -> Ray {
-    // Box reconstruction: samples uniform over the pixel's area.
+    // Tent reconstruction by filter importance sampling (see `tent_offset`); a single sample
+    // goes through the pixel's centre.
     let jitter = if spp == 1 {
         Vec2::splat(0.5)
     } else {
