@@ -24,7 +24,7 @@ pub enum Aov {
 }
 
 impl Aov {
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             Aov::Albedo => "albedo",
             Aov::Normal => "normal",

@@ -44,7 +44,7 @@ pub struct RenderSettings {
 }
 
 impl RenderSettings {
-    pub fn validate(&self) -> Result<(), RenderError> {
+    pub(crate) fn validate(&self) -> Result<(), RenderError> {
         let side_ok = |s: u32| (1..=16384).contains(&s);
         if !side_ok(self.width) || !side_ok(self.height) {
             return Err(RenderError::InvalidSize { width: self.width, height: self.height });
@@ -63,7 +63,7 @@ pub struct RenderStats {
 }
 
 impl RenderStats {
-    pub fn mrays_per_second(&self) -> f64 {
+    pub(crate) fn mrays_per_second(&self) -> f64 {
         self.rays as f64 / self.seconds.max(1e-9) / 1e6
     }
 }
