@@ -4,8 +4,8 @@
 
 use glam::Vec3;
 
-use super::{Integrator, PixelSampler, RenderScene, SurfaceKind};
-use crate::accel::{Hit, SceneQuery};
+use super::{FrameContext, FrameIntegrator, Integrator, PixelSampler, RenderScene, SurfaceKind};
+use crate::accel::Hit;
 use crate::geometry::Ray;
 
 /// What an AOV pass records. Pixels whose camera ray escapes are 0.
@@ -24,7 +24,7 @@ pub enum Aov {
 }
 
 impl Aov {
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             Aov::Albedo => "albedo",
             Aov::Normal => "normal",
@@ -39,10 +39,20 @@ impl Aov {
 pub struct AovIntegrator(pub Aov);
 
 impl Integrator for AovIntegrator {
+    fn bind<'a>(&'a self, frame: FrameContext<'a>) -> Box<dyn FrameIntegrator + 'a> {
+        Box::new(AovFrame { aov: self.0, scene: frame.scene })
+    }
+}
+
+/// [`AovIntegrator`] bound to a frame: it only shades camera-ray hits, so it needs no query.
+struct AovFrame<'a> {
+    aov: Aov,
+    scene: &'a RenderScene<'a>,
+}
+
+impl FrameIntegrator for AovFrame<'_> {
     fn li_from_hit(
         &self,
-        scene: &RenderScene,
-        _query: &dyn SceneQuery,
         ray: &Ray,
         first: Option<Hit>,
         _sampler: &PixelSampler,
@@ -53,8 +63,8 @@ impl Integrator for AovIntegrator {
         let Some(hit) = first else {
             return Vec3::ZERO;
         };
-        let s = scene.surface(ray, &hit);
-        match self.0 {
+        let s = self.scene.surface(ray, &hit);
+        match self.aov {
             Aov::Albedo => s.material.base_color,
             Aov::Normal => s.ns,
             Aov::Depth => Vec3::splat((s.p - ray.origin).length()),

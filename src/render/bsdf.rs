@@ -17,7 +17,7 @@ pub(crate) fn basis(n: Vec3) -> (Vec3, Vec3) {
 }
 
 /// Cosine-weighted direction in the hemisphere around `n`; pdf `cos / pi`.
-pub fn sample_cosine(n: Vec3, u: Vec2) -> Vec3 {
+pub(crate) fn sample_cosine(n: Vec3, u: Vec2) -> Vec3 {
     let r = u.x.sqrt();
     let phi = 2.0 * PI * u.y;
     let (t, b) = basis(n);
@@ -35,7 +35,7 @@ pub(crate) fn sample_cone(axis: Vec3, cos_max: f32, u: Vec2) -> Vec3 {
 
 /// A sampled incident direction.
 #[derive(Clone, Copy, Debug)]
-pub struct BsdfSample {
+pub(crate) struct BsdfSample {
     pub wi: Vec3,
     /// `f * |cos| / pdf`: what the path throughput is multiplied by.
     pub weight: Vec3,
@@ -44,7 +44,7 @@ pub struct BsdfSample {
 
 /// The BSDF at one surface point.
 #[derive(Clone, Copy, Debug)]
-pub struct Bsdf {
+pub(crate) struct Bsdf {
     n: Vec3,
     diffuse: Vec3,
     f0: Vec3,

@@ -64,7 +64,7 @@ impl PinholeCamera {
 
     /// Whether rays leave from a lens of non-zero size (so [`Self::ray_through_lens`] needs
     /// its lens sample).
-    pub fn has_aperture(&self) -> bool {
+    pub(crate) fn has_aperture(&self) -> bool {
         self.lens_u != Vec3::ZERO
     }
 
@@ -78,7 +78,7 @@ impl PinholeCamera {
     /// The ray through image position `(x, y)` leaving the lens at the point `lens` (in
     /// `[0, 1)²`) picks; the pinhole ray when there is no aperture. Every ray through one
     /// image position meets the others on the plane in focus.
-    pub fn ray_through_lens(&self, x: f32, y: f32, lens: Vec2) -> Ray {
+    pub(crate) fn ray_through_lens(&self, x: f32, y: f32, lens: Vec2) -> Ray {
         let pinhole = self.ray(x, y);
         if !self.has_aperture() {
             return pinhole;

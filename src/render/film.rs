@@ -27,12 +27,12 @@ fn srgb_encode(c: f32) -> u8 {
 }
 
 impl Film {
-    pub fn new(width: u32, height: u32) -> Self {
+    pub(crate) fn new(width: u32, height: u32) -> Self {
         Self { width, height, pixels: vec![Vec3::ZERO; width as usize * height as usize] }
     }
 
     /// Tone-mapped, sRGB-encoded 8-bit pixels. Non-finite radiance maps to black.
-    pub fn to_srgb8(&self, exposure: f32) -> Vec<u8> {
+    fn to_srgb8(&self, exposure: f32) -> Vec<u8> {
         self.pixels
             .iter()
             .flat_map(|&p| {
@@ -45,14 +45,14 @@ impl Film {
 }
 
 /// Encodes the film as an 8-bit sRGB PNG and writes it atomically.
-pub fn write_png_atomic(film: &Film, exposure: f32, path: &Path) -> Result<(), RenderError> {
+pub(crate) fn write_png_atomic(film: &Film, exposure: f32, path: &Path) -> Result<(), RenderError> {
     write_rgb8_png_atomic(film.width, film.height, film.to_srgb8(exposure), path)
 }
 
 /// Writes an AOV pass as an 8-bit PNG, atomically, without tone mapping: albedo sRGB-encoded,
 /// normals as `0.5 * n + 0.5`, depth as grey from 0 (at the camera) to 1 (the farthest hit;
 /// rays that hit nothing are white too).
-pub fn write_aov_png_atomic(film: &Film, aov: super::Aov, path: &Path) -> Result<(), RenderError> {
+pub(crate) fn write_aov_png_atomic(film: &Film, aov: super::Aov, path: &Path) -> Result<(), RenderError> {
     let far = film.pixels.iter().map(|p| p.x).filter(|d| d.is_finite()).fold(0.0f32, f32::max).max(1e-6);
     let byte = |c: f32| (c.clamp(0.0, 1.0) * 255.0 + 0.5) as u8;
     let bytes = film
@@ -84,7 +84,7 @@ fn write_rgb8_png_atomic(width: u32, height: u32, bytes: Vec<u8>, path: &Path) -
 }
 
 /// Writes the film's linear radiance as a 32-bit float OpenEXR file, atomically.
-pub fn write_exr_atomic(film: &Film, path: &Path) -> Result<(), RenderError> {
+pub(crate) fn write_exr_atomic(film: &Film, path: &Path) -> Result<(), RenderError> {
     let data: Vec<f32> = film.pixels.iter().flat_map(|p| p.to_array()).collect();
     let img: image::Rgb32FImage =
         ImageBuffer::from_raw(film.width, film.height, data).expect("film holds width * height pixels");

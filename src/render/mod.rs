@@ -15,17 +15,19 @@ mod tiles;
 mod video;
 
 pub use aov::{Aov, AovIntegrator};
-pub(crate) use bsdf::sample_cone;
-pub use bsdf::{sample_cosine, Bsdf, BsdfSample};
+pub(crate) use bsdf::{sample_cone, sample_cosine};
 pub use camera::PinholeCamera;
 pub(crate) use emitters::Emitters;
-pub use film::{write_aov_png_atomic, write_exr_atomic, write_png_atomic, Film};
-pub use integrator::{AmbientOcclusion, DirectLighting, Integrator, PathTracer};
-pub use render_scene::{RenderScene, SurfaceHit, SurfaceKind};
+pub use film::Film;
+pub(crate) use film::{write_aov_png_atomic, write_exr_atomic, write_png_atomic};
+pub use integrator::{
+    AmbientOcclusion, DirectLighting, FrameContext, FrameIntegrator, Integrator, PathTracer,
+};
+pub use render_scene::RenderScene;
+pub(crate) use render_scene::{SurfaceHit, SurfaceKind};
 pub use sampler::PixelSampler;
-pub use texture::sample as sample_texture;
 pub use tiles::{render_frame, RenderSettings, RenderStats};
-pub use video::{encode_video, ffmpeg_available, VideoError, FFMPEG_HINT};
+pub(crate) use video::{encode_video, ffmpeg_available, VideoError};
 
 use std::path::PathBuf;
 

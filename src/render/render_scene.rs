@@ -22,12 +22,11 @@ enum Objects<'a> {
 /// camera and lights, and how to resolve a hit to the mesh, triangle and transform to shade
 /// it with.
 pub struct RenderScene<'a> {
-    pub name: String,
-    pub camera: crate::scene::Camera,
-    pub sun: Sun,
-    pub sky: Sky,
+    pub(crate) camera: crate::scene::Camera,
+    pub(crate) sun: Sun,
+    pub(crate) sky: Sky,
     /// Punctual lights besides the sun.
-    pub lights: Vec<Light>,
+    pub(crate) lights: Vec<Light>,
     /// Emissive triangles, for light sampling.
     pub(crate) emitters: Emitters,
     desc: &'a SceneDescription,
@@ -36,13 +35,11 @@ pub struct RenderScene<'a> {
 
 /// Shading data at a ray hit. Both normals face the side the ray came from.
 #[derive(Clone, Copy, Debug)]
-pub struct SurfaceHit {
+pub(crate) struct SurfaceHit {
     pub p: Vec3,
     pub ng: Vec3,
     pub ns: Vec3,
-    /// Texture coordinates (zero when the mesh has none).
-    pub uv: Vec2,
-    /// The triangle's material with its textures applied at `uv`.
+    /// The triangle's material with its textures applied at the hit's texture coordinates.
     pub material: Material,
     /// Radiance the surface emits (towards either side).
     pub emission: Vec3,
@@ -52,7 +49,7 @@ pub struct SurfaceHit {
 
 /// The kind of object a hit is on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum SurfaceKind {
+pub(crate) enum SurfaceKind {
     Environment,
     Instanced,
     Baked,
@@ -72,7 +69,7 @@ impl<'a> RenderScene<'a> {
     /// A scene whose accelerator someone else fills (the scene manager), resolving hits
     /// through `objects`. The bodies of `desc` are ignored; `bodies` (every body present in
     /// the frame, instanced or baked) place emissive prototypes for light sampling.
-    pub fn with_objects(
+    pub(crate) fn with_objects(
         desc: &'a SceneDescription,
         objects: &'a dyn ObjectMap,
         bodies: &[Body],
@@ -83,7 +80,6 @@ impl<'a> RenderScene<'a> {
 
     fn new(desc: &'a SceneDescription, objects: Objects<'a>, emitters: Emitters) -> Self {
         Self {
-            name: desc.name.clone(),
             camera: desc.camera,
             sun: desc.sun,
             sky: desc.sky,
@@ -144,15 +140,15 @@ impl<'a> RenderScene<'a> {
     /// normal matrix); normal, UV and material are then looked up from the mesh by that local
     /// primitive. Hits on objects the scene does not know (which a correct accelerator never
     /// reports) shade as a neutral grey facet.
-    pub fn surface(&self, ray: &Ray, hit: &Hit) -> SurfaceHit {
+    pub(crate) fn surface(&self, ray: &Ray, hit: &Hit) -> SurfaceHit {
         let p = ray.at(hit.t);
         let ng = if hit.ng.dot(ray.dir) > 0.0 { -hit.ng } else { hit.ng };
         let resolved = self.object(hit).and_then(|obj| self.mesh(obj.mesh).map(|m| (obj, m)));
         let Some((obj, (mesh, material))) = resolved else {
             debug_assert!(false, "hit on unknown object {:?}", hit.object);
             let material = Material::diffuse(Vec3::splat(0.5));
-            let (uv, emission, kind) = (Vec2::ZERO, Vec3::ZERO, SurfaceKind::Environment);
-            return SurfaceHit { p, ng, ns: ng, uv, material, emission, kind };
+            let (emission, kind) = (Vec3::ZERO, SurfaceKind::Environment);
+            return SurfaceHit { p, ng, ns: ng, material, emission, kind };
         };
         let prim = obj.prim as usize;
         let tri = mesh.indices.get(prim).copied();
@@ -191,7 +187,7 @@ impl<'a> RenderScene<'a> {
             (Some(_), false) => SurfaceKind::Instanced,
             (Some(_), true) => SurfaceKind::Baked,
         };
-        SurfaceHit { p, ng, ns, uv, material, emission, kind }
+        SurfaceHit { p, ng, ns, material, emission, kind }
     }
 
     /// Radiance emitted by `material` at `uv` (its emissive factor times its texture).

@@ -28,7 +28,7 @@ fn unit(bits: u32) -> f32 {
 }
 
 impl PixelSampler {
-    pub fn new(x: u32, y: u32, frame: u32) -> Self {
+    pub(crate) fn new(x: u32, y: u32, frame: u32) -> Self {
         Self { seed: hash(x ^ hash(y ^ hash(frame.wrapping_add(0x9e37_79b9)))) }
     }
 

@@ -43,7 +43,7 @@ fn wrap(i: i64, size: u32, mode: Wrap) -> usize {
 /// The texture at `uv` (glTF convention: origin at the image's top-left), bilinearly
 /// filtered, as linear RGBA; the RGB channels are decoded from sRGB when `srgb`. Alpha is
 /// always linear.
-pub fn sample(texture: &Texture, uv: Vec2, srgb: bool) -> Vec4 {
+pub(crate) fn sample(texture: &Texture, uv: Vec2, srgb: bool) -> Vec4 {
     if !texture.is_consistent() {
         debug_assert!(false, "inconsistent texture {}", texture.name);
         return Vec4::new(1.0, 0.0, 1.0, 1.0);

@@ -1,10 +1,16 @@
+//! One frame from camera to film: camera rays per pixel sample (tent filter), 16x16 tiles
+//! over rayon, camera rays of each pixel block traced as one packet, and the integrator bound
+//! to the frame finishing each sample.
+
 use std::time::Instant;
 
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
 use super::integrator::dims;
-use super::{Film, Integrator, PinholeCamera, PixelSampler, RenderError, RenderScene};
+use super::{
+    Film, FrameContext, FrameIntegrator, Integrator, PinholeCamera, PixelSampler, RenderError, RenderScene,
+};
 use crate::accel::SceneQuery;
 use crate::geometry::Ray;
 
@@ -38,7 +44,7 @@ pub struct RenderSettings {
 }
 
 impl RenderSettings {
-    pub fn validate(&self) -> Result<(), RenderError> {
+    pub(crate) fn validate(&self) -> Result<(), RenderError> {
         let side_ok = |s: u32| (1..=16384).contains(&s);
         if !side_ok(self.width) || !side_ok(self.height) {
             return Err(RenderError::InvalidSize { width: self.width, height: self.height });
@@ -57,14 +63,15 @@ pub struct RenderStats {
 }
 
 impl RenderStats {
-    pub fn mrays_per_second(&self) -> f64 {
+    pub(crate) fn mrays_per_second(&self) -> f64 {
         self.rays as f64 / self.seconds.max(1e-9) / 1e6
     }
 }
 
 /// Sample `i` of pixel `(x, y)`'s camera ray.
 fn camera_ray(camera: &PinholeCamera, spp: u32, x: u32, y: u32, sampler: &PixelSampler, i: u32) -> Ray {
-    // Box reconstruction: samples uniform over the pixel's area.
+    // Tent reconstruction by filter importance sampling (see `tent_offset`); a single sample
+    // goes through the pixel's centre.
     let jitter = if spp == 1 {
         Vec2::splat(0.5)
     } else {
@@ -90,46 +97,19 @@ pub fn render_frame(
     settings.validate()?;
     let start = Instant::now();
     let (w, h) = (settings.width, settings.height);
-    let camera = PinholeCamera::new(&scene.camera, w, h);
+    let renderer = TileRenderer {
+        camera: PinholeCamera::new(&scene.camera, w, h),
+        query,
+        integrator: &*integrator.bind(FrameContext { scene, query }),
+        settings,
+    };
     let tiles_x = w.div_ceil(TILE);
     let tiles: Vec<(u32, u32)> =
         (0..tiles_x * h.div_ceil(TILE)).map(|t| ((t % tiles_x) * TILE, (t / tiles_x) * TILE)).collect();
     let rendered: Vec<(u32, u32, Vec<Vec3>, u64)> = tiles
         .par_iter()
         .map(|&(x0, y0)| {
-            let (x1, y1) = ((x0 + TILE).min(w), (y0 + TILE).min(h));
-            let tw = x1 - x0;
-            let mut rays = 0u64;
-            // Per pixel, samples are summed in index order whatever the blocking, so the image
-            // is the same as tracing pixel by pixel.
-            let mut sums = vec![Vec3::ZERO; (tw * (y1 - y0)) as usize];
-            for by in (y0..y1).step_by(BLOCK.1 as usize) {
-                for bx in (x0..x1).step_by(BLOCK.0 as usize) {
-                    // A fixed array, not a Vec: one block per 8 pixels is on the hot path.
-                    let mut cells = [(0, 0, PixelSampler::new(0, 0, 0)); BLOCK_PIXELS];
-                    let mut n = 0;
-                    for y in by..(by + BLOCK.1).min(y1) {
-                        for x in bx..(bx + BLOCK.0).min(x1) {
-                            cells[n] = (x, y, PixelSampler::new(x, y, settings.frame));
-                            n += 1;
-                        }
-                    }
-                    let block = &cells[..n];
-                    let mut camera_rays = [Ray::new(Vec3::ZERO, Vec3::Z); BLOCK_PIXELS];
-                    let mut hits = [None; BLOCK_PIXELS];
-                    for i in 0..settings.spp {
-                        for (ray, (x, y, sampler)) in camera_rays.iter_mut().zip(block) {
-                            *ray = camera_ray(&camera, settings.spp, *x, *y, sampler, i);
-                        }
-                        query.intersect_packet(&camera_rays[..n], &mut hits[..n]);
-                        for ((ray, hit), (x, y, sampler)) in camera_rays.iter().zip(hits).zip(block) {
-                            sums[((y - y0) * tw + (x - x0)) as usize] +=
-                                integrator.li_from_hit(scene, query, ray, hit, sampler, i, &mut rays);
-                        }
-                    }
-                }
-            }
-            let pixels = sums.into_iter().map(|sum| sum / settings.spp as f32).collect();
+            let (pixels, rays) = renderer.render(x0, y0);
             (x0, y0, pixels, rays)
         })
         .collect();
@@ -144,4 +124,55 @@ pub fn render_frame(
         rays += tile_rays;
     }
     Ok((film, RenderStats { rays, seconds: start.elapsed().as_secs_f64() }))
+}
+
+/// What every tile of a frame is rendered with.
+struct TileRenderer<'a> {
+    camera: PinholeCamera,
+    /// Traces the camera-ray packets; the integrator traces the rest.
+    query: &'a dyn SceneQuery,
+    integrator: &'a dyn FrameIntegrator,
+    settings: &'a RenderSettings,
+}
+
+impl TileRenderer<'_> {
+    /// The pixels of the tile whose top-left pixel is `(x0, y0)`, row by row, and the rays
+    /// traced for them.
+    fn render(&self, x0: u32, y0: u32) -> (Vec<Vec3>, u64) {
+        let (w, h, spp) = (self.settings.width, self.settings.height, self.settings.spp);
+        let (x1, y1) = ((x0 + TILE).min(w), (y0 + TILE).min(h));
+        let tw = x1 - x0;
+        let mut rays = 0u64;
+        // Per pixel, samples are summed in index order whatever the blocking, so the image is
+        // the same as tracing pixel by pixel.
+        let mut sums = vec![Vec3::ZERO; (tw * (y1 - y0)) as usize];
+        for by in (y0..y1).step_by(BLOCK.1 as usize) {
+            for bx in (x0..x1).step_by(BLOCK.0 as usize) {
+                // A fixed array, not a Vec: one block per 8 pixels is on the hot path.
+                let mut cells = [(0, 0, PixelSampler::new(0, 0, 0)); BLOCK_PIXELS];
+                let mut n = 0;
+                for y in by..(by + BLOCK.1).min(y1) {
+                    for x in bx..(bx + BLOCK.0).min(x1) {
+                        cells[n] = (x, y, PixelSampler::new(x, y, self.settings.frame));
+                        n += 1;
+                    }
+                }
+                let block = &cells[..n];
+                let mut camera_rays = [Ray::new(Vec3::ZERO, Vec3::Z); BLOCK_PIXELS];
+                let mut hits = [None; BLOCK_PIXELS];
+                for i in 0..spp {
+                    for (ray, (x, y, sampler)) in camera_rays.iter_mut().zip(block) {
+                        *ray = camera_ray(&self.camera, spp, *x, *y, sampler, i);
+                    }
+                    self.query.intersect_packet(&camera_rays[..n], &mut hits[..n]);
+                    for ((ray, hit), (x, y, sampler)) in camera_rays.iter().zip(hits).zip(block) {
+                        sums[((y - y0) * tw + (x - x0)) as usize] +=
+                            self.integrator.li_from_hit(ray, hit, sampler, i, &mut rays);
+                    }
+                }
+            }
+        }
+        let pixels = sums.into_iter().map(|sum| sum / spp as f32).collect();
+        (pixels, rays)
+    }
 }

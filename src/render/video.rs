@@ -8,12 +8,12 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
 /// How to get ffmpeg, for the message when it is missing.
-pub const FFMPEG_HINT: &str =
+const FFMPEG_HINT: &str =
     "install ffmpeg (Debian/Ubuntu: `apt-get install ffmpeg`; Fedora: `dnf install ffmpeg`; \
                                macOS: `brew install ffmpeg`) or leave out --video";
 
 #[derive(Debug, thiserror::Error)]
-pub enum VideoError {
+pub(crate) enum VideoError {
     #[error("--video needs ffmpeg, which was not found on PATH: {FFMPEG_HINT}")]
     FfmpegMissing,
     #[error("no frames to encode")]
@@ -25,7 +25,7 @@ pub enum VideoError {
 }
 
 /// Whether `ffmpeg -version` runs.
-pub fn ffmpeg_available() -> bool {
+pub(crate) fn ffmpeg_available() -> bool {
     Command::new("ffmpeg")
         .arg("-version")
         .stdin(Stdio::null())
@@ -36,7 +36,7 @@ pub fn ffmpeg_available() -> bool {
 }
 
 /// Encodes `frames` (PNG files in `dir`, in order) at `fps` into `out`.
-pub fn encode_video(dir: &Path, frames: &[PathBuf], fps: f64, out: &Path) -> Result<(), VideoError> {
+pub(crate) fn encode_video(dir: &Path, frames: &[PathBuf], fps: f64, out: &Path) -> Result<(), VideoError> {
     if frames.is_empty() {
         return Err(VideoError::NoFrames);
     }

@@ -1,0 +1,107 @@
+//! Integrators: the interface ([`Integrator`] bound to one frame's [`FrameContext`] as a
+//! [`FrameIntegrator`]), the sampler dimensions they draw from, and what they share about
+//! punctual lights and shadow rays. The integrators themselves: path tracing in `path.rs`,
+//! the direct-light preview and ambient occlusion in `preview.rs` (AOVs are in `render/aov.rs`).
+
+mod path;
+mod preview;
+
+pub use path::PathTracer;
+pub use preview::{AmbientOcclusion, DirectLighting};
+
+use glam::Vec3;
+
+use super::{PixelSampler, RenderScene};
+use crate::accel::{Hit, SceneQuery};
+use crate::geometry::Ray;
+use crate::scene::Light;
+
+/// What an integrator sees of one frame: the shading data, camera and lights
+/// ([`RenderScene`]) and the committed geometry to trace rays against.
+#[derive(Clone, Copy)]
+pub struct FrameContext<'a> {
+    pub scene: &'a RenderScene<'a>,
+    pub query: &'a dyn SceneQuery,
+}
+
+impl FrameContext<'_> {
+    /// Whether nothing blocks `ray` (a shadow ray: any hit counts); counts it in `rays`.
+    fn unoccluded(&self, ray: &Ray, rays: &mut u64) -> bool {
+        *rays += 1;
+        !self.query.intersect_p(ray)
+    }
+}
+
+/// An integrator's settings. Object-safe, so the command line picks one at run time
+/// (`Box<dyn Integrator>`); rendering a frame first binds it to the frame's scene.
+pub trait Integrator: Sync {
+    /// This integrator bound to `frame` (as pbrt-v4 binds scene and lights at construction),
+    /// with whatever stays fixed over the frame computed once.
+    fn bind<'a>(&'a self, frame: FrameContext<'a>) -> Box<dyn FrameIntegrator + 'a>;
+}
+
+/// An integrator bound to one frame: computes the radiance arriving along camera rays.
+pub trait FrameIntegrator: Sync {
+    /// Radiance along camera ray `ray` whose closest hit `first` the caller traced (as
+    /// `query.intersect(ray)`, possibly in a packet with neighbouring pixels), for sample
+    /// `index` of `sampler`; adds the rays it traced to `rays`, the camera ray included.
+    fn li_from_hit(
+        &self,
+        ray: &Ray,
+        first: Option<Hit>,
+        sampler: &PixelSampler,
+        index: u32,
+        rays: &mut u64,
+    ) -> Vec3;
+}
+
+/// Dimension pairs of the pixel sampler, so each decision gets its own stratified points.
+pub(crate) mod dims {
+    pub const PIXEL: u32 = 0;
+    pub const SUN: u32 = 1;
+    pub const SKY: u32 = 2;
+    /// Path vertices use `BOUNCE + 4 * depth + k`, `k` in 0..4.
+    pub const BOUNCE: u32 = 3;
+    /// Emitter sampling at path vertex `depth` uses `EMITTER + 2 * depth + k`, `k` in 0..2
+    /// (past every `BOUNCE` pair of the longest path, 64 bounces).
+    pub const EMITTER: u32 = BOUNCE + 4 * 64;
+    /// The point on the camera's lens (depth of field).
+    pub const LENS: u32 = EMITTER + 2 * 64;
+}
+
+/// Light from a punctual light reaching point `p`: the unit direction towards the light, the
+/// irradiance it gives a surface facing it, and the distance to it (infinite for directional
+/// lights). `None` when `p` is outside a spot's cone or on a point light.
+fn punctual_light(light: &Light, p: Vec3) -> Option<(Vec3, Vec3, f32)> {
+    let towards = |position: Vec3| {
+        let d = position - p;
+        let r2 = d.length_squared();
+        (r2 > 0.0 && r2.is_finite()).then(|| (d / r2.sqrt(), r2))
+    };
+    match *light {
+        Light::Point { position, intensity } => {
+            let (wi, r2) = towards(position)?;
+            Some((wi, intensity / r2, r2.sqrt()))
+        }
+        Light::Spot { position, direction, intensity, cos_inner, cos_outer } => {
+            let (wi, r2) = towards(position)?;
+            let cos = (-wi).dot(direction);
+            if cos <= cos_outer {
+                return None;
+            }
+            // glTF's recommended smooth falloff between the cones.
+            let t = if cos_inner > cos_outer {
+                ((cos - cos_outer) / (cos_inner - cos_outer)).min(1.0)
+            } else {
+                1.0
+            };
+            Some((wi, intensity * (t * t) / r2, r2.sqrt()))
+        }
+        Light::Directional { direction, irradiance } => Some((-direction, irradiance, f32::INFINITY)),
+    }
+}
+
+/// A shadow ray from `origin` towards a light `distance` away in unit direction `wi`.
+fn shadow_ray(origin: Vec3, wi: Vec3, distance: f32) -> Ray {
+    Ray::segment(origin, wi, 0.0, if distance.is_finite() { distance * (1.0 - 1e-4) } else { f32::INFINITY })
+}
