@@ -56,7 +56,7 @@ fn assert_agrees(report: &VerifyReport, what: &str) {
 /// `scenes/tiny.toml`, simulated.
 fn tiny() -> Sequence {
     let file = SceneFile::load(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/tiny.toml")).unwrap();
-    let source = SequenceSource::Scene { file, options: SimulateOptions::default(), trajectory: None };
+    let source = SequenceSource::scene(file, SimulateOptions::default(), None);
     Sequence::load(source, &mut |_| {}).unwrap()
 }
 
@@ -237,7 +237,7 @@ fn run_sleep_wake(
         reactivation,
         // Few entries, so lookups see evictions, partial hits and misses.
         cache_budget: CacheBudget { bytes: 64 << 20, entries: 12 },
-        planned_frames: None,
+        ..ManagerOptions::default()
     };
     let mut manager =
         SceneManager::new(accel::create(backend, Some(2)).unwrap(), &template, &infos, options).unwrap();

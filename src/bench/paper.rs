@@ -300,11 +300,11 @@ fn run_workload(
     let size = w.size;
     log(&format!("{}: simulating {} objects for {} frames", w.name, size.count, size.frames));
     let t = Instant::now();
-    let source = SequenceSource::Scene {
-        file: w.file.clone(),
-        options: SimulateOptions { count: Some(size.count), frames: Some(size.frames) },
-        trajectory: None,
-    };
+    let source = SequenceSource::scene(
+        w.file.clone(),
+        SimulateOptions { count: Some(size.count), frames: Some(size.frames) },
+        None,
+    );
     let sequence = Sequence::load(source, &mut |_| {}).map_err(|e| w.error(e))?;
     let simulate_s = t.elapsed().as_secs_f64();
     let islands = sequence.trajectory.island_stats();

@@ -202,7 +202,7 @@ fn integration(
 ) -> Result<(), CliError> {
     let backend = super::render::choose_backend(args.backend)?;
     let (file, options) = args.scene.load()?;
-    let source = SequenceSource::Scene { file, options, trajectory: args.trajectory.clone() };
+    let source = SequenceSource::scene(file, options, args.trajectory.clone());
     let sequence = super::render::load_sequence(source, quiet)?;
     let frames = sequence
         .select(args.frames, args.frame_step)

@@ -234,7 +234,7 @@ fn sequence_source(args: &RenderArgs) -> Result<Option<SequenceSource>, CliError
         (Some(path), trajectory) => {
             let file = SceneFile::load(path).map_err(|e| CliError::Input(e.to_string()))?;
             let options = SimulateOptions { count: args.scene.count, frames: None };
-            Some(SequenceSource::Scene { file, options, trajectory: trajectory.clone() })
+            Some(SequenceSource::scene(file, options, trajectory.clone()))
         }
         (None, Some(path)) => {
             Some(SequenceSource::Recorded { trajectory: path.clone(), count: args.scene.count })

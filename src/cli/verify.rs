@@ -125,8 +125,7 @@ fn simulated_frames(
 ) -> Result<(Vec<SceneDescription>, Vec<u32>), CliError> {
     let file = SceneFile::load(path).map_err(|e| CliError::Input(e.to_string()))?;
     let options = SimulateOptions { count: args.scene.count, frames: args.frame_count };
-    let sequence =
-        super::render::load_sequence(SequenceSource::Scene { file, options, trajectory: None }, quiet)?;
+    let sequence = super::render::load_sequence(SequenceSource::scene(file, options, None), quiet)?;
     let selection = sequence.evenly_spaced(args.check_frames);
     let mut descs = Vec::new();
     sequence.replay(&selection, &mut [], &mut |frame, _| {

@@ -4,6 +4,9 @@ use super::{FrameSelection, Sequence};
 use crate::integrate::SceneManager;
 use crate::physics::ReplayFrame;
 
+/// What [`Sequence::replay`] calls with each selected frame and the scene managers.
+pub type FrameVisitor<'v, E> = dyn FnMut(&ReplayFrame<'_>, &mut [SceneManager]) -> Result<(), E> + 'v;
+
 impl Sequence {
     /// Replays the trajectory from its first frame (every island event must be seen) to the
     /// last frame `selection` can select: each frame's island events go to every manager in
@@ -13,7 +16,7 @@ impl Sequence {
         &self,
         selection: &FrameSelection,
         managers: &mut [SceneManager],
-        on_frame: &mut dyn FnMut(&ReplayFrame<'_>, &mut [SceneManager]) -> Result<(), E>,
+        on_frame: &mut FrameVisitor<'_, E>,
     ) -> Result<(), E> {
         let mut replay = self.trajectory.replay();
         while let Some(frame) = replay.next_frame() {

@@ -19,10 +19,17 @@ use crate::scene::{SceneAssets, SceneDescription};
 pub enum SequenceSource {
     /// A scene file with command-line overrides: simulated now, or replayed from
     /// `trajectory`, which must have been simulated from the same scene and overrides.
-    Scene { file: SceneFile, options: SimulateOptions, trajectory: Option<PathBuf> },
+    Scene { file: Box<SceneFile>, options: SimulateOptions, trajectory: Option<PathBuf> },
     /// A trajectory alone: the scene recorded in it. `count`, if given, must be the count it
     /// was simulated with.
     Recorded { trajectory: PathBuf, count: Option<u32> },
+}
+
+impl SequenceSource {
+    /// A scene file with overrides, simulated now or replayed from `trajectory`.
+    pub fn scene(file: SceneFile, options: SimulateOptions, trajectory: Option<PathBuf>) -> Self {
+        SequenceSource::Scene { file: Box::new(file), options, trajectory }
+    }
 }
 
 /// Where the frames' motion came from.
