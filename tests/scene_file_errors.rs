@@ -41,7 +41,7 @@ fn expect_error(text: &str, field: &str, line: Option<usize>) -> SceneError {
 #[test]
 fn the_good_scene_parses() {
     let file = parse(GOOD).unwrap();
-    assert_eq!(file.description.spawners[0].count, 4);
+    assert_eq!(file.spec().spawners[0].count, 4);
 }
 
 #[test]
@@ -134,11 +134,11 @@ fn every_shipped_scene_parses() {
 #[test]
 fn count_override_spreads_over_spawners() {
     let file = SceneFile::load(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/atrium.toml")).unwrap();
-    let total: u32 = file.description.spawners.iter().map(|s| s.count).sum();
+    let total: u32 = file.spec().spawners.iter().map(|s| s.count).sum();
     assert_eq!(total, 8000, "the default is the paper's experiment");
     let small = file.clone().with_total_count(100).unwrap();
-    assert_eq!(small.description.spawners.iter().map(|s| s.count).sum::<u32>(), 100);
-    assert!(small.description.spawners.iter().all(|s| s.count >= 1 && s.waves <= s.count));
+    assert_eq!(small.spec().spawners.iter().map(|s| s.count).sum::<u32>(), 100);
+    assert!(small.spec().spawners.iter().all(|s| s.count >= 1 && s.waves <= s.count));
     assert!(file.with_total_count(3).is_err(), "fewer objects than spawners");
 }
 

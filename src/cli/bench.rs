@@ -201,7 +201,7 @@ fn integration(
     let sequence = SequenceOptions {
         start: range.start,
         end: range.end,
-        step: args.frame_step.unwrap_or(file.description.render.frame_step.max(1)),
+        step: args.frame_step.unwrap_or(file.spec().render.frame_step.max(1)),
         width: args.size.width,
         height: args.size.height,
         spp: args.spp,

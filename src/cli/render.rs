@@ -146,7 +146,8 @@ pub(super) fn load_trajectory_timed(
 ) -> Result<Trajectory, CliError> {
     match path {
         Some(path) => {
-            let expected = options.effective_scene(file).map_err(super::simulate::physics_error)?.source_hash;
+            let expected =
+                options.effective_scene(file).map_err(super::simulate::physics_error)?.source_hash();
             Trajectory::read(path, expected).map_err(|e| CliError::Input(e.to_string()))
         }
         None => physics::simulate_observed(file, options, on_step).map_err(super::simulate::physics_error),
@@ -168,7 +169,7 @@ fn recorded_scene(path: &Path) -> Result<(SceneFile, SimulateOptions, Trajectory
         .scene_file()
         .map_err(|e| CliError::Input(format!("{}: the scene recorded in it: {e}", path.display())))?;
     let options = recorded.options.clone();
-    let hash = options.effective_scene(&file).map_err(super::simulate::physics_error)?.source_hash;
+    let hash = options.effective_scene(&file).map_err(super::simulate::physics_error)?.source_hash();
     if hash != trajectory.scene_hash {
         return Err(CliError::Input(format!(
             "{}: scene: the recorded scene does not hash to the trajectory's scene_hash (damaged file)",
@@ -328,7 +329,7 @@ pub(super) fn run(
             let sequence = SequenceOptions {
                 start: range.start,
                 end: range.end,
-                step: file.description.render.frame_step.max(1),
+                step: file.spec().render.frame_step.max(1),
                 width: args.size.width,
                 height: args.size.height,
                 spp: args.spp,
