@@ -1,8 +1,9 @@
 //! The raw TOML shape to the checked [`SceneSpec`]: finite numbers, positive counts and
-//! sizes, references resolved to indices, asset files that exist. One function per section
-//! (`world`: environment and prototypes; `motion`: spawners, kinematic bodies and
-//! disturbances; `view`: cameras, sky, lights and render settings). Sections are checked in
-//! file order and the first problem is reported, by field path; the parser adds file and line.
+//! sizes, references resolved to indices, asset files that exist. One function per section:
+//! scene, physics and the asset directory here; `world`: environment and prototypes;
+//! `motion`: spawners, kinematic bodies and disturbances; `view`: cameras, sky, lights and
+//! render settings. [`validate`] checks them in that order and stops at the first problem,
+//! which it reports by field path (the parser adds file and line).
 
 mod motion;
 mod view;
