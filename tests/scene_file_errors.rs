@@ -1,7 +1,7 @@
 //! Bad scene input: every error names the file and the field (and the line when the field
 //! is written), and none panics.
 
-use dormant::scene::file::{SceneError, SceneFile};
+use dormant::scene::file::{SceneError, SceneFile, Shape};
 
 const GOOD: &str = r#"[scene]
 name = "t"
@@ -42,6 +42,26 @@ fn expect_error(text: &str, field: &str, line: Option<usize>) -> SceneError {
 fn the_good_scene_parses() {
     let file = parse(GOOD).unwrap();
     assert_eq!(file.spec().spawners[0].count, 4);
+}
+
+#[test]
+fn references_resolve_to_indices() {
+    let text = GOOD
+        .replace(
+            "[[spawners]]",
+            "[[prototypes]]\nname = \"ball\"\nshape = \"sphere\"\nradius = 0.25\n\n[[spawners]]",
+        )
+        .replace("prototypes = [\"box\"]", "prototypes = [\"ball\", \"box\"]");
+    let cameras = "[[cameras]]\nname = \"a\"\nposition = [0.0, 1.0, 5.0]\nlook_at = [0.0, 0.0, 0.0]\n\n\
+                   [[cameras]]\nname = \"b\"\nposition = [0.0, 2.0, 5.0]\nlook_at = [0.0, 0.0, 0.0]\n\n\
+                   [render]\ncamera = \"b\"\n";
+    let file = parse(&format!("{text}\n{cameras}")).unwrap();
+    let spec = file.spec();
+    assert_eq!(spec.spawners[0].prototypes, vec![1, 0]);
+    assert_eq!(spec.spawners[0].seed, 0, "a spawner's seed defaults to its index");
+    assert_eq!(spec.prototypes[1].shape, Shape::Sphere { radius: 0.25 });
+    assert_eq!(spec.render.camera, Some(1));
+    assert_eq!(spec.render_camera().map(|c| c.name.as_str()), Some("b"));
 }
 
 #[test]
