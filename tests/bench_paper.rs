@@ -8,7 +8,7 @@ mod common;
 use std::path::Path;
 use std::process::Command;
 
-use dormant::scene::file::{ColliderKind, SceneFile};
+use dormant::scene::file::{ColliderKind, SceneFile, Shape};
 
 fn dormant() -> Command {
     Command::new(env!("CARGO_BIN_EXE_dormant"))
@@ -123,8 +123,8 @@ fn compiled_in_atrium_is_the_scene_file() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/atrium.toml");
     let on_disk = SceneFile::load(&path).unwrap();
     let built_in = SceneFile::atrium();
-    assert_eq!(built_in.description, on_disk.description);
-    assert_eq!(built_in.source_hash, on_disk.source_hash);
+    assert_eq!(built_in.spec(), on_disk.spec());
+    assert_eq!(built_in.source_hash(), on_disk.source_hash());
 }
 
 #[test]
@@ -132,14 +132,14 @@ fn asset_rain_scales_objects_to_the_environment_and_spawns_above_it() {
     let Some(dir) = common::shared_assets() else { return };
     let objects = [dir.join("duck.glb"), dir.join("soccerball.glb")];
     let file = SceneFile::asset_rain(&dir.join("monastery.glb"), &objects, 500, 300).unwrap();
-    let d = &file.description;
+    let d = file.spec();
     assert_eq!(d.scene.frames, 300);
     assert_eq!(d.spawners.len(), 2);
     assert_eq!(d.spawners.iter().map(|s| s.count).sum::<u32>(), 500);
     let env = dormant::scene::file::environment_mesh(&file).unwrap().bounds();
     let width = env.extent().x.max(env.extent().z);
     for (i, p) in d.prototypes.iter().enumerate() {
-        assert_eq!(p.collider, ColliderKind::ConvexHull);
+        assert!(matches!(p.shape, Shape::Gltf { collider: ColliderKind::ConvexHull, .. }), "{:?}", p.shape);
         let size = dormant::scene::file::prototype_mesh(&file, i).unwrap().bounds().extent().max_element();
         assert!((size / width - 1.0 / 150.0).abs() < 1e-4, "{}: {size} in {width}", p.name);
     }

@@ -24,7 +24,7 @@ fn a_trajectory_round_trips_through_a_file() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("tiny.traj");
     t.write_atomic(&path).unwrap();
-    let hash = options.effective_scene(&file).unwrap().source_hash;
+    let hash = options.effective_scene(&file).unwrap().source_hash();
     let back = Trajectory::read(&path, hash).unwrap();
     assert_eq!(back, t);
     // No temporary file is left behind.
@@ -67,12 +67,12 @@ fn the_same_scene_gives_identical_bytes_across_runs_and_thread_counts() {
 #[test]
 fn count_and_frame_overrides_change_the_scene_hash() {
     let file = tiny();
-    let base = SimulateOptions::default().effective_scene(&file).unwrap().source_hash;
+    let base = SimulateOptions::default().effective_scene(&file).unwrap().source_hash();
     let counted = SimulateOptions { count: Some(6), frames: None };
     let scene = counted.effective_scene(&file).unwrap();
-    assert_ne!(scene.source_hash, base);
-    assert_eq!(scene.description.spawners.iter().map(|s| s.count).sum::<u32>(), 6);
-    assert_ne!(short().effective_scene(&file).unwrap().source_hash, base);
+    assert_ne!(scene.source_hash(), base);
+    assert_eq!(scene.spec().spawners.iter().map(|s| s.count).sum::<u32>(), 6);
+    assert_ne!(short().effective_scene(&file).unwrap().source_hash(), base);
     assert!(SimulateOptions { count: Some(0), frames: None }.effective_scene(&file).is_err());
 }
 
@@ -127,8 +127,8 @@ fn a_trajectory_records_the_scene_it_was_simulated_from() {
     assert_eq!(recorded.options, options);
     assert!(recorded.asset_dir.is_absolute());
     let again = recorded.scene_file().unwrap();
-    assert_eq!(again.description, file.description);
-    assert_eq!(options.effective_scene(&again).unwrap().source_hash, t.scene_hash);
+    assert_eq!(again.spec(), file.spec());
+    assert_eq!(options.effective_scene(&again).unwrap().source_hash(), t.scene_hash);
 }
 
 /// FNV-1a 64, the trajectory checksum.

@@ -1,7 +1,7 @@
 //! Bad scene input: every error names the file and the field (and the line when the field
 //! is written), and none panics.
 
-use dormant::scene::file::{SceneError, SceneFile};
+use dormant::scene::file::{SceneError, SceneFile, Shape};
 
 const GOOD: &str = r#"[scene]
 name = "t"
@@ -41,7 +41,27 @@ fn expect_error(text: &str, field: &str, line: Option<usize>) -> SceneError {
 #[test]
 fn the_good_scene_parses() {
     let file = parse(GOOD).unwrap();
-    assert_eq!(file.description.spawners[0].count, 4);
+    assert_eq!(file.spec().spawners[0].count, 4);
+}
+
+#[test]
+fn references_resolve_to_indices() {
+    let text = GOOD
+        .replace(
+            "[[spawners]]",
+            "[[prototypes]]\nname = \"ball\"\nshape = \"sphere\"\nradius = 0.25\n\n[[spawners]]",
+        )
+        .replace("prototypes = [\"box\"]", "prototypes = [\"ball\", \"box\"]");
+    let cameras = "[[cameras]]\nname = \"a\"\nposition = [0.0, 1.0, 5.0]\nlook_at = [0.0, 0.0, 0.0]\n\n\
+                   [[cameras]]\nname = \"b\"\nposition = [0.0, 2.0, 5.0]\nlook_at = [0.0, 0.0, 0.0]\n\n\
+                   [render]\ncamera = \"b\"\n";
+    let file = parse(&format!("{text}\n{cameras}")).unwrap();
+    let spec = file.spec();
+    assert_eq!(spec.spawners[0].prototypes, vec![1, 0]);
+    assert_eq!(spec.spawners[0].seed, 0, "a spawner's seed defaults to its index");
+    assert_eq!(spec.prototypes[1].shape, Shape::Sphere { radius: 0.25 });
+    assert_eq!(spec.render.camera, Some(1));
+    assert_eq!(spec.render_camera().map(|c| c.name.as_str()), Some("b"));
 }
 
 #[test]
@@ -134,11 +154,11 @@ fn every_shipped_scene_parses() {
 #[test]
 fn count_override_spreads_over_spawners() {
     let file = SceneFile::load(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/atrium.toml")).unwrap();
-    let total: u32 = file.description.spawners.iter().map(|s| s.count).sum();
+    let total: u32 = file.spec().spawners.iter().map(|s| s.count).sum();
     assert_eq!(total, 8000, "the default is the paper's experiment");
     let small = file.clone().with_total_count(100).unwrap();
-    assert_eq!(small.description.spawners.iter().map(|s| s.count).sum::<u32>(), 100);
-    assert!(small.description.spawners.iter().all(|s| s.count >= 1 && s.waves <= s.count));
+    assert_eq!(small.spec().spawners.iter().map(|s| s.count).sum::<u32>(), 100);
+    assert!(small.spec().spawners.iter().all(|s| s.count >= 1 && s.waves <= s.count));
     assert!(file.with_total_count(3).is_err(), "fewer objects than spawners");
 }
 

@@ -47,7 +47,7 @@ pub fn bench(file: &SceneFile, options: &PhysicsBenchOptions) -> Result<PhysicsB
     }
     let file = options.simulate.effective_scene(file)?;
     let mut sim = Simulation::new(&file)?;
-    let settle_frames = file.description.scene.frames;
+    let settle_frames = file.spec().scene.frames;
     let t0 = Instant::now();
     for _ in 0..settle_frames {
         sim.step();
@@ -71,12 +71,12 @@ pub fn bench(file: &SceneFile, options: &PhysicsBenchOptions) -> Result<PhysicsB
     let asleep_ms = steps(before.step_seconds, mid.step_seconds, mid.rapier_steps - before.rapier_steps);
     let awake_ms = steps(mid.step_seconds, after.step_seconds, after.rapier_steps - mid.rapier_steps);
     Ok(PhysicsBenchReport {
-        scene: file.description.scene.name.clone(),
+        scene: file.spec().scene.name.clone(),
         dynamic_bodies: sim.dynamic_counts().0,
         settle_frames,
         settle_seconds,
         measure_frames: options.measure_frames,
-        substeps: file.description.physics.substeps,
+        substeps: file.spec().physics.substeps,
         asleep_fraction: asleep_sum / options.measure_frames as f64,
         ms_per_step_mostly_asleep: asleep_ms,
         ms_per_step_all_awake: awake_ms,

@@ -7,7 +7,7 @@ use rapier3d::prelude::SharedShape;
 use super::body::to_rapier_vec;
 use super::PhysicsError;
 use crate::geometry::TriangleMesh;
-use crate::scene::file::{prototype_mesh, ColliderKind, PrototypeDef, SceneFile, ShapeKind};
+use crate::scene::file::{prototype_mesh, ColliderKind, SceneFile, Shape};
 
 /// A hull this much smaller in volume than the mesh it wraps marks the mesh as concave.
 const CONCAVITY_RATIO: f32 = 0.85;
@@ -33,30 +33,23 @@ pub(crate) struct PrototypeShape {
 }
 
 pub(crate) fn prototype_shape(file: &SceneFile, index: usize) -> Result<PrototypeShape, PhysicsError> {
-    let p: &PrototypeDef = &file.description.prototypes[index];
-    let field = |f: &str| format!("prototypes[{index}].{f}");
-    let fail = |f: &str, message: String| PhysicsError::Collider {
-        file: file.path.display().to_string(),
-        field: field(f),
-        message,
-    };
+    let p = &file.spec().prototypes[index];
     let (shape, choice) = match p.shape {
-        ShapeKind::Box => {
-            let h = p.half_extents.unwrap_or([0.5; 3]);
-            (SharedShape::cuboid(h[0], h[1], h[2]), ColliderChoice::Primitive)
+        Shape::Box { half_extents: h } => (SharedShape::cuboid(h[0], h[1], h[2]), ColliderChoice::Primitive),
+        Shape::Sphere { radius } => (SharedShape::ball(radius), ColliderChoice::Primitive),
+        Shape::Capsule { half_height, radius } => {
+            (SharedShape::capsule_y(half_height, radius), ColliderChoice::Primitive)
         }
-        ShapeKind::Sphere => (SharedShape::ball(p.radius.unwrap_or(0.5)), ColliderChoice::Primitive),
-        ShapeKind::Capsule => (
-            SharedShape::capsule_y(p.half_height.unwrap_or(0.5), p.radius.unwrap_or(0.5)),
-            ColliderChoice::Primitive,
-        ),
-        ShapeKind::Cylinder => (
-            SharedShape::cylinder(p.half_height.unwrap_or(0.5), p.radius.unwrap_or(0.5)),
-            ColliderChoice::Primitive,
-        ),
-        ShapeKind::Gltf => {
+        Shape::Cylinder { half_height, radius } => {
+            (SharedShape::cylinder(half_height, radius), ColliderChoice::Primitive)
+        }
+        Shape::Gltf { collider, .. } => {
             let mesh = prototype_mesh(file, index)?;
-            mesh_shape(&mesh, p.collider).map_err(|m| fail("gltf", m))?
+            mesh_shape(&mesh, collider).map_err(|message| PhysicsError::Collider {
+                file: file.path().display().to_string(),
+                field: format!("prototypes[{index}].gltf"),
+                message,
+            })?
         }
     };
     let aabb = shape.compute_local_aabb();
@@ -120,7 +113,7 @@ pub(crate) fn environment_shape(mesh: &TriangleMesh, file: &SceneFile) -> Result
     let indices: Vec<[u32; 3]> =
         (0..mesh.triangle_count()).filter(|&i| mesh.triangle_is_valid(i)).map(|i| mesh.indices[i]).collect();
     SharedShape::trimesh(vertices, indices).map_err(|e| PhysicsError::Collider {
-        file: file.path.display().to_string(),
+        file: file.path().display().to_string(),
         field: "environment".into(),
         message: format!("cannot build a triangle-mesh collider: {e:?}"),
     })

@@ -3,7 +3,9 @@
 use super::simulation::Simulation;
 use super::trajectory::Trajectory;
 use super::PhysicsError;
-use crate::scene::file::{fnv1a64_extend, SceneFile};
+use std::num::NonZeroU32;
+
+use crate::scene::file::SceneFile;
 
 /// Overrides a command line can apply to a scene before simulating it.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
@@ -26,15 +28,11 @@ impl SimulateOptions {
             file = file.with_total_count(count)?;
         }
         if let Some(frames) = self.frames {
-            if frames == 0 {
-                return Err(PhysicsError::Option {
-                    option: "--frames",
-                    message: "must be at least 1".into(),
-                });
-            }
-            file.description.scene.frames = frames;
-            file.source_hash = fnv1a64_extend(file.source_hash, b"frames");
-            file.source_hash = fnv1a64_extend(file.source_hash, &frames.to_le_bytes());
+            let frames = NonZeroU32::new(frames).ok_or_else(|| PhysicsError::Option {
+                option: "--frames",
+                message: "must be at least 1".into(),
+            })?;
+            file = file.with_frames(frames);
         }
         Ok(file)
     }
@@ -64,7 +62,7 @@ pub fn simulate_observed(
     let recorded = super::trajectory::RecordedScene::new(file, options);
     let file = options.effective_scene(file)?;
     let mut sim = Simulation::new(&file)?;
-    let frames = file.description.scene.frames;
+    let frames = file.spec().scene.frames;
     let mut records = Vec::with_capacity(frames as usize);
     for f in 0..frames {
         let t0 = std::time::Instant::now();
@@ -83,10 +81,10 @@ pub fn simulate_observed(
         }
     }
     Ok(Trajectory {
-        scene_hash: file.source_hash,
-        timestep: file.description.physics.timestep,
+        scene_hash: file.source_hash(),
+        timestep: file.spec().physics.timestep,
         scene: Some(recorded),
-        prototypes: file.description.prototypes.iter().map(|p| p.name.clone()).collect(),
+        prototypes: file.spec().prototypes.iter().map(|p| p.name.clone()).collect(),
         bodies: sim.bodies().to_vec(),
         frames: records,
     })

@@ -75,21 +75,9 @@ impl Simulation {
     /// bodies, and the full spawn schedule. No object is spawned before the first frame.
     pub fn new(file: &SceneFile) -> Result<Self, PhysicsError> {
         let t0 = Instant::now();
-        let d = &file.description;
+        let d = file.spec();
         let p = &d.physics;
-        let mut world = PhysicsWorld::new();
-        world.gravity = to_rapier_vec(Vec3::from_array(p.gravity));
-        world.integration_parameters =
-            IntegrationParameters { dt: p.timestep / p.substeps as f32, ..IntegrationParameters::default() };
-        world.integration_parameters.num_solver_iterations = p.solver_iterations as usize;
-
-        let env = environment_mesh(file)?;
-        let env_shape = environment_shape(&env, file)?;
-        world.insert(
-            RigidBodyBuilder::fixed(),
-            ColliderBuilder::new(env_shape).friction(d.environment.friction),
-        );
-
+        let mut world = static_world(file)?;
         let prototypes =
             (0..d.prototypes.len()).map(|i| prototype_shape(file, i)).collect::<Result<Vec<_>, _>>()?;
 
@@ -97,11 +85,9 @@ impl Simulation {
         let mut handles = Vec::new();
         let mut kinematics = Vec::new();
         for k in &d.kinematics {
-            let prototype =
-                d.prototypes.iter().position(|p| p.name == k.prototype).expect("validated reference");
             let path = KinematicPath::new(&k.keyframes, k.looped);
             let id = BodyId(bodies.len() as u32);
-            let shape = &prototypes[prototype];
+            let shape = &prototypes[k.prototype];
             let (handle, _) = world.insert(
                 RigidBodyBuilder::kinematic_position_based()
                     .pose(to_rapier_pose(path.pose_at(0.0)))
@@ -110,7 +96,11 @@ impl Simulation {
                     .friction(shape.friction)
                     .restitution(shape.restitution),
             );
-            bodies.push(BodyInfo { prototype: prototype as u32, kind: BodyKind::Kinematic, spawn_frame: 0 });
+            bodies.push(BodyInfo {
+                prototype: k.prototype as u32,
+                kind: BodyKind::Kinematic,
+                spawn_frame: 0,
+            });
             handles.push(Some(handle));
             kinematics.push((id, path));
         }
@@ -290,9 +280,9 @@ impl Simulation {
                     continue;
                 }
                 let impulse = match d.kind {
-                    DisturbanceKind::Impulse => Vec3::from_array(d.impulse.unwrap_or_default()),
-                    DisturbanceKind::Explosion => {
-                        let dv = d.strength.unwrap_or(0.0) * (1.0 - distance / d.radius);
+                    DisturbanceKind::Impulse { impulse } => Vec3::from_array(impulse),
+                    DisturbanceKind::Explosion { strength } => {
+                        let dv = strength * (1.0 - distance / d.radius);
                         offset.try_normalize().unwrap_or(Vec3::Y) * dv * rb.mass()
                     }
                 };
@@ -355,4 +345,21 @@ impl Simulation {
         self.states.clone_from(&states);
         FrameRecord { states, poses, events }
     }
+}
+
+/// A world with the scene's gravity and step parameters and its environment as the one fixed
+/// body.
+fn static_world(file: &SceneFile) -> Result<PhysicsWorld, PhysicsError> {
+    let d = file.spec();
+    let p = &d.physics;
+    let mut world = PhysicsWorld::new();
+    world.gravity = to_rapier_vec(Vec3::from_array(p.gravity));
+    world.integration_parameters =
+        IntegrationParameters { dt: p.timestep / p.substeps as f32, ..IntegrationParameters::default() };
+    world.integration_parameters.num_solver_iterations = p.solver_iterations as usize;
+
+    let env = environment_mesh(file)?;
+    let env_shape = environment_shape(&env, file)?;
+    world.insert(RigidBodyBuilder::fixed(), ColliderBuilder::new(env_shape).friction(d.environment.friction));
+    Ok(world)
 }

@@ -19,19 +19,12 @@ pub(crate) struct SpawnOrder {
 
 /// Every spawner's orders, sorted by frame (stable: spawner order, then wave order).
 pub(crate) fn spawn_schedule(file: &SceneFile, shapes: &[PrototypeShape]) -> Vec<SpawnOrder> {
-    let d = &file.description;
+    let d = file.spec();
     let mut orders = Vec::new();
-    for (i, s) in d.spawners.iter().enumerate() {
-        let seed = d.scene.seed ^ s.seed.unwrap_or(i as u64).wrapping_mul(0xA076_1D64_78BD_642F);
+    for s in &d.spawners {
+        let seed = d.scene.seed ^ s.seed.wrapping_mul(0xA076_1D64_78BD_642F);
         let mut rng = SplitMix64::new(seed);
-        let protos: Vec<u32> = s
-            .prototypes
-            .iter()
-            .map(|name| {
-                d.prototypes.iter().position(|p| &p.name == name).expect("validated reference") as u32
-            })
-            .collect();
-        spawner_orders(s, &protos, shapes, d.physics.timestep, &mut rng, &mut orders);
+        spawner_orders(s, shapes, d.physics.timestep, &mut rng, &mut orders);
     }
     orders.sort_by_key(|o| o.frame);
     orders
@@ -39,13 +32,13 @@ pub(crate) fn spawn_schedule(file: &SceneFile, shapes: &[PrototypeShape]) -> Vec
 
 fn spawner_orders(
     s: &SpawnerDef,
-    protos: &[u32],
     shapes: &[PrototypeShape],
     timestep: f32,
     rng: &mut SplitMix64,
     out: &mut Vec<SpawnOrder>,
 ) {
-    let radius = protos.iter().map(|&p| shapes[p as usize].bounding_radius).fold(0.0f32, f32::max);
+    let protos = &s.prototypes;
+    let radius = protos.iter().map(|&p| shapes[p].bounding_radius).fold(0.0f32, f32::max);
     // Grid cells hold any of the spawner's prototypes in any orientation with a small gap.
     let cell = 2.0 * radius * 1.05 + s.position_jitter * 2.0;
     let (lo, hi) = (Vec3::from_array(s.region.min), Vec3::from_array(s.region.max));
@@ -78,7 +71,7 @@ fn spawner_orders(
                 }
                 SpawnPattern::Random => lo + Vec3::new(rng.unit(), rng.unit(), rng.unit()) * size,
             };
-            let prototype = protos[rng.below(protos.len())];
+            let prototype = protos[rng.below(protos.len())] as u32;
             let rotation = if s.random_rotation { rng.rotation() } else { Quat::IDENTITY };
             let velocity = Vec3::from_array(s.initial_velocity)
                 + Vec3::new(rng.signed(), rng.signed(), rng.signed()) * s.velocity_jitter;

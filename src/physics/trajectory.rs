@@ -70,8 +70,8 @@ impl RecordedScene {
     pub fn new(file: &SceneFile, options: &SimulateOptions) -> Self {
         let absolute = |p: PathBuf| std::path::absolute(&p).unwrap_or(p);
         Self {
-            path: file.path.clone(),
-            asset_dir: absolute(file.asset_dir()),
+            path: file.path().to_path_buf(),
+            asset_dir: absolute(file.asset_dir().to_path_buf()),
             source: file.source().to_string(),
             options: options.clone(),
         }

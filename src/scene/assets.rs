@@ -6,7 +6,10 @@ use std::sync::Arc;
 
 use glam::Vec3;
 
-use super::file::{environment_asset, prototype_asset, CameraDef, LightKind, SceneError, SceneFile};
+use super::file::{
+    environment_asset, prototype_asset, CameraDef, CameraPlacement, LightDef, LightKind, SceneError,
+    SceneFile, SkyDef,
+};
 use super::{Camera, Light, Material, Prototype, SceneDescription, Sky, StaticMesh, Sun, Texture};
 use crate::geometry::TriangleMesh;
 
@@ -40,7 +43,7 @@ const PALETTE: [Vec3; 6] = [
 
 impl SceneAssets {
     pub fn load(file: &SceneFile) -> Result<Self, SceneError> {
-        let doc = &file.description;
+        let doc = file.spec();
         let mut textures = Vec::new();
         let mut environment = environment_asset(file)?;
         let mut materials = vec![environment.take_materials(&mut textures)];
@@ -53,24 +56,18 @@ impl SceneAssets {
         let mut lights = file_lights(file);
         lights.append(&mut environment.lights);
         // The scene file's camera; without any, the environment glTF's first camera.
-        let camera = doc
-            .render
-            .camera
-            .as_ref()
-            .and_then(|name| doc.cameras.iter().find(|c| &c.name == name))
-            .or(doc.cameras.first())
-            .cloned()
-            .or_else(|| {
-                environment.cameras.first().map(|c| CameraDef {
-                    name: c.name.clone(),
-                    position: Some(c.position.to_array()),
-                    look_at: Some((c.position + c.forward).to_array()),
-                    keyframes: Vec::new(),
-                    fov_degrees: c.yfov_degrees,
-                    aperture_radius: 0.0,
-                    focus_distance: None,
-                })
-            });
+        let camera = doc.render_camera().cloned().or_else(|| {
+            environment.cameras.first().map(|c| CameraDef {
+                name: c.name.clone(),
+                placement: CameraPlacement::Fixed {
+                    position: c.position.to_array(),
+                    look_at: (c.position + c.forward).to_array(),
+                },
+                fov_degrees: c.yfov_degrees,
+                aperture_radius: 0.0,
+                focus_distance: None,
+            })
+        });
         Ok(Self {
             name: doc.scene.name.clone(),
             camera,
@@ -98,23 +95,22 @@ fn camera_at(cam: Option<&CameraDef>, environment: &TriangleMesh, t: f32) -> Cam
             45.0,
         );
     };
-    let (eye, target) = match (cam.position, cam.look_at, cam.keyframes.as_slice()) {
-        (_, _, [first, ..]) => {
-            let next = cam.keyframes.iter().position(|k| k.time > t).unwrap_or(cam.keyframes.len());
+    let (eye, target) = match &cam.placement {
+        CameraPlacement::Keyframed(keyframes) => {
+            let next = keyframes.iter().position(|k| k.time > t).unwrap_or(keyframes.len());
             if next == 0 {
-                (first.position, first.look_at)
-            } else if next == cam.keyframes.len() {
-                let last = cam.keyframes[next - 1];
+                (keyframes[0].position, keyframes[0].look_at)
+            } else if next == keyframes.len() {
+                let last = keyframes[next - 1];
                 (last.position, last.look_at)
             } else {
-                let (a, b) = (cam.keyframes[next - 1], cam.keyframes[next]);
+                let (a, b) = (keyframes[next - 1], keyframes[next]);
                 let s = ((t - a.time) / (b.time - a.time).max(1e-6)).clamp(0.0, 1.0);
                 let lerp = |p: [f32; 3], q: [f32; 3]| Vec3::from(p).lerp(Vec3::from(q), s).to_array();
                 (lerp(a.position, b.position), lerp(a.look_at, b.look_at))
             }
         }
-        (Some(p), Some(l), []) => (p, l),
-        _ => ([0.0, 5.0, 10.0], [0.0; 3]),
+        CameraPlacement::Fixed { position, look_at } => (*position, *look_at),
     };
     Camera {
         aperture_radius: cam.aperture_radius,
@@ -125,24 +121,27 @@ fn camera_at(cam: Option<&CameraDef>, environment: &TriangleMesh, t: f32) -> Cam
 
 /// The scene file's `[sky]`, or the daylight gradient.
 fn sky(file: &SceneFile) -> Sky {
-    let Some(def) = &file.description.sky else {
-        return Sky::DAYLIGHT;
-    };
-    let rgb = |v: Option<[f32; 3]>, default: Vec3| v.map_or(default, Vec3::from) * def.intensity;
-    match def.color {
-        Some(c) => Sky::constant(Vec3::from(c) * def.intensity),
-        None => Sky {
-            zenith: rgb(def.zenith, Sky::DAYLIGHT.zenith),
-            horizon: rgb(def.horizon, Sky::DAYLIGHT.horizon),
-            ground: rgb(def.ground, Sky::DAYLIGHT.ground),
-        },
+    match file.spec().sky {
+        None => Sky::DAYLIGHT,
+        Some(SkyDef::Constant { color, intensity }) => Sky::constant(Vec3::from(color) * intensity),
+        Some(SkyDef::Gradient { zenith, horizon, ground, intensity }) => {
+            let rgb = |v: Option<[f32; 3]>, default: Vec3| v.map_or(default, Vec3::from) * intensity;
+            Sky {
+                zenith: rgb(zenith, Sky::DAYLIGHT.zenith),
+                horizon: rgb(horizon, Sky::DAYLIGHT.horizon),
+                ground: rgb(ground, Sky::DAYLIGHT.ground),
+            }
+        }
     }
 }
 
 /// The first directional light as the sun (its `direction` is where light travels).
 fn sun(file: &SceneFile) -> Sun {
-    let light = file.description.lights.iter().find(|l| l.kind == LightKind::Directional);
-    match light.and_then(|l| l.direction.map(|d| (l, d))) {
+    let sun = file.spec().lights.iter().find_map(|l| match l.kind {
+        LightKind::Directional { direction } => Some((l, direction)),
+        _ => None,
+    });
+    match sun {
         Some((l, d)) => Sun {
             direction: (-Vec3::from(d)).normalize_or(Vec3::Y),
             irradiance: Vec3::from(l.color) * l.intensity,
@@ -159,35 +158,32 @@ fn sun(file: &SceneFile) -> Sun {
 /// The scene file's point and spot lights, and its directional lights after the first (which
 /// is the sun).
 fn file_lights(file: &SceneFile) -> Vec<Light> {
-    let color = |l: &crate::scene::file::LightDef| Vec3::from(l.color) * l.intensity;
-    let direction = |d: Option<[f32; 3]>| d.map_or(Vec3::NEG_Y, |d| Vec3::from(d).normalize_or(Vec3::NEG_Y));
+    let color = |l: &LightDef| Vec3::from(l.color) * l.intensity;
+    let direction = |d: [f32; 3]| Vec3::from(d).normalize_or(Vec3::NEG_Y);
     let mut suns = 0;
     let mut lights = Vec::new();
-    for l in &file.description.lights {
-        match (l.kind, l.position) {
-            (LightKind::Directional, _) => {
+    for l in &file.spec().lights {
+        match l.kind {
+            LightKind::Directional { direction: d } => {
                 suns += 1;
                 if suns > 1 {
-                    lights
-                        .push(Light::Directional { direction: direction(l.direction), irradiance: color(l) });
+                    lights.push(Light::Directional { direction: direction(d), irradiance: color(l) });
                 }
             }
-            (LightKind::Point, Some(p)) => {
-                lights.push(Light::Point { position: p.into(), intensity: color(l) })
+            LightKind::Point { position } => {
+                lights.push(Light::Point { position: position.into(), intensity: color(l) })
             }
-            (LightKind::Spot, Some(p)) => {
-                let outer = l.outer_cone_degrees.unwrap_or(45.0).clamp(0.0, 90.0);
-                let inner = l.inner_cone_degrees.unwrap_or(0.0).clamp(0.0, outer);
+            LightKind::Spot { position, direction: d, inner_cone_degrees, outer_cone_degrees } => {
+                let outer = outer_cone_degrees.clamp(0.0, 90.0);
+                let inner = inner_cone_degrees.clamp(0.0, outer);
                 lights.push(Light::Spot {
-                    position: p.into(),
-                    direction: direction(l.direction),
+                    position: position.into(),
+                    direction: direction(d),
                     intensity: color(l),
                     cos_inner: inner.to_radians().cos(),
                     cos_outer: outer.to_radians().cos(),
                 });
             }
-            // Validation requires a position; nothing to place without one.
-            (LightKind::Point | LightKind::Spot, None) => {}
         }
     }
     lights

@@ -97,6 +97,28 @@ pub fn default_scene() -> SceneDescription {
         Prototype { name: "sphere".into(), mesh: primitives::uv_sphere(0.5, 48, 24), material: 2 },
         Prototype { name: "gold sphere".into(), mesh: primitives::uv_sphere(0.5, 48, 24), material: 4 },
     ];
+    SceneDescription {
+        name: "default".into(),
+        materials,
+        textures,
+        statics,
+        prototypes,
+        bodies: default_bodies(),
+        camera: Camera::pinhole(Vec3::new(-1.5, 3.2, 8.5), Vec3::new(0.0, 0.6, 0.0), Vec3::Y, 40.0),
+        sun: Sun {
+            direction: Vec3::new(-0.5, 0.8, 0.35).normalize(),
+            irradiance: Vec3::new(2.4, 2.25, 2.0),
+            angular_radius_deg: 2.0,
+        },
+        sky: Sky::DAYLIGHT,
+        lights: Vec::new(),
+    }
+}
+
+/// The default scene's bodies: four checkered boxes (two stacked, one on the plinth), a gold
+/// sphere and two blue ones.
+fn default_bodies() -> Vec<Body> {
+    // (centre, yaw, size)
     let boxes = [
         (Vec3::new(-2.2, 0.5, 0.0), 0.35, 1.0),
         (Vec3::new(-2.0, 1.5, 0.1), 1.1, 1.0),
@@ -124,22 +146,7 @@ pub fn default_scene() -> SceneDescription {
         prototype,
         transform: Affine3A::from_scale_rotation_translation(Vec3::splat(size), Quat::IDENTITY, at),
     }));
-    SceneDescription {
-        name: "default".into(),
-        materials,
-        textures,
-        statics,
-        prototypes,
-        bodies,
-        camera: Camera::pinhole(Vec3::new(-1.5, 3.2, 8.5), Vec3::new(0.0, 0.6, 0.0), Vec3::Y, 40.0),
-        sun: Sun {
-            direction: Vec3::new(-0.5, 0.8, 0.35).normalize(),
-            irradiance: Vec3::new(2.4, 2.25, 2.0),
-            angular_radius_deg: 2.0,
-        },
-        sky: Sky::DAYLIGHT,
-        lights: Vec::new(),
-    }
+    bodies
 }
 
 #[cfg(test)]

@@ -127,6 +127,61 @@ pub fn load_gltf(path: &Path) -> Result<GltfAsset, GltfError> {
 }
 
 fn load(path: &Path, with_materials: bool) -> Result<GltfAsset, GltfError> {
+    let (document, buffers) = read_document(path)?;
+    let mut triangles = Triangles::default();
+    let mut lights = Vec::new();
+    let mut cameras = Vec::new();
+    walk_nodes(path, &document, &mut |node, world| {
+        if let (true, Some(light)) = (with_materials, node.light()) {
+            lights.push(punctual_light(&light, world));
+        }
+        if let (true, Some(camera)) = (with_materials, node.camera()) {
+            cameras.extend(perspective_camera(path, &camera, world));
+        }
+        match node.mesh() {
+            Some(mesh) => triangles.add_mesh(path, &mesh, world, &buffers, with_materials),
+            None => Ok(()),
+        }
+    })?;
+    if triangles.mesh.indices.is_empty() {
+        return Err(GltfError::new(path, "(document)", "contains no triangles"));
+    }
+    let Triangles { mut mesh, normals, uvs, mut material_ids, any_normals, any_uvs, any_material } =
+        triangles;
+    if any_normals {
+        mesh.normals = Some(normals);
+    }
+    if any_uvs {
+        mesh.uvs = Some(uvs);
+    }
+
+    let mut asset = GltfAsset { lights, cameras, ..GltfAsset::default() };
+    if any_material {
+        let default_slot = document.materials().len() as u32;
+        if material_ids.contains(&u32::MAX) {
+            for id in &mut material_ids {
+                if *id == u32::MAX {
+                    *id = default_slot;
+                }
+            }
+        }
+        mesh.material_ids = Some(material_ids);
+        if with_materials {
+            let mut textures = TextureLoader::new(path, &document, &buffers);
+            asset.materials = document.materials().map(|m| material(path, &m, &mut textures)).collect();
+            if mesh.max_material_slot() == default_slot {
+                asset.materials.push(Material::gltf_default());
+            }
+            asset.textures = textures.textures;
+        }
+    }
+    mesh.validate().map_err(|e| GltfError::new(path, "(merged mesh)", e.to_string()))?;
+    asset.mesh = mesh;
+    Ok(asset)
+}
+
+/// The file's document, checked for extensions, and its buffers' data.
+fn read_document(path: &Path) -> Result<(gltf::Document, Vec<gltf::buffer::Data>), GltfError> {
     let bytes = std::fs::read(path).map_err(|e| GltfError::new(path, "(file)", e.to_string()))?;
     let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(&bytes)
         .map_err(|e| GltfError::new(path, "(document)", e.to_string()))?;
@@ -135,18 +190,17 @@ fn load(path: &Path, with_materials: bool) -> Result<GltfAsset, GltfError> {
         .map_err(|e| GltfError::new(path, "(document)", e.to_string()))?;
     let buffers = gltf::import_buffers(&document, path.parent(), blob)
         .map_err(|e| GltfError::new(path, "buffers", e.to_string()))?;
+    Ok((document, buffers))
+}
 
-    let mut out = TriangleMesh::default();
-    let mut normals = Vec::new();
-    let mut uvs = Vec::new();
-    let mut material_ids = Vec::new();
-    let mut any_normals = false;
-    let mut any_uvs = false;
-    let mut lights = Vec::new();
-    let mut cameras = Vec::new();
-    // glTF material index per triangle; `None` for glTF's default material.
-    let mut any_material = false;
-
+/// Calls `visit` with every node of the default scene (else the first scene, else every node
+/// that is no other node's child) and its world transform, depth first; stops at the first
+/// error, `visit`'s or a hierarchy deeper than 256 or a non-finite transform.
+fn walk_nodes<'d>(
+    path: &Path,
+    document: &'d gltf::Document,
+    visit: &mut dyn FnMut(&gltf::Node<'d>, &Mat4) -> Result<(), GltfError>,
+) -> Result<(), GltfError> {
     let roots: Vec<gltf::Node> = match document.default_scene().or_else(|| document.scenes().next()) {
         Some(scene) => scene.nodes().collect(),
         // No scene at all: treat every node that is no other node's child as a root.
@@ -170,176 +224,196 @@ fn load(path: &Path, with_materials: bool) -> Result<GltfAsset, GltfError> {
         if !world.is_finite() {
             return Err(GltfError::new(path, format!("nodes[{}]", node.index()), "non-finite transform"));
         }
-        if let (true, Some(light)) = (with_materials, node.light()) {
-            lights.push(punctual_light(&light, &world));
-        }
-        if let (true, Some(camera)) = (with_materials, node.camera()) {
-            match camera.projection() {
-                gltf::camera::Projection::Perspective(p) if p.yfov().is_finite() && p.yfov() > 0.0 => cameras
-                    .push(GltfCamera {
-                        name: format!("camera {}", camera.index()),
-                        position: world.transform_point3(Vec3::ZERO),
-                        forward: world.transform_vector3(Vec3::NEG_Z).normalize_or(Vec3::NEG_Z),
-                        yfov_degrees: p.yfov().to_degrees(),
-                    }),
-                gltf::camera::Projection::Perspective(_) => tracing::warn!(
-                    "{}: cameras[{}]: perspective camera without a usable yfov, ignored",
-                    path.display(),
-                    camera.index()
-                ),
-                gltf::camera::Projection::Orthographic(_) => tracing::warn!(
-                    "{}: cameras[{}]: orthographic cameras are not supported, ignored",
-                    path.display(),
-                    camera.index()
-                ),
-            }
-        }
-        if let Some(mesh) = node.mesh() {
-            let xf = Affine3A::from_mat4(world);
-            let normal_matrix = glam::Mat3::from(xf.matrix3).inverse().transpose();
-            for prim in mesh.primitives() {
-                let element = format!("meshes[{}].primitives[{}]", mesh.index(), prim.index());
-                if prim.mode() != gltf::mesh::Mode::Triangles {
-                    // Points and lines have no surface to collide with or render.
-                    continue;
-                }
-                let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
-                // The reader answers `None` both for a missing attribute and for an accessor
-                // whose data lies outside its buffer view or buffer: tell them apart.
-                let unreadable = |what: &str, accessor: Option<gltf::Accessor>| {
-                    match accessor {
-                    Some(a) => GltfError::new(
-                        path,
-                        &element,
-                        format!("{what} (accessors[{}]) cannot be read: its data lies outside its buffer view or buffer", a.index()),
-                    ),
-                    None => GltfError::new(path, &element, format!("has no {what} attribute")),
-                }
-                };
-                let positions: Vec<Vec3> = reader
-                    .read_positions()
-                    .ok_or_else(|| unreadable("POSITION", prim.get(&gltf::Semantic::Positions)))?
-                    .map(Vec3::from_array)
-                    .collect();
-                let base = out.positions.len();
-                let n = positions.len();
-                let indices: Vec<u32> = match (reader.read_indices(), prim.indices()) {
-                    (Some(ix), _) => ix.into_u32().collect(),
-                    (None, None) => (0..n as u32).collect(),
-                    (None, Some(a)) => return Err(unreadable("indices", Some(a))),
-                };
-                if indices.len() % 3 != 0 {
-                    return Err(GltfError::new(
-                        path,
-                        &element,
-                        format!("{} indices is not a whole number of triangles", indices.len()),
-                    ));
-                }
-                if let Some(&bad) = indices.iter().find(|&&i| i as usize >= n) {
-                    return Err(GltfError::new(
-                        path,
-                        &element,
-                        format!("index {bad} out of range for {n} vertices"),
-                    ));
-                }
-                if positions.iter().any(|p| !p.is_finite()) {
-                    return Err(GltfError::new(path, &element, "POSITION has non-finite values"));
-                }
-                out.positions.extend(positions.iter().map(|&p| xf.transform_point3(p)));
-                out.indices.extend(
-                    indices
-                        .chunks_exact(3)
-                        .map(|t| [t[0] + base as u32, t[1] + base as u32, t[2] + base as u32]),
-                );
-                // Primitives without an attribute get zeros: a zero normal shades with the
-                // geometric normal, and a zero UV only matters to an untextured material.
-                match reader.read_normals() {
-                    Some(ns) => {
-                        any_normals = true;
-                        normals.extend(ns.map(|v| (normal_matrix * Vec3::from_array(v)).normalize_or_zero()))
-                    }
-                    None if prim.get(&gltf::Semantic::Normals).is_some() => {
-                        return Err(unreadable("NORMAL", prim.get(&gltf::Semantic::Normals)))
-                    }
-                    None => normals.resize(out.positions.len(), Vec3::ZERO),
-                }
-                match reader.read_tex_coords(0) {
-                    Some(tc) => {
-                        any_uvs = true;
-                        uvs.extend(tc.into_f32().map(|uv| {
-                            let uv = Vec2::from_array(uv);
-                            if uv.is_finite() {
-                                uv
-                            } else {
-                                Vec2::ZERO
-                            }
-                        }))
-                    }
-                    None if prim.get(&gltf::Semantic::TexCoords(0)).is_some() => {
-                        return Err(unreadable("TEXCOORD_0", prim.get(&gltf::Semantic::TexCoords(0))))
-                    }
-                    None => {
-                        let m = prim.material();
-                        let pbr = m.pbr_metallic_roughness();
-                        let textured = pbr.base_color_texture().is_some()
-                            || pbr.metallic_roughness_texture().is_some()
-                            || m.emissive_texture().is_some();
-                        if with_materials && textured {
-                            tracing::warn!(
-                                file = %path.display(),
-                                "{element}: its material has textures but the primitive has no \
-                                 TEXCOORD_0; they are read at (0, 0)"
-                            );
-                        }
-                        uvs.resize(out.positions.len(), Vec2::ZERO)
-                    }
-                }
-                if normals.len() != out.positions.len() || uvs.len() != out.positions.len() {
-                    return Err(GltfError::new(path, &element, "attribute counts differ from POSITION's"));
-                }
-                let material = prim.material().index();
-                any_material |= material.is_some();
-                let slot = material.map_or(u32::MAX, |m| m as u32);
-                material_ids.resize(out.indices.len(), slot);
-            }
-        }
+        visit(&node, &world)?;
         for child in node.children() {
             stack.push((child, world, depth + 1));
         }
     }
-    if out.indices.is_empty() {
-        return Err(GltfError::new(path, "(document)", "contains no triangles"));
-    }
-    if any_normals {
-        out.normals = Some(normals);
-    }
-    if any_uvs {
-        out.uvs = Some(uvs);
-    }
+    Ok(())
+}
 
-    let mut asset = GltfAsset { lights, cameras, ..GltfAsset::default() };
-    if any_material {
-        let default_slot = document.materials().len() as u32;
-        if material_ids.contains(&u32::MAX) {
-            for id in &mut material_ids {
-                if *id == u32::MAX {
-                    *id = default_slot;
+/// A perspective camera where `world` puts it; other cameras are ignored with a warning.
+fn perspective_camera(path: &Path, camera: &gltf::Camera, world: &Mat4) -> Option<GltfCamera> {
+    match camera.projection() {
+        gltf::camera::Projection::Perspective(p) if p.yfov().is_finite() && p.yfov() > 0.0 => {
+            Some(GltfCamera {
+                name: format!("camera {}", camera.index()),
+                position: world.transform_point3(Vec3::ZERO),
+                forward: world.transform_vector3(Vec3::NEG_Z).normalize_or(Vec3::NEG_Z),
+                yfov_degrees: p.yfov().to_degrees(),
+            })
+        }
+        gltf::camera::Projection::Perspective(_) => {
+            tracing::warn!(
+                "{}: cameras[{}]: perspective camera without a usable yfov, ignored",
+                path.display(),
+                camera.index()
+            );
+            None
+        }
+        gltf::camera::Projection::Orthographic(_) => {
+            tracing::warn!(
+                "{}: cameras[{}]: orthographic cameras are not supported, ignored",
+                path.display(),
+                camera.index()
+            );
+            None
+        }
+    }
+}
+
+/// The triangle primitives of a file gathered so far, in the file's space: per-vertex normals
+/// and UVs (zeros where a primitive has none) and a glTF material slot per triangle.
+#[derive(Default)]
+struct Triangles {
+    mesh: TriangleMesh,
+    normals: Vec<Vec3>,
+    uvs: Vec<Vec2>,
+    /// The glTF material index per triangle; `u32::MAX` for glTF's default material.
+    material_ids: Vec<u32>,
+    any_normals: bool,
+    any_uvs: bool,
+    any_material: bool,
+}
+
+impl Triangles {
+    /// Appends every triangle primitive of `mesh`, moved by `world` (points and lines have no
+    /// surface to collide with or render).
+    fn add_mesh(
+        &mut self,
+        path: &Path,
+        mesh: &gltf::Mesh,
+        world: &Mat4,
+        buffers: &[gltf::buffer::Data],
+        with_materials: bool,
+    ) -> Result<(), GltfError> {
+        let xf = Affine3A::from_mat4(*world);
+        let normal_matrix = glam::Mat3::from(xf.matrix3).inverse().transpose();
+        for prim in mesh.primitives() {
+            let element = format!("meshes[{}].primitives[{}]", mesh.index(), prim.index());
+            if prim.mode() != gltf::mesh::Mode::Triangles {
+                continue;
+            }
+            let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+            let unreadable = |what: &str, accessor| unreadable(path, &element, what, accessor);
+            let positions: Vec<Vec3> = reader
+                .read_positions()
+                .ok_or_else(|| unreadable("POSITION", prim.get(&gltf::Semantic::Positions)))?
+                .map(Vec3::from_array)
+                .collect();
+            let indices: Vec<u32> = match (reader.read_indices(), prim.indices()) {
+                (Some(ix), _) => ix.into_u32().collect(),
+                (None, None) => (0..positions.len() as u32).collect(),
+                (None, Some(a)) => return Err(unreadable("indices", Some(a))),
+            };
+            self.add_triangles(path, &element, &positions, &indices, &xf)?;
+            // Primitives without an attribute get zeros: a zero normal shades with the
+            // geometric normal, and a zero UV only matters to an untextured material.
+            let vertices = self.mesh.positions.len();
+            match reader.read_normals() {
+                Some(ns) => {
+                    self.any_normals = true;
+                    self.normals.extend(ns.map(|v| (normal_matrix * Vec3::from_array(v)).normalize_or_zero()))
+                }
+                None if prim.get(&gltf::Semantic::Normals).is_some() => {
+                    return Err(unreadable("NORMAL", prim.get(&gltf::Semantic::Normals)))
+                }
+                None => self.normals.resize(vertices, Vec3::ZERO),
+            }
+            match reader.read_tex_coords(0) {
+                Some(tc) => {
+                    self.any_uvs = true;
+                    self.uvs.extend(tc.into_f32().map(|uv| {
+                        let uv = Vec2::from_array(uv);
+                        if uv.is_finite() {
+                            uv
+                        } else {
+                            Vec2::ZERO
+                        }
+                    }))
+                }
+                None if prim.get(&gltf::Semantic::TexCoords(0)).is_some() => {
+                    return Err(unreadable("TEXCOORD_0", prim.get(&gltf::Semantic::TexCoords(0))))
+                }
+                None => {
+                    if with_materials {
+                        warn_textures_without_uvs(path, &element, &prim.material());
+                    }
+                    self.uvs.resize(vertices, Vec2::ZERO)
                 }
             }
-        }
-        out.material_ids = Some(material_ids);
-        if with_materials {
-            let mut textures = TextureLoader::new(path, &document, &buffers);
-            asset.materials = document.materials().map(|m| material(path, &m, &mut textures)).collect();
-            if out.max_material_slot() == default_slot {
-                asset.materials.push(Material::gltf_default());
+            if self.normals.len() != vertices || self.uvs.len() != vertices {
+                return Err(GltfError::new(path, &element, "attribute counts differ from POSITION's"));
             }
-            asset.textures = textures.textures;
+            let material = prim.material().index();
+            self.any_material |= material.is_some();
+            let slot = material.map_or(u32::MAX, |m| m as u32);
+            self.material_ids.resize(self.mesh.indices.len(), slot);
         }
+        Ok(())
     }
-    out.validate().map_err(|e| GltfError::new(path, "(merged mesh)", e.to_string()))?;
-    asset.mesh = out;
-    Ok(asset)
+
+    /// Appends a primitive's triangles (`indices` into `positions`), moved by `xf`, after
+    /// checking them: whole triangles, indices in range, finite positions.
+    fn add_triangles(
+        &mut self,
+        path: &Path,
+        element: &str,
+        positions: &[Vec3],
+        indices: &[u32],
+        xf: &Affine3A,
+    ) -> Result<(), GltfError> {
+        let n = positions.len();
+        if indices.len() % 3 != 0 {
+            return Err(GltfError::new(
+                path,
+                element,
+                format!("{} indices is not a whole number of triangles", indices.len()),
+            ));
+        }
+        if let Some(&bad) = indices.iter().find(|&&i| i as usize >= n) {
+            return Err(GltfError::new(path, element, format!("index {bad} out of range for {n} vertices")));
+        }
+        if positions.iter().any(|p| !p.is_finite()) {
+            return Err(GltfError::new(path, element, "POSITION has non-finite values"));
+        }
+        let base = self.mesh.positions.len() as u32;
+        self.mesh.positions.extend(positions.iter().map(|&p| xf.transform_point3(p)));
+        self.mesh.indices.extend(indices.chunks_exact(3).map(|t| [t[0] + base, t[1] + base, t[2] + base]));
+        Ok(())
+    }
+}
+
+/// The error for an attribute the reader could not give: it answers `None` both for a
+/// missing attribute and for an accessor whose data lies outside its buffer view or buffer,
+/// so this tells them apart.
+fn unreadable(path: &Path, element: &str, what: &str, accessor: Option<gltf::Accessor>) -> GltfError {
+    match accessor {
+        Some(a) => GltfError::new(
+            path,
+            element,
+            format!(
+                "{what} (accessors[{}]) cannot be read: its data lies outside its buffer view or buffer",
+                a.index()
+            ),
+        ),
+        None => GltfError::new(path, element, format!("has no {what} attribute")),
+    }
+}
+
+/// Warns that a primitive without TEXCOORD_0 reads its material's textures at (0, 0).
+fn warn_textures_without_uvs(path: &Path, element: &str, m: &gltf::Material) {
+    let pbr = m.pbr_metallic_roughness();
+    let textured = pbr.base_color_texture().is_some()
+        || pbr.metallic_roughness_texture().is_some()
+        || m.emissive_texture().is_some();
+    if textured {
+        tracing::warn!(
+            file = %path.display(),
+            "{element}: its material has textures but the primitive has no \
+             TEXCOORD_0; they are read at (0, 0)"
+        );
+    }
 }
 
 /// Warns about every used extension the importer ignores; refuses a file that requires one.

@@ -7,8 +7,11 @@ use std::path::Path;
 
 use glam::{Affine3A, Quat, Vec3};
 
+use std::sync::Arc;
+
 use super::description::{Body, Camera, Material, Prototype, SceneDescription, Sky, StaticMesh, Sun};
-use super::gltf::{load_gltf, GltfError};
+use super::gltf::{load_gltf, GltfAsset, GltfError};
+use super::texture::Texture;
 use crate::rng::SplitMix64;
 
 /// A heap of `count` copies of the `object` glTF in the middle of the `env` glTF's floor.
@@ -18,17 +21,7 @@ pub fn asset_pile(env: &Path, object: &Path, count: usize, seed: u64) -> Result<
     let mut env_asset = load_gltf(env)?;
     let mut object_asset = load_gltf(object)?;
     let mut textures = Vec::new();
-    let mut materials = env_asset.take_materials(&mut textures);
-    if materials.is_empty() {
-        materials.push(Material::diffuse(Vec3::splat(0.6)));
-    }
-    let object_material = materials.len() as u32;
-    let object_materials = object_asset.take_materials(&mut textures);
-    if object_materials.is_empty() {
-        materials.push(Material::diffuse(Vec3::new(0.8, 0.65, 0.2)));
-    } else {
-        materials.extend(object_materials);
-    }
+    let (materials, object_material) = pile_materials(&mut env_asset, &mut object_asset, &mut textures);
     let env_mesh = env_asset.mesh;
     let object_mesh = object_asset.mesh;
     let env_bounds = env_mesh.bounds();
@@ -94,4 +87,25 @@ pub fn asset_pile(env: &Path, object: &Path, count: usize, seed: u64) -> Result<
         sky: Sky::DAYLIGHT,
         lights: env_asset.lights,
     })
+}
+
+/// The environment's materials (grey when it has none), then the object's (ochre when it has
+/// none), their textures moved to `textures`; and the index of the object's first material.
+fn pile_materials(
+    env: &mut GltfAsset,
+    object: &mut GltfAsset,
+    textures: &mut Vec<Arc<Texture>>,
+) -> (Vec<Material>, u32) {
+    let mut materials = env.take_materials(textures);
+    if materials.is_empty() {
+        materials.push(Material::diffuse(Vec3::splat(0.6)));
+    }
+    let object_material = materials.len() as u32;
+    let object_materials = object.take_materials(textures);
+    if object_materials.is_empty() {
+        materials.push(Material::diffuse(Vec3::new(0.8, 0.65, 0.2)));
+    } else {
+        materials.extend(object_materials);
+    }
+    (materials, object_material)
 }

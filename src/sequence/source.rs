@@ -64,7 +64,7 @@ impl Sequence {
     ) -> Result<Self, SequenceError> {
         match source {
             SequenceSource::Scene { file, options, trajectory: Some(path) } => {
-                let expected = options.effective_scene(&file)?.source_hash;
+                let expected = options.effective_scene(&file)?.source_hash();
                 let trajectory = Trajectory::read(&path, expected)?;
                 Self::new(&file, trajectory, PhysicsSource::Trajectory, Vec::new())
             }
@@ -98,7 +98,7 @@ impl Sequence {
             trajectory,
             assets,
             template,
-            frame_step: file.description.render.frame_step.max(1),
+            frame_step: file.spec().render.frame_step.max(1),
             physics,
             physics_ms,
         })
@@ -192,7 +192,7 @@ fn recorded_scene(path: &Path) -> Result<(SceneFile, SimulateOptions, Trajectory
         .scene_file()
         .map_err(|source| SequenceError::RecordedScene { path: path.to_path_buf(), source })?;
     let options = recorded.options.clone();
-    if options.effective_scene(&file)?.source_hash != trajectory.scene_hash {
+    if options.effective_scene(&file)?.source_hash() != trajectory.scene_hash {
         return Err(SequenceError::RecordedSceneHash(path.to_path_buf()));
     }
     Ok((file, options, trajectory))

@@ -8,7 +8,7 @@ use std::f32::consts::PI;
 use glam::{Affine3A, Quat, Vec3};
 
 use super::parse::SceneFile;
-use super::schema::{GeneratorKind, PrototypeDef, ShapeKind};
+use super::spec::{EnvironmentSource, GeneratorKind, Shape};
 use super::SceneError;
 use crate::geometry::{primitives, TriangleMesh};
 use crate::scene::gltf::{load_gltf, load_gltf_mesh, GltfAsset, GltfError};
@@ -35,7 +35,7 @@ fn gltf_asset(
     let loaded =
         if with_materials { load_gltf(&path) } else { load_gltf_mesh(&path).map(GltfAsset::from_mesh) };
     loaded.map_err(|source: GltfError| SceneError::Asset {
-        file: file.path.clone(),
+        file: file.path().to_path_buf(),
         line: file.line_of(field),
         field: field.into(),
         source: Box::new(source),
@@ -43,11 +43,10 @@ fn gltf_asset(
 }
 
 fn environment(file: &SceneFile, with_materials: bool) -> Result<GltfAsset, SceneError> {
-    let env = &file.description.environment;
-    let asset = match (&env.gltf, env.generator) {
-        (Some(path), _) => gltf_asset(file, "environment.gltf", path, with_materials)?,
-        (None, Some(kind)) => GltfAsset::from_mesh(generate(kind)),
-        (None, None) => return Err(file.error("environment", "no `gltf` and no `generator`")),
+    let env = &file.spec().environment;
+    let asset = match &env.source {
+        EnvironmentSource::Gltf(path) => gltf_asset(file, "environment.gltf", path, with_materials)?,
+        EnvironmentSource::Generator(kind) => GltfAsset::from_mesh(generate(*kind)),
     };
     let xf = Affine3A::from_scale_rotation_translation(
         Vec3::splat(env.scale),
@@ -68,7 +67,7 @@ pub fn prototype_asset(file: &SceneFile, index: usize) -> Result<GltfAsset, Scen
     let mut asset = prototype(file, index, true)?;
     if !asset.lights.is_empty() {
         tracing::warn!(
-            file = %file.path.display(),
+            file = %file.path().display(),
             "prototypes[{index}]: {} glTF light(s) ignored (only the environment's lights are used)",
             asset.lights.len()
         );
@@ -78,32 +77,20 @@ pub fn prototype_asset(file: &SceneFile, index: usize) -> Result<GltfAsset, Scen
 }
 
 fn prototype(file: &SceneFile, index: usize, with_materials: bool) -> Result<GltfAsset, SceneError> {
-    let proto: &PrototypeDef = file
-        .description
+    let proto = file
+        .spec()
         .prototypes
         .get(index)
         .ok_or_else(|| file.error(format!("prototypes[{index}]"), "no such prototype"))?;
-    let missing = |f: &str| {
-        file.error(format!("prototypes[{index}].{f}"), format!("shape {:?} needs `{f}`", proto.shape))
-    };
-    Ok(GltfAsset::from_mesh(match proto.shape {
-        ShapeKind::Box => {
-            primitives::cuboid(Vec3::from_array(proto.half_extents.ok_or_else(|| missing("half_extents"))?))
-        }
-        ShapeKind::Sphere => primitives::uv_sphere(proto.radius.ok_or_else(|| missing("radius"))?, 16, 8),
-        ShapeKind::Capsule => capsule(
-            proto.half_height.ok_or_else(|| missing("half_height"))?,
-            proto.radius.ok_or_else(|| missing("radius"))?,
-        ),
-        ShapeKind::Cylinder => cylinder(
-            proto.half_height.ok_or_else(|| missing("half_height"))?,
-            proto.radius.ok_or_else(|| missing("radius"))?,
-        ),
-        ShapeKind::Gltf => {
+    Ok(GltfAsset::from_mesh(match &proto.shape {
+        Shape::Box { half_extents } => primitives::cuboid(Vec3::from_array(*half_extents)),
+        Shape::Sphere { radius } => primitives::uv_sphere(*radius, 16, 8),
+        Shape::Capsule { half_height, radius } => capsule(*half_height, *radius),
+        Shape::Cylinder { half_height, radius } => cylinder(*half_height, *radius),
+        Shape::Gltf { path, scale, .. } => {
             let field = format!("prototypes[{index}].gltf");
-            let path = proto.gltf.as_deref().ok_or_else(|| missing("gltf"))?;
             let asset = gltf_asset(file, &field, path, with_materials)?;
-            return Ok(asset.transformed(&Affine3A::from_scale(Vec3::splat(proto.scale))));
+            return Ok(asset.transformed(&Affine3A::from_scale(Vec3::splat(*scale))));
         }
     }))
 }

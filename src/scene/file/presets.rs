@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 
 use super::parse::SceneFile;
 use super::SceneError;
+use crate::geometry::Aabb;
 use crate::scene::gltf::load_gltf_mesh;
 
 const ATRIUM_TOML: &str = include_str!("../../../scenes/atrium.toml");
@@ -86,30 +87,8 @@ impl SceneFile {
             );
             names.push(format!("\"{name}\""));
         }
-        // Two spawners over opposite quadrants of the central area, half the objects each, the
-        // second a little later, as scenes/monastery-rain.toml does: one region over the
-        // centre left 13% of the objects awake (on roofs) after 1,800 frames, against 3%.
+        text += &rain_spawners(&env_bounds, object_size, &names, count);
         let centre = env_bounds.center();
-        let half = env_bounds.extent() * (0.5 * SPAWN_FRACTION);
-        let gap = env_bounds.extent() * SPAWN_GAP_FRACTION;
-        let y = env_bounds.max.y + SPAWN_CLEARANCE_OBJECTS * object_size;
-        let quadrants = [(-1.0f32, -1.0f32, 0.0f32), (1.0, 1.0, 0.3)];
-        for (k, (sx, sz, start)) in quadrants.into_iter().enumerate() {
-            let (xa, xb) = (centre.x + sx * gap.x, centre.x + sx * half.x);
-            let (za, zb) = (centre.z + sz * gap.z, centre.z + sz * half.z);
-            text += &format!(
-                "[[spawners]]\nprototypes = [{names}]\ncount = {count}\n\
-                 region = {{ min = [{x0}, {y}, {z0}], max = [{x1}, {y}, {z1}] }}\n\
-                 waves = 8\nwave_interval = 0.75\nstart_time = {start}\nposition_jitter = {jitter}\n\n",
-                names = names.join(", "),
-                count = count / 2 + (count % 2) * u32::from(k == 0),
-                x0 = xa.min(xb),
-                x1 = xa.max(xb),
-                z0 = za.min(zb),
-                z1 = za.max(zb),
-                jitter = 0.1 * object_size,
-            );
-        }
         let eye = centre + glam::Vec3::new(0.0, 0.55 * width, 0.85 * width);
         text += &format!(
             "[[cameras]]\nname = \"overview\"\nposition = [{}, {}, {}]\nlook_at = [{}, {}, {}]\n\
@@ -121,4 +100,34 @@ impl SceneFile {
         let name = format!("asset rain over {}", env.display());
         SceneFile::parse(name, text)
     }
+}
+
+/// Two `[[spawners]]` over opposite quadrants of the central area of `env`, half the `count`
+/// objects each, the second a little later, as scenes/monastery-rain.toml does: one region
+/// over the centre left 13% of the objects awake (on roofs) after 1,800 frames, against 3%.
+/// `names` are the prototypes' quoted names.
+fn rain_spawners(env: &Aabb, object_size: f32, names: &[String], count: u32) -> String {
+    let centre = env.center();
+    let half = env.extent() * (0.5 * SPAWN_FRACTION);
+    let gap = env.extent() * SPAWN_GAP_FRACTION;
+    let y = env.max.y + SPAWN_CLEARANCE_OBJECTS * object_size;
+    let quadrants = [(-1.0f32, -1.0f32, 0.0f32), (1.0, 1.0, 0.3)];
+    let mut text = String::new();
+    for (k, (sx, sz, start)) in quadrants.into_iter().enumerate() {
+        let (xa, xb) = (centre.x + sx * gap.x, centre.x + sx * half.x);
+        let (za, zb) = (centre.z + sz * gap.z, centre.z + sz * half.z);
+        text += &format!(
+            "[[spawners]]\nprototypes = [{names}]\ncount = {count}\n\
+             region = {{ min = [{x0}, {y}, {z0}], max = [{x1}, {y}, {z1}] }}\n\
+             waves = 8\nwave_interval = 0.75\nstart_time = {start}\nposition_jitter = {jitter}\n\n",
+            names = names.join(", "),
+            count = count / 2 + (count % 2) * u32::from(k == 0),
+            x0 = xa.min(xb),
+            x1 = xa.max(xb),
+            z0 = za.min(zb),
+            z1 = za.max(zb),
+            jitter = 0.1 * object_size,
+        );
+    }
+    text
 }

@@ -1,0 +1,120 @@
+//! The raw TOML shape to the checked [`SceneSpec`]: finite numbers, positive counts and
+//! sizes, references resolved to indices, asset files that exist. One function per section:
+//! scene, physics and the asset directory here; `world`: environment and prototypes;
+//! `motion`: spawners, kinematic bodies and disturbances; `view`: cameras, sky, lights and
+//! render settings. [`validate`] checks them in that order and stops at the first problem,
+//! which it reports by field path (the parser adds file and line).
+
+mod motion;
+mod view;
+mod world;
+
+use super::asset_dir::AssetDir;
+use super::schema::SceneToml;
+use super::spec::{PhysicsSettings, SceneInfo, SceneSpec};
+
+/// One thing wrong with a scene, at a field path such as `spawners[1].count`.
+#[derive(Debug)]
+pub(super) struct Problem {
+    pub field: String,
+    pub message: String,
+}
+
+/// A checked value, or the first problem found on the way to it.
+type Checked<T> = Result<T, Problem>;
+
+/// Checks `raw` section by section and builds the spec; relative asset paths resolve
+/// against `assets`.
+pub(super) fn validate(raw: &SceneToml, assets: &AssetDir) -> Result<SceneSpec, Problem> {
+    let scene = scene(&raw.scene)?;
+    let physics = physics(&raw.physics)?;
+    if raw.scene.assets.is_some() && !assets.is_overridden() && !assets.path().is_dir() {
+        return Err(problem("scene.assets", format!("directory not found: {}", assets.path().display())));
+    }
+    let environment = world::environment(&raw.environment, assets)?;
+    let prototypes = world::prototypes(&raw.prototypes, assets)?;
+    let spawners = motion::spawners(&raw.spawners, &prototypes)?;
+    let kinematics = motion::kinematics(&raw.kinematics, &prototypes)?;
+    let disturbances = motion::disturbances(&raw.disturbances, scene.frames)?;
+    let cameras = view::cameras(&raw.cameras)?;
+    let sky = raw.sky.as_ref().map(view::sky).transpose()?;
+    let lights = view::lights(&raw.lights)?;
+    let render = view::render(&raw.render, &cameras)?;
+    Ok(SceneSpec {
+        scene,
+        physics,
+        environment,
+        prototypes,
+        spawners,
+        kinematics,
+        disturbances,
+        cameras,
+        lights,
+        sky,
+        render,
+    })
+}
+
+/// `[scene]`: a name and at least one frame.
+fn scene(s: &SceneInfo) -> Checked<SceneInfo> {
+    if s.name.trim().is_empty() {
+        return Err(problem("scene.name", "must not be empty"));
+    }
+    at_least_one("scene.frames", s.frames)?;
+    Ok(s.clone())
+}
+
+/// `[physics]`: a positive timestep, at least one substep and solver iteration, finite
+/// gravity and kill plane, thresholds, times and damping not negative.
+fn physics(p: &PhysicsSettings) -> Checked<PhysicsSettings> {
+    positive("physics.timestep", p.timestep)?;
+    at_least_one("physics.substeps", p.substeps)?;
+    finite3("physics.gravity", p.gravity)?;
+    non_negative("physics.sleep_linear_threshold", p.sleep_linear_threshold)?;
+    non_negative("physics.sleep_angular_threshold", p.sleep_angular_threshold)?;
+    non_negative("physics.sleep_time", p.sleep_time)?;
+    finite("physics.kill_plane_y", p.kill_plane_y)?;
+    at_least_one("physics.solver_iterations", p.solver_iterations)?;
+    non_negative("physics.linear_damping", p.linear_damping)?;
+    non_negative("physics.angular_damping", p.angular_damping)?;
+    Ok(p.clone())
+}
+
+fn problem(field: impl Into<String>, message: impl Into<String>) -> Problem {
+    Problem { field: field.into(), message: message.into() }
+}
+
+fn finite(field: &str, v: f32) -> Checked<f32> {
+    if !v.is_finite() {
+        return Err(problem(field, format!("must be a finite number, got {v}")));
+    }
+    Ok(v)
+}
+
+fn finite3(field: &str, v: [f32; 3]) -> Checked<[f32; 3]> {
+    if v.iter().any(|x| !x.is_finite()) {
+        return Err(problem(field, format!("must be finite numbers, got {v:?}")));
+    }
+    Ok(v)
+}
+
+fn positive(field: &str, v: f32) -> Checked<f32> {
+    if finite(field, v)? <= 0.0 {
+        return Err(problem(field, format!("must be greater than 0, got {v}")));
+    }
+    Ok(v)
+}
+
+fn non_negative(field: &str, v: f32) -> Checked<f32> {
+    if finite(field, v)? < 0.0 {
+        return Err(problem(field, format!("must not be negative, got {v}")));
+    }
+    Ok(v)
+}
+
+fn at_least_one(field: &str, v: u32) -> Checked<u32> {
+    if v == 0 {
+        return Err(problem(field, "must be at least 1, got 0"));
+    }
+    Ok(v)
+}
