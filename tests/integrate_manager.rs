@@ -11,8 +11,8 @@ use dormant::accel::{self, load_scene, Backend};
 use dormant::crosscheck::{camera_rays, compare_mapped, surface_rays, MappedQuery, Tolerance, VerifyReport};
 use dormant::geometry::{primitives, Ray};
 use dormant::integrate::{
-    CacheBudget, IntegrationPolicy, LoadedObjectMap, ManagerOptions, ReactivationPath, ReactivationStrategy,
-    SceneManager,
+    CacheBudget, IntegrationForm, IntegrationPolicy, IntegrationSettings, LoadedObjectMap, ManagerOptions,
+    ReactivationPath, ReactivationStrategy, SceneManager,
 };
 use dormant::physics::{
     BodyId, BodyInfo, BodyKind, BodyPose, BodyState, IslandEvent, IslandId, ReplayFrame, SimulateOptions,
@@ -25,6 +25,21 @@ use proptest::prelude::*;
 
 fn backends() -> Vec<Backend> {
     Backend::compiled().to_vec()
+}
+
+/// Every compiled backend with each of `policies` in every integration form it supports.
+fn configurations(policies: &[IntegrationPolicy]) -> Vec<(Backend, IntegrationPolicy, IntegrationForm)> {
+    let mut out = Vec::new();
+    for backend in backends() {
+        let forms: &[IntegrationForm] =
+            if backend == Backend::Embree { &IntegrationForm::ALL } else { &[IntegrationForm::Baked] };
+        for &policy in policies {
+            for &form in forms {
+                out.push((backend, policy, form));
+            }
+        }
+    }
+    out
 }
 
 /// Compares the manager's committed scene with `reference` (every body an instance).
@@ -64,9 +79,10 @@ fn tiny() -> Sequence {
 fn integrated_frames_hit_like_all_instanced_frames() {
     let sequence = tiny();
     let every_fourth = sequence.select(None, Some(4)).unwrap();
-    for backend in backends() {
-        for policy in [IntegrationPolicy::Always, IntegrationPolicy::Auto] {
-            let options = ManagerOptions { policy, ..ManagerOptions::default() };
+    for (backend, policy, form) in configurations(&[IntegrationPolicy::Always, IntegrationPolicy::Auto]) {
+        {
+            let settings = IntegrationSettings { policy, form, ..IntegrationSettings::default() };
+            let options = sequence.manager_options(&every_fourth, settings);
             let mut manager = sequence.manager(backend, Some(2), options).unwrap();
             let (mut compared, mut integrated_seen, mut reactivated) = (0, 0, 0);
             let mut check = |f: &ReplayFrame<'_>, managers: &mut [SceneManager]| {
@@ -80,7 +96,7 @@ fn integrated_frames_hit_like_all_instanced_frames() {
                     rays.extend(surface_rays(&reference, 1500, u64::from(f.index)));
                     let present: Vec<BodyId> = f.present_bodies().collect();
                     let report = check_against(backend, manager, &reference, &present, &rays);
-                    assert_agrees(&report, &format!("{backend} {policy} frame {}", f.index));
+                    assert_agrees(&report, &format!("{backend} {policy} {form} frame {}", f.index));
                     compared += 1;
                     integrated_seen = integrated_seen.max(stats.integrated_islands);
                 }
@@ -294,9 +310,12 @@ fn never_always_and_auto_render_the_same_images() {
     for backend in backends() {
         let mut films: Vec<Vec<Film>> = Vec::new();
         let mut integrated = 0;
-        for policy in [IntegrationPolicy::Never, IntegrationPolicy::Always, IntegrationPolicy::Auto] {
-            let options = ManagerOptions { policy, ..ManagerOptions::default() };
-            let mut manager = sequence.manager(backend, Some(2), options).unwrap();
+        let runs =
+            configurations(&[IntegrationPolicy::Never, IntegrationPolicy::Always, IntegrationPolicy::Auto]);
+        for (_, policy, form) in runs.into_iter().filter(|(b, ..)| *b == backend) {
+            let settings = IntegrationSettings { policy, form, ..IntegrationSettings::default() };
+            let mut manager =
+                sequence.manager(backend, Some(2), sequence.manager_options(&frames, settings)).unwrap();
             let mut images = Vec::new();
             sequence
                 .render(&frames, &mut manager, &renderer, &mut |f, stats| {
