@@ -10,6 +10,7 @@
 mod build;
 mod mesh;
 mod sah;
+mod stack;
 mod traverse;
 mod wide;
 

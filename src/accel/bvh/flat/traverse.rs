@@ -3,10 +3,9 @@
 //! test would accept, and nearer child first by entry distance. The slab test uses glam's
 //! `Vec3A` (SSE2 where available, scalar elsewhere); there is no hand-written SIMD.
 
-use std::mem::MaybeUninit;
-
 use glam::{Vec3, Vec3A};
 
+use super::stack::TraversalStack;
 use super::Node;
 use crate::geometry::Ray;
 
@@ -76,9 +75,7 @@ where
     if ray.hit(root_node, *t_max) == f32::INFINITY {
         return false;
     }
-    // Uninitialised: zeroing 1 KiB per call costs more than a short traversal.
-    let mut stack = [const { MaybeUninit::<(u32, f32)>::uninit() }; STACK_SIZE];
-    let mut sp = 0usize;
+    let mut stack = TraversalStack::<STACK_SIZE>::new();
     let mut node = root_node;
     loop {
         if node.is_leaf() {
@@ -93,9 +90,7 @@ where
             match (ta < f32::INFINITY, tb < f32::INFINITY) {
                 (true, true) => {
                     let (near, far, tfar) = if ta <= tb { (na, a + 1, tb) } else { (nb, a, ta) };
-                    debug_assert!(sp < STACK_SIZE);
-                    stack[sp].write((far as u32, tfar));
-                    sp += 1;
+                    stack.push(far as u32, tfar);
                     node = near;
                     continue;
                 }
@@ -110,19 +105,10 @@ where
                 (false, false) => {}
             }
         }
-        // Pop the next subtree still in front of the closest hit.
-        loop {
-            if sp == 0 {
-                return false;
-            }
-            sp -= 1;
-            // SAFETY: every entry below `sp` was written by the push above before `sp` grew
-            // past it, and `sp` only shrinks by the pop here.
-            let (i, t) = unsafe { stack[sp].assume_init() };
-            if t <= *t_max {
-                node = &nodes[i as usize];
-                break;
-            }
+        // The next subtree still in front of the closest hit.
+        match stack.pop_within(*t_max) {
+            Some(i) => node = &nodes[i as usize],
+            None => return false,
         }
     }
 }
