@@ -11,20 +11,20 @@ use crate::geometry::Ray;
 
 /// Traversal stack entries; deeper than any tree the builder makes (its depth is bounded by
 /// the object-median fallback).
-pub const STACK_SIZE: usize = 128;
+pub(crate) const STACK_SIZE: usize = 128;
 
 /// `1 + 2 * gamma(3)`: widens the far slab distance to absorb rounding (pbrt 4, section 6.8).
 pub(crate) const FAR_SCALE: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
 
 /// Whether the ray's `[t_min, t_max]` is a usable interval (false for NaN bounds).
 #[inline]
-pub fn interval_is_valid(ray: &Ray) -> bool {
+pub(crate) fn interval_is_valid(ray: &Ray) -> bool {
     ray.t_min <= ray.t_max
 }
 
 /// A ray prepared for slab tests.
 #[derive(Clone, Copy, Debug)]
-pub struct BoxRay {
+pub(crate) struct BoxRay {
     pub org: Vec3A,
     /// `1 / dir`, with zero components replaced by `±1 / f32::MIN_POSITIVE` so that no slab
     /// distance is ever `0 * inf = NaN` (a finite origin on a slab plane gives 0, not NaN).
@@ -65,7 +65,7 @@ impl BoxRay {
 /// each leaf's primitive range and the current `t_max`, which it lowers on hits; it returns
 /// `true` to stop (any-hit). Returns whether `leaf` stopped the traversal.
 #[inline(always)]
-pub fn traverse<F>(nodes: &[Node], root: u32, ray: &BoxRay, t_max: &mut f32, mut leaf: F) -> bool
+pub(crate) fn traverse<F>(nodes: &[Node], root: u32, ray: &BoxRay, t_max: &mut f32, mut leaf: F) -> bool
 where
     F: FnMut(u32, u32, &mut f32) -> bool,
 {

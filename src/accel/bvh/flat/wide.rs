@@ -22,7 +22,7 @@ const NONE: u32 = u32::MAX;
 /// Four children's boxes in structure-of-arrays layout, plus what each child is.
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(64))]
-pub struct Node4 {
+pub(crate) struct Node4 {
     min: [[f32; 4]; 3],
     max: [[f32; 4]; 3],
     /// Interior child: wide node index. Leaf child: first primitive. Unused: [`EMPTY`].
@@ -35,7 +35,7 @@ const _: () = assert!(std::mem::size_of::<Node4>() == 128);
 
 /// The wide tree plus, for each binary node, the wide node rooted there (if any).
 #[derive(Clone, Debug, Default)]
-pub struct Wide {
+pub(crate) struct Wide {
     nodes: Vec<Node4>,
     map: Vec<u32>,
 }
