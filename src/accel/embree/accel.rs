@@ -1,3 +1,7 @@
+//! [`EmbreeAccel`], the Embree [`crate::accel::Accelerator`]: prototypes as frozen scenes, the
+//! static scene owned by an identity instance, and a top level of instances; with the build
+//! qualities of each kind of scene ([`EmbreeBuildParams`]).
+
 use std::sync::Arc;
 
 use glam::{Affine3A, Mat3, Vec3};
