@@ -2,10 +2,17 @@
 //! traversal uses (binary and 4-wide flat trees; the persistent static tree and the two-level
 //! scene trace through those two). It owns the traversal's only `unsafe`.
 //!
-//! Performance notes (measured, so nobody retries them blind):
-//! - The storage is left uninitialised. Zeroing it (a plain `[(0, 0.0); N]`) costs more than a
-//!   short traversal: 1 KiB per binary traversal and 3 KiB per 4-wide one, and a ray runs
-//!   one traversal per instance it enters.
+//! Performance notes (measured, so nobody retries them blind). Setup: CPU time (`perf stat -e
+//! task-clock`) of `dormant --threads 1 render --backend bvh --mode ao --env monastery.glb
+//! --object duck.glb --count 1000 --size 640x360 --spp 16`, 8 runs of each binary alternating,
+//! 2 shared cores:
+//! - This type against the two hand-written stacks it replaced: 1.00x (median of runs and
+//!   best run); images byte-identical.
+//! - Zeroed storage (a plain `[(0, 0.0); N]`, no `unsafe` at all): 1.21x the CPU time, every
+//!   run. The memset is 1 KiB per binary traversal and 3 KiB per 4-wide one, and a ray runs
+//!   one traversal per block subtree and per instance it enters, most of them short.
+//! - `get_unchecked` in [`TraversalStack::pop_within`] (dropping the bounds check on the
+//!   pop): 0.99x median, 1.00x best run, within noise; not worth a second `unsafe`.
 
 use std::mem::MaybeUninit;
 
