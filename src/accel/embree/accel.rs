@@ -1,6 +1,5 @@
-//! [`EmbreeAccel`], the Embree [`crate::accel::Accelerator`]: prototypes as frozen scenes, the
-//! static scene owned by an identity instance, and a top level of instances; with the build
-//! qualities of each kind of scene ([`EmbreeBuildParams`]).
+//! [`EmbreeAccel`], the Embree [`crate::accel::Accelerator`] (its scenes are described on the
+//! type), and the build quality of each kind of scene it makes ([`EmbreeBuildParams`]).
 
 use std::sync::Arc;
 
