@@ -21,6 +21,6 @@ pub use accel::{EmbreeAccel, EmbreeBuildParams};
 pub use device::{Device, Version};
 pub use error::EmbreeError;
 pub use geometry::TriangleGeometry;
-pub use packet::{Coherence, PACKET_WIDTHS};
+pub use packet::Coherence;
 pub use quality::BuildQuality;
 pub use scene::{EmbreeHit, FrozenScene, Geometry, InstanceGeometry, Scene, SceneFlags, SceneView};
