@@ -3,7 +3,7 @@
 mod bvh_common;
 
 use bvh_common::*;
-use dormant::accel::bvh::{BuildParams, BvhAccel, StaticBvh};
+use dormant::accel::bvh::{testing, BuildParams, BvhAccel, StaticBvh};
 use dormant::accel::{create, AccelError, Accelerator, Backend, HitObject, SceneQuery, StaticId};
 use dormant::geometry::{Ray, TriangleMesh};
 use glam::{Affine3A, Quat, Vec3};
@@ -69,7 +69,7 @@ proptest! {
                 prop_assert!(tree.remove(id));
                 live[k] = false;
             }
-            tree.check().map_err(TestCaseError::fail)?;
+            testing::check_static_tree(&tree).map_err(TestCaseError::fail)?;
             let mut meshes: Vec<(StaticId, &TriangleMesh)> = vec![(StaticId(100), &base)];
             meshes.extend((0..islands.len()).filter(|&k| live[k]).map(|k| (StaticId(k as u32), &islands[k])));
             let mut fresh = StaticBvh::new(BuildParams::QUALITY);
@@ -123,14 +123,14 @@ proptest! {
                 }
                 // Snapshot now, restore a previous one.
                 _ => {
-                    snapshots.push((accel.static_snapshot(), live.clone()));
+                    snapshots.push((accel.snapshot_static_scene().unwrap(), live.clone()));
                     let (snap, l) = snapshots[k % snapshots.len()].clone();
-                    accel.restore_static(snap);
+                    accel.restore_static_scene(&snap).unwrap();
                     live = l;
                 }
             }
             accel.commit().unwrap();
-            accel.static_bvh().check().map_err(TestCaseError::fail)?;
+            testing::check_static_tree_of(&accel).map_err(TestCaseError::fail)?;
             let tris: Vec<RefTri> = live.iter().flat_map(|(id, m)| ref_tris(HitObject::Static(*id), m)).collect();
             let all: Vec<&TriangleMesh> = [&base_a, &base_b].into_iter().chain(islands.iter()).collect();
             let rays = rays_for(&all, seed, 48, 12.0);
@@ -154,11 +154,11 @@ proptest! {
         for (i, m) in extra.iter().enumerate() {
             tree.insert(StaticId(i as u32 + 1), m).unwrap();
         }
-        tree.check().map_err(TestCaseError::fail)?;
+        testing::check_static_tree(&tree).map_err(TestCaseError::fail)?;
         let mid = tree.snapshot();
         tree.remove(StaticId(0));
         tree.remove(StaticId(1));
-        tree.check().map_err(TestCaseError::fail)?;
+        testing::check_static_tree(&tree).map_err(TestCaseError::fail)?;
         let after: Vec<_> = rays.iter().map(|r| old.intersect(r)).collect();
         prop_assert_eq!(&before, &after);
         prop_assert!(old.contains(StaticId(0)) && !tree.contains(StaticId(0)));

@@ -1,3 +1,5 @@
+//! [`Backend`]: the accelerator implementations, and [`create`], which makes one.
+
 use std::fmt;
 use std::str::FromStr;
 

@@ -1,3 +1,5 @@
+//! [`Hit`]: a ray-triangle intersection as every backend reports it.
+
 use glam::Vec3;
 
 use super::{InstanceId, StaticId};

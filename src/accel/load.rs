@@ -1,3 +1,5 @@
+//! [`load_scene`]: a scene description into an accelerator, with ids in a fixed order.
+
 use super::{AccelError, Accelerator, InstanceId, PrototypeId, StaticId};
 use crate::scene::SceneDescription;
 

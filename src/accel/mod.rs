@@ -7,7 +7,9 @@
 //!
 //! Changes are staged and become visible to rays at [`Accelerator::commit`]. Queries go through
 //! [`Accelerator::query`], which fails while changes are uncommitted, so no ray ever sees a
-//! half-updated scene. Nothing outside this module knows which backend it talks to.
+//! half-updated scene. The renderer and the integration engine see only these traits; the
+//! backends' modules are public for their own types (build parameters for the benchmarks,
+//! the Embree wrapper and its version for `dormant info`, the BVH's persistent static tree).
 
 mod backend;
 pub mod bvh;

@@ -215,20 +215,19 @@ fn insert_timing(
     })
 }
 
-pub fn bench_accel(
+/// Builds the scene with every variant and traces the primary and bounce rays through each.
+/// The bounce rays are made once, from the first variant's primary hits. Returns the build
+/// and trace timings and the bounce ray count.
+fn build_and_trace(
     desc: &SceneDescription,
-    opts: &AccelBenchOptions,
-) -> Result<AccelBenchReport, AccelError> {
-    let threads = opts.threads;
-    let primary = camera_rays(desc, opts.width, opts.height);
+    primary: &[Ray],
+    variants: &[Variant],
+    runs: u32,
+) -> Result<(Vec<BuildTiming>, Vec<TraceTiming>, usize), AccelError> {
     let mut build = Vec::new();
     let mut trace_timings = Vec::new();
     let mut bounce: Option<Vec<Ray>> = None;
-
-    let bvh: Variant = (Backend::Bvh, "sah".into(), Box::new(move || accel::create(Backend::Bvh, threads)));
-    let variants: Vec<Variant> = embree_variants(threads).into_iter().chain([bvh]).collect();
-
-    for (backend, quality, make) in &variants {
+    for (backend, quality, make) in variants {
         // Prototypes are built as they are added, so the timing covers loading and commit.
         let (a, ms) = timed(|| -> Result<_, AccelError> {
             let mut a = make()?;
@@ -240,9 +239,9 @@ pub fn bench_accel(
         tracing::info!("{backend}/{quality}: built in {ms:.1} ms");
         build.push(BuildTiming { backend: *backend, quality: quality.clone(), ms });
         let query = a.query()?;
-        let bounce = bounce.get_or_insert_with(|| bounce_rays(query, &primary));
-        let primary_ms = best_trace(query, &primary, opts.trace_runs);
-        let bounce_ms = best_trace(query, bounce, opts.trace_runs);
+        let bounce = bounce.get_or_insert_with(|| bounce_rays(query, primary));
+        let primary_ms = best_trace(query, primary, runs);
+        let bounce_ms = best_trace(query, bounce, runs);
         trace_timings.push(TraceTiming {
             backend: *backend,
             quality: quality.clone(),
@@ -252,48 +251,76 @@ pub fn bench_accel(
             bounce_mrays_per_s: bounce.len() as f64 / bounce_ms / 1e3,
         });
     }
+    Ok((build, trace_timings, bounce.map_or(0, |b| b.len())))
+}
 
-    let island_size = ((desc.bodies.len() as f64 * opts.island_fraction).round() as usize).max(1);
+/// [`insert_timing`] for every compiled backend, with islands of `island_fraction` of the
+/// bodies; none when the scene has no bodies.
+fn insert_timings(
+    desc: &SceneDescription,
+    island_fraction: f64,
+    threads: Option<usize>,
+) -> Result<Vec<InsertTiming>, AccelError> {
+    let island_size = ((desc.bodies.len() as f64 * island_fraction).round() as usize).max(1);
     let islands = baked_islands(desc, island_size);
-    let mut insert = Vec::new();
-    if !islands.is_empty() {
-        #[cfg(feature = "embree")]
-        insert.push(insert_timing(Backend::Embree, desc, &islands, &move || {
-            accel::create(Backend::Embree, threads)
-        })?);
-        insert.push(insert_timing(Backend::Bvh, desc, &islands, &move || {
-            accel::create(Backend::Bvh, threads)
-        })?);
+    if islands.is_empty() {
+        return Ok(Vec::new());
     }
+    Backend::compiled()
+        .into_iter()
+        .map(|backend| insert_timing(backend, desc, &islands, &move || accel::create(backend, threads)))
+        .collect()
+}
 
-    let find_build =
-        |b: Backend, q: &str| build.iter().find(|t| t.backend == b && t.quality == q).map(|t| t.ms);
-    let find_trace = |b: Backend, q: &str| {
-        trace_timings.iter().find(|t| t.backend == b && t.quality == q).map(|t| t.primary_ms + t.bounce_ms)
-    };
-    let ratio = |a: Option<f64>, b: Option<f64>| match (a, b) {
-        (Some(a), Some(b)) if b > 0.0 => a / b,
-        _ => f64::NAN,
-    };
-    let bvh_insert = insert.iter().find(|t| t.backend == Backend::Bvh);
-    let embree_insert = insert.iter().find(|t| t.backend == Backend::Embree);
-    let ratios = AccelRatios {
-        bvh_over_embree_trace: ratio(find_trace(Backend::Bvh, "sah"), find_trace(Backend::Embree, "medium")),
-        bvh_over_embree_high_trace: ratio(
-            find_trace(Backend::Bvh, "sah"),
-            find_trace(Backend::Embree, "high"),
-        ),
-        bvh_over_embree_build: ratio(find_build(Backend::Bvh, "sah"), find_build(Backend::Embree, "medium")),
-        bvh_rebuild_over_insert: ratio(bvh_insert.map(|t| t.rebuild_ms), bvh_insert.map(|t| t.insert_ms)),
-        bvh_insert_sah_over_rebuild: ratio(
-            bvh_insert.and_then(|t| t.sah_after_insert).map(f64::from),
-            bvh_insert.and_then(|t| t.sah_rebuild).map(f64::from),
-        ),
-        embree_rebuild_over_insert: ratio(
-            embree_insert.map(|t| t.rebuild_ms),
-            embree_insert.map(|t| t.insert_ms),
-        ),
-    };
+impl AccelRatios {
+    fn new(build: &[BuildTiming], trace: &[TraceTiming], insert: &[InsertTiming]) -> Self {
+        let find_build =
+            |b: Backend, q: &str| build.iter().find(|t| t.backend == b && t.quality == q).map(|t| t.ms);
+        let find_trace = |b: Backend, q: &str| {
+            trace.iter().find(|t| t.backend == b && t.quality == q).map(|t| t.primary_ms + t.bounce_ms)
+        };
+        let ratio = |a: Option<f64>, b: Option<f64>| match (a, b) {
+            (Some(a), Some(b)) if b > 0.0 => a / b,
+            _ => f64::NAN,
+        };
+        let bvh_insert = insert.iter().find(|t| t.backend == Backend::Bvh);
+        let embree_insert = insert.iter().find(|t| t.backend == Backend::Embree);
+        AccelRatios {
+            bvh_over_embree_trace: ratio(
+                find_trace(Backend::Bvh, "sah"),
+                find_trace(Backend::Embree, "medium"),
+            ),
+            bvh_over_embree_high_trace: ratio(
+                find_trace(Backend::Bvh, "sah"),
+                find_trace(Backend::Embree, "high"),
+            ),
+            bvh_over_embree_build: ratio(
+                find_build(Backend::Bvh, "sah"),
+                find_build(Backend::Embree, "medium"),
+            ),
+            bvh_rebuild_over_insert: ratio(bvh_insert.map(|t| t.rebuild_ms), bvh_insert.map(|t| t.insert_ms)),
+            bvh_insert_sah_over_rebuild: ratio(
+                bvh_insert.and_then(|t| t.sah_after_insert).map(f64::from),
+                bvh_insert.and_then(|t| t.sah_rebuild).map(f64::from),
+            ),
+            embree_rebuild_over_insert: ratio(
+                embree_insert.map(|t| t.rebuild_ms),
+                embree_insert.map(|t| t.insert_ms),
+            ),
+        }
+    }
+}
+
+pub fn bench_accel(
+    desc: &SceneDescription,
+    opts: &AccelBenchOptions,
+) -> Result<AccelBenchReport, AccelError> {
+    let threads = opts.threads;
+    let primary = camera_rays(desc, opts.width, opts.height);
+    let bvh: Variant = (Backend::Bvh, "sah".into(), Box::new(move || accel::create(Backend::Bvh, threads)));
+    let variants: Vec<Variant> = embree_variants(threads).into_iter().chain([bvh]).collect();
+    let (build, trace, bounce_rays) = build_and_trace(desc, &primary, &variants, opts.trace_runs)?;
+    let insert = insert_timings(desc, opts.island_fraction, threads)?;
     Ok(AccelBenchReport {
         scene: desc.name.clone(),
         static_triangles: desc.statics.iter().map(|s| s.mesh.triangle_count()).sum(),
@@ -304,11 +331,11 @@ pub fn bench_accel(
             .map(|b| desc.prototypes[b.prototype as usize].mesh.triangle_count())
             .sum(),
         primary_rays: primary.len(),
-        bounce_rays: bounce.map_or(0, |b| b.len()),
+        bounce_rays,
         threads: threads.unwrap_or_else(rayon::current_num_threads),
+        ratios: AccelRatios::new(&build, &trace, &insert),
         build,
-        trace: trace_timings,
+        trace,
         insert,
-        ratios,
     })
 }

@@ -2,7 +2,7 @@
 //! comparison that tolerates ties and rays grazing an edge.
 #![allow(dead_code)]
 
-use dormant::accel::bvh::triangle::RayTri;
+use dormant::accel::bvh::testing::watertight_hit;
 use dormant::accel::{Hit, HitObject};
 use dormant::geometry::{Ray, TriangleMesh};
 use glam::{DVec3, Vec3};
@@ -23,7 +23,7 @@ pub fn ref_tris(object: HitObject, mesh: &TriangleMesh) -> Vec<RefTri> {
 /// The backend's own f32 watertight test: the reference for static geometry, where the BVH
 /// must find exactly what brute force over the same test finds.
 pub fn exact_hit(ray: &Ray, p: &[Vec3; 3]) -> Option<(f64, f64, f64)> {
-    RayTri::new(ray).intersect(p, ray.t_max).map(|h| (f64::from(h.t), f64::from(h.u), f64::from(h.v)))
+    watertight_hit(ray, p).map(|(t, u, v)| (f64::from(t), f64::from(u), f64::from(v)))
 }
 
 /// Möller-Trumbore in f64: `(t, u, v)` within the ray's interval, both sides.

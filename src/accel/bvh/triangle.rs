@@ -7,7 +7,7 @@ use crate::geometry::{Ray, TriangleMesh};
 
 /// One triangle copied out of its mesh, with the ids a [`crate::accel::Hit`] reports.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Tri {
+pub(crate) struct Tri {
     pub p: [Vec3; 3],
     /// The mesh it came from (a `StaticId` for static geometry, unused for prototypes).
     pub geom: u32,
@@ -27,12 +27,12 @@ impl Tri {
 }
 
 /// Largest coordinate magnitude kept: beyond it, box areas and SAH costs overflow `f32`.
-pub const MAX_COORD: f32 = 1e30;
+pub(crate) const MAX_COORD: f32 = 1e30;
 
 /// Copies the usable triangles of `mesh` ([`TriangleMesh::triangle_is_valid`]: finite, non-zero
 /// area; and every coordinate below [`MAX_COORD`] in magnitude); returns them and how many were
 /// skipped. The mesh must have passed [`TriangleMesh::validate`].
-pub fn extract(mesh: &TriangleMesh, geom: u32) -> (Vec<Tri>, usize) {
+pub(crate) fn extract(mesh: &TriangleMesh, geom: u32) -> (Vec<Tri>, usize) {
     let mut tris = Vec::with_capacity(mesh.triangle_count());
     for i in 0..mesh.triangle_count() {
         if mesh.triangle_is_valid(i) && mesh.triangle(i).iter().all(|p| p.abs().max_element() < MAX_COORD) {
@@ -45,7 +45,7 @@ pub fn extract(mesh: &TriangleMesh, geom: u32) -> (Vec<Tri>, usize) {
 
 /// A triangle hit in the space the triangle was tested in.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct TriHit {
+pub(crate) struct TriHit {
     pub t: f32,
     pub u: f32,
     pub v: f32,
@@ -53,7 +53,7 @@ pub struct TriHit {
 
 /// Per-ray constants of the watertight test: the ray is sheared so that it runs along +z.
 #[derive(Clone, Copy, Debug)]
-pub struct RayTri {
+pub(crate) struct RayTri {
     org: Vec3,
     dir: Vec3,
     kx: usize,

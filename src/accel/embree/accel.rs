@@ -1,3 +1,6 @@
+//! [`EmbreeAccel`], the Embree [`crate::accel::Accelerator`] (its scenes are described on the
+//! type), and the build quality of each kind of scene it makes ([`EmbreeBuildParams`]).
+
 use std::sync::Arc;
 
 use glam::{Affine3A, Mat3, Vec3};

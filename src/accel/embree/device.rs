@@ -1,3 +1,6 @@
+//! [`Device`]: an Embree device with its error callback (errors come back as
+//! [`EmbreeError`]s) and thread count, and the library [`Version`] check against the headers.
+
 use std::ffi::{c_char, c_void, CStr, CString};
 use std::fmt;
 use std::ptr;

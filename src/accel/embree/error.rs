@@ -1,3 +1,5 @@
+//! [`EmbreeError`]: what Embree or the wrapper's own checks report.
+
 use embree4_sys as sys;
 
 /// Errors reported by Embree or by the wrapper's own checks.

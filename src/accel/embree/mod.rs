@@ -14,11 +14,13 @@ mod device;
 mod error;
 mod geometry;
 mod packet;
+mod quality;
 mod scene;
 
 pub use accel::{EmbreeAccel, EmbreeBuildParams};
 pub use device::{Device, Version};
 pub use error::EmbreeError;
-pub use geometry::{InstanceGeometry, TriangleGeometry};
-pub use packet::{Coherence, PACKET_WIDTHS};
-pub use scene::{BuildQuality, EmbreeHit, FrozenScene, Geometry, Scene, SceneFlags, SceneView};
+pub use geometry::TriangleGeometry;
+pub use packet::Coherence;
+pub use quality::BuildQuality;
+pub use scene::{EmbreeHit, FrozenScene, Geometry, InstanceGeometry, Scene, SceneFlags, SceneView};

@@ -9,9 +9,6 @@ use embree4_sys as sys;
 use super::scene::{EmbreeHit, SceneView};
 use crate::geometry::Ray;
 
-/// The packet widths Embree offers.
-pub const PACKET_WIDTHS: [usize; 3] = [4, 8, 16];
-
 /// Embree's hint on how alike a packet's rays are (`RTC_RAY_QUERY_FLAG_COHERENT` /
 /// `..._INCOHERENT`): it may pick its traversal by it; results do not depend on it.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

@@ -1,12 +1,20 @@
+//! Embree scenes: [`Scene`] (geometries plus the BVH its commit builds), [`InstanceGeometry`]
+//! (a scene placed in another by a transform), [`FrozenScene`] (a committed scene shared by
+//! instances) and [`SceneView`], the single-ray queries of a committed scene. Scenes and
+//! instances nest (a scene holds instances, an instance holds a scene and commits it), so they
+//! share this file; triangle meshes ([`TriangleGeometry`]) do not depend on them.
+
 use std::collections::{BTreeMap, BTreeSet};
 use std::marker::PhantomData;
 use std::sync::Arc;
 
 use embree4_sys as sys;
+use glam::Affine3A;
 
 use super::device::Device;
 use super::error::EmbreeError;
-use super::geometry::{InstanceGeometry, TriangleGeometry};
+use super::geometry::TriangleGeometry;
+use super::quality::BuildQuality;
 
 /// Embree's scene flags (rtcSetSceneFlags(3)).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -33,29 +41,6 @@ impl SceneFlags {
             f |= RTC_SCENE_FLAG_ROBUST;
         }
         f
-    }
-}
-
-/// Embree's BVH build quality (rtcSetSceneBuildQuality(3)).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum BuildQuality {
-    Low,
-    #[default]
-    Medium,
-    High,
-}
-
-impl BuildQuality {
-    pub const ALL: [BuildQuality; 3] = [BuildQuality::Low, BuildQuality::Medium, BuildQuality::High];
-
-    pub(crate) fn raw(self) -> sys::RTCBuildQuality::Type {
-        use sys::RTCBuildQuality::*;
-        match self {
-            BuildQuality::Low => RTC_BUILD_QUALITY_LOW,
-            BuildQuality::Medium => RTC_BUILD_QUALITY_MEDIUM,
-            BuildQuality::High => RTC_BUILD_QUALITY_HIGH,
-        }
     }
 }
 
@@ -257,9 +242,127 @@ impl Scene {
     }
 }
 
+/// What an instance points to: a frozen prototype shared by many instances, or a mutable scene
+/// the instance owns (the static scene in the top level), changed only through the parent.
+enum InstanceChild {
+    Shared(Arc<FrozenScene>),
+    Owned(Box<Scene>),
+}
+
+/// An instance of a scene placed by an affine transform (object to world).
+pub struct InstanceGeometry {
+    raw: sys::RTCGeometry,
+    device: Device,
+    child: InstanceChild,
+}
+
+// SAFETY: mutation (`set_transform`, `child_mut`) needs `&mut self`; Embree objects are not
+// bound to the thread that made them.
+unsafe impl Send for InstanceGeometry {}
+// SAFETY: `&InstanceGeometry` exposes no mutation.
+unsafe impl Sync for InstanceGeometry {}
+
+impl Drop for InstanceGeometry {
+    fn drop(&mut self) {
+        // SAFETY: we own one reference to `raw`; the child scene is dropped after it.
+        unsafe { sys::rtcReleaseGeometry(self.raw) };
+    }
+}
+
+/// Embree's FLOAT3X4_COLUMN_MAJOR layout of an affine transform.
+fn column_major_3x4(xf: &Affine3A) -> [f32; 12] {
+    let m = xf.matrix3;
+    let t = xf.translation;
+    [
+        m.x_axis.x, m.x_axis.y, m.x_axis.z, m.y_axis.x, m.y_axis.y, m.y_axis.z, m.z_axis.x, m.z_axis.y,
+        m.z_axis.z, t.x, t.y, t.z,
+    ]
+}
+
 impl InstanceGeometry {
+    /// An instance of a frozen (committed, immutable) scene.
+    pub fn new(
+        device: &Device,
+        prototype: &Arc<FrozenScene>,
+        transform: &Affine3A,
+    ) -> Result<Self, EmbreeError> {
+        Self::with_child(device, InstanceChild::Shared(prototype.clone()), transform)
+    }
+
+    /// An instance that owns a mutable scene. Changes to it go through
+    /// [`Scene::instance_mut`] and [`InstanceGeometry::child_mut`], so the parent knows to
+    /// recommit; the parent commits the child first.
+    pub fn owning(device: &Device, scene: Scene, transform: &Affine3A) -> Result<Self, EmbreeError> {
+        Self::with_child(device, InstanceChild::Owned(Box::new(scene)), transform)
+    }
+
+    fn with_child(device: &Device, child: InstanceChild, transform: &Affine3A) -> Result<Self, EmbreeError> {
+        // SAFETY: the device is valid; a null result is reported through `check`.
+        let raw = unsafe {
+            sys::rtcNewGeometry(device.inner.raw, sys::RTCGeometryType::RTC_GEOMETRY_TYPE_INSTANCE)
+        };
+        device.check()?;
+        let child_raw = match &child {
+            InstanceChild::Shared(frozen) => frozen.scene.raw,
+            InstanceChild::Owned(scene) => scene.raw,
+        };
+        let mut instance = Self { raw, device: device.clone(), child };
+        // SAFETY: both handles are valid; `instance.child` keeps the child scene alive as long
+        // as the instance geometry.
+        unsafe { sys::rtcSetGeometryInstancedScene(instance.raw, child_raw) };
+        instance.device.check()?;
+        instance.set_transform(transform)?;
+        Ok(instance)
+    }
+
+    /// Replaces the transform. Through a parent scene, use [`Scene::instance_mut`] so the
+    /// parent is marked for recommit.
+    pub fn set_transform(&mut self, transform: &Affine3A) -> Result<(), EmbreeError> {
+        if !transform.is_finite() {
+            return Err(EmbreeError::NonFiniteTransform);
+        }
+        let m = column_major_3x4(transform);
+        // SAFETY: `m` holds the 12 floats FLOAT3X4_COLUMN_MAJOR reads; Embree copies them.
+        // `&mut self` guarantees no ray traverses a scene holding this geometry meanwhile
+        // (the parent's `SceneView` borrows the parent).
+        unsafe {
+            sys::rtcSetGeometryTransform(
+                self.raw,
+                0,
+                sys::RTCFormat::RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR,
+                m.as_ptr().cast(),
+            );
+            sys::rtcCommitGeometry(self.raw);
+        }
+        self.device.check()
+    }
+
     fn child_is_owned(&self) -> bool {
-        matches!(self.child(), super::geometry::InstanceChild::Owned(_))
+        matches!(self.child, InstanceChild::Owned(_))
+    }
+
+    /// The owned child scene, for changes; `None` for a shared prototype.
+    pub fn child_mut(&mut self) -> Option<&mut Scene> {
+        match &mut self.child {
+            InstanceChild::Owned(scene) => Some(scene),
+            InstanceChild::Shared(_) => None,
+        }
+    }
+
+    /// Commits an owned child scene that has staged changes and tells Embree the instance
+    /// changed. Called by the parent's commit.
+    pub(crate) fn commit_child(&mut self) -> Result<bool, EmbreeError> {
+        let InstanceChild::Owned(scene) = &mut self.child else {
+            return Ok(false);
+        };
+        if !scene.is_dirty() {
+            return Ok(false);
+        }
+        scene.commit()?;
+        // SAFETY: `raw` is valid; the parent is being committed under `&mut`.
+        unsafe { sys::rtcCommitGeometry(self.raw) };
+        self.device.check()?;
+        Ok(true)
     }
 }
 
@@ -271,10 +374,6 @@ pub struct FrozenScene {
 impl FrozenScene {
     pub fn view(&self) -> SceneView<'_> {
         self.scene.view().expect("a frozen scene is committed")
-    }
-
-    pub(crate) fn scene(&self) -> &Scene {
-        &self.scene
     }
 }
 

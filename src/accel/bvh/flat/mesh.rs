@@ -4,11 +4,11 @@
 use super::{build, BoxRay, FlatBvh, Wide};
 use crate::accel::bvh::triangle::{RayTri, Tri};
 use crate::accel::bvh::BuildParams;
-use crate::geometry::{Aabb, Ray};
+use crate::geometry::Aabb;
 
 /// Closest triangle found so far, in the space it was tested in.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PrimHit {
+pub(crate) struct PrimHit {
     pub t: f32,
     pub u: f32,
     pub v: f32,
@@ -18,7 +18,7 @@ pub struct PrimHit {
 
 /// Triangles plus the tree over them.
 #[derive(Clone, Debug, Default)]
-pub struct MeshBvh {
+pub(crate) struct MeshBvh {
     pub bvh: FlatBvh,
     /// The 4-wide copy rays traverse.
     pub wide: Wide,
@@ -80,13 +80,5 @@ impl MeshBvh {
                 .iter()
                 .any(|tri| tray.intersect(&tri.p, *t_max).is_some())
         })
-    }
-
-    /// Convenience for tests and tools: closest hit of `ray` over the whole mesh.
-    pub fn intersect(&self, ray: &Ray) -> Option<PrimHit> {
-        let mut best = None;
-        let mut t_max = ray.t_max;
-        self.intersect_from(0, &BoxRay::new(ray), &RayTri::new(ray), &mut t_max, &mut best);
-        best
     }
 }

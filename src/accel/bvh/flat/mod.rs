@@ -10,14 +10,15 @@
 mod build;
 mod mesh;
 mod sah;
+mod stack;
 mod traverse;
 mod wide;
 
-pub use build::build;
-pub use mesh::{MeshBvh, PrimHit};
-pub use sah::{sah_cost, subtree_cost};
-pub use traverse::{interval_is_valid, traverse, BoxRay, STACK_SIZE};
-pub use wide::Wide;
+pub(crate) use build::build;
+pub(crate) use mesh::{MeshBvh, PrimHit};
+pub(crate) use sah::{sah_cost, subtree_cost};
+pub(crate) use traverse::{interval_is_valid, traverse, BoxRay, STACK_SIZE};
+pub(crate) use wide::Wide;
 
 use glam::Vec3;
 
@@ -26,7 +27,7 @@ use crate::geometry::Aabb;
 /// One BVH node: bounds plus either a child index (interior) or a primitive range (leaf).
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[repr(C, align(32))]
-pub struct Node {
+pub(crate) struct Node {
     pub min: Vec3,
     /// Interior: index of the first child (the second follows it). Leaf: first primitive.
     pub first: u32,
@@ -59,10 +60,8 @@ impl Node {
 
 /// A built tree. Leaves refer to a primitive array its owner keeps in build order.
 #[derive(Clone, Debug, Default)]
-pub struct FlatBvh {
+pub(crate) struct FlatBvh {
     pub nodes: Vec<Node>,
-    /// Greatest root-to-leaf depth (root = 0), which bounds the traversal stack.
-    pub depth: u32,
 }
 
 impl FlatBvh {

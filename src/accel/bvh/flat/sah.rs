@@ -5,7 +5,7 @@ use crate::accel::bvh::BuildParams;
 
 /// Unnormalised SAH sum of the subtree at `root`: over its nodes, surface area times
 /// `traversal_cost` (interior) or `intersection_cost * count` (leaf).
-pub fn subtree_cost(nodes: &[Node], root: u32, params: &BuildParams) -> f64 {
+pub(crate) fn subtree_cost(nodes: &[Node], root: u32, params: &BuildParams) -> f64 {
     let mut sum = 0.0f64;
     if nodes.is_empty() {
         return sum;
@@ -26,7 +26,7 @@ pub fn subtree_cost(nodes: &[Node], root: u32, params: &BuildParams) -> f64 {
 }
 
 /// SAH cost of a whole tree, normalised by its root's area; 0 for an empty tree.
-pub fn sah_cost(nodes: &[Node], params: &BuildParams) -> f32 {
+pub(crate) fn sah_cost(nodes: &[Node], params: &BuildParams) -> f32 {
     let Some(root) = nodes.first() else {
         return 0.0;
     };

@@ -3,29 +3,28 @@
 //! test would accept, and nearer child first by entry distance. The slab test uses glam's
 //! `Vec3A` (SSE2 where available, scalar elsewhere); there is no hand-written SIMD.
 
-use std::mem::MaybeUninit;
-
 use glam::{Vec3, Vec3A};
 
+use super::stack::TraversalStack;
 use super::Node;
 use crate::geometry::Ray;
 
 /// Traversal stack entries; deeper than any tree the builder makes (its depth is bounded by
 /// the object-median fallback).
-pub const STACK_SIZE: usize = 128;
+pub(crate) const STACK_SIZE: usize = 128;
 
 /// `1 + 2 * gamma(3)`: widens the far slab distance to absorb rounding (pbrt 4, section 6.8).
 pub(crate) const FAR_SCALE: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
 
 /// Whether the ray's `[t_min, t_max]` is a usable interval (false for NaN bounds).
 #[inline]
-pub fn interval_is_valid(ray: &Ray) -> bool {
+pub(crate) fn interval_is_valid(ray: &Ray) -> bool {
     ray.t_min <= ray.t_max
 }
 
 /// A ray prepared for slab tests.
 #[derive(Clone, Copy, Debug)]
-pub struct BoxRay {
+pub(crate) struct BoxRay {
     pub org: Vec3A,
     /// `1 / dir`, with zero components replaced by `±1 / f32::MIN_POSITIVE` so that no slab
     /// distance is ever `0 * inf = NaN` (a finite origin on a slab plane gives 0, not NaN).
@@ -66,7 +65,7 @@ impl BoxRay {
 /// each leaf's primitive range and the current `t_max`, which it lowers on hits; it returns
 /// `true` to stop (any-hit). Returns whether `leaf` stopped the traversal.
 #[inline(always)]
-pub fn traverse<F>(nodes: &[Node], root: u32, ray: &BoxRay, t_max: &mut f32, mut leaf: F) -> bool
+pub(crate) fn traverse<F>(nodes: &[Node], root: u32, ray: &BoxRay, t_max: &mut f32, mut leaf: F) -> bool
 where
     F: FnMut(u32, u32, &mut f32) -> bool,
 {
@@ -76,9 +75,7 @@ where
     if ray.hit(root_node, *t_max) == f32::INFINITY {
         return false;
     }
-    // Uninitialised: zeroing 1 KiB per call costs more than a short traversal.
-    let mut stack = [const { MaybeUninit::<(u32, f32)>::uninit() }; STACK_SIZE];
-    let mut sp = 0usize;
+    let mut stack = TraversalStack::<STACK_SIZE>::new();
     let mut node = root_node;
     loop {
         if node.is_leaf() {
@@ -93,9 +90,7 @@ where
             match (ta < f32::INFINITY, tb < f32::INFINITY) {
                 (true, true) => {
                     let (near, far, tfar) = if ta <= tb { (na, a + 1, tb) } else { (nb, a, ta) };
-                    debug_assert!(sp < STACK_SIZE);
-                    stack[sp].write((far as u32, tfar));
-                    sp += 1;
+                    stack.push(far as u32, tfar);
                     node = near;
                     continue;
                 }
@@ -110,19 +105,10 @@ where
                 (false, false) => {}
             }
         }
-        // Pop the next subtree still in front of the closest hit.
-        loop {
-            if sp == 0 {
-                return false;
-            }
-            sp -= 1;
-            // SAFETY: every entry below `sp` was written by the push above before `sp` grew
-            // past it, and `sp` only shrinks by the pop here.
-            let (i, t) = unsafe { stack[sp].assume_init() };
-            if t <= *t_max {
-                node = &nodes[i as usize];
-                break;
-            }
+        // The next subtree still in front of the closest hit.
+        match stack.pop_within(*t_max) {
+            Some(i) => node = &nodes[i as usize],
+            None => return false,
         }
     }
 }

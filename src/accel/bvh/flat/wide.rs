@@ -4,10 +4,9 @@
 //! (insertion, SAH, references into blocks); a binary node that was folded into its parent's
 //! wide node is entered through its children.
 
-use std::mem::MaybeUninit;
-
 use glam::Vec4;
 
+use super::stack::TraversalStack;
 use super::traverse::FAR_SCALE;
 use super::{BoxRay, FlatBvh, STACK_SIZE};
 
@@ -23,7 +22,7 @@ const NONE: u32 = u32::MAX;
 /// Four children's boxes in structure-of-arrays layout, plus what each child is.
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(64))]
-pub struct Node4 {
+pub(crate) struct Node4 {
     min: [[f32; 4]; 3],
     max: [[f32; 4]; 3],
     /// Interior child: wide node index. Leaf child: first primitive. Unused: [`EMPTY`].
@@ -36,7 +35,7 @@ const _: () = assert!(std::mem::size_of::<Node4>() == 128);
 
 /// The wide tree plus, for each binary node, the wide node rooted there (if any).
 #[derive(Clone, Debug, Default)]
-pub struct Wide {
+pub(crate) struct Wide {
     nodes: Vec<Node4>,
     map: Vec<u32>,
 }
@@ -132,8 +131,7 @@ impl Wide {
         let t_min = Vec4::splat(ray.t_min);
         // Entries: wide node index, or `LEAF | (node << 2 | slot)` for a leaf child.
         const LEAF: u32 = 1 << 31;
-        let mut stack = [const { MaybeUninit::<(u32, f32)>::uninit() }; WIDE_STACK];
-        let mut sp = 0usize;
+        let mut stack = TraversalStack::<WIDE_STACK>::new();
         let mut cur = root;
         loop {
             if cur & LEAF == 0 {
@@ -173,10 +171,8 @@ impl Wide {
                     k += 1;
                 }
                 if k > 0 {
-                    for &h in &hits[..k - 1] {
-                        debug_assert!(sp < WIDE_STACK);
-                        stack[sp].write(h);
-                        sp += 1;
+                    for &(code, t) in &hits[..k - 1] {
+                        stack.push(code, t);
                     }
                     cur = hits[k - 1].0;
                     continue;
@@ -188,19 +184,10 @@ impl Wide {
                     return true;
                 }
             }
-            // Pop the next entry still in front of the closest hit.
-            loop {
-                if sp == 0 {
-                    return false;
-                }
-                sp -= 1;
-                // SAFETY: every entry below `sp` was written by the push above before `sp` grew
-                // past it, and `sp` only shrinks by the pop here.
-                let (c, t) = unsafe { stack[sp].assume_init() };
-                if t <= *t_max {
-                    cur = c;
-                    break;
-                }
+            // The next entry still in front of the closest hit.
+            match stack.pop_within(*t_max) {
+                Some(c) => cur = c,
+                None => return false,
             }
         }
     }

@@ -33,12 +33,13 @@
 //! Mesh bookkeeping (id -> block) is an `Arc<HashMap>` cloned on first write after a snapshot,
 //! so that part of a change is O(number of static meshes), once per commit.
 
+mod check;
 mod insert;
 mod remove;
 mod stats;
 mod traverse;
 
-pub use stats::{SnapshotMemory, StaticStats};
+pub use stats::SnapshotMemory;
 
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -50,7 +51,7 @@ use crate::accel::{AccelError, StaticId};
 use crate::geometry::{Aabb, TriangleMesh};
 
 /// Deepest overlay allowed before a rebuild; also bounds the overlay traversal stack.
-pub const MAX_OVERLAY_HEIGHT: u32 = 64;
+pub(crate) const MAX_OVERLAY_HEIGHT: u32 = 64;
 
 /// An immutable BVH over some static triangles.
 #[derive(Debug)]

@@ -1,4 +1,4 @@
-//! Measurements of the persistent tree: SAH cost, shape, and per-snapshot memory.
+//! Measurements of the persistent tree: SAH cost and per-snapshot memory.
 
 use std::collections::{HashMap, HashSet};
 use std::sync::Arc;
@@ -6,7 +6,6 @@ use std::sync::Arc;
 use super::{Block, Link, StaticBvh, StaticSnapshot};
 use crate::accel::bvh::flat::{sah_cost, subtree_cost, MeshBvh};
 use crate::accel::bvh::BuildParams;
-use crate::accel::StaticId;
 
 /// Visits every distinct block referenced from `root` once.
 pub(crate) fn for_each_block(root: &Link, f: &mut impl FnMut(&Block)) {
@@ -22,19 +21,6 @@ pub(crate) fn for_each_block(root: &Link, f: &mut impl FnMut(&Block)) {
             Link::Node(n) => stack.extend(n.kids.iter()),
         }
     }
-}
-
-/// Shape of the static tree.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct StaticStats {
-    pub triangles: usize,
-    pub meshes: usize,
-    /// Distinct blocks (the base plus one per inserted mesh).
-    pub blocks: usize,
-    pub overlay_nodes: usize,
-    pub overlay_height: u32,
-    /// SAH cost with the tree's build parameters (see [`StaticBvh::sah_cost`]).
-    pub sah_cost: f32,
 }
 
 /// Memory of one snapshot.
@@ -64,7 +50,7 @@ fn sah_sum(root: &Link, p: &BuildParams) -> f64 {
 impl StaticSnapshot {
     /// SAH cost of this version's tree (overlay nodes and block subtrees alike), normalised
     /// by the root's area; comparable with [`crate::accel::bvh::flat::sah_cost`].
-    pub fn sah_cost(&self, params: &BuildParams) -> f32 {
+    pub(crate) fn sah_cost(&self, params: &BuildParams) -> f32 {
         let Some(root) = &self.root else {
             return 0.0;
         };
@@ -132,101 +118,5 @@ impl StaticBvh {
     pub fn rebuilt_sah_cost(&self) -> f32 {
         let mesh = MeshBvh::build(self.live_tris(), self.params);
         sah_cost(&mesh.bvh.nodes, &self.params)
-    }
-
-    pub fn stats(&self) -> StaticStats {
-        let mut s = StaticStats {
-            triangles: self.state.triangles,
-            meshes: self.state.meshes.len(),
-            sah_cost: self.sah_cost(),
-            ..StaticStats::default()
-        };
-        if let Some(root) = &self.state.root {
-            s.overlay_height = root.height();
-            for_each_block(root, &mut |_| s.blocks += 1);
-            let mut stack = vec![root];
-            while let Some(l) = stack.pop() {
-                if let Link::Node(n) = l {
-                    s.overlay_nodes += 1;
-                    stack.extend(n.kids.iter());
-                }
-            }
-        }
-        s
-    }
-}
-
-impl StaticBvh {
-    /// Checks the tree's invariants (for tests; O(n)): overlay bounds, masks and heights match
-    /// their children, every live mesh's triangles are reachable exactly once, nothing else is,
-    /// and the traversal view matches the tree.
-    pub fn check(&self) -> Result<(), String> {
-        let s = &self.state;
-        let mut per_mesh: HashMap<u32, usize> = HashMap::new();
-        let mut refs = 0usize;
-        if let Some(root) = &s.root {
-            let mut stack = vec![root];
-            while let Some(l) = stack.pop() {
-                match l {
-                    Link::Node(n) => {
-                        let [a, b] = &n.kids;
-                        if n.aabb != a.aabb().union(b.aabb()) {
-                            return Err(format!(
-                                "overlay bounds {:?} are not the union of the children",
-                                n.aabb
-                            ));
-                        }
-                        if n.mask != a.mask() | b.mask() || n.height != 1 + a.height().max(b.height()) {
-                            return Err("overlay mask or height is stale".into());
-                        }
-                        stack.extend([a, b]);
-                    }
-                    Link::Ref(b, i) => {
-                        refs += 1;
-                        let nodes = &b.mesh.bvh.nodes;
-                        let mut inner = vec![*i];
-                        while let Some(k) = inner.pop() {
-                            let n = &nodes[k as usize];
-                            if n.is_leaf() {
-                                for t in &b.mesh.tris[n.first as usize..(n.first + n.count) as usize] {
-                                    if s.meshes.get(&StaticId(t.geom)).is_none_or(|e| e.block != b.id) {
-                                        return Err(format!(
-                                            "stale triangle of mesh {} in block {}",
-                                            t.geom, b.id
-                                        ));
-                                    }
-                                    *per_mesh.entry(t.geom).or_default() += 1;
-                                }
-                            } else {
-                                inner.extend([n.first, n.first + 1]);
-                            }
-                        }
-                    }
-                }
-            }
-        }
-        for (id, e) in s.meshes.iter() {
-            let found = per_mesh.remove(&id.0).unwrap_or(0);
-            if found != e.triangles {
-                return Err(format!(
-                    "mesh {} has {} triangles reachable, expected {}",
-                    id.0, found, e.triangles
-                ));
-            }
-        }
-        if !per_mesh.is_empty() {
-            return Err(format!("triangles of unknown meshes reachable: {per_mesh:?}"));
-        }
-        let total: usize = s.meshes.values().map(|e| e.triangles).sum();
-        if total != s.triangles {
-            return Err(format!("triangle count {} != sum over meshes {}", s.triangles, total));
-        }
-        if s.view.refs.len() != refs {
-            return Err("traversal view is stale".into());
-        }
-        if s.root.as_ref().is_some_and(|r| r.height() > super::MAX_OVERLAY_HEIGHT) {
-            return Err("overlay too deep".into());
-        }
-        Ok(())
     }
 }

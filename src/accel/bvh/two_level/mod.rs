@@ -5,7 +5,7 @@
 
 mod query;
 
-pub use query::BvhScene;
+pub(crate) use query::BvhScene;
 
 use std::sync::Arc;
 
@@ -94,25 +94,13 @@ impl BvhAccel {
         }
     }
 
-    /// The committed static tree (read-only; for statistics and SAH comparisons).
-    pub fn static_bvh(&self) -> &StaticBvh {
+    /// The committed static tree, for the invariant check of [`crate::accel::bvh::testing`].
+    pub(crate) fn static_tree(&self) -> &StaticBvh {
         &self.statics
     }
 
-    /// O(1) snapshot of the committed static tree, for the geometry cache.
-    pub fn static_snapshot(&self) -> StaticSnapshot {
-        self.statics.snapshot()
-    }
-
-    /// Makes `snapshot` the static scene. Staged static changes stay staged (they apply on top
-    /// at the next commit); the scene counts as changed until then.
-    pub fn restore_static(&mut self, snapshot: StaticSnapshot) {
-        self.statics.restore(snapshot);
-        self.dirty = true;
-    }
-
     /// The committed scene as a concrete type (the same object [`Accelerator::query`] returns).
-    pub fn scene(&self) -> Result<&BvhScene, AccelError> {
+    fn scene(&self) -> Result<&BvhScene, AccelError> {
         if self.dirty {
             Err(AccelError::NotCommitted)
         } else {
@@ -280,7 +268,10 @@ impl Accelerator for BvhAccel {
         let saved = snapshot
             .payload::<StaticSnapshot>()
             .ok_or(AccelError::ForeignSnapshot { backend: Backend::Bvh, from: snapshot.backend() })?;
-        self.restore_static(saved.clone());
+        // Staged static changes stay staged (they apply on top at the next commit); the scene
+        // counts as changed until then.
+        self.statics.restore(saved.clone());
+        self.dirty = true;
         Ok(())
     }
 

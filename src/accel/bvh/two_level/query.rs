@@ -56,17 +56,12 @@ pub(crate) fn build_top(instances: &[(u32, Arc<MeshBvh>, Affine3A, Affine3A)], p
 
 /// A committed scene. Cheap to keep: everything in it is shared.
 #[derive(Clone, Debug, Default)]
-pub struct BvhScene {
+pub(crate) struct BvhScene {
     pub(crate) statics: StaticSnapshot,
     pub(crate) top: Top,
 }
 
 impl BvhScene {
-    /// The static part of this scene.
-    pub fn static_snapshot(&self) -> &StaticSnapshot {
-        &self.statics
-    }
-
     /// The ray in the instance's object space. The origin is moved by the forward translation
     /// before the inverse linear part is applied: `inv * o` would add two large, nearly
     /// cancelling terms for instances far from the world origin (seen: t errors of 7e-5 at
