@@ -7,14 +7,14 @@
 
 pub mod accel;
 pub mod atomic_file;
-pub mod bench;
+pub(crate) mod bench;
 pub mod cli;
 pub mod crosscheck;
 pub mod geometry;
 pub mod integrate;
 pub mod physics;
 pub mod render;
-pub mod report;
+pub(crate) mod report;
 pub(crate) mod rng;
 pub mod scene;
 pub mod sequence;

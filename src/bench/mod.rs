@@ -7,10 +7,10 @@ pub mod integration;
 pub mod paper;
 pub mod render;
 
-pub use accel::{bench_accel, AccelBenchOptions, AccelBenchReport};
-pub use integration::{bench_integration, IntegrationBenchOptions, IntegrationBenchReport};
-pub use paper::{bench_paper, PaperBenchOptions, PaperError, PaperPreset, PaperReport, RainAssets};
-pub use render::{bench_render, RenderBenchOptions, RenderBenchReport};
+pub(crate) use accel::{bench_accel, AccelBenchOptions};
+pub(crate) use integration::{bench_integration, IntegrationBenchOptions};
+pub(crate) use paper::{bench_paper, PaperBenchOptions, PaperPreset, RainAssets};
+pub(crate) use render::{bench_render, RenderBenchOptions};
 
 use std::time::Instant;
 

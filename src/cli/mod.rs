@@ -16,11 +16,9 @@ use clap::{Args, Parser, Subcommand};
 
 use crate::scene::{self, SceneDescription};
 
-pub use info::InfoReport;
-
 /// Errors that end a command, with the exit code they map to.
 #[derive(Debug, thiserror::Error)]
-pub enum CliError {
+pub(crate) enum CliError {
     /// Bad flags or input files: exit code 2.
     #[error("{0}")]
     Input(String),
@@ -63,7 +61,7 @@ impl CliError {
     about = "Offline renderer for physics-simulated scenes that bakes sleeping islands into the static scene",
     after_help = "Examples:\n  dormant render --out out/demo          render the built-in default scene\n  dormant render --size 1280x720 --spp 64 --out out/hq\n  dormant info                           versions and compiled backends as JSON"
 )]
-pub struct Cli {
+pub(crate) struct Cli {
     /// Worker threads for rendering and Embree's builder (default: all cores).
     #[arg(long, global = true, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=1024))]
     pub threads: Option<u32>,
@@ -77,7 +75,7 @@ pub struct Cli {
 }
 
 #[derive(Debug, Subcommand)]
-pub enum Command {
+pub(crate) enum Command {
     /// Render the built-in default scene to a PNG.
     #[command(
         after_help = "Examples:\n  dormant render --out out/demo\n  dormant render --size 640x360 --spp 4 --backend embree --out /tmp/preview"
@@ -120,7 +118,7 @@ fn init_logging(quiet: bool) {
     let _ = tracing_subscriber::fmt().with_env_filter(filter).with_writer(std::io::stderr).try_init();
 }
 
-pub fn run(cli: &Cli) -> Result<(), CliError> {
+pub(crate) fn run(cli: &Cli) -> Result<(), CliError> {
     if let Some(n) = cli.threads {
         rayon::ThreadPoolBuilder::new()
             .num_threads(n as usize)
@@ -140,7 +138,7 @@ pub fn run(cli: &Cli) -> Result<(), CliError> {
 /// Which scene a command works on: the built-in default, or an environment glTF with a heap of
 /// object glTFs.
 #[derive(Debug, Args)]
-pub struct SceneSource {
+pub(crate) struct SceneSource {
     /// Static environment glTF (with --object: a heap of objects on its floor).
     #[arg(long, value_name = "GLB", requires = "object")]
     pub env: Option<PathBuf>,
@@ -178,7 +176,7 @@ pub(crate) fn write_json_atomic(path: &Path, value: &serde_json::Value) -> Resul
 /// `--json [FILE]` (global: before or after the command): write the command's report as JSON
 /// to FILE, or to stdout when FILE is omitted or `-`.
 #[derive(Debug, Args)]
-pub struct JsonOutput {
+pub(crate) struct JsonOutput {
     /// Write the report as JSON to FILE (stdout if FILE is omitted or -).
     #[arg(long = "json", value_name = "FILE", num_args = 0..=1, default_missing_value = "-", global = true)]
     pub path: Option<PathBuf>,

@@ -10,10 +10,9 @@ mod paper_plot;
 mod plot;
 mod stats;
 
-pub use paper::{paper_markdown, write_paper};
-pub use paper_plot::write_workload_png;
-pub use plot::{write_report_png, PLOT_HEIGHT, PLOT_WIDTH};
-pub use stats::{FrameRecord, RunInfo, RunStats, Summary, STATS_FORMAT, STATS_VERSION};
+pub(crate) use paper::write_paper;
+pub(crate) use plot::write_report_png;
+pub(crate) use stats::{FrameRecord, RunInfo, RunStats};
 
 /// Failures writing a report file.
 #[derive(Debug, thiserror::Error)]

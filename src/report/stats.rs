@@ -255,10 +255,6 @@ impl RunStats {
         RunStats { format: STATS_FORMAT, version: STATS_VERSION, run, frames, summary }
     }
 
-    pub fn to_json(&self) -> serde_json::Value {
-        serde_json::to_value(self).expect("run statistics serialise")
-    }
-
     /// One header line, then one line per frame (decisions as counts).
     pub fn to_csv(&self) -> String {
         let columns = csv_columns();
