@@ -3,6 +3,8 @@
 //! their paths, steps Rapier `substeps` times, removes bodies below the kill plane, and
 //! feeds every body's sleep state to the [`IslandTracker`].
 //!
+//! [`simulate`] runs a scene from its first frame to its last and records a [`Trajectory`].
+//!
 //! Rapier runs single-threaded (dormant builds it without its `parallel` feature), and
 //! nothing here iterates a hash map, so a scene and seed always give the same frames.
 
@@ -18,21 +20,13 @@ use super::body::{
     BodyState,
 };
 use super::colliders::{environment_shape, prototype_shape, ColliderChoice, PrototypeShape};
-use super::island::{IslandEvent, IslandTracker, SleepObservation};
+use super::island::{IslandTracker, SleepObservation};
 use super::kinematic::KinematicPath;
+use super::options::SimulateOptions;
 use super::spawn::{spawn_schedule, SpawnOrder};
+use super::trajectory::{RecordedScene, Trajectory, TrajectoryFrame};
 use super::PhysicsError;
 use crate::scene::file::{environment_mesh, DisturbanceDef, DisturbanceKind, SceneFile};
-
-/// What one frame changed: every body's state, the poses that must be stored (bodies
-/// awake at the end of the frame, and bodies that fell asleep during it; a sleeping body
-/// keeps its last pose), and the island events.
-#[derive(Clone, Debug, PartialEq)]
-pub struct FrameRecord {
-    pub states: Vec<BodyState>,
-    pub poses: Vec<(BodyId, BodyPose)>,
-    pub events: Vec<IslandEvent>,
-}
 
 /// Per-stage wall-clock counters, in seconds, and work counts.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
@@ -217,7 +211,7 @@ impl Simulation {
     }
 
     /// Simulates one frame and returns what changed.
-    pub fn step(&mut self) -> FrameRecord {
+    pub fn step(&mut self) -> TrajectoryFrame {
         let frame = self.frame;
         let t0 = Instant::now();
         self.spawn_due(frame);
@@ -314,7 +308,7 @@ impl Simulation {
         }
     }
 
-    fn observe(&mut self) -> FrameRecord {
+    fn observe(&mut self) -> TrajectoryFrame {
         let mut observations = Vec::with_capacity(self.bodies.len());
         let mut poses = Vec::new();
         let mut states = Vec::with_capacity(self.bodies.len());
@@ -353,6 +347,58 @@ impl Simulation {
         }
         let events = self.tracker.update(&observations);
         self.states.clone_from(&states);
-        FrameRecord { states, poses, events }
+        TrajectoryFrame { states, poses, events }
     }
+}
+
+/// One simulated frame, as [`simulate_observed`] reports it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SimulatedFrame {
+    pub index: u32,
+    /// Frames the whole run simulates.
+    pub frames: u32,
+    /// Wall-clock milliseconds of this frame's physics step.
+    pub step_ms: f64,
+}
+
+/// Simulates `file` with `options` and records every frame.
+pub fn simulate(file: &SceneFile, options: &SimulateOptions) -> Result<Trajectory, PhysicsError> {
+    simulate_observed(file, options, &mut |_| {})
+}
+
+/// [`simulate`], calling `on_frame` after each frame (for progress and per-frame timings).
+pub fn simulate_observed(
+    file: &SceneFile,
+    options: &SimulateOptions,
+    on_frame: &mut dyn FnMut(SimulatedFrame),
+) -> Result<Trajectory, PhysicsError> {
+    let recorded = RecordedScene::new(file, options);
+    let file = options.effective_scene(file)?;
+    let mut sim = Simulation::new(&file)?;
+    let frames = file.description.scene.frames;
+    let mut records = Vec::with_capacity(frames as usize);
+    for f in 0..frames {
+        let t0 = Instant::now();
+        records.push(sim.step());
+        on_frame(SimulatedFrame { index: f, frames, step_ms: t0.elapsed().as_secs_f64() * 1e3 });
+        if (f + 1) % 100 == 0 || f + 1 == frames {
+            let (present, asleep) = sim.dynamic_counts();
+            tracing::info!(
+                frame = f + 1,
+                frames,
+                bodies = present,
+                asleep,
+                step_ms = 1e3 * sim.counters().step_seconds / sim.counters().frames as f64,
+                "simulating"
+            );
+        }
+    }
+    Ok(Trajectory {
+        scene_hash: file.source_hash,
+        timestep: file.description.physics.timestep,
+        scene: Some(recorded),
+        prototypes: file.description.prototypes.iter().map(|p| p.name.clone()).collect(),
+        bodies: sim.bodies().to_vec(),
+        frames: records,
+    })
 }

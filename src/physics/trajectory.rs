@@ -26,8 +26,7 @@ use glam::{Quat, Vec3};
 
 use super::body::{BodyId, BodyInfo, BodyKind, BodyPose, BodyState};
 use super::island::{IslandEvent, IslandId};
-use super::simulate::SimulateOptions;
-use super::simulation::FrameRecord;
+use super::options::SimulateOptions;
 use crate::scene::file::{fnv1a64, SceneError, SceneFile};
 
 const MAGIC: &[u8; 8] = b"DORMTRAJ";
@@ -83,6 +82,16 @@ impl RecordedScene {
     }
 }
 
+/// One simulated frame as a trajectory records it: every body's state at the frame's end,
+/// the poses that must be stored (bodies awake at the end of the frame, and bodies that fell
+/// asleep during it; a sleeping body keeps its last pose), and the island events.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TrajectoryFrame {
+    pub states: Vec<BodyState>,
+    pub poses: Vec<(BodyId, BodyPose)>,
+    pub events: Vec<IslandEvent>,
+}
+
 /// A recorded simulation.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Trajectory {
@@ -95,7 +104,7 @@ pub struct Trajectory {
     /// Prototype names, indexed by [`BodyInfo::prototype`].
     pub prototypes: Vec<String>,
     pub bodies: Vec<BodyInfo>,
-    pub frames: Vec<FrameRecord>,
+    pub frames: Vec<TrajectoryFrame>,
 }
 
 impl Trajectory {
@@ -172,158 +181,20 @@ impl Trajectory {
     /// invariants (no `Woke` without an earlier `Slept`, each body in at most one sleeping
     /// island). `file` names the source in errors.
     pub fn from_bytes(bytes: &[u8], file: &Path) -> Result<Self, TrajectoryError> {
-        let corrupt = |field: &str, message: String| TrajectoryError::Corrupt {
-            file: file.to_path_buf(),
-            field: field.to_string(),
-            message,
-        };
-        if bytes.len() < MAGIC.len() || &bytes[..MAGIC.len()] != MAGIC {
-            return Err(TrajectoryError::NotATrajectory { file: file.to_path_buf() });
-        }
-        let mut r = Reader { bytes, at: MAGIC.len() };
-        let version = r.u32().ok_or_else(|| corrupt("version", "truncated".into()))?;
-        if version != Self::FORMAT_VERSION && version != 1 {
-            return Err(TrajectoryError::Version {
-                file: file.to_path_buf(),
-                found: version,
-                expected: Self::FORMAT_VERSION,
-            });
-        }
-        if bytes.len() < MAGIC.len() + 12 + 8 {
-            return Err(corrupt("checksum", "truncated".into()));
-        }
-        let (body_bytes, tail) = bytes.split_at(bytes.len() - 8);
-        let stored = u64::from_le_bytes(tail.try_into().expect("8 bytes"));
-        if fnv1a64(body_bytes) != stored {
-            return Err(corrupt(
-                "checksum",
-                "does not match the contents (truncated or damaged file)".into(),
-            ));
-        }
-        let mut r = Reader { bytes: body_bytes, at: r.at };
-        let truncated = |field: &str| corrupt(field, "truncated".into());
-        let scene_hash = r.u64().ok_or_else(|| truncated("scene_hash"))?;
-        let timestep = r.f32().ok_or_else(|| truncated("timestep"))?;
+        let (version, contents) = check_envelope(bytes, file)?;
+        let mut r = Reader { bytes: contents, at: MAGIC.len() + 4, file };
+        let scene_hash = r.u64("scene_hash")?;
+        let timestep = r.f32("timestep")?;
         if !(timestep.is_finite() && timestep > 0.0) {
-            return Err(corrupt("timestep", format!("must be positive and finite, got {timestep}")));
+            return Err(r.corrupt("timestep", format!("must be positive and finite, got {timestep}")));
         }
-        let scene = match version {
-            1 => None,
-            _ => match r.u8() {
-                Some(0) => None,
-                Some(1) => {
-                    let mut text = |field: &str| -> Result<String, TrajectoryError> {
-                        let len = r.count(1).ok_or_else(|| truncated(field))?;
-                        let raw = r.take(len).ok_or_else(|| truncated(field))?;
-                        String::from_utf8(raw.to_vec()).map_err(|_| corrupt(field, "not UTF-8".into()))
-                    };
-                    let (path, asset_dir, source) =
-                        (text("scene.path")?, text("scene.asset_dir")?, text("scene.source")?);
-                    let mut option = |field: &str| match (r.u8(), r.u32()) {
-                        (Some(0), Some(_)) => Ok(None),
-                        (Some(1), Some(v)) => Ok(Some(v)),
-                        (Some(_), Some(_)) => Err(corrupt(field, "bad presence flag".into())),
-                        _ => Err(truncated(field)),
-                    };
-                    let options =
-                        SimulateOptions { count: option("scene.count")?, frames: option("scene.frames")? };
-                    Some(RecordedScene { path: path.into(), asset_dir: asset_dir.into(), source, options })
-                }
-                Some(_) => return Err(corrupt("scene", "bad presence flag".into())),
-                None => return Err(truncated("scene")),
-            },
-        };
-        let n = r.count(4).ok_or_else(|| truncated("prototypes"))?;
-        let mut prototypes = Vec::with_capacity(n);
-        for i in 0..n {
-            let len = r.count(1).ok_or_else(|| truncated("prototypes"))?;
-            let raw = r.take(len).ok_or_else(|| truncated("prototypes"))?;
-            prototypes.push(
-                String::from_utf8(raw.to_vec())
-                    .map_err(|_| corrupt(&format!("prototypes[{i}]"), "not UTF-8".into()))?,
-            );
-        }
-        let n = r.count(9).ok_or_else(|| truncated("bodies"))?;
-        let mut bodies = Vec::with_capacity(n);
-        for i in 0..n {
-            let (prototype, kind, spawn_frame) = (r.u32(), r.u8(), r.u32());
-            let (Some(prototype), Some(kind), Some(spawn_frame)) = (prototype, kind, spawn_frame) else {
-                return Err(truncated("bodies"));
-            };
-            if prototype as usize >= prototypes.len() {
-                return Err(corrupt(&format!("bodies[{i}].prototype"), format!("{prototype} out of range")));
-            }
-            let kind = match kind {
-                0 => BodyKind::Dynamic,
-                1 => BodyKind::Kinematic,
-                k => return Err(corrupt(&format!("bodies[{i}].kind"), format!("unknown kind {k}"))),
-            };
-            bodies.push(BodyInfo { prototype, kind, spawn_frame });
-        }
-        let body_count = bodies.len();
-        let n = r.count(body_count + 8).ok_or_else(|| truncated("frames"))?;
-        let mut frames = Vec::with_capacity(n);
-        let mut checker = EventChecker::new(body_count);
-        for fi in 0..n {
-            let at = |f: &str| format!("frames[{fi}].{f}");
-            let raw = r.take(body_count).ok_or_else(|| truncated(&at("states")))?;
-            let states = raw
-                .iter()
-                .map(|&s| match s {
-                    0 => Ok(BodyState::Absent),
-                    1 => Ok(BodyState::Awake),
-                    2 => Ok(BodyState::Asleep),
-                    s => Err(corrupt(&at("states"), format!("unknown state {s}"))),
-                })
-                .collect::<Result<Vec<_>, _>>()?;
-            let np = r.count(32).ok_or_else(|| truncated(&at("poses")))?;
-            let mut poses = Vec::with_capacity(np);
-            for _ in 0..np {
-                let id = r
-                    .body(body_count)
-                    .ok_or_else(|| corrupt(&at("poses"), "truncated or body out of range".into()))?;
-                let pose =
-                    r.pose().ok_or_else(|| corrupt(&at("poses"), "truncated or non-finite pose".into()))?;
-                poses.push((id, pose));
-            }
-            let ne = r.count(9).ok_or_else(|| truncated(&at("events")))?;
-            let mut events = Vec::with_capacity(ne);
-            for _ in 0..ne {
-                let (tag, island) = (r.u8(), r.u64());
-                let (Some(tag), Some(island)) = (tag, island) else {
-                    return Err(truncated(&at("events")));
-                };
-                let island = IslandId(island);
-                let event = match tag {
-                    0 => {
-                        let m = r.count(32).ok_or_else(|| truncated(&at("events")))?;
-                        let mut ids = Vec::with_capacity(m);
-                        let mut ps = Vec::with_capacity(m);
-                        for _ in 0..m {
-                            let id = r.body(body_count).ok_or_else(|| {
-                                corrupt(&at("events"), "truncated or body out of range".into())
-                            })?;
-                            let pose = r.pose().ok_or_else(|| {
-                                corrupt(&at("events"), "truncated or non-finite pose".into())
-                            })?;
-                            ids.push(id);
-                            ps.push(pose);
-                        }
-                        IslandEvent::Slept { island, bodies: ids, poses: ps }
-                    }
-                    1 => IslandEvent::Woke { island },
-                    t => return Err(corrupt(&at("events"), format!("unknown event tag {t}"))),
-                };
-                checker.apply(&event).map_err(|m| corrupt(&at("events"), m))?;
-                events.push(event);
-            }
-            frames.push(FrameRecord { states, poses, events });
-        }
-        if r.at != body_bytes.len() {
-            return Err(corrupt(
-                "frames",
-                format!("{} unexpected bytes after the last frame", body_bytes.len() - r.at),
-            ));
+        let scene = if version == 1 { None } else { read_scene(&mut r)? };
+        let prototypes = read_prototypes(&mut r)?;
+        let bodies = read_bodies(&mut r, prototypes.len())?;
+        let frames = read_frames(&mut r, bodies.len())?;
+        if r.at != contents.len() {
+            let extra = contents.len() - r.at;
+            return Err(r.corrupt("frames", format!("{extra} unexpected bytes after the last frame")));
         }
         Ok(Self { scene_hash, timestep, scene, prototypes, bodies, frames })
     }
@@ -410,6 +281,155 @@ impl Replay<'_> {
     }
 }
 
+/// Checks the magic, the version and the trailing checksum; returns the version and the
+/// bytes before the checksum.
+fn check_envelope<'a>(bytes: &'a [u8], file: &Path) -> Result<(u32, &'a [u8]), TrajectoryError> {
+    let corrupt = |field: &str, message: &str| TrajectoryError::Corrupt {
+        file: file.to_path_buf(),
+        field: field.to_string(),
+        message: message.to_string(),
+    };
+    if bytes.len() < MAGIC.len() || &bytes[..MAGIC.len()] != MAGIC {
+        return Err(TrajectoryError::NotATrajectory { file: file.to_path_buf() });
+    }
+    let version = bytes
+        .get(MAGIC.len()..MAGIC.len() + 4)
+        .map(|b| u32::from_le_bytes(b.try_into().expect("4 bytes")))
+        .ok_or_else(|| corrupt("version", "truncated"))?;
+    if version != Trajectory::FORMAT_VERSION && version != 1 {
+        return Err(TrajectoryError::Version {
+            file: file.to_path_buf(),
+            found: version,
+            expected: Trajectory::FORMAT_VERSION,
+        });
+    }
+    if bytes.len() < MAGIC.len() + 12 + 8 {
+        return Err(corrupt("checksum", "truncated"));
+    }
+    let (contents, tail) = bytes.split_at(bytes.len() - 8);
+    let stored = u64::from_le_bytes(tail.try_into().expect("8 bytes"));
+    if fnv1a64(contents) != stored {
+        return Err(corrupt("checksum", "does not match the contents (truncated or damaged file)"));
+    }
+    Ok((version, contents))
+}
+
+/// The `scene` section (version 2 on): the recorded scene file, if any.
+fn read_scene(r: &mut Reader<'_>) -> Result<Option<RecordedScene>, TrajectoryError> {
+    match r.u8("scene")? {
+        0 => return Ok(None),
+        1 => {}
+        _ => return Err(r.corrupt("scene", "bad presence flag")),
+    }
+    let path = r.text("scene.path")?;
+    let asset_dir = r.text("scene.asset_dir")?;
+    let source = r.text("scene.source")?;
+    let mut option = |field: &str| -> Result<Option<u32>, TrajectoryError> {
+        let (present, value) = (r.u8(field)?, r.u32(field)?);
+        match present {
+            0 => Ok(None),
+            1 => Ok(Some(value)),
+            _ => Err(r.corrupt(field, "bad presence flag")),
+        }
+    };
+    let options = SimulateOptions { count: option("scene.count")?, frames: option("scene.frames")? };
+    Ok(Some(RecordedScene { path: path.into(), asset_dir: asset_dir.into(), source, options }))
+}
+
+/// The `prototypes` section: prototype names.
+fn read_prototypes(r: &mut Reader<'_>) -> Result<Vec<String>, TrajectoryError> {
+    let n = r.count("prototypes", 4)?;
+    let mut prototypes = Vec::with_capacity(n);
+    for i in 0..n {
+        let len = r.count("prototypes", 1)?;
+        let raw = r.take(len, "prototypes")?;
+        let name = String::from_utf8(raw.to_vec())
+            .map_err(|_| r.corrupt(&format!("prototypes[{i}]"), "not UTF-8"))?;
+        prototypes.push(name);
+    }
+    Ok(prototypes)
+}
+
+/// The `bodies` section, checked against the number of prototypes.
+fn read_bodies(r: &mut Reader<'_>, prototype_count: usize) -> Result<Vec<BodyInfo>, TrajectoryError> {
+    let n = r.count("bodies", 9)?;
+    let mut bodies = Vec::with_capacity(n);
+    for i in 0..n {
+        let (prototype, kind, spawn_frame) = (r.u32("bodies")?, r.u8("bodies")?, r.u32("bodies")?);
+        if prototype as usize >= prototype_count {
+            return Err(r.corrupt(&format!("bodies[{i}].prototype"), format!("{prototype} out of range")));
+        }
+        let kind = match kind {
+            0 => BodyKind::Dynamic,
+            1 => BodyKind::Kinematic,
+            k => return Err(r.corrupt(&format!("bodies[{i}].kind"), format!("unknown kind {k}"))),
+        };
+        bodies.push(BodyInfo { prototype, kind, spawn_frame });
+    }
+    Ok(bodies)
+}
+
+/// The `frames` section: every frame's states, poses and events, with the event invariants
+/// checked across frames.
+fn read_frames(r: &mut Reader<'_>, body_count: usize) -> Result<Vec<TrajectoryFrame>, TrajectoryError> {
+    let n = r.count("frames", body_count + 8)?;
+    let mut frames = Vec::with_capacity(n);
+    let mut checker = EventChecker::new(body_count);
+    for fi in 0..n {
+        let at = |f: &str| format!("frames[{fi}].{f}");
+        let states = r
+            .take(body_count, &at("states"))?
+            .iter()
+            .map(|&s| match s {
+                0 => Ok(BodyState::Absent),
+                1 => Ok(BodyState::Awake),
+                2 => Ok(BodyState::Asleep),
+                s => Err(s),
+            })
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(|s| r.corrupt(&at("states"), format!("unknown state {s}")))?;
+        let np = r.count(&at("poses"), 32)?;
+        let mut poses = Vec::with_capacity(np);
+        for _ in 0..np {
+            poses.push((r.body(&at("poses"), body_count)?, r.pose(&at("poses"))?));
+        }
+        let events = read_events(r, &at("events"), body_count, &mut checker)?;
+        frames.push(TrajectoryFrame { states, poses, events });
+    }
+    Ok(frames)
+}
+
+/// One frame's island events, fed to `checker` as they are read.
+fn read_events(
+    r: &mut Reader<'_>,
+    field: &str,
+    body_count: usize,
+    checker: &mut EventChecker,
+) -> Result<Vec<IslandEvent>, TrajectoryError> {
+    let n = r.count(field, 9)?;
+    let mut events = Vec::with_capacity(n);
+    for _ in 0..n {
+        let (tag, island) = (r.u8(field)?, IslandId(r.u64(field)?));
+        let event = match tag {
+            0 => {
+                let m = r.count(field, 32)?;
+                let mut bodies = Vec::with_capacity(m);
+                let mut poses = Vec::with_capacity(m);
+                for _ in 0..m {
+                    bodies.push(r.body(field, body_count)?);
+                    poses.push(r.pose(field)?);
+                }
+                IslandEvent::Slept { island, bodies, poses }
+            }
+            1 => IslandEvent::Woke { island },
+            t => return Err(r.corrupt(field, format!("unknown event tag {t}"))),
+        };
+        checker.apply(&event).map_err(|m| r.corrupt(field, m))?;
+        events.push(event);
+    }
+    Ok(events)
+}
+
 /// Checks the event-stream invariants incrementally.
 struct EventChecker {
     live: std::collections::BTreeMap<IslandId, Vec<BodyId>>,
@@ -473,46 +493,79 @@ fn put_pose(w: &mut Vec<u8>, p: &BodyPose) {
     }
 }
 
+/// A cursor over a trajectory's bytes whose reads fail with an error naming the file and
+/// the field being read.
 struct Reader<'a> {
     bytes: &'a [u8],
     at: usize,
+    file: &'a Path,
 }
 
-impl Reader<'_> {
-    fn take(&mut self, n: usize) -> Option<&[u8]> {
-        let end = self.at.checked_add(n)?;
-        let s = self.bytes.get(self.at..end)?;
-        self.at = end;
-        Some(s)
+impl<'a> Reader<'a> {
+    fn corrupt(&self, field: &str, message: impl Into<String>) -> TrajectoryError {
+        TrajectoryError::Corrupt {
+            file: self.file.to_path_buf(),
+            field: field.to_string(),
+            message: message.into(),
+        }
     }
-    fn u8(&mut self) -> Option<u8> {
-        self.take(1).map(|b| b[0])
+    fn take(&mut self, n: usize, field: &str) -> Result<&'a [u8], TrajectoryError> {
+        let bytes = self.bytes;
+        let s = self.at.checked_add(n).and_then(|end| bytes.get(self.at..end));
+        let s = s.ok_or_else(|| self.corrupt(field, "truncated"))?;
+        self.at += n;
+        Ok(s)
     }
-    fn u32(&mut self) -> Option<u32> {
-        self.take(4).map(|b| u32::from_le_bytes(b.try_into().expect("4 bytes")))
+    fn array<const N: usize>(&mut self, field: &str) -> Result<[u8; N], TrajectoryError> {
+        Ok(self.take(N, field)?.try_into().expect("N bytes"))
     }
-    fn u64(&mut self) -> Option<u64> {
-        self.take(8).map(|b| u64::from_le_bytes(b.try_into().expect("8 bytes")))
+    fn u8(&mut self, field: &str) -> Result<u8, TrajectoryError> {
+        Ok(self.take(1, field)?[0])
     }
-    fn f32(&mut self) -> Option<f32> {
-        self.take(4).map(|b| f32::from_le_bytes(b.try_into().expect("4 bytes")))
+    fn u32(&mut self, field: &str) -> Result<u32, TrajectoryError> {
+        self.array(field).map(u32::from_le_bytes)
+    }
+    fn u64(&mut self, field: &str) -> Result<u64, TrajectoryError> {
+        self.array(field).map(u64::from_le_bytes)
+    }
+    fn f32(&mut self, field: &str) -> Result<f32, TrajectoryError> {
+        self.array(field).map(f32::from_le_bytes)
     }
     /// A count whose items take at least `min_item_bytes` each: rejects counts the rest of
     /// the file cannot hold (so a damaged count cannot trigger a huge allocation).
-    fn count(&mut self, min_item_bytes: usize) -> Option<usize> {
-        let n = self.u32()? as usize;
-        (n.checked_mul(min_item_bytes.max(1))? <= self.bytes.len() - self.at).then_some(n)
+    fn count(&mut self, field: &str, min_item_bytes: usize) -> Result<usize, TrajectoryError> {
+        let n = self.u32(field)? as usize;
+        let fits =
+            n.checked_mul(min_item_bytes.max(1)).is_some_and(|need| need <= self.bytes.len() - self.at);
+        if fits {
+            Ok(n)
+        } else {
+            Err(self.corrupt(field, "truncated"))
+        }
     }
-    fn body(&mut self, body_count: usize) -> Option<BodyId> {
-        let id = self.u32()?;
-        ((id as usize) < body_count).then_some(BodyId(id))
+    /// A length-prefixed UTF-8 string.
+    fn text(&mut self, field: &str) -> Result<String, TrajectoryError> {
+        let len = self.count(field, 1)?;
+        let raw = self.take(len, field)?;
+        String::from_utf8(raw.to_vec()).map_err(|_| self.corrupt(field, "not UTF-8"))
     }
-    fn pose(&mut self) -> Option<BodyPose> {
+    fn body(&mut self, field: &str, body_count: usize) -> Result<BodyId, TrajectoryError> {
+        let id = self.u32(field).map_err(|_| self.corrupt(field, "truncated or body out of range"))?;
+        if (id as usize) < body_count {
+            Ok(BodyId(id))
+        } else {
+            Err(self.corrupt(field, "truncated or body out of range"))
+        }
+    }
+    fn pose(&mut self, field: &str) -> Result<BodyPose, TrajectoryError> {
         let mut v = [0f32; 7];
         for x in &mut v {
-            *x = self.f32()?;
+            *x = self.f32(field).map_err(|_| self.corrupt(field, "truncated or non-finite pose"))?;
         }
-        v.iter().all(|x| x.is_finite()).then(|| BodyPose {
+        if !v.iter().all(|x| x.is_finite()) {
+            return Err(self.corrupt(field, "truncated or non-finite pose"));
+        }
+        Ok(BodyPose {
             translation: Vec3::new(v[0], v[1], v[2]),
             rotation: Quat::from_xyzw(v[3], v[4], v[5], v[6]),
         })
