@@ -24,7 +24,7 @@ use super::island::{IslandTracker, SleepObservation};
 use super::kinematic::KinematicPath;
 use super::options::SimulateOptions;
 use super::spawn::{spawn_schedule, SpawnOrder};
-use super::trajectory::{RecordedScene, Trajectory, TrajectoryFrame};
+use super::trajectory::{FrameRecorder, RecordedScene, Trajectory, TrajectoryFrame};
 use super::PhysicsError;
 use crate::scene::file::{environment_mesh, DisturbanceDef, DisturbanceKind, SceneFile};
 
@@ -55,6 +55,8 @@ pub struct Simulation {
     kinematics: Vec<(BodyId, KinematicPath)>,
     disturbances: Vec<DisturbanceDef>,
     tracker: IslandTracker,
+    /// The frames' changes against what was recorded before.
+    recorder: FrameRecorder,
     frame: u32,
     timestep: f32,
     substeps: u32,
@@ -129,6 +131,7 @@ impl Simulation {
         Ok(Self {
             world,
             prototypes,
+            recorder: FrameRecorder::new(bodies.len()),
             bodies,
             handles,
             states,
@@ -308,10 +311,11 @@ impl Simulation {
         }
     }
 
+    /// Observes every body after the frame's steps: its state and pose go to the recorder
+    /// (poses of bodies awake at the end or fallen asleep during the frame; a sleeping body
+    /// keeps its pose), its sleep group to the island tracker.
     fn observe(&mut self) -> TrajectoryFrame {
         let mut observations = Vec::with_capacity(self.bodies.len());
-        let mut poses = Vec::new();
-        let mut states = Vec::with_capacity(self.bodies.len());
         for (i, handle) in self.handles.iter().enumerate() {
             let id = BodyId(i as u32);
             let previous = self.states[i];
@@ -338,16 +342,16 @@ impl Simulation {
                     observations.push(SleepObservation { body: id, group, pose });
                     let state = if asleep { BodyState::Asleep } else { BodyState::Awake };
                     if state == BodyState::Awake || previous != BodyState::Asleep {
-                        poses.push((id, pose));
+                        self.recorder.pose(id, pose);
                     }
                     state
                 }
             };
-            states.push(state);
+            self.recorder.state(id, state);
+            self.states[i] = state;
         }
         let events = self.tracker.update(&observations);
-        self.states.clone_from(&states);
-        TrajectoryFrame { states, poses, events }
+        self.recorder.finish(events)
     }
 }
 
