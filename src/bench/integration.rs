@@ -430,26 +430,22 @@ fn settled_awake_share(asleep_fraction: &[f64], settled: &[bool]) -> f64 {
 fn asleep_fractions(sequence: &Sequence, selection: &FrameSelection) -> Vec<f64> {
     let trajectory = &sequence.trajectory;
     let dynamic: Vec<bool> = trajectory.bodies.iter().map(|b| b.kind == BodyKind::Dynamic).collect();
-    trajectory
-        .frames
-        .iter()
-        .enumerate()
-        .filter(|(i, _)| selection.selects(*i as u32))
-        .map(|(_, f)| {
-            let (mut present, mut asleep) = (0usize, 0usize);
-            for (s, d) in f.states.iter().zip(&dynamic) {
-                if *d && *s != BodyState::Absent {
-                    present += 1;
-                    asleep += usize::from(*s == BodyState::Asleep);
-                }
+    let mut fractions = Vec::new();
+    let mut replay = trajectory.replay();
+    while let Some(f) = replay.next_frame() {
+        if !selection.selects(f.index) {
+            continue;
+        }
+        let (mut present, mut asleep) = (0usize, 0usize);
+        for (s, d) in f.states.iter().zip(&dynamic) {
+            if *d && *s != BodyState::Absent {
+                present += 1;
+                asleep += usize::from(*s == BodyState::Asleep);
             }
-            if present == 0 {
-                0.0
-            } else {
-                asleep as f64 / present as f64
-            }
-        })
-        .collect()
+        }
+        fractions.push(if present == 0 { 0.0 } else { asleep as f64 / present as f64 });
+    }
+    fractions
 }
 
 /// One configuration's report from its frames (`settled` marks the settled ones) and its

@@ -3,7 +3,7 @@
 
 use std::time::Instant;
 
-use super::simulate::SimulateOptions;
+use super::options::SimulateOptions;
 use super::simulation::Simulation;
 use super::PhysicsError;
 use crate::scene::file::SceneFile;

@@ -3,6 +3,8 @@
 //! their paths, steps Rapier `substeps` times, removes bodies below the kill plane, and
 //! feeds every body's sleep state to the [`IslandTracker`].
 //!
+//! [`simulate`] runs a scene from its first frame to its last and records a [`Trajectory`].
+//!
 //! Rapier runs single-threaded (dormant builds it without its `parallel` feature), and
 //! nothing here iterates a hash map, so a scene and seed always give the same frames.
 
@@ -18,21 +20,13 @@ use super::body::{
     BodyState,
 };
 use super::colliders::{environment_shape, prototype_shape, ColliderChoice, PrototypeShape};
-use super::island::{IslandEvent, IslandTracker, SleepObservation};
+use super::island::{IslandTracker, SleepObservation};
 use super::kinematic::KinematicPath;
+use super::options::SimulateOptions;
 use super::spawn::{spawn_schedule, SpawnOrder};
+use super::trajectory::{FrameRecorder, RecordedScene, Trajectory, TrajectoryFrame};
 use super::PhysicsError;
 use crate::scene::file::{environment_mesh, DisturbanceDef, DisturbanceKind, SceneFile};
-
-/// What one frame changed: every body's state, the poses that must be stored (bodies
-/// awake at the end of the frame, and bodies that fell asleep during it; a sleeping body
-/// keeps its last pose), and the island events.
-#[derive(Clone, Debug, PartialEq)]
-pub struct FrameRecord {
-    pub states: Vec<BodyState>,
-    pub poses: Vec<(BodyId, BodyPose)>,
-    pub events: Vec<IslandEvent>,
-}
 
 /// Per-stage wall-clock counters, in seconds, and work counts.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
@@ -61,6 +55,8 @@ pub struct Simulation {
     kinematics: Vec<(BodyId, KinematicPath)>,
     disturbances: Vec<DisturbanceDef>,
     tracker: IslandTracker,
+    /// The frames' changes against what was recorded before.
+    recorder: FrameRecorder,
     frame: u32,
     timestep: f32,
     substeps: u32,
@@ -125,6 +121,7 @@ impl Simulation {
         Ok(Self {
             world,
             prototypes,
+            recorder: FrameRecorder::new(bodies.len()),
             bodies,
             handles,
             states,
@@ -207,7 +204,7 @@ impl Simulation {
     }
 
     /// Simulates one frame and returns what changed.
-    pub fn step(&mut self) -> FrameRecord {
+    pub fn step(&mut self) -> TrajectoryFrame {
         let frame = self.frame;
         let t0 = Instant::now();
         self.spawn_due(frame);
@@ -304,10 +301,11 @@ impl Simulation {
         }
     }
 
-    fn observe(&mut self) -> FrameRecord {
+    /// Observes every body after the frame's steps: its state and pose go to the recorder
+    /// (poses of bodies awake at the end or fallen asleep during the frame; a sleeping body
+    /// keeps its pose), its sleep group to the island tracker.
+    fn observe(&mut self) -> TrajectoryFrame {
         let mut observations = Vec::with_capacity(self.bodies.len());
-        let mut poses = Vec::new();
-        let mut states = Vec::with_capacity(self.bodies.len());
         for (i, handle) in self.handles.iter().enumerate() {
             let id = BodyId(i as u32);
             let previous = self.states[i];
@@ -334,16 +332,16 @@ impl Simulation {
                     observations.push(SleepObservation { body: id, group, pose });
                     let state = if asleep { BodyState::Asleep } else { BodyState::Awake };
                     if state == BodyState::Awake || previous != BodyState::Asleep {
-                        poses.push((id, pose));
+                        self.recorder.pose(id, pose);
                     }
                     state
                 }
             };
-            states.push(state);
+            self.recorder.state(id, state);
+            self.states[i] = state;
         }
         let events = self.tracker.update(&observations);
-        self.states.clone_from(&states);
-        FrameRecord { states, poses, events }
+        self.recorder.finish(events)
     }
 }
 
@@ -362,4 +360,56 @@ fn static_world(file: &SceneFile) -> Result<PhysicsWorld, PhysicsError> {
     let env_shape = environment_shape(&env, file)?;
     world.insert(RigidBodyBuilder::fixed(), ColliderBuilder::new(env_shape).friction(d.environment.friction));
     Ok(world)
+}
+
+/// One simulated frame, as [`simulate_observed`] reports it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SimulatedFrame {
+    pub index: u32,
+    /// Frames the whole run simulates.
+    pub frames: u32,
+    /// Wall-clock milliseconds of this frame's physics step.
+    pub step_ms: f64,
+}
+
+/// Simulates `file` with `options` and records every frame.
+pub fn simulate(file: &SceneFile, options: &SimulateOptions) -> Result<Trajectory, PhysicsError> {
+    simulate_observed(file, options, &mut |_| {})
+}
+
+/// [`simulate`], calling `on_frame` after each frame (for progress and per-frame timings).
+pub fn simulate_observed(
+    file: &SceneFile,
+    options: &SimulateOptions,
+    on_frame: &mut dyn FnMut(SimulatedFrame),
+) -> Result<Trajectory, PhysicsError> {
+    let recorded = RecordedScene::new(file, options);
+    let file = options.effective_scene(file)?;
+    let mut sim = Simulation::new(&file)?;
+    let frames = file.spec().scene.frames;
+    let mut records = Vec::with_capacity(frames as usize);
+    for f in 0..frames {
+        let t0 = Instant::now();
+        records.push(sim.step());
+        on_frame(SimulatedFrame { index: f, frames, step_ms: t0.elapsed().as_secs_f64() * 1e3 });
+        if (f + 1) % 100 == 0 || f + 1 == frames {
+            let (present, asleep) = sim.dynamic_counts();
+            tracing::info!(
+                frame = f + 1,
+                frames,
+                bodies = present,
+                asleep,
+                step_ms = 1e3 * sim.counters().step_seconds / sim.counters().frames as f64,
+                "simulating"
+            );
+        }
+    }
+    Ok(Trajectory {
+        scene_hash: file.source_hash(),
+        timestep: file.spec().physics.timestep,
+        scene: Some(recorded),
+        prototypes: file.spec().prototypes.iter().map(|p| p.name.clone()).collect(),
+        bodies: sim.bodies().to_vec(),
+        frames: records,
+    })
 }

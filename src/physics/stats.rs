@@ -59,20 +59,13 @@ impl Trajectory {
         let all: Vec<f64> = woken_durations.iter().chain(&open).copied().collect();
         let mut sorted = sizes.clone();
         sorted.sort_unstable();
-        let (dynamic, asleep) = match self.frames.last() {
-            Some(last) => {
-                let dynamic: Vec<&BodyState> = last
-                    .states
-                    .iter()
-                    .zip(&self.bodies)
-                    .filter(|(s, b)| b.kind == BodyKind::Dynamic && **s != BodyState::Absent)
-                    .map(|(s, _)| s)
-                    .collect();
-                let asleep = dynamic.iter().filter(|s| ***s == BodyState::Asleep).count();
-                (dynamic.len() as u64, asleep as u64)
+        let (mut dynamic, mut asleep) = (0u64, 0u64);
+        for (state, body) in self.states_at_end().into_iter().zip(&self.bodies) {
+            if body.kind == BodyKind::Dynamic && state != BodyState::Absent {
+                dynamic += 1;
+                asleep += u64::from(state == BodyState::Asleep);
             }
-            None => (0, 0),
-        };
+        }
         IslandStats {
             frames: end,
             islands_formed: sizes.len() as u64,

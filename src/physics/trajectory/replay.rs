@@ -1,0 +1,125 @@
+//! Frames as changes, both ways: [`FrameRecorder`] turns each frame's body states and poses
+//! into a [`TrajectoryFrame`] of what changed, and [`Replay`] applies those changes to give
+//! every body's state and pose frame by frame.
+
+use glam::{Quat, Vec3};
+
+use super::TrajectoryFrame;
+use crate::physics::body::{BodyId, BodyPose, BodyState};
+use crate::physics::island::IslandEvent;
+
+/// Every body's state and pose as of the last frame recorded or replayed. Before the first
+/// frame every body is absent at the origin.
+#[derive(Clone, Debug)]
+struct BodyTable {
+    states: Vec<BodyState>,
+    poses: Vec<BodyPose>,
+}
+
+impl BodyTable {
+    fn new(body_count: usize) -> Self {
+        let origin = BodyPose { translation: Vec3::ZERO, rotation: Quat::IDENTITY };
+        Self { states: vec![BodyState::Absent; body_count], poses: vec![origin; body_count] }
+    }
+
+    fn apply(&mut self, frame: &TrajectoryFrame) {
+        for &(body, state) in &frame.state_changes {
+            self.states[body.0 as usize] = state;
+        }
+        for &(body, pose) in &frame.pose_changes {
+            self.poses[body.0 as usize] = pose;
+        }
+    }
+}
+
+/// Records frames as changes against every body's last recorded state and pose: feed each
+/// body's state and the poses to store with [`state`](Self::state) and [`pose`](Self::pose),
+/// then [`finish`](Self::finish) the frame.
+#[derive(Clone, Debug)]
+pub(crate) struct FrameRecorder {
+    last: BodyTable,
+    frame: TrajectoryFrame,
+}
+
+impl FrameRecorder {
+    pub(crate) fn new(body_count: usize) -> Self {
+        Self { last: BodyTable::new(body_count), frame: TrajectoryFrame::default() }
+    }
+
+    /// `body` ends the frame in `state`; recorded if that is a change.
+    pub(crate) fn state(&mut self, body: BodyId, state: BodyState) {
+        let last = &mut self.last.states[body.0 as usize];
+        if *last != state {
+            *last = state;
+            self.frame.state_changes.push((body, state));
+        }
+    }
+
+    /// `body` ends the frame at `pose`; recorded unless it is bit for bit the body's last
+    /// recorded pose (so replay gives exactly the poses it was given).
+    pub(crate) fn pose(&mut self, body: BodyId, pose: BodyPose) {
+        let last = &mut self.last.poses[body.0 as usize];
+        if pose_bits(last) != pose_bits(&pose) {
+            *last = pose;
+            self.frame.pose_changes.push((body, pose));
+        }
+    }
+
+    /// The frame's changes, with its island events; the next frame starts empty.
+    pub(crate) fn finish(&mut self, events: Vec<IslandEvent>) -> TrajectoryFrame {
+        TrajectoryFrame { events, ..std::mem::take(&mut self.frame) }
+    }
+}
+
+fn pose_bits(p: &BodyPose) -> [u32; 7] {
+    let [x, y, z] = p.translation.to_array();
+    let [i, j, k, w] = p.rotation.to_array();
+    [x, y, z, i, j, k, w].map(f32::to_bits)
+}
+
+/// A cursor over a trajectory's frames that keeps every body's current state and pose.
+pub struct Replay<'a> {
+    frames: &'a [TrajectoryFrame],
+    next: usize,
+    table: BodyTable,
+}
+
+/// One replayed frame: every body's state and pose at its end (`poses[i]` is meaningless
+/// while body `i` is absent) and the frame's island events.
+pub struct ReplayFrame<'a> {
+    pub index: u32,
+    pub states: &'a [BodyState],
+    pub poses: &'a [BodyPose],
+    pub events: &'a [IslandEvent],
+}
+
+impl ReplayFrame<'_> {
+    /// Whether body `b` is in the world this frame: spawned, not removed, at a finite pose.
+    /// The one place that decides which bodies a frame shows.
+    pub fn is_present(&self, b: usize) -> bool {
+        self.states[b] != BodyState::Absent && self.poses[b].translation.is_finite()
+    }
+
+    /// The bodies present this frame, ascending.
+    pub fn present_bodies(&self) -> impl Iterator<Item = BodyId> + '_ {
+        (0..self.states.len()).filter(|&b| self.is_present(b)).map(|b| BodyId(b as u32))
+    }
+}
+
+impl<'a> Replay<'a> {
+    pub(super) fn new(frames: &'a [TrajectoryFrame], body_count: usize) -> Self {
+        Self { frames, next: 0, table: BodyTable::new(body_count) }
+    }
+
+    pub fn next_frame(&mut self) -> Option<ReplayFrame<'_>> {
+        let frame = self.frames.get(self.next)?;
+        self.table.apply(frame);
+        self.next += 1;
+        Some(ReplayFrame {
+            index: (self.next - 1) as u32,
+            states: &self.table.states,
+            poses: &self.table.poses,
+            events: &frame.events,
+        })
+    }
+}
