@@ -46,7 +46,9 @@ const RUN: &[(&str, &str)] = &[
     ("backend", "string"),
     ("mode", "string"),
     ("integration", "string"),
+    ("integrate_as", "string"),
     ("cache_enabled", "boolean"),
+    ("lookahead", "boolean"),
     ("width", "integer"),
     ("height", "integer"),
     ("spp", "integer"),
@@ -69,6 +71,8 @@ const FRAME: &[(&str, &str)] = &[
     ("integrated_islands", "integer"),
     ("sleeping_islands", "integer"),
     ("baked_bodies", "integer"),
+    ("resting_bodies", "integer"),
+    ("rest_rebuilt", "boolean"),
     ("islands_slept", "integer"),
     ("islands_woke", "integer"),
     ("islands_integrated", "integer"),
@@ -90,9 +94,10 @@ const DECISION: &[(&str, &str)] = &[
 
 const ESTIMATE: &[(&str, &str)] = &[
     ("build_ms", "number"),
-    ("fixed_ms", "number"),
+    ("wake_ms", "number"),
     ("gain_ms_per_frame", "number"),
     ("expected_frames", "number"),
+    ("exact", "boolean"),
 ];
 
 const SUMMARY: &[(&str, &str)] = &[
@@ -118,6 +123,7 @@ const TOTALS: &[(&str, &str)] = &[
     ("islands_woke", "integer"),
     ("islands_integrated", "integer"),
     ("islands_reactivated", "integer"),
+    ("rest_rebuilds", "integer"),
     ("cache_full", "integer"),
     ("cache_partial", "integer"),
     ("cache_miss", "integer"),
@@ -152,8 +158,11 @@ const CACHE: &[(&str, &str)] = &[
 const COST_MODEL: &[(&str, &str)] = &[
     ("build_ms_intercept", "number"),
     ("build_ms_per_mtriangle", "number"),
+    ("rest_ms_intercept", "number"),
+    ("rest_ms_per_kinstance", "number"),
     ("commit_ms_per_instance", "number"),
-    ("trace_ms_per_instance", "number"),
+    ("trace_ms_mean", "number"),
+    ("penalty", "object"),
     ("sleep_samples", "integer"),
     ("shadow_islands", "integer"),
 ];
@@ -171,7 +180,7 @@ fn check_stats(stats: &Value, frames: std::ops::Range<u32>, physics: &str) {
         ],
     );
     assert_eq!(stats["format"], "dormant-stats");
-    assert_eq!(stats["version"], 1);
+    assert_eq!(stats["version"], 2);
     check_object("run", &stats["run"], RUN);
     assert_eq!(stats["run"]["physics"], physics);
     let records = stats["frames"].as_array().unwrap();

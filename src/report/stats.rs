@@ -12,7 +12,7 @@ use crate::sequence::PhysicsSource;
 /// `format` field of stats.json.
 pub const STATS_FORMAT: &str = "dormant-stats";
 /// `version` field of stats.json; bumped when a field changes meaning or goes away.
-pub const STATS_VERSION: u32 = 1;
+pub const STATS_VERSION: u32 = 2;
 
 /// One rendered frame.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -31,6 +31,8 @@ pub struct FrameRecord {
     pub integrated_islands: usize,
     pub sleeping_islands: usize,
     pub baked_bodies: usize,
+    pub resting_bodies: usize,
+    pub rest_rebuilt: bool,
     pub islands_slept: u32,
     pub islands_woke: u32,
     pub islands_integrated: u32,
@@ -57,6 +59,8 @@ impl FrameRecord {
             integrated_islands: stats.integrated_islands,
             sleeping_islands: stats.sleeping_islands,
             baked_bodies: stats.baked_bodies,
+            resting_bodies: stats.resting_bodies,
+            rest_rebuilt: stats.rest_rebuilt,
             islands_slept: stats.islands_slept,
             islands_woke: stats.islands_woke,
             islands_integrated: stats.islands_integrated,
@@ -88,7 +92,10 @@ pub struct RunInfo {
     pub backend: String,
     pub mode: String,
     pub integration: String,
+    /// `baked` or `resting`.
+    pub integrate_as: String,
     pub cache_enabled: bool,
+    pub lookahead: bool,
     pub width: u32,
     pub height: u32,
     pub spp: u32,
@@ -109,6 +116,8 @@ pub struct Totals {
     pub islands_woke: u64,
     pub islands_integrated: u64,
     pub islands_reactivated: u64,
+    /// Frames that rebuilt the resting scene.
+    pub rest_rebuilds: u64,
     pub cache_full: u64,
     pub cache_partial: u64,
     pub cache_miss: u64,
@@ -186,7 +195,7 @@ fn csv_columns() -> Vec<(&'static str, Cell)> {
         ("physics_ms", Cell::Text(|f| f.physics_ms.map(|v| format!("{v:.4}")).unwrap_or_default())),
     ];
     columns.extend(StageTimes::STAGES.map(|(name, get)| (name, Cell::Stage(get))));
-    let rest: [(&'static str, Cell); 18] = [
+    let rest: [(&'static str, Cell); 20] = [
         ("frame_ms", Cell::Text(|f| format!("{:.4}", f.frame_ms))),
         ("rays", Cell::Text(|f| f.rays.to_string())),
         ("mrays_per_second", Cell::Text(|f| format!("{:.3}", f.mrays_per_second))),
@@ -195,6 +204,8 @@ fn csv_columns() -> Vec<(&'static str, Cell)> {
         ("integrated_islands", Cell::Text(|f| f.integrated_islands.to_string())),
         ("sleeping_islands", Cell::Text(|f| f.sleeping_islands.to_string())),
         ("baked_bodies", Cell::Text(|f| f.baked_bodies.to_string())),
+        ("resting_bodies", Cell::Text(|f| f.resting_bodies.to_string())),
+        ("rest_rebuilt", Cell::Text(|f| f.rest_rebuilt.to_string())),
         ("islands_slept", Cell::Text(|f| f.islands_slept.to_string())),
         ("islands_woke", Cell::Text(|f| f.islands_woke.to_string())),
         ("islands_integrated", Cell::Text(|f| f.islands_integrated.to_string())),
@@ -230,6 +241,7 @@ impl RunStats {
             totals.islands_woke += u64::from(f.islands_woke);
             totals.islands_integrated += u64::from(f.islands_integrated);
             totals.islands_reactivated += u64::from(f.islands_reactivated);
+            totals.rest_rebuilds += u64::from(f.rest_rebuilt);
             totals.cache_full += f.cache_full;
             totals.cache_partial += f.cache_partial;
             totals.cache_miss += f.cache_miss;
@@ -317,7 +329,9 @@ mod tests {
             backend: "bvh".into(),
             mode: "path".into(),
             integration: "auto".into(),
+            integrate_as: "baked".into(),
             cache_enabled: true,
+            lookahead: true,
             width: 1,
             height: 1,
             spp: 1,
@@ -328,7 +342,7 @@ mod tests {
         let lines: Vec<&str> = csv.lines().collect();
         assert_eq!(lines.len(), 4);
         let n = csv_columns().len();
-        assert_eq!(n, 26);
+        assert_eq!(n, 28);
         assert_eq!(lines[0].split(',').count(), n);
         assert!(lines[1..].iter().all(|l| l.split(',').count() == n));
         assert_eq!(stats.summary.totals.stages.trace_ms, 3.0);
