@@ -202,3 +202,66 @@ fn frame_flags_without_a_sequence_are_input_errors() {
         assert!(stderr.contains(flags[0]) && stderr.contains("SCENE"), "{stderr}");
     }
 }
+
+/// Six crates dropped onto the ground: at rest (bit for bit) from about frame 70 on.
+const SETTLING_SCENE: &str = r#"
+[scene]
+name = "settle"
+seed = 3
+frames = 160
+
+[physics]
+timestep = 0.016666667
+
+[environment]
+generator = "ground"
+
+[[prototypes]]
+name = "crate"
+shape = "box"
+half_extents = [0.25, 0.25, 0.25]
+
+[[spawners]]
+prototypes = ["crate"]
+count = 6
+region = { min = [-1.0, 0.3, -1.0], max = [1.0, 0.3, 1.0] }
+random_rotation = false
+
+[[cameras]]
+name = "main"
+position = [0.0, 3.0, 6.0]
+look_at = [0.0, 0.3, 0.0]
+"#;
+
+#[test]
+fn static_frames_reuse_the_previous_image_byte_for_byte() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("settle.toml");
+    std::fs::write(&scene, SETTLING_SCENE).unwrap();
+    let render = |reuse: &str| {
+        let out = dir.path().join(format!("reuse-{reuse}"));
+        let status = dormant()
+            .args(["render", "--quiet", "--size", "48x27", "--spp", "2", "--frames", "130..150"])
+            .args(["--aov", "albedo", "--exr", "--seed", "fixed", "--reuse", reuse, "--out"])
+            .arg(&out)
+            .arg(&scene)
+            .status()
+            .unwrap();
+        assert!(status.success());
+        out
+    };
+    let (on, off) = (render("on"), render("off"));
+    for f in 130..150 {
+        for ext in ["png", "exr", "albedo.png", "albedo.exr"] {
+            let name = format!("frame_{f:04}.{ext}");
+            let a = std::fs::read(on.join(&name)).unwrap();
+            assert_eq!(a, std::fs::read(off.join(&name)).unwrap(), "{name} differs with reuse");
+        }
+    }
+    let stats = |dir: &Path| -> serde_json::Value {
+        serde_json::from_slice(&std::fs::read(dir.join("stats.json")).unwrap()).unwrap()
+    };
+    // Every frame after the first shows the same scene: reused, nothing traced.
+    assert_eq!(stats(&on)["summary"]["totals"]["reused_frames"], 19);
+    assert_eq!(stats(&off)["summary"]["totals"]["reused_frames"], 0);
+}

@@ -19,7 +19,7 @@ use dormant::physics::{
 };
 use dormant::scene::file::SceneFile;
 use dormant::scene::{Body, Camera, Material, Prototype, SceneDescription, Sky, StaticMesh, Sun};
-use dormant::sequence::{FrameRange, FrameRenderer, Sequence, SequenceError, SequenceSource};
+use dormant::sequence::{FrameRange, FrameRenderer, SeedMode, Sequence, SequenceError, SequenceSource};
 use glam::{Quat, Vec3};
 use proptest::prelude::*;
 
@@ -306,7 +306,15 @@ fn never_always_and_auto_render_the_same_images() {
     let sequence = tiny();
     let frames = sequence.select(Some(FrameRange { start: 0, end: 480 }), Some(40)).unwrap();
     let integrator = PathTracer::default();
-    let renderer = FrameRenderer { integrator: &integrator, aovs: &[], width: 64, height: 36, spp: 4 };
+    let renderer = FrameRenderer {
+        integrator: &integrator,
+        aovs: &[],
+        width: 64,
+        height: 36,
+        spp: 4,
+        seed: SeedMode::PerFrame,
+        reuse_static: false,
+    };
     for backend in backends() {
         let mut films: Vec<Vec<Film>> = Vec::new();
         let mut integrated = 0;
@@ -354,7 +362,15 @@ fn baked_debug_view_shows_integrated_bodies_in_orange() {
     let sequence = tiny();
     let frames = sequence.select(Some(FrameRange { start: 0, end: 480 }), Some(60)).unwrap();
     let integrator = AovIntegrator(Aov::Baked);
-    let renderer = FrameRenderer { integrator: &integrator, aovs: &[], width: 96, height: 54, spp: 1 };
+    let renderer = FrameRenderer {
+        integrator: &integrator,
+        aovs: &[],
+        width: 96,
+        height: 54,
+        spp: 1,
+        seed: SeedMode::PerFrame,
+        reuse_static: false,
+    };
     let orange = |p: glam::Vec3| p.x > 1.5 * p.z && p.x > 0.1;
     for (policy, expect_baked) in [(IntegrationPolicy::Never, false), (IntegrationPolicy::Always, true)] {
         let options = ManagerOptions { policy, ..ManagerOptions::default() };

@@ -27,7 +27,7 @@ const BLACK_SKY: Sky = Sky { zenith: Vec3::ZERO, horizon: Vec3::ZERO, ground: Ve
 fn render(desc: &SceneDescription, integrator: &dyn Integrator, width: u32, height: u32, spp: u32) -> Film {
     let mut a = accel::create(Backend::compiled()[0], None).unwrap();
     let scene = RenderScene::build(desc, a.as_mut()).unwrap();
-    let settings = RenderSettings { width, height, spp, frame: 0 };
+    let settings = RenderSettings { width, height, spp, seed: 0 };
     render_frame(&scene, a.query().unwrap(), integrator, &settings).unwrap().0
 }
 

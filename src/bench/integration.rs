@@ -26,7 +26,7 @@ use crate::integrate::{
 use crate::physics::{BodyKind, BodyState};
 use crate::render::Integrator;
 use crate::scene::{SceneDescription, StaticMesh};
-use crate::sequence::{FrameRenderer, FrameSelection, Sequence, SequenceError};
+use crate::sequence::{FrameRenderer, FrameSelection, SeedMode, Sequence, SequenceError};
 
 /// What to run.
 pub struct IntegrationBenchOptions {
@@ -364,6 +364,9 @@ pub fn bench_integration(
         width: options.width,
         height: options.height,
         spp: options.spp,
+        // Every frame traced, and noise decorrelated as in a per-frame-seeded render.
+        seed: SeedMode::PerFrame,
+        reuse_static: false,
     };
     let results = run_lockstep(sequence, &renderer, options, &manager_options, progress)?;
     let mut runs = Vec::new();

@@ -313,7 +313,7 @@ pub fn bench_render(
     desc: &SceneDescription,
     opts: &RenderBenchOptions,
 ) -> Result<RenderBenchReport, RenderError> {
-    let settings = RenderSettings { width: opts.width, height: opts.height, spp: opts.spp, frame: 0 };
+    let settings = RenderSettings { width: opts.width, height: opts.height, spp: opts.spp, seed: 0 };
     settings.validate()?;
     let integrator = PathTracer::default();
     let mut sets: Option<RaySets> = None;

@@ -11,12 +11,14 @@ use crate::accel::{self, Backend};
 use crate::integrate::{FrameStats, IntegrationForm, IntegrationPolicy, IntegrationSettings};
 use crate::physics::SimulateOptions;
 use crate::render::{
-    self, AmbientOcclusion, Aov, AovIntegrator, DirectLighting, Film, Integrator, PathTracer, RenderScene,
-    RenderSettings, RenderStats,
+    self, AmbientOcclusion, Aov, AovIntegrator, DirectLighting, Integrator, PathTracer, RenderScene,
+    RenderSettings,
 };
 use crate::report::{self, FrameRecord, RunInfo, RunStats};
 use crate::scene::file::SceneFile;
-use crate::sequence::{FrameRange, FrameRenderer, RenderedFrame, Sequence, SequenceError, SequenceSource};
+use crate::sequence::{
+    FrameRange, FrameRenderer, RenderedFrame, SeedMode, Sequence, SequenceError, SequenceSource,
+};
 
 /// Image size as `WIDTHxHEIGHT`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -109,6 +111,15 @@ pub struct RenderArgs {
     /// remaining sleep over the rendered frames) instead of estimating it.
     #[arg(long, value_enum, default_value_t = Switch::On)]
     pub lookahead: Switch,
+    /// How frames seed the sampler: one seed for all (like Cycles' default; a frame where
+    /// nothing moved is then the previous image, copied instead of traced) or the frame number
+    /// (noise changes from frame to frame).
+    #[arg(long, value_enum, default_value_t = SeedMode::Fixed)]
+    pub seed: SeedMode,
+    /// With a fixed seed: copy the previous frame's files for frames where nothing moved and
+    /// the camera stayed, instead of tracing them (`off` traces every frame).
+    #[arg(long, value_enum, default_value_t = Switch::On)]
+    pub reuse: Switch,
     /// With SCENE or --trajectory: also encode the frames as DIR/video.mp4 (needs ffmpeg on PATH).
     #[arg(long)]
     pub video: bool,
@@ -257,7 +268,7 @@ fn render_still(
     let scene = RenderScene::build(&description, accel.as_mut()).map_err(|e| runtime(&e))?;
     let query = accel.query().map_err(|e| runtime(&e))?;
     let settings =
-        RenderSettings { width: args.size.width, height: args.size.height, spp: args.spp, frame: 0 };
+        RenderSettings { width: args.size.width, height: args.size.height, spp: args.spp, seed: 0 };
     let (film, stats) =
         render::render_frame(&scene, query, integrator, &settings).map_err(|e| runtime(&e))?;
     let mut aovs = Vec::new();
@@ -266,7 +277,7 @@ fn render_still(
             render::render_frame(&scene, query, &AovIntegrator(aov), &settings).map_err(|e| runtime(&e))?;
         aovs.push((aov, film));
     }
-    let frame = RenderedFrame { index: 0, film, render: stats, aovs };
+    let frame = RenderedFrame { index: 0, film, render: stats, aovs, reused_from: None };
     writer.write(&frame, None, &ProgressBar::hidden())?;
     Ok(description.name)
 }
@@ -298,6 +309,8 @@ fn render_sequence(
         width: args.size.width,
         height: args.size.height,
         spp: args.spp,
+        seed: args.seed,
+        reuse_static: args.reuse == Switch::On,
     };
     let progress = super::progress::frames_bar(quiet, "rendering", Some(u64::from(frames.count())));
     let (mut records, mut frame_paths) = (Vec::new(), Vec::new());
@@ -366,7 +379,8 @@ struct FrameWriter<'a> {
 }
 
 impl FrameWriter<'_> {
-    /// Writes `frame`'s files atomically; returns the image's path.
+    /// Writes `frame`'s files atomically (a reused frame's are copies of its source's);
+    /// returns the image's path.
     fn write(
         &mut self,
         frame: &RenderedFrame,
@@ -374,29 +388,57 @@ impl FrameWriter<'_> {
         progress: &ProgressBar,
     ) -> Result<PathBuf, CliError> {
         let (args, index) = (self.args, frame.index);
-        let runtime = |e: &dyn std::fmt::Display| CliError::Runtime(e.to_string());
-        let path = args.out.join(format!("frame_{index:04}.png"));
-        render::write_png_atomic(&frame.film, args.exposure, &path).map_err(|e| runtime(&e))?;
-        if args.exr {
-            render::write_exr_atomic(&frame.film, &path.with_extension("exr")).map_err(|e| runtime(&e))?;
+        let files = frame_files(args, index);
+        match frame.reused_from {
+            Some(source) => {
+                for (from, to) in frame_files(args, source).iter().zip(&files) {
+                    copy_atomic(from, to)?;
+                }
+            }
+            None => self.write_images(frame, &files)?,
         }
-        let mut aov_paths = Vec::new();
-        for (aov, film) in &frame.aovs {
-            aov_paths.push(write_aov(&args.out, index, *aov, film, args.exr)?);
-        }
+        let path = files[0].clone();
         let stats = &frame.render;
         if !self.quiet {
-            progress.suspend(|| println!("{}", self.summary(&path, stats)));
+            progress.suspend(|| println!("{}", self.summary(&path, frame)));
         }
+        let aov_paths: Vec<&PathBuf> =
+            files.iter().skip(1).filter(|p| p.extension().is_some_and(|e| e == "png")).collect();
         self.records.push(serde_json::json!({ "frame": index, "path": path, "rays": stats.rays,
             "seconds": stats.seconds, "mrays_per_second": stats.mrays_per_second(), "aovs": aov_paths,
-            "scene": scene_stats }));
+            "reused_from": frame.reused_from, "scene": scene_stats }));
         Ok(path)
     }
 
+    /// Encodes the image and AOVs of a traced frame to `files` (from [`frame_files`]).
+    fn write_images(&self, frame: &RenderedFrame, files: &[PathBuf]) -> Result<(), CliError> {
+        let runtime = |e: &dyn std::fmt::Display| CliError::Runtime(e.to_string());
+        let mut files = files.iter();
+        let mut next = || files.next().expect("frame_files lists every file");
+        let exr = self.args.exr;
+        render::write_png_atomic(&frame.film, self.args.exposure, next()).map_err(|e| runtime(&e))?;
+        if exr {
+            render::write_exr_atomic(&frame.film, next()).map_err(|e| runtime(&e))?;
+        }
+        for (aov, film) in &frame.aovs {
+            render::write_aov_png_atomic(film, *aov, next()).map_err(|e| runtime(&e))?;
+            if exr {
+                render::write_exr_atomic(film, next()).map_err(|e| runtime(&e))?;
+            }
+        }
+        Ok(())
+    }
+
     /// The line printed for a written frame.
-    fn summary(&self, path: &Path, stats: &RenderStats) -> String {
+    fn summary(&self, path: &Path, frame: &RenderedFrame) -> String {
         let args = self.args;
+        if let Some(source) = frame.reused_from {
+            return format!(
+                "wrote {} (nothing moved since frame {source}: its image, not traced)",
+                path.display()
+            );
+        }
+        let stats = &frame.render;
         format!(
             "rendered {} ({}x{}, {} spp, {:?} mode, {}): {:.2} s, {} rays, {:.1} Mrays/s",
             path.display(),
@@ -412,15 +454,28 @@ impl FrameWriter<'_> {
     }
 }
 
-/// Writes one AOV pass (PNG, and EXR with `exr`); returns the PNG's path.
-fn write_aov(out: &Path, index: u32, aov: Aov, film: &Film, exr: bool) -> Result<PathBuf, CliError> {
-    let runtime = |e: &dyn std::fmt::Display| CliError::Runtime(e.to_string());
-    let path = out.join(format!("frame_{index:04}.{}.png", aov.name()));
-    render::write_aov_png_atomic(film, aov, &path).map_err(|e| runtime(&e))?;
-    if exr {
-        render::write_exr_atomic(film, &path.with_extension("exr")).map_err(|e| runtime(&e))?;
+/// The files frame `index` writes, in order: the image (PNG, then EXR with `--exr`), then each
+/// AOV pass the same way.
+fn frame_files(args: &RenderArgs, index: u32) -> Vec<PathBuf> {
+    let base = args.out.join(format!("frame_{index:04}"));
+    let mut names = vec![String::new()];
+    names.extend(args.aov.iter().map(|a| format!(".{}", a.name())));
+    let mut files = Vec::new();
+    for name in names {
+        files.push(PathBuf::from(format!("{}{name}.png", base.display())));
+        if args.exr {
+            files.push(PathBuf::from(format!("{}{name}.exr", base.display())));
+        }
     }
-    Ok(path)
+    files
+}
+
+/// Copies `from` to `to` atomically (temporary file, then rename).
+fn copy_atomic(from: &Path, to: &Path) -> Result<(), CliError> {
+    let bytes = std::fs::read(from)
+        .map_err(|e| CliError::Runtime(format!("cannot read {} to reuse it: {e}", from.display())))?;
+    crate::atomic_file::write_atomic(to, &bytes)
+        .map_err(|e| CliError::Runtime(format!("cannot write {}: {e}", to.display())))
 }
 
 /// A value's JSON name (a unit enum's serde name).

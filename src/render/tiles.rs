@@ -39,8 +39,9 @@ pub struct RenderSettings {
     pub width: u32,
     pub height: u32,
     pub spp: u32,
-    /// Frame number: seeds the sampler so consecutive frames decorrelate.
-    pub frame: u32,
+    /// Seeds the pixel sampler: a sequence passes the frame number so consecutive frames
+    /// decorrelate, or one value for every frame (`--seed fixed`).
+    pub seed: u32,
 }
 
 impl RenderSettings {
@@ -153,7 +154,7 @@ impl TileRenderer<'_> {
                 let mut n = 0;
                 for y in by..(by + BLOCK.1).min(y1) {
                     for x in bx..(bx + BLOCK.0).min(x1) {
-                        cells[n] = (x, y, PixelSampler::new(x, y, self.settings.frame));
+                        cells[n] = (x, y, PixelSampler::new(x, y, self.settings.seed));
                         n += 1;
                     }
                 }

@@ -33,6 +33,8 @@ pub struct FrameRecord {
     pub baked_bodies: usize,
     pub resting_bodies: usize,
     pub rest_rebuilt: bool,
+    /// The previous image again: nothing visible changed, nothing was traced.
+    pub reused: bool,
     pub islands_slept: u32,
     pub islands_woke: u32,
     pub islands_integrated: u32,
@@ -61,6 +63,7 @@ impl FrameRecord {
             baked_bodies: stats.baked_bodies,
             resting_bodies: stats.resting_bodies,
             rest_rebuilt: stats.rest_rebuilt,
+            reused: stats.reused,
             islands_slept: stats.islands_slept,
             islands_woke: stats.islands_woke,
             islands_integrated: stats.islands_integrated,
@@ -118,6 +121,8 @@ pub struct Totals {
     pub islands_reactivated: u64,
     /// Frames that rebuilt the resting scene.
     pub rest_rebuilds: u64,
+    /// Frames that reused the previous image.
+    pub reused_frames: u64,
     pub cache_full: u64,
     pub cache_partial: u64,
     pub cache_miss: u64,
@@ -195,7 +200,7 @@ fn csv_columns() -> Vec<(&'static str, Cell)> {
         ("physics_ms", Cell::Text(|f| f.physics_ms.map(|v| format!("{v:.4}")).unwrap_or_default())),
     ];
     columns.extend(StageTimes::STAGES.map(|(name, get)| (name, Cell::Stage(get))));
-    let rest: [(&'static str, Cell); 20] = [
+    let rest: [(&'static str, Cell); 21] = [
         ("frame_ms", Cell::Text(|f| format!("{:.4}", f.frame_ms))),
         ("rays", Cell::Text(|f| f.rays.to_string())),
         ("mrays_per_second", Cell::Text(|f| format!("{:.3}", f.mrays_per_second))),
@@ -206,6 +211,7 @@ fn csv_columns() -> Vec<(&'static str, Cell)> {
         ("baked_bodies", Cell::Text(|f| f.baked_bodies.to_string())),
         ("resting_bodies", Cell::Text(|f| f.resting_bodies.to_string())),
         ("rest_rebuilt", Cell::Text(|f| f.rest_rebuilt.to_string())),
+        ("reused", Cell::Text(|f| f.reused.to_string())),
         ("islands_slept", Cell::Text(|f| f.islands_slept.to_string())),
         ("islands_woke", Cell::Text(|f| f.islands_woke.to_string())),
         ("islands_integrated", Cell::Text(|f| f.islands_integrated.to_string())),
@@ -242,6 +248,7 @@ impl RunStats {
             totals.islands_integrated += u64::from(f.islands_integrated);
             totals.islands_reactivated += u64::from(f.islands_reactivated);
             totals.rest_rebuilds += u64::from(f.rest_rebuilt);
+            totals.reused_frames += u64::from(f.reused);
             totals.cache_full += f.cache_full;
             totals.cache_partial += f.cache_partial;
             totals.cache_miss += f.cache_miss;
@@ -342,7 +349,7 @@ mod tests {
         let lines: Vec<&str> = csv.lines().collect();
         assert_eq!(lines.len(), 4);
         let n = csv_columns().len();
-        assert_eq!(n, 28);
+        assert_eq!(n, 29);
         assert_eq!(lines[0].split(',').count(), n);
         assert!(lines[1..].iter().all(|l| l.split(',').count() == n));
         assert_eq!(stats.summary.totals.stages.trace_ms, 3.0);

@@ -22,6 +22,6 @@ mod selection;
 mod source;
 
 pub use error::SequenceError;
-pub use render::{FrameRenderer, RenderedFrame};
+pub use render::{FrameRenderer, RenderedFrame, SeedMode};
 pub use selection::{FrameRange, FrameSelection};
 pub use source::{PhysicsSource, Sequence, SequenceSource};

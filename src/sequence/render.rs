@@ -14,6 +14,19 @@ use crate::render::{
 /// rays for a stable time, few enough to cost a few ms.
 const PROBE_SIZE: (u32, u32) = (128, 72);
 
+/// How the pixel sampler is seeded across a sequence (`--seed`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum SeedMode {
+    /// One seed for every frame, as Cycles does by default: a frame that shows the same scene
+    /// as the one before is the same image, so it is not traced again but copied.
+    #[default]
+    Fixed,
+    /// The frame number seeds each frame: noise decorrelates from frame to frame (like
+    /// Cycles' animated seed), and every frame is traced.
+    PerFrame,
+}
+
 /// How every frame of a run is rendered.
 #[derive(Clone, Copy)]
 pub struct FrameRenderer<'a> {
@@ -23,21 +36,33 @@ pub struct FrameRenderer<'a> {
     pub width: u32,
     pub height: u32,
     pub spp: u32,
+    pub seed: SeedMode,
+    /// With a fixed seed, hand on the previous image for frames where nothing visible changed
+    /// instead of tracing them again.
+    pub reuse_static: bool,
 }
 
 impl FrameRenderer<'_> {
     fn settings(&self, frame: u32) -> RenderSettings {
-        RenderSettings { width: self.width, height: self.height, spp: self.spp, frame }
+        let seed = match self.seed {
+            SeedMode::Fixed => 0,
+            SeedMode::PerFrame => frame,
+        };
+        RenderSettings { width: self.width, height: self.height, spp: self.spp, seed }
     }
 }
 
-/// One rendered frame; the manager keeps its statistics ([`SceneManager::last_frame`]).
+/// One frame of a sequence: rendered, or (static-frame reuse) the same image as an earlier
+/// one; the manager keeps the statistics of the last frame it prepared.
 pub struct RenderedFrame {
     pub index: u32,
     pub film: Film,
     pub render: RenderStats,
     /// The requested AOV passes, in request order.
     pub aovs: Vec<(Aov, Film)>,
+    /// `Some(f)`: nothing visible changed since frame `f`, whose image (and AOVs) this is; no
+    /// ray was traced.
+    pub reused_from: Option<u32>,
 }
 
 impl Sequence {
@@ -69,13 +94,27 @@ impl Sequence {
             (film, render, aovs)
         };
         manager.record_trace(render.seconds * 1e3, render.rays);
-        Ok(RenderedFrame { index: frame.index, film, render, aovs })
+        Ok(RenderedFrame { index: frame.index, film, render, aovs, reused_from: None })
+    }
+
+    /// Whether frames `a` and `b > a` show the same scene: no body moved, appeared or left in
+    /// between (kinematic bodies included), and the camera is where it was. Lights, sky and
+    /// materials do not change over a sequence.
+    pub fn unchanged_between(&self, a: u32, b: u32) -> bool {
+        let frames = &self.trajectory.frames;
+        let still = (a as usize + 1..=b as usize)
+            .all(|f| frames.get(f).is_some_and(|f| f.pose_changes.is_empty() && f.state_changes.is_empty()));
+        still && self.assets.camera_at(self.time_of(a)) == self.assets.camera_at(self.time_of(b))
     }
 
     /// Renders the frames `selection` selects through `manager` and hands each to
-    /// `on_frame` with the manager's statistics. The accelerator is brought up to date at the
-    /// first selected frame, so a slice of a sequence renders the same images as a whole run,
-    /// up to float noise (integrated and instanced bodies are hit alike).
+    /// `on_frame` with its statistics. The accelerator is brought up to date at the first
+    /// selected frame, so a slice of a sequence renders the same images as a whole run, up to
+    /// float noise (integrated and instanced bodies are hit alike).
+    ///
+    /// With a fixed seed, a frame that shows the same scene as the previous rendered frame
+    /// ([`Sequence::unchanged_between`]) is that frame's image again: it is handed on with
+    /// `reused_from` set and statistics marked `reused`, and the manager is not touched.
     pub fn render<E: From<SequenceError>>(
         &self,
         selection: &FrameSelection,
@@ -83,10 +122,23 @@ impl Sequence {
         renderer: &FrameRenderer<'_>,
         on_frame: &mut dyn FnMut(&RenderedFrame, &FrameStats) -> Result<(), E>,
     ) -> Result<(), E> {
+        let mut last: Option<RenderedFrame> = None;
         self.replay(selection, std::slice::from_mut(manager), &mut |frame, managers| {
             let manager = &mut managers[0];
+            let reusable = renderer.reuse_static && renderer.seed == SeedMode::Fixed;
+            if let Some(prev) =
+                last.as_mut().filter(|p| reusable && self.unchanged_between(p.index, frame.index))
+            {
+                prev.reused_from = Some(prev.reused_from.unwrap_or(prev.index));
+                prev.index = frame.index;
+                prev.render = RenderStats::default();
+                let stats = manager.last_frame().reused_as(frame.index);
+                return on_frame(prev, &stats);
+            }
             let rendered = self.render_frame(manager, frame, renderer).map_err(SequenceError::from)?;
-            on_frame(&rendered, manager.last_frame())
+            on_frame(&rendered, manager.last_frame())?;
+            last = Some(rendered);
+            Ok(())
         })
     }
 }

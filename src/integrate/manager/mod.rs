@@ -147,9 +147,27 @@ pub struct FrameStats {
     pub cache_partial: u64,
     pub cache_miss: u64,
     pub decisions: Vec<Decision>,
+    /// Whether the frame reused an earlier frame's image (nothing visible changed): no stage
+    /// ran.
+    pub reused: bool,
 }
 
 impl FrameStats {
+    /// The statistics of frame `index`, which reuses this frame's image: the same scene
+    /// state, no work, no events.
+    pub fn reused_as(&self, index: u32) -> FrameStats {
+        FrameStats {
+            frame: index,
+            instances: self.instances,
+            integrated_islands: self.integrated_islands,
+            baked_bodies: self.baked_bodies,
+            resting_bodies: self.resting_bodies,
+            sleeping_islands: self.sleeping_islands,
+            reused: true,
+            ..FrameStats::default()
+        }
+    }
+
     /// Every stage, the trace included: the per-frame time the integration policies compete on.
     pub fn frame_ms(&self) -> f64 {
         self.stages.frame_ms()
