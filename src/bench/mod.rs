@@ -5,11 +5,13 @@
 pub mod accel;
 pub mod integration;
 pub mod paper;
+pub mod regimes;
 pub mod render;
 
 pub(crate) use accel::{bench_accel, AccelBenchOptions};
 pub(crate) use integration::{bench_integration, IntegrationBenchOptions};
 pub(crate) use paper::{bench_paper, PaperBenchOptions, PaperPreset, RainAssets};
+pub(crate) use regimes::{bench_regimes, Budget, RegimeSizes, RegimesOptions};
 pub(crate) use render::{bench_render, RenderBenchOptions};
 
 use std::time::Instant;

@@ -43,6 +43,13 @@ pub enum BenchCommand {
         after_help = "Examples:\n  dormant bench paper --out out/paper                 the atrium, about 15 minutes\n  dormant bench paper --quick --out out/paper-quick   scaled down, about 2 minutes\n  dormant bench paper --env ../shared/assets/monastery.glb --object ../shared/assets/duck.glb \\\n      --object ../shared/assets/teddy.glb --object ../shared/assets/soccerball.glb --out docs/paper"
     )]
     Paper(PaperArgs),
+    /// Where integration pays: a scene simulated at several body counts, rendered under never,
+    /// always and auto by every backend at several per-frame ray budgets; writes regimes.json,
+    /// regimes.md and regimes.png into --out.
+    #[command(
+        after_help = "Examples:\n  dormant bench regimes scenes/demolition.toml --out out/regimes\n  dormant bench regimes scenes/demolition.toml --quick --out out/regimes-quick"
+    )]
+    Regimes(RegimesArgs),
     /// Physics step time with every body awake against most asleep.
     #[command(after_help = "Examples:\n  dormant bench physics scenes/atrium.toml --json out/physics.json")]
     Physics(PhysicsArgs),
@@ -65,6 +72,41 @@ pub struct PaperArgs {
     /// Backends to compare (repeat; default: every compiled one).
     #[arg(long)]
     pub backend: Vec<crate::accel::Backend>,
+}
+
+#[derive(Debug, Args)]
+pub struct RegimesArgs {
+    /// Scene file to simulate at each count.
+    #[arg(value_name = "SCENE")]
+    pub scene: PathBuf,
+    /// Output directory for regimes.json, regimes.md and regimes.png.
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+    /// Dynamic bodies of each simulation (comma-separated).
+    #[arg(long, value_name = "N,...", value_delimiter = ',', default_values_t = [2000u32, 8000, 50000, 150000])]
+    pub counts: Vec<u32>,
+    /// Frames to simulate (default: the scene's).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    pub frame_count: Option<u32>,
+    /// Per-frame ray budgets (comma-separated; default: all).
+    #[arg(long, value_enum, value_delimiter = ',')]
+    pub budgets: Vec<bench::Budget>,
+    /// Backends to compare (repeat; default: every compiled one).
+    #[arg(long)]
+    pub backend: Vec<crate::accel::Backend>,
+    /// The integration form measured.
+    #[arg(long, value_enum, default_value_t = crate::integrate::IntegrationForm::default())]
+    pub integrate_as: crate::integrate::IntegrationForm,
+    /// Frames rendered per preview cell.
+    #[arg(long, value_name = "N", default_value_t = 150)]
+    pub preview_frames: u32,
+    /// Settled frames rendered per production cell.
+    #[arg(long, value_name = "N", default_value_t = 4)]
+    pub production_frames: u32,
+    /// Scaled down for tests: counts 300 and 1200 over 240 frames, 24 preview frames, one
+    /// production frame at 160x90.
+    #[arg(long)]
+    pub quick: bool,
 }
 
 #[derive(Debug, Args)]
@@ -153,6 +195,7 @@ pub(super) fn run(
         BenchCommand::Physics(p) => physics(p, quiet, json),
         BenchCommand::Integration(i) => integration(i, threads, quiet, json),
         BenchCommand::Paper(p) => paper(p, threads, quiet, json),
+        BenchCommand::Regimes(r) => regimes(r, threads, quiet, json),
     }
 }
 
@@ -230,6 +273,64 @@ fn integration(
     };
     let report = bench::bench_integration(&sequence, integrator.as_ref(), &options, &mut progress)?;
     emit(&serde_json::to_value(&report).expect("bench report serialises"), json, quiet)
+}
+
+fn regimes(
+    args: &RegimesArgs,
+    threads: Option<usize>,
+    quiet: bool,
+    json: &JsonOutput,
+) -> Result<(), CliError> {
+    let scene =
+        crate::scene::file::SceneFile::load(&args.scene).map_err(|e| CliError::Input(e.to_string()))?;
+    let backends = if args.backend.is_empty() {
+        crate::accel::Backend::compiled()
+    } else {
+        args.backend.iter().map(|&b| super::render::choose_backend(Some(b))).collect::<Result<_, _>>()?
+    };
+    let budgets = if args.budgets.is_empty() { bench::Budget::ALL.to_vec() } else { args.budgets.clone() };
+    let (counts, frame_count, sizes) = match args.quick {
+        true => (vec![300, 1200], Some(240), bench::RegimeSizes { preview_frames: 24, production_frames: 1 }),
+        false => (
+            args.counts.clone(),
+            args.frame_count,
+            bench::RegimeSizes {
+                preview_frames: args.preview_frames,
+                production_frames: args.production_frames,
+            },
+        ),
+    };
+    let options = bench::RegimesOptions {
+        scene,
+        counts,
+        frame_count,
+        backends,
+        budgets,
+        form: args.integrate_as,
+        sizes,
+        quick: args.quick,
+        threads,
+    };
+    // Before minutes of benchmarking, not after.
+    std::fs::create_dir_all(&args.out).map_err(|e| {
+        CliError::Runtime(format!("cannot create output directory {}: {e}", args.out.display()))
+    })?;
+    let start = std::time::Instant::now();
+    let mut log = |line: &str| {
+        if !quiet {
+            eprintln!("bench regimes [{:>5.0} s] {line}", start.elapsed().as_secs_f64());
+        }
+    };
+    let report = bench::bench_regimes(&options, &mut log)?;
+    let written =
+        crate::report::write_regimes(&report, &args.out).map_err(|e| CliError::Runtime(e.to_string()))?;
+    json.emit(&serde_json::to_value(&report).expect("the regimes report serialises"))?;
+    if !quiet && !json.is_requested() {
+        for path in written {
+            println!("wrote {}", path.display());
+        }
+    }
+    Ok(())
 }
 
 fn physics(args: &PhysicsArgs, quiet: bool, json: &JsonOutput) -> Result<(), CliError> {

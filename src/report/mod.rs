@@ -8,10 +8,12 @@
 mod paper;
 mod paper_plot;
 mod plot;
+mod regimes;
 mod stats;
 
 pub(crate) use paper::write_paper;
 pub(crate) use plot::write_report_png;
+pub(crate) use regimes::write_regimes;
 pub(crate) use stats::{FrameRecord, RunInfo, RunStats};
 
 /// Failures writing a report file.

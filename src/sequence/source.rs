@@ -131,9 +131,16 @@ impl Sequence {
 
     /// `count` frames, evenly spaced and ending with the last.
     pub fn evenly_spaced(&self, count: u32) -> FrameSelection {
-        let n = self.frame_count();
+        self.evenly_spaced_in(FrameRange { start: 0, end: self.frame_count().max(1) }, count)
+    }
+
+    /// `count` frames of `range` (clamped to the trajectory), evenly spaced and ending with
+    /// its last.
+    pub fn evenly_spaced_in(&self, range: FrameRange, count: u32) -> FrameSelection {
+        let end = range.end.min(self.frame_count());
+        let n = end.saturating_sub(range.start);
         let k = count.min(n.max(1));
-        FrameSelection::list((1..=k).map(|i| (i * n).div_ceil(k).saturating_sub(1)).collect())
+        FrameSelection::list((1..=k).map(|i| range.start + (i * n).div_ceil(k).saturating_sub(1)).collect())
     }
 
     /// The trajectory's last frame.
