@@ -7,7 +7,7 @@ use glam::{Affine3A, Mat3};
 
 use super::object_map::normal_matrix;
 use crate::geometry::TriangleMesh;
-use crate::physics::{BodyId, BodyPose, IslandId};
+use crate::physics::{BodyId, BodyPose};
 
 /// One body's triangles within a baked mesh.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -22,7 +22,6 @@ pub struct BakedPart {
 /// An island baked into world space.
 #[derive(Clone, Debug)]
 pub struct BakedIsland {
-    pub island: IslandId,
     pub mesh: TriangleMesh,
     /// Ascending by `first_prim`.
     pub parts: Vec<BakedPart>,
@@ -32,11 +31,7 @@ impl BakedIsland {
     /// Transforms each body's prototype mesh by its pose and concatenates them. Only positions
     /// and indices are kept: shading reads normals and UVs from the prototype (see
     /// [`BakedIsland::part_of`]).
-    pub fn bake(
-        island: IslandId,
-        bodies: &[(BodyId, u32, BodyPose)],
-        prototypes: &[Arc<TriangleMesh>],
-    ) -> BakedIsland {
+    pub fn bake(bodies: &[(BodyId, u32, BodyPose)], prototypes: &[Arc<TriangleMesh>]) -> BakedIsland {
         let (mut vertices, mut triangles) = (0, 0);
         for (_, proto, _) in bodies {
             vertices += prototypes[*proto as usize].positions.len();
@@ -63,7 +58,7 @@ impl BakedIsland {
             mesh.positions.extend(src.positions.iter().map(|p| xf.transform_point3(*p)));
             mesh.indices.extend(src.indices.iter().map(|t| t.map(|i| i + base)));
         }
-        BakedIsland { island, mesh, parts }
+        BakedIsland { mesh, parts }
     }
 
     /// The body part holding baked triangle `prim`, and the triangle's index in its prototype.
@@ -90,7 +85,7 @@ mod tests {
             vec![Arc::new(primitives::cuboid(Vec3::ONE)), Arc::new(primitives::uv_sphere(1.0, 6, 4))];
         let pose = |x: f32| BodyPose { translation: Vec3::new(x, 0.0, 0.0), rotation: Quat::IDENTITY };
         let bodies = [(BodyId(7), 1, pose(0.0)), (BodyId(3), 0, pose(5.0))];
-        let baked = BakedIsland::bake(IslandId(1), &bodies, &protos);
+        let baked = BakedIsland::bake(&bodies, &protos);
         let n0 = protos[1].indices.len() as u32;
         assert_eq!(baked.triangle_count(), (n0 + 12) as usize);
         let (part, local) = baked.part_of(n0 + 4).unwrap();

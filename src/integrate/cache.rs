@@ -121,12 +121,9 @@ impl<S> GeometryCache<S> {
         &self.stats
     }
 
+    #[cfg(test)]
     pub fn len(&self) -> usize {
         self.entries.len()
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.entries.is_empty()
     }
 
     fn priority(&self, triangles: usize, bytes: usize) -> f64 {

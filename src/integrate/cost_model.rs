@@ -402,6 +402,7 @@ impl CostModel {
     }
 
     /// Estimated ms to build `triangles` into the static scene.
+    #[cfg(test)]
     pub fn build_ms(&self, triangles: usize) -> f64 {
         let (a, b) = Self::line(&self.build, PRIOR_BUILD_MS);
         (a + b * triangles as f64).max(0.0)

@@ -1,9 +1,13 @@
 //! Integration: from simulated frames to the scenes the accelerators hold.
 //!
 //! - [`SceneManager`] keeps one accelerator in step with a simulation: awake bodies are
-//!   instances, sleeping islands the [`IntegrationPolicy`] accepts are baked into the static
-//!   scene ([`BakedIsland`]), woken ones leave it through the [`GeometryCache`] or by removal.
-//! - [`CostModel`] decides, under the `auto` policy, whether integrating pays off.
+//!   instances; sleeping islands the [`IntegrationPolicy`] accepts are integrated in an
+//!   [`IntegrationForm`]: baked into the static scene, or resting (instances in a scene
+//!   rebuilt only when its set changes); woken ones leave, baked ones through the geometry
+//!   cache or by removal.
+//! - The cost model decides, under the `auto` policy, whether integrating pays off, with the
+//!   run's future when it is known ([`Lookahead`]).
+//! - [`StageTimes`]: the per-frame stage times every record and report is made of.
 //! - [`ObjectMap`] maps hits back to bodies, prototypes and triangles for shading.
 
 mod baked;
@@ -15,16 +19,12 @@ mod object_map;
 mod policy;
 mod stage_times;
 
-pub use baked::{BakedIsland, BakedPart};
-pub use cache::{CacheBudget, CacheHit, CacheOutcome, CacheStats, GeometryCache, FRACTION_BUCKETS};
-pub use cost_model::{
-    choose_batch, Candidate, CostEstimate, CostModel, CostModelState, IntegrationForm, Outlook, Penalties,
-    Situation,
-};
+pub use cache::{CacheBudget, CacheOutcome, CacheStats, FRACTION_BUCKETS};
+pub use cost_model::{CostEstimate, CostModelState, IntegrationForm, Penalties};
 pub use lookahead::Lookahead;
 pub use manager::{
     Decision, FrameStats, ManagerOptions, ReactivationPath, ReactivationStrategy, SceneManager,
 };
-pub use object_map::{normal_matrix, LoadedObjectMap, MeshRef, ObjectMap, ResolvedHit};
+pub use object_map::{LoadedObjectMap, MeshRef, ObjectMap, ResolvedHit};
 pub use policy::{IntegrationPolicy, IntegrationSettings};
-pub use stage_times::{StageColumn, StageTimes};
+pub use stage_times::StageTimes;

@@ -23,5 +23,6 @@ mod source;
 
 pub use error::SequenceError;
 pub use render::{FrameRenderer, RenderedFrame, SeedMode};
+pub use replay::FrameVisitor;
 pub use selection::{FrameRange, FrameSelection};
 pub use source::{PhysicsSource, Sequence, SequenceSource};

@@ -175,7 +175,7 @@ impl SceneManager {
                 .zip(&s.poses)
                 .map(|(b, p)| (*b, self.bodies[b.0 as usize].prototype, *p))
                 .collect();
-            let baked = Arc::new(BakedIsland::bake(*island, &bodies, &self.prototypes));
+            let baked = Arc::new(BakedIsland::bake(&bodies, &self.prototypes));
             if self.cache.is_some() {
                 self.record_in_cache();
                 if per_island {
