@@ -232,12 +232,16 @@ impl Accelerator for EmbreeAccel {
             .get(prototype.0 as usize)
             .ok_or(AccelError::UnknownId { kind: "prototype", id: prototype.0 })?
             .clone();
-        let id = self.free_instances.pop().unwrap_or(self.instances.len() as u32);
+        // The id is taken only once the instance is attached: a bad transform must not lose
+        // a free id.
+        let id = self.free_instances.last().copied().unwrap_or(self.instances.len() as u32);
         let normal_matrix = checked_transform(id, &transform)?;
         let geometry = InstanceGeometry::new(&self.device, &proto, &transform)?;
         self.top.attach_by_id(geometry, id + 1)?;
         if id as usize == self.instances.len() {
             self.instances.push(None);
+        } else {
+            self.free_instances.pop();
         }
         self.instances[id as usize] = Some(InstanceSlot { normal_matrix, resting: false });
         Ok(InstanceId(id))
@@ -313,7 +317,9 @@ impl Accelerator for EmbreeAccel {
     }
 
     fn query(&self) -> Result<&dyn SceneQuery, AccelError> {
-        if self.top.is_dirty() || self.resting.is_dirty() {
+        // A resting scene rebuilt by `commit_static` is committed in Embree's sense but not
+        // published before `commit`.
+        if self.top.is_dirty() || self.resting.is_dirty() || self.pending.resting_rebuilt {
             Err(AccelError::NotCommitted)
         } else {
             Ok(self)
