@@ -2,6 +2,22 @@
 //! and the top level over awake instances, each instance holding its prototype's bottom-level
 //! BVH and inverse transform. Rays are transformed into object space per instance; normals go
 //! back with the inverse transpose.
+//!
+//! Closest hits trace the three structures one after the other, each up to the nearest hit so
+//! far. The order was measured (resting over all-instanced CPU time of 1280x720 primary rays and
+//! their bounces, best of 5-8 interleaved runs, two invocations each; monastery + 8,000 ducks
+//! with the last 1% awake / the built-in default scene):
+//! - static tree, resting level, top level: 1.007-1.009 / 0.978-0.997;
+//! - top level first, then static and resting: 1.022-1.024;
+//! - a root over the three (their root boxes in order of entry distance, skipping those beyond
+//!   the nearest hit): 1.013-1.022; the static root contains the camera, so it always comes
+//!   first and the root only adds box tests;
+//! - resting level, top level, static tree: 0.921-0.931 / 1.011-1.016;
+//! - resting level, static tree, top level (kept): 0.926-0.938 / 0.950-0.967. Rays meet the
+//!   bodies before the floor behind them, and the floor then needs no search.
+//!
+//! Without resting instances the resting level is empty and rays trace the static tree and
+//! then the top level, as before. Any-hit queries keep that order (static first).
 
 use std::sync::Arc;
 
@@ -135,8 +151,9 @@ fn unit(n: Vec3) -> Vec3 {
 }
 
 impl SceneQuery for BvhScene {
-    /// The static tree, then the resting level and the top level, each up to the closest hit
-    /// found so far.
+    /// The resting level, the static tree, then the top level, each up to the closest hit
+    /// found so far. Without resting instances that is the static tree and the top level, as
+    /// it always was; with them, resting bodies first (see the measurements at the top).
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
         if !interval_is_valid(ray) {
             return None;
@@ -144,10 +161,14 @@ impl SceneQuery for BvhScene {
         let bray = BoxRay::new(ray);
         let tray = RayTri::new(ray);
         let mut t_max = ray.t_max;
-        let mut static_hit: Option<PrimHit> = None;
-        self.statics.intersect_with(&bray, &tray, &mut t_max, &mut static_hit);
         let mut inst_hit: Option<(PrimHit, &TopItem)> = None;
         self.resting.intersect_with(ray, &bray, &mut t_max, &mut inst_hit);
+        let mut static_hit: Option<PrimHit> = None;
+        self.statics.intersect_with(&bray, &tray, &mut t_max, &mut static_hit);
+        if static_hit.is_some() {
+            // Found within the resting hit's distance: nearer.
+            inst_hit = None;
+        }
         self.top.intersect_with(ray, &bray, &mut t_max, &mut inst_hit);
         if let Some((h, item)) = inst_hit {
             return Some(Hit {
