@@ -7,6 +7,7 @@ mod query;
 use std::sync::Arc;
 
 use glam::{Affine3A, Mat3};
+use rayon::prelude::*;
 
 use super::{BuildQuality, Device, FrozenScene, InstanceGeometry, Scene, SceneFlags, TriangleGeometry};
 use crate::accel::{
@@ -168,7 +169,12 @@ impl EmbreeAccel {
         quality: BuildQuality,
     ) -> Result<(TriangleGeometry, usize), AccelError> {
         mesh.validate()?;
-        let skipped = (0..mesh.triangle_count()).filter(|&i| !mesh.triangle_is_valid(i)).count();
+        // In parallel: on a 337k-triangle island this count took 2-3 ms of a 100 ms insert.
+        let skipped = (0..mesh.triangle_count())
+            .into_par_iter()
+            .with_min_len(1 << 14)
+            .filter(|&i| !mesh.triangle_is_valid(i))
+            .count();
         Ok((TriangleGeometry::with_quality(&self.device, &mesh.positions, &mesh.indices, quality)?, skipped))
     }
 
