@@ -6,6 +6,9 @@
 //! rest, the resting scene becoming empty again and the top level becoming empty, the commit
 //! reports, and random sequences of all of these (property tests).
 
+mod bvh_common;
+
+use bvh_common::cluster;
 use dormant::accel::{
     self, Accelerator, Backend, CommitReport, Hit, HitObject, InstanceId, PrototypeId, SceneQuery, StaticId,
 };
@@ -54,23 +57,6 @@ enum Op {
     Commit {
         split: bool,
     },
-}
-
-/// A deterministic cluster of `n` triangles around `c`.
-fn cluster(c: Vec3, n: usize, seed: u64) -> TriangleMesh {
-    let mut s = seed | 1;
-    let mut next = || {
-        s = s.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
-        (s >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
-    };
-    let mut positions = Vec::new();
-    let mut indices = Vec::new();
-    for i in 0..n as u32 {
-        let o = c + Vec3::new(next(), next(), next()) * 1.5;
-        positions.extend([o, o + Vec3::new(next(), next(), next()), o + Vec3::new(next(), next(), next())]);
-        indices.push([3 * i, 3 * i + 1, 3 * i + 2]);
-    }
-    TriangleMesh::new(positions, indices)
 }
 
 /// Coherent rays from above the scene (a grid, traced as packets too) and incoherent rays
