@@ -3,7 +3,9 @@
 //! The scene an accelerator holds has two levels:
 //! - **prototypes**: one bottom-level structure per mesh, shared by every instance of it;
 //! - **static geometry**: world-space triangle meshes (the environment and baked islands);
-//! - **instances**: a prototype plus an affine transform, one per awake body.
+//! - **instances**: a prototype plus an affine transform, one per body kept instanced: awake
+//!   in the per-frame top level, or at rest in a resting scene rebuilt only when its set
+//!   changes ([`Accelerator::set_instance_resting`]).
 //!
 //! Changes are staged and become visible to rays at [`Accelerator::commit`]. Queries go through
 //! [`Accelerator::query`], which fails while changes are uncommitted, so no ray ever sees a

@@ -258,15 +258,21 @@ fn insert_timing(
     Ok((timing, grown, last_id.expect("at least one insert")))
 }
 
+/// What [`build_and_trace`] measured, with the bounce rays it made.
+struct BuildsAndTraces {
+    build: Vec<BuildTiming>,
+    trace: Vec<TraceTiming>,
+    bounce: Vec<Ray>,
+}
+
 /// Builds the scene with every variant and traces the primary and bounce rays through each.
-/// The bounce rays are made once, from the first variant's primary hits. Returns the build
-/// and trace timings and the bounce rays.
+/// The bounce rays are made once, from the first variant's primary hits.
 fn build_and_trace(
     desc: &SceneDescription,
     primary: &[Ray],
     variants: &[Variant],
     runs: u32,
-) -> Result<(Vec<BuildTiming>, Vec<TraceTiming>, Vec<Ray>), AccelError> {
+) -> Result<BuildsAndTraces, AccelError> {
     let mut build = Vec::new();
     let mut trace_timings = Vec::new();
     let mut bounce: Option<Vec<Ray>> = None;
@@ -294,7 +300,7 @@ fn build_and_trace(
             bounce_mrays_per_s: bounce.len() as f64 / bounce_ms / 1e3,
         });
     }
-    Ok((build, trace_timings, bounce.unwrap_or_default()))
+    Ok(BuildsAndTraces { build, trace: trace_timings, bounce: bounce.unwrap_or_default() })
 }
 
 /// [`insert_timing`] and then the integration forms ([`resting::resting_timing`], on the grown
@@ -392,7 +398,8 @@ pub fn bench_accel(
     let primary = camera_rays(desc, opts.width, opts.height);
     let bvh: Variant = (Backend::Bvh, "sah".into(), Box::new(move || accel::create(Backend::Bvh, threads)));
     let variants: Vec<Variant> = embree_variants(threads).into_iter().chain([bvh]).collect();
-    let (build, trace, bounce) = build_and_trace(desc, &primary, &variants, opts.trace_runs)?;
+    let BuildsAndTraces { build, trace, bounce } =
+        build_and_trace(desc, &primary, &variants, opts.trace_runs)?;
     let (insert, forms) = insert_and_forms(desc, opts, (&primary, &bounce))?;
     Ok(AccelBenchReport {
         scene: desc.name.clone(),
