@@ -136,8 +136,10 @@ pub trait Accelerator: Send + Sync {
 
     /// Moves instance `id` into (`resting`) or out of the resting scene: instances the
     /// per-frame top level no longer holds, in a scene of their own that is rebuilt only when
-    /// its set changes (at the next [`Accelerator::commit_static`], which reports it). Rays
-    /// see both scenes; hits on resting instances are [`HitObject::Instance`] as before.
+    /// its set changes or a member moves or is removed (at the next
+    /// [`Accelerator::commit_static`], which reports it; visible after [`Accelerator::commit`]).
+    /// Rays see both scenes; hits on resting instances are [`HitObject::Instance`] with the
+    /// same results as awake ones.
     fn set_instance_resting(&mut self, id: InstanceId, resting: bool) -> Result<(), AccelError> {
         let _ = (id, resting);
         Err(AccelError::RestingUnsupported(self.backend()))
