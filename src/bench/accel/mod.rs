@@ -17,7 +17,7 @@
 
 mod resting;
 
-pub use resting::{FormTrace, RestingTiming};
+use resting::RestingTiming;
 
 use std::ops::Range;
 
