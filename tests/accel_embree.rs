@@ -105,3 +105,15 @@ fn bad_input_is_rejected_without_panicking() {
     assert_eq!(report.skipped_triangles, 2);
     assert!(a.query().unwrap().intersect_p(&Ray::new(Vec3::new(0.2, 0.2, 1.0), Vec3::NEG_Z)));
 }
+
+#[test]
+fn a_rejected_instance_does_not_use_up_a_free_id() {
+    let mut a = embree();
+    let p = a.add_prototype(&primitives::cuboid(Vec3::ONE)).unwrap();
+    let first = a.add_instance(p, Affine3A::IDENTITY).unwrap();
+    a.remove_instance(first).unwrap();
+    let nan = Affine3A::from_translation(Vec3::splat(f32::NAN));
+    assert!(matches!(a.add_instance(p, nan), Err(AccelError::InvalidTransform { .. })));
+    assert_eq!(a.add_instance(p, Affine3A::IDENTITY).unwrap(), first, "the freed id is reused");
+    assert_eq!(a.add_instance(p, Affine3A::IDENTITY).unwrap(), InstanceId(first.0 + 1));
+}

@@ -222,23 +222,6 @@ proptest! {
     }
 }
 
-/// A deterministic cluster of `n` triangles around `c`.
-fn cluster(c: Vec3, n: usize, seed: u64) -> TriangleMesh {
-    let mut s = seed | 1;
-    let mut next = || {
-        s = s.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
-        (s >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
-    };
-    let mut positions = Vec::new();
-    let mut indices = Vec::new();
-    for i in 0..n as u32 {
-        let o = c + Vec3::new(next(), next(), next()) * 1.5;
-        positions.extend([o, o + Vec3::new(next(), next(), next()), o + Vec3::new(next(), next(), next())]);
-        indices.push([3 * i, 3 * i + 1, 3 * i + 2]);
-    }
-    TriangleMesh::new(positions, indices)
-}
-
 #[test]
 fn degenerate_and_non_finite_input_never_panics() {
     let nan = f32::NAN;

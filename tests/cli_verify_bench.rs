@@ -71,7 +71,7 @@ fn verify_monastery_with_ducks_has_no_mismatches() {
 }
 
 #[test]
-fn bench_accel_reports_the_four_ratios() {
+fn bench_accel_reports_its_ratios() {
     let dir = tempfile::tempdir().unwrap();
     let json = dir.path().join("accel.json");
     let status = dormant()
@@ -86,12 +86,23 @@ fn bench_accel_reports_the_four_ratios() {
         "bvh_over_embree_build",
         "bvh_rebuild_over_insert",
         "bvh_insert_sah_over_rebuild",
+        "bvh_resting_trace_over_instanced",
+        "bvh_baked_trace_over_instanced",
     ] {
         assert!(
             report["ratios"][key].as_f64().is_some_and(f64::is_finite),
             "ratio {key}: {:#}",
             report["ratios"]
         );
+    }
+    // The forms section: one per compiled backend, the last island awake, the rest resting.
+    let forms = report["forms"].as_array().unwrap();
+    assert_eq!(forms.len(), if cfg!(feature = "embree") { 2 } else { 1 });
+    for f in forms {
+        let (resting, awake) =
+            (f["resting_instances"].as_u64().unwrap(), f["awake_instances"].as_u64().unwrap());
+        assert!(resting > 0 && awake > 0 && resting > awake, "{f:#}");
+        assert!(f["resting_rebuild_ms"].as_f64().is_some_and(|ms| ms > 0.0), "{f:#}");
     }
 }
 

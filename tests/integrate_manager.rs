@@ -27,14 +27,12 @@ fn backends() -> Vec<Backend> {
     Backend::compiled().to_vec()
 }
 
-/// Every compiled backend with each of `policies` in every integration form it supports.
+/// Every compiled backend with each of `policies` in every integration form.
 fn configurations(policies: &[IntegrationPolicy]) -> Vec<(Backend, IntegrationPolicy, IntegrationForm)> {
     let mut out = Vec::new();
     for backend in backends() {
-        let forms: &[IntegrationForm] =
-            if backend == Backend::Embree { &IntegrationForm::ALL } else { &[IntegrationForm::Baked] };
         for &policy in policies {
-            for &form in forms {
+            for form in IntegrationForm::ALL {
                 out.push((backend, policy, form));
             }
         }

@@ -3,7 +3,9 @@
 //! The scene an accelerator holds has two levels:
 //! - **prototypes**: one bottom-level structure per mesh, shared by every instance of it;
 //! - **static geometry**: world-space triangle meshes (the environment and baked islands);
-//! - **instances**: a prototype plus an affine transform, one per awake body.
+//! - **instances**: a prototype plus an affine transform, one per body kept instanced: awake
+//!   in the per-frame top level, or at rest in a resting scene rebuilt only when its set
+//!   changes ([`Accelerator::set_instance_resting`]).
 //!
 //! Changes are staged and become visible to rays at [`Accelerator::commit`]. Queries go through
 //! [`Accelerator::query`], which fails while changes are uncommitted, so no ray ever sees a
@@ -134,8 +136,10 @@ pub trait Accelerator: Send + Sync {
 
     /// Moves instance `id` into (`resting`) or out of the resting scene: instances the
     /// per-frame top level no longer holds, in a scene of their own that is rebuilt only when
-    /// its set changes (at the next [`Accelerator::commit_static`], which reports it). Rays
-    /// see both scenes; hits on resting instances are [`HitObject::Instance`] as before.
+    /// its set changes or a member moves or is removed (at the next
+    /// [`Accelerator::commit_static`], which reports it; visible after [`Accelerator::commit`]).
+    /// Rays see both scenes; hits on resting instances are [`HitObject::Instance`] with the
+    /// same results as awake ones.
     fn set_instance_resting(&mut self, id: InstanceId, resting: bool) -> Result<(), AccelError> {
         let _ = (id, resting);
         Err(AccelError::RestingUnsupported(self.backend()))

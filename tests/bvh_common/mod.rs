@@ -1,5 +1,5 @@
-//! Shared helpers of the BVH tests: random geometry, an f64 brute-force reference, and a hit
-//! comparison that tolerates ties and rays grazing an edge.
+//! Shared helpers of the BVH tests (and `accel_resting`): random geometry, an f64 brute-force
+//! reference, and a hit comparison that tolerates ties and rays grazing an edge.
 #![allow(dead_code)]
 
 use dormant::accel::bvh::testing::watertight_hit;
@@ -219,4 +219,21 @@ pub fn rays_for(meshes: &[&TriangleMesh], seed: u64, count: usize, range: f32) -
 
 pub fn dvec(v: Vec3) -> DVec3 {
     v.as_dvec3()
+}
+
+/// A deterministic cluster of `n` triangles around `c`.
+pub fn cluster(c: Vec3, n: usize, seed: u64) -> TriangleMesh {
+    let mut s = seed | 1;
+    let mut next = || {
+        s = s.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+        (s >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
+    };
+    let mut positions = Vec::new();
+    let mut indices = Vec::new();
+    for i in 0..n as u32 {
+        let o = c + Vec3::new(next(), next(), next()) * 1.5;
+        positions.extend([o, o + Vec3::new(next(), next(), next()), o + Vec3::new(next(), next(), next())]);
+        indices.push([3 * i, 3 * i + 1, 3 * i + 2]);
+    }
+    TriangleMesh::new(positions, indices)
 }

@@ -7,7 +7,8 @@
 //! - `flat`: the flattened binned-SAH BVH (prototypes, top level, static blocks), its 4-wide
 //!   traversal copy, and the traversal stack every ray query uses;
 //! - `persistent`: the static tree with incremental insertion/removal and O(1) snapshots;
-//! - `two_level`: instances, the top level, and the [`crate::accel::Accelerator`] impl;
+//! - `two_level`: instances, the top level, the resting level, and the
+//!   [`crate::accel::Accelerator`] impl;
 //! - [`testing`] (hidden): the internals the property tests check.
 //!
 //! SIMD: only through glam's `Vec3A`/`Vec4` (SSE2 on x86-64, NEON on aarch64, plain scalar

@@ -1,11 +1,13 @@
 //! The two-level scene and [`BvhAccel`], the pure-Rust [`Accelerator`]: one shared bottom-level
-//! BVH per prototype, a top-level BVH over instances (rebuilt at commit when instances changed,
-//! it is small), and the persistent static BVH beside it. Changes are staged and published at
-//! commit as a new [`BvhScene`], which owns everything rays need (Arcs and a snapshot).
+//! BVH per prototype, a top-level BVH over awake instances (rebuilt at commit when one changed,
+//! it is small), a resting level over instances at rest (rebuilt only when its set or one of
+//! its members changes), and the persistent static BVH beside them. Changes are staged and
+//! published at commit as a new [`BvhScene`], which owns everything rays need (Arcs and a
+//! snapshot).
 
 mod query;
 
-pub(crate) use query::BvhScene;
+pub(crate) use query::{BvhScene, Top};
 
 use std::sync::Arc;
 
@@ -27,6 +29,8 @@ struct Instance {
     proto: u32,
     xf: Affine3A,
     inv: Affine3A,
+    /// In the resting level rather than the top level.
+    resting: bool,
 }
 
 /// The inverse of `xf` when `xf` and its inverse are finite, it is invertible, and it keeps
@@ -52,7 +56,13 @@ pub struct BvhAccel {
     next_static: u32,
     staged_adds: Vec<(StaticId, Vec<Tri>)>,
     staged_removes: Vec<StaticId>,
-    instances_changed: bool,
+    /// The top level (awake instances) must be rebuilt at the next commit.
+    awake_changed: bool,
+    /// The resting level must be rebuilt at the next static build.
+    resting_changed: bool,
+    resting_count: usize,
+    /// A resting rebuild by `commit_static` that the next `commit` reports.
+    resting_rebuilt: bool,
     dirty: bool,
     pending_built: usize,
     pending_skipped: usize,
@@ -79,7 +89,10 @@ impl BvhAccel {
             next_static: 0,
             staged_adds: Vec::new(),
             staged_removes: Vec::new(),
-            instances_changed: false,
+            awake_changed: false,
+            resting_changed: false,
+            resting_count: 0,
+            resting_rebuilt: false,
             dirty: false,
             pending_built: 0,
             pending_skipped: 0,
@@ -115,25 +128,28 @@ impl BvhAccel {
             .ok_or(AccelError::UnknownId { kind: "instance", id: id.0 })
     }
 
-    fn build_top(&mut self) {
-        let instances: Vec<(u32, Instance)> = self
+    /// Marks the level holding `resting` instances for a rebuild.
+    fn level_changed(&mut self, resting: bool) {
+        if resting {
+            self.resting_changed = true;
+        } else {
+            self.awake_changed = true;
+        }
+        self.dirty = true;
+    }
+
+    /// Builds the BVH over the resting (`true`) or the awake instances.
+    fn build_level(&self, resting: bool) -> Top {
+        let instances: Vec<_> = self
             .instances
             .iter()
             .enumerate()
-            .filter_map(|(i, x)| x.map(|x| (i as u32, x)))
+            .filter_map(|(i, x)| x.filter(|x| x.resting == resting).map(|x| (i as u32, x)))
             .filter(|(_, x)| !self.prototypes[x.proto as usize].bvh.is_empty())
+            .map(|(id, x)| (id, self.prototypes[x.proto as usize].clone(), x.xf, x.inv))
             .collect();
-        let (protos, params) = (&self.prototypes, self.top_params);
-        let top = self.run(|| {
-            query::build_top(
-                &instances
-                    .iter()
-                    .map(|(id, x)| (*id, protos[x.proto as usize].clone(), x.xf, x.inv))
-                    .collect::<Vec<_>>(),
-                params,
-            )
-        });
-        self.scene.top = top;
+        let params = self.top_params;
+        self.run(|| query::build_top(&instances, params))
     }
 }
 
@@ -205,9 +221,8 @@ impl Accelerator for BvhAccel {
         let id = self.instances.len() as u32;
         let proto = &self.prototypes[prototype.0 as usize];
         let inv = checked_inverse(&transform, proto).ok_or(AccelError::InvalidTransform { instance: id })?;
-        self.instances.push(Some(Instance { proto: prototype.0, xf: transform, inv }));
-        self.instances_changed = true;
-        self.dirty = true;
+        self.instances.push(Some(Instance { proto: prototype.0, xf: transform, inv, resting: false }));
+        self.level_changed(false);
         Ok(InstanceId(id))
     }
 
@@ -218,16 +233,34 @@ impl Accelerator for BvhAccel {
         let inst = self.instance_mut(id)?;
         inst.xf = transform;
         inst.inv = inv;
-        self.instances_changed = true;
-        self.dirty = true;
+        let resting = inst.resting;
+        self.level_changed(resting);
         Ok(())
     }
 
     fn remove_instance(&mut self, id: InstanceId) -> Result<(), AccelError> {
-        self.instance_mut(id)?;
+        let resting = self.instance_mut(id)?.resting;
         self.instances[id.0 as usize] = None;
-        self.instances_changed = true;
-        self.dirty = true;
+        if resting {
+            self.resting_count -= 1;
+        }
+        self.level_changed(resting);
+        Ok(())
+    }
+
+    fn set_instance_resting(&mut self, id: InstanceId, resting: bool) -> Result<(), AccelError> {
+        let inst = self.instance_mut(id)?;
+        if inst.resting == resting {
+            return Ok(());
+        }
+        inst.resting = resting;
+        if resting {
+            self.resting_count += 1;
+        } else {
+            self.resting_count -= 1;
+        }
+        self.level_changed(true);
+        self.level_changed(false);
         Ok(())
     }
 
@@ -235,12 +268,13 @@ impl Accelerator for BvhAccel {
         let mut report = self.commit_static()?;
         report.built_triangles += std::mem::take(&mut self.pending_built);
         report.skipped_triangles += std::mem::take(&mut self.pending_skipped);
-        if self.instances_changed {
-            self.build_top();
-            self.instances_changed = false;
+        if self.awake_changed {
+            self.scene.top = self.build_level(false);
+            self.awake_changed = false;
         }
         self.scene.statics = self.statics.snapshot();
-        report.instances = self.instances.iter().flatten().count();
+        report.instances = self.instances.iter().flatten().filter(|x| !x.resting).count();
+        report.resting_rebuilt = std::mem::take(&mut self.resting_rebuilt);
         self.dirty = false;
         Ok(report)
     }
@@ -257,6 +291,15 @@ impl Accelerator for BvhAccel {
             };
             report.built_triangles = update.built_triangles;
         }
+        // Not visible before `commit`: queries fail while the scene is dirty, which it is
+        // since the resting set changed.
+        if self.resting_changed {
+            self.scene.resting = self.build_level(true);
+            self.resting_changed = false;
+            self.resting_rebuilt = true;
+            report.resting_rebuilt = true;
+        }
+        report.resting_instances = self.resting_count;
         Ok(report)
     }
 

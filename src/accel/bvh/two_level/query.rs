@@ -1,10 +1,28 @@
-//! The committed scene rays see: the static snapshot plus the top level over instances, each
-//! instance holding its prototype's bottom-level BVH and inverse transform. Rays are
-//! transformed into object space per instance; normals go back with the inverse transpose.
+//! The committed scene rays see: the static snapshot, the resting level over instances at rest
+//! and the top level over awake instances, each instance holding its prototype's bottom-level
+//! BVH and inverse transform. Rays are transformed into object space per instance; normals go
+//! back with the inverse transpose.
+//!
+//! Closest hits trace the three structures one after the other, each up to the nearest hit so
+//! far. The order was measured (resting over all-instanced CPU time of 1280x720 primary rays and
+//! their bounces, best of 5-8 interleaved runs, two invocations each; monastery + 8,000 ducks
+//! with the last 1% awake / the built-in default scene):
+//! - static tree, resting level, top level: 1.007-1.009 / 0.978-0.997;
+//! - top level first, then static and resting: 1.022-1.024;
+//! - a root over the three (their root boxes in order of entry distance, skipping those beyond
+//!   the nearest hit): 1.013-1.022; the static root contains the camera, so it always comes
+//!   first and the root only adds box tests;
+//! - resting level, top level, static tree: 0.921-0.931 / 1.011-1.016;
+//! - resting level, static tree, top level (kept): 0.926-0.938 / 0.950-0.967. Rays meet the
+//!   bodies before the floor behind them, and the floor then needs no search.
+//!
+//! Without resting instances the resting level is empty and rays trace the static tree and
+//! then the top level, as before. Any-hit queries keep that order (static first).
 
 use std::sync::Arc;
 
 use glam::{Affine3A, Mat3A, Vec3, Vec3A};
+use rayon::prelude::*;
 
 use crate::accel::bvh::flat::{build, interval_is_valid, BoxRay, FlatBvh, MeshBvh, PrimHit, Wide};
 use crate::accel::bvh::persistent::StaticSnapshot;
@@ -12,6 +30,9 @@ use crate::accel::bvh::triangle::RayTri;
 use crate::accel::bvh::BuildParams;
 use crate::accel::{Hit, HitObject, InstanceId, SceneQuery, StaticId};
 use crate::geometry::{Aabb, Ray};
+
+/// Instances per rayon task when a level's bounds and items are made in parallel.
+const PAR_CHUNK: usize = 1024;
 
 /// One instance as traversal needs it.
 #[derive(Clone, Debug)]
@@ -25,7 +46,8 @@ pub(crate) struct TopItem {
     pub id: u32,
 }
 
-/// Top-level BVH; `items` are in leaf order.
+/// A BVH over instances (the per-frame top level, or the resting level); `items` are in leaf
+/// order.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Top {
     pub bvh: FlatBvh,
@@ -33,12 +55,18 @@ pub(crate) struct Top {
     pub items: Vec<TopItem>,
 }
 
-/// Builds the top level over `(instance id, prototype BVH, transform, inverse)`.
+/// Builds a BVH over `(instance id, prototype BVH, transform, inverse)`: world bounds and
+/// items in parallel chunks, the tree by the parallel binned-SAH builder.
 pub(crate) fn build_top(instances: &[(u32, Arc<MeshBvh>, Affine3A, Affine3A)], params: BuildParams) -> Top {
-    let bounds: Vec<Aabb> = instances.iter().map(|(_, blas, xf, _)| blas.bounds().transformed(xf)).collect();
+    let bounds: Vec<Aabb> = instances
+        .par_iter()
+        .with_min_len(PAR_CHUNK)
+        .map(|(_, blas, xf, _)| blas.bounds().transformed(xf))
+        .collect();
     let (bvh, order) = build(&bounds, params);
     let items = order
-        .iter()
+        .par_iter()
+        .with_min_len(PAR_CHUNK)
         .map(|&i| {
             let (id, blas, xf, inv) = &instances[i as usize];
             TopItem {
@@ -54,26 +82,68 @@ pub(crate) fn build_top(instances: &[(u32, Arc<MeshBvh>, Affine3A, Affine3A)], p
     Top { bvh, wide, items }
 }
 
+impl Top {
+    /// Closest instance hit with `t <= *t_max`; lowers `*t_max` and overwrites `hit` when it
+    /// finds one.
+    #[inline]
+    fn intersect_with<'a>(
+        &'a self,
+        ray: &Ray,
+        bray: &BoxRay,
+        t_max: &mut f32,
+        hit: &mut Option<(PrimHit, &'a TopItem)>,
+    ) {
+        let items = &self.items;
+        self.wide.traverse(&self.bvh, 0, bray, t_max, &mut |first, count, t_max| {
+            for item in &items[first as usize..(first + count) as usize] {
+                let oray = object_ray(ray, item);
+                let mut best = None;
+                if item.blas.intersect_from(0, &BoxRay::new(&oray), &RayTri::new(&oray), t_max, &mut best) {
+                    if let Some(h) = best {
+                        *hit = Some((h, item));
+                    }
+                }
+            }
+            false
+        });
+    }
+
+    /// Whether any instance is hit within `[t_min, t_max]`.
+    #[inline]
+    fn occluded_with(&self, ray: &Ray, bray: &BoxRay, t_max: f32) -> bool {
+        let items = &self.items;
+        let mut t_max = t_max;
+        self.wide.traverse(&self.bvh, 0, bray, &mut t_max, &mut |first, count, t_max| {
+            items[first as usize..(first + count) as usize].iter().any(|item| {
+                let oray = object_ray(ray, item);
+                item.blas.occluded_from(0, &BoxRay::new(&oray), &RayTri::new(&oray), *t_max)
+            })
+        })
+    }
+}
+
+/// The ray in the instance's object space. The origin is moved by the forward translation
+/// before the inverse linear part is applied: `inv * o` would add two large, nearly
+/// cancelling terms for instances far from the world origin (seen: t errors of 7e-5 at
+/// t = 0.2 on ducks 40 units out, twice Embree's), while `o - translation` is nearly exact.
+#[inline]
+fn object_ray(ray: &Ray, item: &TopItem) -> Ray {
+    Ray {
+        origin: (item.inv.matrix3 * (Vec3A::from(ray.origin) - item.translation)).into(),
+        dir: item.inv.transform_vector3(ray.dir),
+        t_min: ray.t_min,
+        t_max: ray.t_max,
+    }
+}
+
 /// A committed scene. Cheap to keep: everything in it is shared.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct BvhScene {
     pub(crate) statics: StaticSnapshot,
+    /// Instances at rest: rebuilt only when their set changes.
+    pub(crate) resting: Top,
+    /// Awake instances: rebuilt at each commit that changed one.
     pub(crate) top: Top,
-}
-
-impl BvhScene {
-    /// The ray in the instance's object space. The origin is moved by the forward translation
-    /// before the inverse linear part is applied: `inv * o` would add two large, nearly
-    /// cancelling terms for instances far from the world origin (seen: t errors of 7e-5 at
-    /// t = 0.2 on ducks 40 units out, twice Embree's), while `o - translation` is nearly exact.
-    fn object_ray(ray: &Ray, item: &TopItem) -> Ray {
-        Ray {
-            origin: (item.inv.matrix3 * (Vec3A::from(ray.origin) - item.translation)).into(),
-            dir: item.inv.transform_vector3(ray.dir),
-            t_min: ray.t_min,
-            t_max: ray.t_max,
-        }
-    }
 }
 
 fn unit(n: Vec3) -> Vec3 {
@@ -81,6 +151,9 @@ fn unit(n: Vec3) -> Vec3 {
 }
 
 impl SceneQuery for BvhScene {
+    /// The resting level, the static tree, then the top level, each up to the closest hit
+    /// found so far. Without resting instances that is the static tree and the top level, as
+    /// it always was; with them, resting bodies first (see the measurements at the top).
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
         if !interval_is_valid(ray) {
             return None;
@@ -88,22 +161,15 @@ impl SceneQuery for BvhScene {
         let bray = BoxRay::new(ray);
         let tray = RayTri::new(ray);
         let mut t_max = ray.t_max;
+        let mut inst_hit: Option<(PrimHit, &TopItem)> = None;
+        self.resting.intersect_with(ray, &bray, &mut t_max, &mut inst_hit);
         let mut static_hit: Option<PrimHit> = None;
         self.statics.intersect_with(&bray, &tray, &mut t_max, &mut static_hit);
-        let mut inst_hit: Option<(PrimHit, &TopItem)> = None;
-        let items = &self.top.items;
-        self.top.wide.traverse(&self.top.bvh, 0, &bray, &mut t_max, &mut |first, count, t_max| {
-            for item in &items[first as usize..(first + count) as usize] {
-                let oray = Self::object_ray(ray, item);
-                let mut best = None;
-                if item.blas.intersect_from(0, &BoxRay::new(&oray), &RayTri::new(&oray), t_max, &mut best) {
-                    if let Some(h) = best {
-                        inst_hit = Some((h, item));
-                    }
-                }
-            }
-            false
-        });
+        if static_hit.is_some() {
+            // Found within the resting hit's distance: nearer.
+            inst_hit = None;
+        }
+        self.top.intersect_with(ray, &bray, &mut t_max, &mut inst_hit);
         if let Some((h, item)) = inst_hit {
             return Some(Hit {
                 t: h.t,
@@ -130,16 +196,8 @@ impl SceneQuery for BvhScene {
         }
         let bray = BoxRay::new(ray);
         let tray = RayTri::new(ray);
-        if self.statics.occluded_with(&bray, &tray, ray.t_max) {
-            return true;
-        }
-        let items = &self.top.items;
-        let mut t_max = ray.t_max;
-        self.top.wide.traverse(&self.top.bvh, 0, &bray, &mut t_max, &mut |first, count, t_max| {
-            items[first as usize..(first + count) as usize].iter().any(|item| {
-                let oray = Self::object_ray(ray, item);
-                item.blas.occluded_from(0, &BoxRay::new(&oray), &RayTri::new(&oray), *t_max)
-            })
-        })
+        self.statics.occluded_with(&bray, &tray, ray.t_max)
+            || self.resting.occluded_with(ray, &bray, ray.t_max)
+            || self.top.occluded_with(ray, &bray, ray.t_max)
     }
 }

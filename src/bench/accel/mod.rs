@@ -7,16 +7,26 @@
 //!   the primary hits, generated once through Embree), closest hit, rayon over all cores; best
 //!   of three runs;
 //! - **insert**: every body baked into world space in islands of 1% of the bodies; a static
-//!   scene holding all but one island gets the last one added and committed (incremental),
-//!   against a from-scratch build of the same final scene; for the BVH also the SAH cost of
-//!   both trees.
+//!   scene holding all but one island gets the last one added and committed (incremental; the
+//!   median of several inserts, the island removed between them), against a from-scratch build
+//!   of the same final scene (adding every mesh and committing); for the BVH also the SAH cost
+//!   of both trees;
+//! - **forms** ([`resting`]): the same rays through the integration forms, the last island
+//!   awake and the rest instanced, resting or baked; the resting scene's rebuild and the
+//!   per-frame commit.
+
+mod resting;
+
+use resting::RestingTiming;
+
+use std::ops::Range;
 
 use glam::Vec2;
 use rayon::prelude::*;
 use serde::Serialize;
 
 use super::timed;
-use crate::accel::{self, AccelError, Accelerator, Backend, SceneQuery};
+use crate::accel::{self, AccelError, Accelerator, Backend, SceneQuery, StaticId};
 use crate::crosscheck::camera_rays;
 use crate::geometry::{Ray, TriangleMesh};
 use crate::render::sample_cosine;
@@ -68,7 +78,11 @@ pub struct InsertTiming {
     /// Triangles in the inserted island.
     pub island_triangles: usize,
     pub rebuild_ms: f64,
+    /// Median of `insert_runs_ms`.
     pub insert_ms: f64,
+    /// Each insert: the first, then the island removed again and re-inserted.
+    pub insert_runs_ms: Vec<f64>,
+    /// After the first insert.
     pub sah_after_insert: Option<f32>,
     pub sah_rebuild: Option<f32>,
 }
@@ -84,6 +98,13 @@ pub struct AccelRatios {
     pub bvh_rebuild_over_insert: f64,
     pub bvh_insert_sah_over_rebuild: f64,
     pub embree_rebuild_over_insert: f64,
+    /// Trace penalty of the resting form (99% resting, 1% awake) over every body instanced,
+    /// primary and bounce rays.
+    pub embree_resting_trace_over_instanced: f64,
+    pub bvh_resting_trace_over_instanced: f64,
+    /// The same for the baked form (99% baked, the same 1% awake).
+    pub embree_baked_trace_over_instanced: f64,
+    pub bvh_baked_trace_over_instanced: f64,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -98,6 +119,7 @@ pub struct AccelBenchReport {
     pub build: Vec<BuildTiming>,
     pub trace: Vec<TraceTiming>,
     pub insert: Vec<InsertTiming>,
+    pub forms: Vec<RestingTiming>,
     pub ratios: AccelRatios,
 }
 
@@ -175,22 +197,29 @@ fn baked_islands(desc: &SceneDescription, island_size: usize) -> Vec<TriangleMes
         .collect()
 }
 
+/// Times the insert of the last island (`runs` times, the median counts) against a rebuild;
+/// returns the timing, the grown scene and the last island's id in it.
 fn insert_timing(
     backend: Backend,
     desc: &SceneDescription,
     islands: &[TriangleMesh],
     make: &AccelFactory,
-) -> Result<InsertTiming, AccelError> {
+    runs: u32,
+) -> Result<(InsertTiming, Box<dyn Accelerator>, StaticId), AccelError> {
     let (last, rest) = islands.split_last().expect("at least one island");
     let env: Vec<&TriangleMesh> = desc.statics.iter().map(|s| &s.mesh).collect();
 
+    // The rebuild counts adding the meshes (validation, copies into the backend's buffers) as
+    // the insert does for its island.
     let mut fresh = make()?;
-    let rebuild_ms = {
+    let (result, rebuild_ms) = timed(|| -> Result<(), AccelError> {
         for m in env.iter().copied().chain(islands) {
             fresh.add_static(m)?;
         }
-        timed(|| fresh.commit()).1
-    };
+        fresh.commit()?;
+        Ok(())
+    });
+    result?;
     let sah_rebuild = fresh.static_sah_cost();
     drop(fresh);
 
@@ -199,31 +228,51 @@ fn insert_timing(
         grown.add_static(m)?;
     }
     grown.commit()?;
-    let (result, insert_ms) = timed(|| {
-        grown.add_static(last)?;
-        grown.commit()
-    });
-    result?;
-    Ok(InsertTiming {
+    let (mut insert_runs_ms, mut last_id, mut sah_after_insert) = (Vec::new(), None, None);
+    for _ in 0..runs.max(1) {
+        if let Some(id) = last_id {
+            grown.remove_static(id)?;
+            grown.commit()?;
+        }
+        let (result, ms) = timed(|| -> Result<StaticId, AccelError> {
+            let id = grown.add_static(last)?;
+            grown.commit()?;
+            Ok(id)
+        });
+        last_id = Some(result?);
+        insert_runs_ms.push(ms);
+        sah_after_insert = sah_after_insert.or_else(|| grown.static_sah_cost());
+    }
+    let mut sorted = insert_runs_ms.clone();
+    sorted.sort_by(f64::total_cmp);
+    let timing = InsertTiming {
         backend,
         triangles: env.iter().copied().chain(islands).map(TriangleMesh::triangle_count).sum(),
         island_triangles: last.triangle_count(),
         rebuild_ms,
-        insert_ms,
-        sah_after_insert: grown.static_sah_cost(),
+        insert_ms: sorted[sorted.len() / 2],
+        insert_runs_ms,
+        sah_after_insert,
         sah_rebuild,
-    })
+    };
+    Ok((timing, grown, last_id.expect("at least one insert")))
+}
+
+/// What [`build_and_trace`] measured, with the bounce rays it made.
+struct BuildsAndTraces {
+    build: Vec<BuildTiming>,
+    trace: Vec<TraceTiming>,
+    bounce: Vec<Ray>,
 }
 
 /// Builds the scene with every variant and traces the primary and bounce rays through each.
-/// The bounce rays are made once, from the first variant's primary hits. Returns the build
-/// and trace timings and the bounce ray count.
+/// The bounce rays are made once, from the first variant's primary hits.
 fn build_and_trace(
     desc: &SceneDescription,
     primary: &[Ray],
     variants: &[Variant],
     runs: u32,
-) -> Result<(Vec<BuildTiming>, Vec<TraceTiming>, usize), AccelError> {
+) -> Result<BuildsAndTraces, AccelError> {
     let mut build = Vec::new();
     let mut trace_timings = Vec::new();
     let mut bounce: Option<Vec<Ray>> = None;
@@ -251,29 +300,52 @@ fn build_and_trace(
             bounce_mrays_per_s: bounce.len() as f64 / bounce_ms / 1e3,
         });
     }
-    Ok((build, trace_timings, bounce.map_or(0, |b| b.len())))
+    Ok(BuildsAndTraces { build, trace: trace_timings, bounce: bounce.unwrap_or_default() })
 }
 
-/// [`insert_timing`] for every compiled backend, with islands of `island_fraction` of the
-/// bodies; none when the scene has no bodies.
-fn insert_timings(
+/// [`insert_timing`] and then the integration forms ([`resting::resting_timing`], on the grown
+/// scene) for every compiled backend, with islands of `island_fraction` of the bodies; none
+/// when the scene has no bodies (the forms need two islands).
+fn insert_and_forms(
     desc: &SceneDescription,
-    island_fraction: f64,
-    threads: Option<usize>,
-) -> Result<Vec<InsertTiming>, AccelError> {
-    let island_size = ((desc.bodies.len() as f64 * island_fraction).round() as usize).max(1);
+    opts: &AccelBenchOptions,
+    rays: (&[Ray], &[Ray]),
+) -> Result<(Vec<InsertTiming>, Vec<RestingTiming>), AccelError> {
+    let n = desc.bodies.len();
+    let island_size = ((n as f64 * opts.island_fraction).round() as usize).max(1);
     let islands = baked_islands(desc, island_size);
+    let (mut inserts, mut forms) = (Vec::new(), Vec::new());
     if islands.is_empty() {
-        return Ok(Vec::new());
+        return Ok((inserts, forms));
     }
-    Backend::compiled()
-        .into_iter()
-        .map(|backend| insert_timing(backend, desc, &islands, &move || accel::create(backend, threads)))
-        .collect()
+    // The last island's bodies: `baked_islands` chunks the bodies in order.
+    let awake: Range<usize> = island_size * (islands.len() - 1)..n;
+    let threads = opts.threads;
+    for backend in Backend::compiled() {
+        let (insert, grown, last) = insert_timing(
+            backend,
+            desc,
+            &islands,
+            &move || accel::create(backend, threads),
+            opts.trace_runs,
+        )?;
+        inserts.push(insert);
+        if islands.len() > 1 {
+            let form =
+                resting::resting_timing(desc, (grown, last), awake.clone(), rays, opts.trace_runs, threads)?;
+            forms.push(form);
+        }
+    }
+    Ok((inserts, forms))
 }
 
 impl AccelRatios {
-    fn new(build: &[BuildTiming], trace: &[TraceTiming], insert: &[InsertTiming]) -> Self {
+    fn new(
+        build: &[BuildTiming],
+        trace: &[TraceTiming],
+        insert: &[InsertTiming],
+        forms: &[RestingTiming],
+    ) -> Self {
         let find_build =
             |b: Backend, q: &str| build.iter().find(|t| t.backend == b && t.quality == q).map(|t| t.ms);
         let find_trace = |b: Backend, q: &str| {
@@ -285,6 +357,9 @@ impl AccelRatios {
         };
         let bvh_insert = insert.iter().find(|t| t.backend == Backend::Bvh);
         let embree_insert = insert.iter().find(|t| t.backend == Backend::Embree);
+        let form = |b: Backend, f: fn(&RestingTiming) -> f64| {
+            forms.iter().find(|t| t.backend == b).map_or(f64::NAN, f)
+        };
         AccelRatios {
             bvh_over_embree_trace: ratio(
                 find_trace(Backend::Bvh, "sah"),
@@ -307,6 +382,10 @@ impl AccelRatios {
                 embree_insert.map(|t| t.rebuild_ms),
                 embree_insert.map(|t| t.insert_ms),
             ),
+            embree_resting_trace_over_instanced: form(Backend::Embree, |t| t.resting_trace_over_instanced),
+            bvh_resting_trace_over_instanced: form(Backend::Bvh, |t| t.resting_trace_over_instanced),
+            embree_baked_trace_over_instanced: form(Backend::Embree, |t| t.baked_trace_over_instanced),
+            bvh_baked_trace_over_instanced: form(Backend::Bvh, |t| t.baked_trace_over_instanced),
         }
     }
 }
@@ -319,8 +398,9 @@ pub fn bench_accel(
     let primary = camera_rays(desc, opts.width, opts.height);
     let bvh: Variant = (Backend::Bvh, "sah".into(), Box::new(move || accel::create(Backend::Bvh, threads)));
     let variants: Vec<Variant> = embree_variants(threads).into_iter().chain([bvh]).collect();
-    let (build, trace, bounce_rays) = build_and_trace(desc, &primary, &variants, opts.trace_runs)?;
-    let insert = insert_timings(desc, opts.island_fraction, threads)?;
+    let BuildsAndTraces { build, trace, bounce } =
+        build_and_trace(desc, &primary, &variants, opts.trace_runs)?;
+    let (insert, forms) = insert_and_forms(desc, opts, (&primary, &bounce))?;
     Ok(AccelBenchReport {
         scene: desc.name.clone(),
         static_triangles: desc.statics.iter().map(|s| s.mesh.triangle_count()).sum(),
@@ -331,11 +411,12 @@ pub fn bench_accel(
             .map(|b| desc.prototypes[b.prototype as usize].mesh.triangle_count())
             .sum(),
         primary_rays: primary.len(),
-        bounce_rays,
+        bounce_rays: bounce.len(),
         threads: threads.unwrap_or_else(rayon::current_num_threads),
-        ratios: AccelRatios::new(&build, &trace, &insert),
+        ratios: AccelRatios::new(&build, &trace, &insert, &forms),
         build,
         trace,
         insert,
+        forms,
     })
 }
