@@ -68,7 +68,11 @@ fn quick_paper_run_writes_json_markdown_and_figure() {
     assert_eq!(runs.len(), compiled_backends().len());
     for run in runs {
         let configs = run["integration"]["runs"].as_array().unwrap();
-        assert_eq!(configs.len(), 5, "never, always and auto with the cache on and off");
+        assert_eq!(
+            configs.len(),
+            8,
+            "never; always and auto in each form; auto without lookahead; baked with the cache off"
+        );
         let frames = run["integration"]["frames"].as_array().unwrap().len();
         assert!(frames >= 100, "{frames} frames rendered");
         for c in configs {

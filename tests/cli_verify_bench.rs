@@ -124,14 +124,16 @@ fn bench_integration_reports_the_five_ratios_and_every_configuration() {
         assert!(report["ratios"][key].as_f64().is_some_and(f64::is_finite), "{key}: {:#}", report["ratios"]);
     }
     // No frame of tiny's first two seconds has 90% of its bodies asleep: no settled ratio.
+    assert!(report["ratios_by_form"]["baked"]["rebuild_over_insert"].as_f64().is_some_and(f64::is_finite));
     assert_eq!(report["settled_frames"], 0);
     assert!(report["ratios"]["settled_speedup"].is_null(), "{:#}", report["ratios"]);
     let runs = report["runs"].as_array().unwrap();
-    let configs: Vec<(String, bool)> = runs
-        .iter()
-        .map(|r| (r["policy"].as_str().unwrap().to_owned(), r["cache"].as_bool().unwrap()))
-        .collect();
-    assert_eq!(configs.len(), 5, "{configs:?}");
+    let configs: Vec<&str> = runs.iter().map(|r| r["name"].as_str().unwrap()).collect();
+    // never; always and auto in each form (the default first); auto without lookahead.
+    assert_eq!(
+        configs,
+        ["never", "always resting", "auto resting", "always baked", "auto baked", "auto resting, online"],
+    );
     assert!(runs.iter().all(|r| r["frame_ms"].as_array().unwrap().len() == 20));
 }
 

@@ -161,10 +161,11 @@ pub struct IntegrationRatios {
     pub run_speedup: f64,
     /// `auto` over the better of `never` and `always` (cache on), whole run.
     pub auto_over_best: f64,
-    /// A from-scratch build of the final static scene of `always` over the mean integration
-    /// of one island in that run.
+    /// A from-scratch build of the final static scene of `always` in the baked form over the
+    /// mean integration of one island in that run (NaN when the baked form did not run).
     pub rebuild_over_insert: f64,
-    /// Share of `auto`'s cache requests whose entry held 90-99% of the requested islands.
+    /// Share of `auto`'s cache requests (baked form: the cache serves baked islands) whose
+    /// entry held 90-99% of the requested islands.
     pub partial_hit_90_99_fraction: f64,
     /// What integration could reach on the settled frames: `never`'s frame over its trace
     /// plus its commit times the awake share (the frame if sleeping bodies cost nothing to
@@ -213,7 +214,12 @@ impl IntegrationBenchReport {
     /// The run of `policy` in the first form, cache on, with lookahead; `never` has only one
     /// run (form, cache and lookahead play no part in it).
     pub fn cache_on(&self, policy: IntegrationPolicy) -> Option<&PolicyRun> {
-        self.forms.first().and_then(|&form| find_run(&self.runs, policy, form))
+        self.forms.first().and_then(|&form| self.run_of(policy, form))
+    }
+
+    /// The run of `policy` in `form`, cache on, with lookahead (`never`: its only run).
+    pub fn run_of(&self, policy: IntegrationPolicy, form: IntegrationForm) -> Option<&PolicyRun> {
+        find_run(&self.runs, policy, form)
     }
 }
 
@@ -389,10 +395,11 @@ pub fn bench_integration(
         runs.push(run);
     }
     let awake = settled_awake_share(&asleep_fraction, &settled);
+    let rebuild_over_insert = if mean_insert_ms > 0.0 { rebuild_ms / mean_insert_ms } else { f64::NAN };
     let ratios_by_form: BTreeMap<String, IntegrationRatios> = options
         .forms
         .iter()
-        .map(|&form| (form.to_string(), ratios(&runs, form, awake, rebuild_ms / mean_insert_ms.max(1e-9))))
+        .map(|&form| (form.to_string(), ratios(&runs, form, awake, rebuild_over_insert)))
         .collect();
     let ratios =
         options.forms.first().map_or_else(IntegrationRatios::default, |f| ratios_by_form[&f.to_string()]);
@@ -526,8 +533,11 @@ fn ratios(
         settled_speedup,
         run_speedup: never.total_ms / auto.total_ms.max(1e-9),
         auto_over_best: auto.total_ms / never.total_ms.min(always.total_ms).max(1e-9),
-        rebuild_over_insert: if form == IntegrationForm::Baked { rebuild_over_insert } else { nan },
-        partial_hit_90_99_fraction: auto.cache_stats.partial_90_99_fraction(),
+        // Measured on the baked form (the insert it times), whatever form these ratios describe.
+        rebuild_over_insert,
+        // The geometry cache serves baked islands only.
+        partial_hit_90_99_fraction: find_run(runs, IntegrationPolicy::Auto, IntegrationForm::Baked)
+            .map_or(nan, |r| r.cache_stats.partial_90_99_fraction()),
         ceiling,
         of_ceiling: settled_speedup / ceiling,
         trace_penalty: always_trace / never_trace.max(1e-9),

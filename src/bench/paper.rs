@@ -445,7 +445,7 @@ fn check_claims(w: &WorkloadReport) -> Vec<ClaimCheck> {
         ));
         let requests = run
             .integration
-            .cache_on(crate::integrate::IntegrationPolicy::Auto)
+            .run_of(crate::integrate::IntegrationPolicy::Auto, crate::integrate::IntegrationForm::Baked)
             .map_or(0, |p| p.cache_stats.requests);
         claims.push(check(
             "Most cache requests find 90-99% of the requested islands already integrated",

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use super::paper_plot::write_workload_png;
 use super::ReportError;
 use crate::bench::paper::{PaperReport, Verdict, WorkloadReport};
-use crate::integrate::{IntegrationPolicy, FRACTION_BUCKETS};
+use crate::integrate::{IntegrationForm, IntegrationPolicy, FRACTION_BUCKETS};
 
 /// Writes `paper.json`, `paper.md` and `figures/<workload>.png` into `dir` (created if
 /// missing) and returns the paths written.
@@ -253,7 +253,7 @@ fn settled_stages(md: &mut String, w: &WorkloadReport) {
 
 /// The geometry cache's requests by served fraction (`auto`, cache on).
 fn cache_table(md: &mut String, w: &WorkloadReport) {
-    let _ = writeln!(md, "### Geometry cache (`auto`, cache on)\n");
+    let _ = writeln!(md, "### Geometry cache (`auto baked`, cache on)\n");
     let _ = writeln!(
         md,
         "Requests by the fraction of the requested islands the served entry held.\n\n| backend | requests | \
@@ -262,7 +262,7 @@ fn cache_table(md: &mut String, w: &WorkloadReport) {
     );
     let _ = writeln!(md, "| --- |{}", " ---: |".repeat(4 + FRACTION_BUCKETS.len()));
     for run in &w.runs {
-        let Some(auto) = run.integration.cache_on(IntegrationPolicy::Auto) else {
+        let Some(auto) = run.integration.run_of(IntegrationPolicy::Auto, IntegrationForm::Baked) else {
             continue;
         };
         let c = &auto.cache_stats;

@@ -11,7 +11,7 @@ use super::plot::{count_labels, draw_legend, err, write_png, Area, PlotResult, F
 use super::ReportError;
 use crate::bench::integration::IntegrationBenchReport;
 use crate::bench::paper::WorkloadReport;
-use crate::integrate::{IntegrationPolicy, StageTimes, FRACTION_BUCKETS};
+use crate::integrate::{IntegrationForm, IntegrationPolicy, StageTimes, FRACTION_BUCKETS};
 
 const WIDTH: u32 = 1400;
 const ROW_HEIGHT: u32 = 480;
@@ -175,7 +175,7 @@ fn fraction_histogram(w: &WorkloadReport, area: &Area<'_>) -> PlotResult {
         .runs
         .iter()
         .filter_map(|run| {
-            let auto = run.integration.cache_on(IntegrationPolicy::Auto)?;
+            let auto = run.integration.run_of(IntegrationPolicy::Auto, IntegrationForm::Baked)?;
             let s = &auto.cache_stats;
             Some((format!("{} ({} requests)", run.backend, s.requests), s.fraction_histogram))
         })
