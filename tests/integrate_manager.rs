@@ -1,9 +1,10 @@
 //! The scene manager's scenes against all-instanced references, on both backends:
 //! - simulated frames: integrated scenes give the same hits (same body and prototype triangle)
 //!   as the same frame with every body an instance;
-//! - random sleep/wake sequences (3 cases x 2 strategies x 2,000 events = 12,000 events per
-//!   backend): every static scene the manager serves, including those restored from the
-//!   geometry cache, gives the same hits as a from-scratch build of the same island set.
+//! - random sleep/wake sequences (baked: 3 cases x 2 strategies x 2,000 events = 12,000 events
+//!   per backend; resting: 3 x 2,000): every scene the manager serves, including static scenes
+//!   restored from the geometry cache, gives the same hits as a from-scratch build of the same
+//!   island set.
 
 use std::path::Path;
 
@@ -231,6 +232,7 @@ fn template() -> SceneDescription {
 /// (events, checks, cache-served reactivations).
 fn run_sleep_wake(
     backend: Backend,
+    form: IntegrationForm,
     reactivation: ReactivationStrategy,
     seed: u64,
     events: usize,
@@ -251,6 +253,7 @@ fn run_sleep_wake(
         reactivation,
         // Few entries, so lookups see evictions, partial hits and misses.
         cache_budget: CacheBudget { bytes: 64 << 20, entries: 12 },
+        form,
         ..ManagerOptions::default()
     };
     let mut manager =
@@ -288,12 +291,22 @@ proptest! {
         for backend in backends() {
             // Cheapest: removals (islands keep their own blocks); cache first: restores.
             for strategy in [ReactivationStrategy::Cheapest, ReactivationStrategy::CacheFirst] {
-                let (events, checks, served) = run_sleep_wake(backend, strategy, seed, 2000, 25);
+                let (events, checks, served) =
+                    run_sleep_wake(backend, IntegrationForm::Baked, strategy, seed, 2000, 25);
                 prop_assert!(events >= 2000 && checks > 30, "{events} events, {checks} checks");
                 if backend == Backend::Bvh && strategy == ReactivationStrategy::CacheFirst {
                     prop_assert!(served > 100, "the BVH serves reactivations from the cache: {served}");
                 }
             }
+        }
+    }
+
+    #[test]
+    fn resting_scenes_equal_fresh_builds(seed in any::<u64>()) {
+        for backend in backends() {
+            let (events, checks, _) =
+                run_sleep_wake(backend, IntegrationForm::Resting, ReactivationStrategy::Cheapest, seed, 2000, 25);
+            prop_assert!(events >= 2000 && checks > 30, "{events} events, {checks} checks");
         }
     }
 }
