@@ -1,11 +1,12 @@
 //! The raw TOML shape to the checked [`SceneSpec`]: finite numbers, positive counts and
 //! sizes, references resolved to indices, asset files that exist. One function per section:
 //! scene, physics and the asset directory here; `world`: environment and prototypes;
-//! `motion`: spawners, kinematic bodies and disturbances; `view`: cameras, sky, lights and
-//! render settings. [`validate`] checks them in that order and stops at the first problem,
+//! `motion`: spawners, kinematic bodies and disturbances; `structures`: structures and
+//! projectiles; `view`: cameras, sky, lights and render settings. [`validate`] checks them in that order and stops at the first problem,
 //! which it reports by field path (the parser adds file and line).
 
 mod motion;
+mod structures;
 mod view;
 mod world;
 
@@ -36,6 +37,8 @@ pub(super) fn validate(raw: &SceneToml, assets: &AssetDir) -> Result<SceneSpec, 
     let spawners = motion::spawners(&raw.spawners, &prototypes)?;
     let kinematics = motion::kinematics(&raw.kinematics, &prototypes)?;
     let disturbances = motion::disturbances(&raw.disturbances, scene.frames)?;
+    let structures = structures::structures(&raw.structures, &prototypes)?;
+    let projectiles = structures::projectiles(&raw.projectiles, &prototypes, &structures, scene.frames)?;
     let cameras = view::cameras(&raw.cameras)?;
     let sky = raw.sky.as_ref().map(view::sky).transpose()?;
     let lights = view::lights(&raw.lights)?;
@@ -48,6 +51,8 @@ pub(super) fn validate(raw: &SceneToml, assets: &AssetDir) -> Result<SceneSpec, 
         spawners,
         kinematics,
         disturbances,
+        structures,
+        projectiles,
         cameras,
         lights,
         sky,
