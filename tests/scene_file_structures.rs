@@ -138,6 +138,17 @@ fn copies_that_would_touch_are_rejected() {
 }
 
 #[test]
+fn copies_of_different_structures_must_not_overlap() {
+    let second =
+        "\n[[structures]]\nname = \"stack\"\nkind = \"grid\"\nprototype = \"brick\"\ncounts = [2, 2, 2]\n";
+    // The towers' copies stand at x = 1, 5, 9 and z = 2, 7: a stack at x = 5.2 overlaps one.
+    let text = format!("{GOOD}{second}origin = [5.2, 0.0, 7.0]\n");
+    let err = expect_error(&text, "structures[1].origin", Some(41));
+    assert!(err.to_string().contains("copy 4 of \"towers\""), "{err}");
+    parse(&format!("{GOOD}{second}origin = [3.0, 0.0, 7.0]\n")).unwrap();
+}
+
+#[test]
 fn dominoes_must_not_overlap() {
     let dominoes = GOOD
         .replace("kind = \"tower\"", "kind = \"dominoes\"")

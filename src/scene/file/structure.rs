@@ -5,9 +5,10 @@
 
 use std::f32::consts::FRAC_PI_2;
 
-use glam::{Quat, Vec3};
+use glam::{Affine3A, Quat, Vec3};
 
 use super::spec::{ProjectileAim, ProjectileDef, StructureDef, StructureLayout};
+use crate::geometry::Aabb;
 
 /// One body of a structure in world space.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -113,19 +114,26 @@ impl StructureDef {
         blocks
     }
 
+    /// The box one copy fills in its own frame.
+    pub fn local_bounds(&self) -> Aabb {
+        let h = Vec3::from_array(self.half_extents);
+        self.local_blocks().into_iter().fold(Aabb::EMPTY, |bounds, (centre, yaw)| {
+            let (s, c) = (yaw.sin().abs(), yaw.cos().abs());
+            let half = Vec3::new(c * h.x + s * h.z, h.y, s * h.x + c * h.z);
+            bounds.union(Aabb { min: centre - half, max: centre + half })
+        })
+    }
+
     /// The extent of one copy over X and Z in its own frame.
     pub fn footprint(&self) -> Footprint {
-        let h = Vec3::from_array(self.half_extents);
-        let mut fp = Footprint { min: [f32::INFINITY; 2], max: [f32::NEG_INFINITY; 2] };
-        for (centre, yaw) in self.local_blocks() {
-            let (s, c) = (yaw.sin().abs(), yaw.cos().abs());
-            let half = [c * h.x + s * h.z, s * h.x + c * h.z];
-            for (axis, (value, half)) in [centre.x, centre.z].into_iter().zip(half).enumerate() {
-                fp.min[axis] = fp.min[axis].min(value - half);
-                fp.max[axis] = fp.max[axis].max(value + half);
-            }
-        }
-        fp
+        let b = self.local_bounds();
+        Footprint { min: [b.min.x, b.min.z], max: [b.max.x, b.max.z] }
+    }
+
+    /// The world-space box around copy `copy`.
+    pub fn copy_bounds(&self, copy: u32) -> Aabb {
+        let (anchor, rotation) = self.copy_placement(copy);
+        self.local_bounds().transformed(&Affine3A::from_rotation_translation(rotation, anchor))
     }
 
     /// Where copy `copy` stands: its anchor in world space and its heading.

@@ -4,6 +4,7 @@
 use std::collections::BTreeSet;
 
 use super::{at_least_one, finite, finite3, non_negative, problem, Checked};
+use crate::geometry::Aabb;
 use crate::scene::file::schema::{ArrayToml, ProjectileToml, StructureKind, StructureToml};
 use crate::scene::file::spec::{
     ProjectileAim, ProjectileDef, PrototypeDef, Shape, StructureArray, StructureDef, StructureLayout,
@@ -36,7 +37,37 @@ pub(super) fn structures(raw: &[StructureToml], prototypes: &[PrototypeDef]) -> 
         }
         structures.push(structure);
     }
+    apart(&structures)?;
     Ok(structures)
+}
+
+/// Copies of different structures that overlap or touch (by their world-space boxes): the
+/// first pair found, sweeping along X.
+fn apart(structures: &[StructureDef]) -> Checked<()> {
+    let mut boxes: Vec<(Aabb, usize, u32)> = structures
+        .iter()
+        .enumerate()
+        .flat_map(|(i, s)| (0..s.copies()).map(move |copy| (s.copy_bounds(copy), i, copy)))
+        .collect();
+    boxes.sort_by(|a, b| a.0.min.x.total_cmp(&b.0.min.x));
+    let mut open: Vec<usize> = Vec::new();
+    for (k, (b, i, copy)) in boxes.iter().enumerate() {
+        open.retain(|&j| boxes[j].0.max.x >= b.min.x);
+        for &j in &open {
+            let (other, oi, ocopy) = &boxes[j];
+            if oi != i && (0..3).all(|a| other.min[a] <= b.max[a] && b.min[a] <= other.max[a]) {
+                let (first, second) =
+                    if oi < i { ((*oi, *ocopy), (*i, *copy)) } else { ((*i, *copy), (*oi, *ocopy)) };
+                let message = format!(
+                    "copy {} of {:?} overlaps or touches copy {} of {:?}",
+                    second.1, structures[second.0].name, first.1, structures[first.0].name
+                );
+                return Err(problem(format!("structures[{}].origin", second.0), message));
+            }
+        }
+        open.push(k);
+    }
+    Ok(())
 }
 
 /// A box prototype, the layout keys of its kind (counts at least 1), a finite placement, a
