@@ -212,6 +212,20 @@ fn count_override_scales_structures_by_whole_copies() {
 }
 
 #[test]
+fn count_override_refuses_arrays_that_grow_into_other_structures() {
+    // The towers' copies stand at x = 1, 5, 9 and would grow to 13: a stack stands at x = 13.1.
+    let text = format!(
+        "{GOOD}\n[[structures]]\nname = \"stack\"\nkind = \"grid\"\nprototype = \"brick\"\ncounts = [1, 1, 1]\norigin = [13.1, 0.0, 2.0]\n"
+    );
+    let file = parse(&text).unwrap();
+    file.clone().with_total_count(100).unwrap();
+    let err = file.with_total_count(400).unwrap_err();
+    let message = err.to_string();
+    assert!(message.contains("scenes/bad.toml") && message.contains("--count 400"), "{message}");
+    assert_eq!(err.field(), Some("structures[1].origin"), "{message}");
+}
+
+#[test]
 fn the_demolition_scene_has_its_regime_and_scales_with_count() {
     let file = SceneFile::load(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/demolition.toml")).unwrap();
     let bodies: u64 = file.spec().structures.iter().map(|s| s.body_count()).sum();
@@ -220,6 +234,11 @@ fn the_demolition_scene_has_its_regime_and_scales_with_count() {
     let small = file.with_total_count(2000).unwrap();
     let scaled: u64 = small.spec().structures.iter().map(|s| s.body_count()).sum();
     assert!((1500..=2600).contains(&scaled), "--count 2000 gives {scaled} structure bodies");
+    // The districts grow away from each other: the regime map's largest count lays out.
+    let file = SceneFile::load(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/demolition.toml")).unwrap();
+    let large = file.with_total_count(300_000).unwrap();
+    let scaled: u64 = large.spec().structures.iter().map(|s| s.body_count()).sum();
+    assert!((270_000..=330_000).contains(&scaled), "--count 300000 gives {scaled} structure bodies");
 }
 
 fn layout_strategy() -> impl Strategy<Value = String> {

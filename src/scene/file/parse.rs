@@ -10,7 +10,7 @@ use super::count::spread_count;
 use super::location::{line_of, syntax_error};
 use super::schema::SceneToml;
 use super::spec::{SceneInfo, SceneSpec};
-use super::validate::{validate, Problem};
+use super::validate::{structures_apart, validate, Problem};
 use super::SceneError;
 
 /// A checked scene file: its [`SceneSpec`] plus where it came from. Plain data, built only by
@@ -118,7 +118,8 @@ impl SceneFile {
     /// objects), structures' arrays to whole copies. Without structures the spawners get all
     /// of `total`; with them, spawners and structures share it in proportion to their bodies.
     /// Projectiles follow their structures' copies. The override is folded into the hash.
-    /// `total` must be at least the number of spawners.
+    /// `total` must be at least the number of spawners, and grown arrays must not reach
+    /// other structures.
     pub fn with_total_count(self, total: u32) -> Result<Self, SceneError> {
         let n = self.spec.spawners.len();
         if n == 0 && self.spec.structures.is_empty() {
@@ -130,6 +131,10 @@ impl SceneFile {
             );
         }
         let (spawners, structures) = spread_count(&self.spec.spawners, &self.spec.structures, total);
+        // Arrays that grew may reach other structures.
+        if let Err(Problem { field, message }) = structures_apart(&structures) {
+            return Err(self.error(field, format!("with --count {total}: {message}")));
+        }
         // The override changes what is simulated: fold it into the hash.
         let source_hash = fnv1a64_extend(self.source_hash, &total.to_le_bytes());
         Ok(SceneFile { spec: SceneSpec { spawners, structures, ..self.spec }, source_hash, ..self })

@@ -10,6 +10,8 @@ mod structures;
 mod view;
 mod world;
 
+pub(super) use structures::apart as structures_apart;
+
 use super::asset_dir::AssetDir;
 use super::schema::SceneToml;
 use super::spec::{PhysicsSettings, SceneInfo, SceneSpec};

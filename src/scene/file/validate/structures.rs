@@ -43,7 +43,7 @@ pub(super) fn structures(raw: &[StructureToml], prototypes: &[PrototypeDef]) -> 
 
 /// Copies of different structures that overlap or touch (by their world-space boxes): the
 /// first pair found, sweeping along X.
-fn apart(structures: &[StructureDef]) -> Checked<()> {
+pub(in crate::scene::file) fn apart(structures: &[StructureDef]) -> Checked<()> {
     let mut boxes: Vec<(Aabb, usize, u32)> = structures
         .iter()
         .enumerate()
