@@ -2,8 +2,11 @@
 //! scene files: what they parse into, how `--count` scales them, and bad input, which is an
 //! error naming the file, the line and the field, never a panic.
 
+mod scene_errors;
+
 use dormant::scene::file::{ProjectileAim, SceneError, SceneFile, StructureLayout};
 use proptest::prelude::*;
+use scene_errors::{expect_error, parse};
 
 const GOOD: &str = r#"[scene]
 name = "t"
@@ -40,24 +43,6 @@ interval_frames = 20
 position = [0.0, 1.0, -2.0]
 velocity = [0.0, 0.0, 8.0]
 "#;
-
-fn parse(text: &str) -> Result<SceneFile, SceneError> {
-    SceneFile::parse("scenes/bad.toml", text)
-}
-
-/// `text` is rejected with an error naming the file, `field` and (when given) `line`.
-fn expect_error(text: &str, field: &str, line: Option<usize>) -> SceneError {
-    let err = parse(text).expect_err("scene must be rejected");
-    let message = err.to_string();
-    assert!(message.contains("scenes/bad.toml"), "{message}");
-    assert!(message.contains(field), "expected field {field:?} in {message}");
-    assert_eq!(err.field().map(|f| f.contains(field)), Some(true), "{err:?}");
-    if let Some(line) = line {
-        assert_eq!(err.line(), Some(line), "{message}");
-        assert!(message.contains(&format!("bad.toml:{line}")), "{message}");
-    }
-    err
-}
 
 #[test]
 fn structures_and_projectiles_parse_into_checked_tables() {

@@ -87,6 +87,25 @@ fn physics(p: &PhysicsSettings) -> Checked<PhysicsSettings> {
     Ok(p.clone())
 }
 
+/// A table whose variant (`what`, e.g. "shape Box") takes the keys `wanted` of the optional
+/// keys `given` (name, written?): each must be written exactly when wanted.
+fn exactly_the_keys(
+    what: &str,
+    wanted: &[&str],
+    given: &[(&str, bool)],
+    at: &dyn Fn(&str) -> String,
+) -> Checked<()> {
+    for &(name, present) in given {
+        let needed = wanted.contains(&name);
+        if needed && !present {
+            return Err(problem(at(name), format!("{what} needs `{name}`")));
+        } else if !needed && present {
+            return Err(problem(at(name), format!("{what} does not use `{name}`")));
+        }
+    }
+    Ok(())
+}
+
 fn problem(field: impl Into<String>, message: impl Into<String>) -> Problem {
     Problem { field: field.into(), message: message.into() }
 }

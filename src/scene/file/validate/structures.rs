@@ -3,7 +3,7 @@
 
 use std::collections::BTreeSet;
 
-use super::{at_least_one, finite, finite3, non_negative, problem, Checked};
+use super::{at_least_one, exactly_the_keys, finite, finite3, non_negative, problem, Checked};
 use crate::geometry::Aabb;
 use crate::scene::file::schema::{ArrayToml, ProjectileToml, StructureKind, StructureToml};
 use crate::scene::file::spec::{
@@ -120,14 +120,7 @@ fn layout(
         ("spacing", s.spacing.is_some()),
         ("counts", s.counts.is_some()),
     ];
-    for (name, present) in given {
-        let needed = wanted.contains(&name);
-        if needed && !present {
-            return Err(problem(at(name), format!("a {:?} structure needs `{name}`", s.kind)));
-        } else if !needed && present {
-            return Err(problem(at(name), format!("a {:?} structure does not use `{name}`", s.kind)));
-        }
-    }
+    exactly_the_keys(&format!("a {:?} structure", s.kind), wanted, &given, at)?;
     // Every key the kind needs is present (checked above).
     let count = |name: &str, v: Option<u32>| at_least_one(&at(name), v.unwrap_or(0));
     Ok(match s.kind {

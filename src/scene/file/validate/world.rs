@@ -2,7 +2,7 @@
 
 use std::collections::BTreeSet;
 
-use super::{finite, finite3, non_negative, positive, problem, Checked};
+use super::{exactly_the_keys, finite, finite3, non_negative, positive, problem, Checked};
 use crate::scene::file::asset_dir::AssetDir;
 use crate::scene::file::schema::{EnvironmentToml, PrototypeToml, ShapeKind};
 use crate::scene::file::spec::{EnvironmentDef, EnvironmentSource, PrototypeDef, Shape};
@@ -103,15 +103,9 @@ fn shape(p: &PrototypeToml, assets: &AssetDir, at: &dyn Fn(&str) -> String) -> C
         ("half_height", p.half_height.is_some()),
         ("gltf", p.gltf.is_some()),
     ];
-    let needs = |name: &str| problem(at(name), format!("shape {:?} needs `{name}`", p.shape));
-    for (name, present) in given {
-        let needed = wanted.contains(&name);
-        if needed && !present {
-            return Err(needs(name));
-        } else if !needed && present {
-            return Err(problem(at(name), format!("shape {:?} does not use `{name}`", p.shape)));
-        }
-    }
+    let what = format!("shape {:?}", p.shape);
+    exactly_the_keys(&what, wanted, &given, at)?;
+    let needs = |name: &str| problem(at(name), format!("{what} needs `{name}`"));
     if let Some(h) = p.half_extents {
         if finite3(&at("half_extents"), h)?.iter().any(|&x| x <= 0.0) {
             return Err(problem(at("half_extents"), format!("must all be greater than 0, got {h:?}")));
