@@ -1,7 +1,10 @@
 //! Bad scene input: every error names the file and the field (and the line when the field
 //! is written), and none panics.
 
+mod scene_errors;
+
 use dormant::scene::file::{SceneError, SceneFile, Shape};
+use scene_errors::{expect_error, parse};
 
 const GOOD: &str = r#"[scene]
 name = "t"
@@ -20,23 +23,6 @@ prototypes = ["box"]
 count = 4
 region = { min = [0.0, 1.0, 0.0], max = [2.0, 1.0, 2.0] }
 "#;
-
-fn parse(text: &str) -> Result<SceneFile, SceneError> {
-    SceneFile::parse("scenes/bad.toml", text)
-}
-
-fn expect_error(text: &str, field: &str, line: Option<usize>) -> SceneError {
-    let err = parse(text).expect_err("scene must be rejected");
-    let message = err.to_string();
-    assert!(message.contains("scenes/bad.toml"), "{message}");
-    assert!(message.contains(field), "expected field {field:?} in {message}");
-    assert_eq!(err.field().map(|f| f.contains(field)), Some(true), "{err:?}");
-    if let Some(line) = line {
-        assert_eq!(err.line(), Some(line), "{message}");
-        assert!(message.contains(&format!("bad.toml:{line}")), "{message}");
-    }
-    err
-}
 
 #[test]
 fn the_good_scene_parses() {

@@ -146,7 +146,8 @@ pub(crate) struct SceneSource {
     #[arg(long, value_name = "GLB", requires = "env")]
     pub object: Option<PathBuf>,
     /// Objects: the heap's size with --env/--object (default 8000), or with a SCENE file the
-    /// total dynamic objects, spread over its spawners in proportion.
+    /// total dynamic objects, spread over its spawners and structures (whole copies) in
+    /// proportion.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
     pub count: Option<u32>,
 }

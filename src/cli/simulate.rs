@@ -12,7 +12,8 @@ pub struct PhysicsScene {
     /// Scene file (TOML; see docs/scene-format.md).
     #[arg(value_name = "SCENE")]
     pub scene: PathBuf,
-    /// Total dynamic objects, spread over the scene's spawners in proportion.
+    /// Total dynamic objects, spread over the scene's spawners and structures (whole copies)
+    /// in proportion.
     #[arg(long, value_name = "N")]
     pub count: Option<u32>,
     /// Frames to simulate instead of the scene's own count.

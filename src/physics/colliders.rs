@@ -103,8 +103,70 @@ fn closed_mesh_volume(mesh: &TriangleMesh) -> f32 {
         .sum()
 }
 
+/// The environment's colliders: one triangle mesh, or with `environment.collider_cells` n > 1
+/// one per cell of an n x n grid over the mesh's XZ bounds. Rapier keeps a collider's contact
+/// pairs in one list that it walks to find a pair, so a floor that tens of thousands of
+/// bodies touch makes every new contact with it that slow; cells keep the lists short.
+pub(crate) fn environment_shapes(
+    mesh: &TriangleMesh,
+    file: &SceneFile,
+) -> Result<Vec<SharedShape>, PhysicsError> {
+    match file.spec().environment.collider_cells {
+        1 => Ok(vec![environment_shape(mesh, file)?]),
+        n => match cell_meshes(mesh, n).as_slice() {
+            // No valid triangle: the one mesh says why it cannot collide.
+            [] => Ok(vec![environment_shape(mesh, file)?]),
+            cells => cells.iter().map(|cell| environment_shape(cell, file)).collect(),
+        },
+    }
+}
+
+/// `mesh`'s valid triangles in an `n` x `n` grid over its XZ bounds: each triangle halved
+/// along its edges until it is no wider than a cell (at most [`MAX_CELL_SPLITS`] times), then
+/// put in the cell of its centroid. Empty cells are left out.
+fn cell_meshes(mesh: &TriangleMesh, n: u32) -> Vec<TriangleMesh> {
+    let bounds = mesh.bounds();
+    let (lo, size) = (bounds.min, bounds.max - bounds.min);
+    let cell = (size.x.max(size.z) / n as f32).max(f32::MIN_POSITIVE);
+    let index = |v: f32, lo: f32, size: f32| {
+        if size > 0.0 {
+            ((v - lo) / size * n as f32).clamp(0.0, n as f32 - 1.0) as usize
+        } else {
+            0
+        }
+    };
+    let mut cells: Vec<Vec<[glam::Vec3; 3]>> = vec![Vec::new(); (n * n) as usize];
+    for i in (0..mesh.triangle_count()).filter(|&i| mesh.triangle_is_valid(i)) {
+        let mut pending = vec![(mesh.triangle(i), 0)];
+        while let Some((t @ [a, b, c], splits)) = pending.pop() {
+            let width = [a - b, b - c, c - a].iter().map(|e| e.x.abs().max(e.z.abs())).fold(0.0, f32::max);
+            if width > cell && splits < MAX_CELL_SPLITS {
+                let (ab, bc, ca) = ((a + b) * 0.5, (b + c) * 0.5, (c + a) * 0.5);
+                pending
+                    .extend([[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]].map(|t| (t, splits + 1)));
+            } else {
+                let centroid = (a + b + c) / 3.0;
+                let (x, z) = (index(centroid.x, lo.x, size.x), index(centroid.z, lo.z, size.z));
+                cells[z * n as usize + x].push(t);
+            }
+        }
+    }
+    cells
+        .into_iter()
+        .filter(|triangles| !triangles.is_empty())
+        .map(|triangles| {
+            let positions: Vec<_> = triangles.iter().flatten().copied().collect();
+            let indices = (0..triangles.len() as u32).map(|t| [3 * t, 3 * t + 1, 3 * t + 2]).collect();
+            TriangleMesh::new(positions, indices)
+        })
+        .collect()
+}
+
+/// How often [`cell_meshes`] may halve one triangle (4^8 pieces at most).
+const MAX_CELL_SPLITS: u32 = 8;
+
 /// The environment as a Rapier triangle mesh, skipping degenerate triangles.
-pub(crate) fn environment_shape(mesh: &TriangleMesh, file: &SceneFile) -> Result<SharedShape, PhysicsError> {
+fn environment_shape(mesh: &TriangleMesh, file: &SceneFile) -> Result<SharedShape, PhysicsError> {
     let vertices: Vec<_> = mesh
         .positions
         .iter()

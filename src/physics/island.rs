@@ -9,6 +9,7 @@
 //! same update. So an id's bodies and poses never change while it lives, which is what a
 //! renderer that bakes sleeping islands needs.
 
+use std::collections::btree_map::Entry;
 use std::collections::BTreeMap;
 
 use super::body::{BodyId, BodyPose};
@@ -44,6 +45,60 @@ pub struct SleepObservation {
     pub pose: BodyPose,
 }
 
+/// One update's sleeping bodies by group.
+struct Sleepers {
+    /// Per body id: its group key, if it sleeps.
+    group_of: Vec<Option<u64>>,
+    /// Per body id: the index of its observation (`u32::MAX`: not observed).
+    observation_of: Vec<u32>,
+    /// The sleeping bodies of each group key, ascending.
+    groups: BTreeMap<u64, Vec<BodyId>>,
+}
+
+impl Sleepers {
+    fn of(observations: &[SleepObservation]) -> Self {
+        let max_body = observations.iter().map(|o| o.body.0 as usize + 1).max().unwrap_or(0);
+        let mut group_of = vec![None; max_body];
+        let mut observation_of = vec![u32::MAX; max_body];
+        let mut groups: BTreeMap<u64, Vec<BodyId>> = BTreeMap::new();
+        // Bodies of one group usually come one after another: collect a run of equal keys
+        // before looking its group up.
+        let mut run: Option<(u64, Vec<BodyId>)> = None;
+        for (i, o) in observations.iter().enumerate() {
+            let b = o.body.0 as usize;
+            debug_assert!(observation_of[b] == u32::MAX, "body {:?} observed twice", o.body);
+            observation_of[b] = i as u32;
+            let Some(key) = o.group else { continue };
+            group_of[b] = Some(key);
+            match &mut run {
+                Some((k, members)) if *k == key => members.push(o.body),
+                _ => {
+                    if let Some((k, members)) = run.replace((key, vec![o.body])) {
+                        add_run(&mut groups, k, members);
+                    }
+                }
+            }
+        }
+        if let Some((k, members)) = run {
+            add_run(&mut groups, k, members);
+        }
+        for members in groups.values_mut() {
+            members.sort_unstable();
+        }
+        Sleepers { group_of, observation_of, groups }
+    }
+}
+
+/// Adds a run of `members` of group `key` to `groups`.
+fn add_run(groups: &mut BTreeMap<u64, Vec<BodyId>>, key: u64, members: Vec<BodyId>) {
+    match groups.entry(key) {
+        Entry::Vacant(e) => {
+            e.insert(members);
+        }
+        Entry::Occupied(mut e) => e.get_mut().extend(members),
+    }
+}
+
 /// Per-tracker counters.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
 pub struct IslandCounters {
@@ -72,21 +127,8 @@ impl IslandTracker {
     /// first, then all `Slept` events, each in ascending id order.
     pub fn update(&mut self, observations: &[SleepObservation]) -> Vec<IslandEvent> {
         self.counters.updates += 1;
-        let max_body = observations.iter().map(|o| o.body.0 as usize + 1).max().unwrap_or(0);
-        let mut group_of: Vec<Option<u64>> = vec![None; max_body];
-        let mut pose_of: Vec<Option<BodyPose>> = vec![None; max_body];
-        let mut groups: BTreeMap<u64, Vec<BodyId>> = BTreeMap::new();
-        for o in observations {
-            debug_assert!(pose_of[o.body.0 as usize].is_none(), "body {:?} observed twice", o.body);
-            pose_of[o.body.0 as usize] = Some(o.pose);
-            if let Some(key) = o.group {
-                group_of[o.body.0 as usize] = Some(key);
-                groups.entry(key).or_default().push(o.body);
-            }
-        }
-        for members in groups.values_mut() {
-            members.sort_unstable();
-        }
+        let Sleepers { group_of, observation_of, groups } = Sleepers::of(observations);
+        let max_body = group_of.len();
 
         let mut events = Vec::new();
         // End every island that is no longer exactly one sleeping group.
@@ -129,7 +171,7 @@ impl IslandTracker {
                 self.island_of[b.0 as usize] = Some(id);
             }
             let poses =
-                bodies.iter().map(|b| pose_of[b.0 as usize].expect("observed body has a pose")).collect();
+                bodies.iter().map(|b| observations[observation_of[b.0 as usize] as usize].pose).collect();
             self.counters.islands_slept += 1;
             self.counters.bodies_slept += bodies.len() as u64;
             self.islands.insert(id, bodies.clone());

@@ -1,5 +1,5 @@
-//! Physics: Rapier worlds built from scene files, stepping with spawners, kinematic paths
-//! and scripted disturbances, the island tracker that turns Rapier's sleep state into
+//! Physics: Rapier worlds built from scene files, stepping with spawners, structures built
+//! asleep, projectiles, kinematic paths and scripted disturbances, the island tracker that turns Rapier's sleep state into
 //! `Slept`/`Woke` events with stable ids, trajectories (recording and replay), island
 //! statistics and the physics benchmark. Rapier's types stay inside this module; everything
 //! public speaks glam.
@@ -14,6 +14,7 @@ mod options;
 mod simulation;
 mod spawn;
 mod stats;
+mod structures;
 mod trajectory;
 
 pub use bench::{bench, PhysicsBenchOptions, PhysicsBenchReport};

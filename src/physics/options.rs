@@ -9,7 +9,8 @@ use crate::scene::file::SceneFile;
 /// Overrides a command line can apply to a scene before simulating it.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct SimulateOptions {
-    /// Total dynamic objects, spread over the spawners in proportion to their counts.
+    /// Total dynamic objects, spread over the spawners and structures in proportion to their
+    /// bodies (see [`SceneFile::with_total_count`]).
     pub count: Option<u32>,
     /// Frames to simulate instead of `scene.frames`.
     pub frames: Option<u32>,

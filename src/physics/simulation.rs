@@ -12,18 +12,19 @@ use std::time::Instant;
 
 use glam::Vec3;
 use rapier3d::prelude::{
-    ColliderBuilder, IntegrationParameters, PhysicsWorld, RigidBodyBuilder, RigidBodyHandle,
+    ActiveHooks, ColliderBuilder, IntegrationParameters, PhysicsWorld, RigidBodyBuilder, RigidBodyHandle,
 };
 
 use super::body::{
     from_rapier_pose, from_rapier_vec, to_rapier_pose, to_rapier_vec, BodyId, BodyInfo, BodyKind, BodyPose,
     BodyState,
 };
-use super::colliders::{environment_shape, prototype_shape, ColliderChoice, PrototypeShape};
+use super::colliders::{environment_shapes, prototype_shape, ColliderChoice, PrototypeShape};
 use super::island::{IslandTracker, SleepObservation};
 use super::kinematic::KinematicPath;
 use super::options::SimulateOptions;
 use super::spawn::{spawn_schedule, SpawnOrder};
+use super::structures::{RestingContacts, StructureSet};
 use super::trajectory::{FrameRecorder, RecordedScene, Trajectory, TrajectoryFrame};
 use super::PhysicsError;
 use crate::scene::file::{environment_mesh, DisturbanceDef, DisturbanceKind, SceneFile};
@@ -54,6 +55,7 @@ pub struct Simulation {
     first_spawned: u32,
     kinematics: Vec<(BodyId, KinematicPath)>,
     disturbances: Vec<DisturbanceDef>,
+    structures: StructureSet,
     tracker: IslandTracker,
     /// The frames' changes against what was recorded before.
     recorder: FrameRecorder,
@@ -110,6 +112,7 @@ impl Simulation {
             });
             handles.push(None);
         }
+        let structures = StructureSet::new(&spawns, first_spawned, bodies.len());
         let mut disturbances = d.disturbances.clone();
         disturbances.sort_by_key(|d| d.frame);
         let mut states = vec![BodyState::Absent; bodies.len()];
@@ -130,6 +133,7 @@ impl Simulation {
             first_spawned,
             kinematics,
             disturbances,
+            structures,
             tracker: IslandTracker::new(),
             frame: 0,
             timestep: p.timestep,
@@ -186,6 +190,11 @@ impl Simulation {
         (present, asleep)
     }
 
+    /// Structure copies that have not woken since they were built.
+    pub fn intact_structures(&self) -> usize {
+        self.structures.intact_count()
+    }
+
     /// Gives `body` a linear impulse (waking its island). False when the body is not in the
     /// world.
     pub fn apply_impulse(&mut self, body: BodyId, impulse: Vec3) -> bool {
@@ -211,6 +220,9 @@ impl Simulation {
         self.disturb(frame);
         let t1 = Instant::now();
         let sub_dt = self.timestep / self.substeps as f32;
+        // A structure that anything woke wakes whole, before Rapier steps it and before the
+        // tracker observes it.
+        self.structures.wake_touched(&mut self.world, &self.handles);
         for s in 0..self.substeps {
             let t_end = frame as f32 * self.timestep + (s + 1) as f32 * sub_dt;
             for (id, path) in &self.kinematics {
@@ -218,8 +230,9 @@ impl Simulation {
                     self.world.bodies[h].set_next_kinematic_position(to_rapier_pose(path.pose_at(t_end)));
                 }
             }
-            self.world.step();
+            self.world.step_with_events(&RestingContacts, &());
             self.counters.rapier_steps += 1;
+            self.structures.wake_touched(&mut self.world, &self.handles);
         }
         let t2 = Instant::now();
         self.remove_fallen();
@@ -238,17 +251,23 @@ impl Simulation {
         while let Some(order) = self.spawns.get(self.next_spawn).filter(|o| o.frame <= frame) {
             let id = BodyId(self.first_spawned + self.next_spawn as u32);
             let shape = &self.prototypes[order.prototype as usize];
+            // Structures are built asleep, with the filter that keeps their touching blocks
+            // from waking each other (see `structures`).
+            let resting = order.structure.is_some();
+            let hooks = if resting { ActiveHooks::FILTER_CONTACT_PAIRS } else { ActiveHooks::empty() };
             let (handle, _) = self.world.insert(
                 RigidBodyBuilder::dynamic()
                     .pose(to_rapier_pose(order.pose))
                     .linvel(to_rapier_vec(order.velocity))
                     .linear_damping(self.damping.0)
                     .angular_damping(self.damping.1)
+                    .sleeping(resting)
                     .user_data(id.0 as u128),
                 ColliderBuilder::new(shape.shape.clone())
                     .density(shape.density)
                     .friction(shape.friction)
-                    .restitution(shape.restitution),
+                    .restitution(shape.restitution)
+                    .active_hooks(hooks),
             );
             let activation = self.world.bodies[handle].activation_mut();
             activation.normalized_linear_threshold = lin;
@@ -291,6 +310,9 @@ impl Simulation {
     fn remove_fallen(&mut self) {
         for id in self.first_spawned as usize..self.bodies.len() {
             let Some(h) = self.handles[id] else { continue };
+            if self.structures.resting(BodyId(id as u32)).is_some() {
+                continue; // asleep where it was built
+            }
             let y = self.world.bodies[h].translation().y;
             // A NaN height means the body blew up: it leaves the world too.
             if y.is_nan() || y < self.kill_plane_y {
@@ -299,6 +321,27 @@ impl Simulation {
                 self.counters.removed_below_kill_plane += 1;
             }
         }
+    }
+
+    /// Whether body `i` (Rapier's `h`) sleeps, its sleep-group key if it does, and its pose.
+    fn sleep_state(&self, i: usize, h: RigidBodyHandle) -> (bool, Option<u64>, BodyPose) {
+        // An intact structure sleeps as one group where it was built (no need to ask Rapier).
+        if let Some((key, pose)) = self.structures.resting(BodyId(i as u32)) {
+            return (true, Some(key), pose);
+        }
+        let rb = &self.world.bodies[h];
+        let pose = from_rapier_pose(rb.position());
+        let asleep = self.bodies[i].kind == BodyKind::Dynamic && rb.is_sleeping();
+        // Rapier sleeps and wakes whole persistent islands, so its island of a sleeping body
+        // is exactly the sleeping group. Should it ever not know the body, the body sleeps
+        // alone (keys above u32 cannot collide).
+        let group = asleep.then(|| {
+            self.world
+                .islands
+                .persistent_island_of(&self.world.bodies, h)
+                .map_or(u64::from(u32::MAX) + 1 + i as u64, u64::from)
+        });
+        (asleep, group, pose)
     }
 
     /// Observes every body after the frame's steps: its state and pose go to the recorder
@@ -312,23 +355,7 @@ impl Simulation {
             let state = match handle {
                 None => BodyState::Absent,
                 Some(h) => {
-                    let rb = &self.world.bodies[*h];
-                    let pose = from_rapier_pose(rb.position());
-                    let dynamic = self.bodies[i].kind == BodyKind::Dynamic;
-                    let asleep = dynamic && rb.is_sleeping();
-                    let group = if asleep {
-                        // Rapier sleeps and wakes whole persistent islands, so its island of a
-                        // sleeping body is exactly the sleeping group. Should it ever not know
-                        // the body, the body sleeps alone (keys above u32 cannot collide).
-                        Some(
-                            self.world
-                                .islands
-                                .persistent_island_of(&self.world.bodies, *h)
-                                .map_or(u64::from(u32::MAX) + 1 + i as u64, u64::from),
-                        )
-                    } else {
-                        None
-                    };
+                    let (asleep, group, pose) = self.sleep_state(i, *h);
                     observations.push(SleepObservation { body: id, group, pose });
                     let state = if asleep { BodyState::Asleep } else { BodyState::Awake };
                     if state == BodyState::Awake || previous != BodyState::Asleep {
@@ -346,7 +373,7 @@ impl Simulation {
 }
 
 /// A world with the scene's gravity and step parameters and its environment as the one fixed
-/// body.
+/// body (with one collider, or one per collider cell).
 fn static_world(file: &SceneFile) -> Result<PhysicsWorld, PhysicsError> {
     let d = file.spec();
     let p = &d.physics;
@@ -357,8 +384,18 @@ fn static_world(file: &SceneFile) -> Result<PhysicsWorld, PhysicsError> {
     world.integration_parameters.num_solver_iterations = p.solver_iterations as usize;
 
     let env = environment_mesh(file)?;
-    let env_shape = environment_shape(&env, file)?;
-    world.insert(RigidBodyBuilder::fixed(), ColliderBuilder::new(env_shape).friction(d.environment.friction));
+    let friction = d.environment.friction;
+    match environment_shapes(&env, file)?.as_slice() {
+        [shape] => {
+            world.insert(RigidBodyBuilder::fixed(), ColliderBuilder::new(shape.clone()).friction(friction));
+        }
+        cells => {
+            let body = world.insert_body(RigidBodyBuilder::fixed());
+            for shape in cells {
+                world.insert_collider(ColliderBuilder::new(shape.clone()).friction(friction), Some(body));
+            }
+        }
+    }
     Ok(world)
 }
 

@@ -1,12 +1,14 @@
-//! Spawners: when and where each dynamic object enters the world. The whole schedule is
-//! computed up front from the scene and its seeds, so it is identical on every run.
+//! The spawn schedule: when and where each dynamic object enters the world. Structures'
+//! bodies come first, asleep before the first frame; then spawners' waves and projectiles'
+//! launches by frame. The whole schedule is computed up front from the scene and its seeds,
+//! so it is identical on every run.
 
 use glam::{Quat, Vec3};
 
 use super::body::BodyPose;
 use super::colliders::PrototypeShape;
 use crate::rng::SplitMix64;
-use crate::scene::file::{SceneFile, SpawnPattern, SpawnerDef};
+use crate::scene::file::{SceneFile, SpawnPattern, SpawnerDef, StructureDef};
 
 /// One object to create at the start of `frame`.
 #[derive(Clone, Debug, PartialEq)]
@@ -15,18 +17,48 @@ pub(crate) struct SpawnOrder {
     pub prototype: u32,
     pub pose: BodyPose,
     pub velocity: Vec3,
+    /// The structure copy (numbered over all structures) the body belongs to: it enters the
+    /// world asleep.
+    pub structure: Option<u32>,
 }
 
-/// Every spawner's orders, sorted by frame (stable: spawner order, then wave order).
+/// Every object's order, sorted by frame (stable: structures copy by copy, then spawners in
+/// order, wave by wave, then projectiles in order, launch by launch).
 pub(crate) fn spawn_schedule(file: &SceneFile, shapes: &[PrototypeShape]) -> Vec<SpawnOrder> {
     let d = file.spec();
-    let mut orders = Vec::new();
+    let mut orders = structure_orders(&d.structures);
     for s in &d.spawners {
         let seed = d.scene.seed ^ s.seed.wrapping_mul(0xA076_1D64_78BD_642F);
         let mut rng = SplitMix64::new(seed);
         spawner_orders(s, shapes, d.physics.timestep, &mut rng, &mut orders);
     }
+    for p in &d.projectiles {
+        orders.extend(p.launches(&d.structures, d.scene.frames).into_iter().map(|launch| SpawnOrder {
+            frame: launch.frame,
+            prototype: p.prototype as u32,
+            pose: BodyPose { translation: launch.translation, rotation: launch.rotation },
+            velocity: launch.velocity,
+            structure: None,
+        }));
+    }
     orders.sort_by_key(|o| o.frame);
+    orders
+}
+
+/// Every structure's blocks at frame 0, asleep; copies are numbered over all structures.
+fn structure_orders(structures: &[StructureDef]) -> Vec<SpawnOrder> {
+    let mut orders = Vec::new();
+    let mut first_copy = 0;
+    for s in structures {
+        orders.extend(s.blocks().into_iter().map(|block| SpawnOrder {
+            frame: 0,
+            prototype: s.prototype as u32,
+            pose: BodyPose { translation: block.translation, rotation: block.rotation },
+            velocity: Vec3::ZERO,
+            structure: Some(first_copy + block.copy),
+        }));
+        first_copy += s.copies();
+    }
     orders
 }
 
@@ -80,6 +112,7 @@ fn spawner_orders(
                 prototype,
                 pose: BodyPose { translation: position, rotation },
                 velocity,
+                structure: None,
             });
         }
     }

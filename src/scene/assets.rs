@@ -19,8 +19,11 @@ pub struct SceneAssets {
     pub environment: TriangleMesh,
     pub prototypes: Vec<(String, TriangleMesh)>,
     /// The glTF materials of the environment (first) and of every prototype; empty where the
-    /// mesh has none, which then gets a grey (environment) or palette colour (prototypes).
+    /// mesh has none, which then gets a grey (environment), or the file's or a palette colour
+    /// (prototypes).
     materials: Vec<Vec<Material>>,
+    /// Each prototype's colour from the scene file, if it gives one.
+    colors: Vec<Option<[f32; 3]>>,
     textures: Vec<Arc<Texture>>,
     /// Point, spot and extra directional lights: the scene file's and the environment glTF's.
     lights: Vec<Light>,
@@ -76,6 +79,7 @@ impl SceneAssets {
             environment: environment.mesh,
             prototypes,
             materials,
+            colors: doc.prototypes.iter().map(|p| p.color).collect(),
             textures,
             lights,
         })
@@ -218,7 +222,7 @@ impl SceneAssets {
                 material: push_materials(
                     &mut materials,
                     &self.materials[i + 1],
-                    Material::diffuse(PALETTE[i % PALETTE.len()]),
+                    Material::diffuse(self.colors[i].map_or(PALETTE[i % PALETTE.len()], Vec3::from)),
                 ),
             })
             .collect();

@@ -1,10 +1,12 @@
 //! Scene files: parsing TOML text into a checked [`SceneSpec`] (the raw serde shape stays
 //! private to the parser; the checked types hold validated values and prototype and camera
 //! references as indices), errors by file, line and field, and the resolution of the
-//! environment and prototypes into plain triangle meshes. Parsing builds plain data, never
-//! physics or render objects; see docs/scene-format.md for the format.
+//! environment and prototypes into plain triangle meshes, and of structures and projectiles
+//! into blocks and launches. Parsing builds plain data, never physics or render objects; see
+//! docs/scene-format.md for the format.
 
 mod asset_dir;
+mod count;
 mod error;
 mod geometry;
 mod location;
@@ -12,6 +14,7 @@ mod parse;
 mod presets;
 mod schema;
 mod spec;
+mod structure;
 mod validate;
 
 pub use error::SceneError;
@@ -21,6 +24,7 @@ pub use parse::SceneFile;
 pub use spec::{
     CameraDef, CameraKeyframeDef, CameraPlacement, ColliderKind, DisturbanceDef, DisturbanceKind,
     EnvironmentDef, EnvironmentSource, GeneratorKind, KeyframeDef, KinematicDef, LightDef, LightKind,
-    PhysicsSettings, PrototypeDef, RegionDef, RenderDef, SceneInfo, SceneSpec, Shape, SkyDef, SpawnPattern,
-    SpawnerDef,
+    PhysicsSettings, ProjectileAim, ProjectileDef, PrototypeDef, RegionDef, RenderDef, SceneInfo, SceneSpec,
+    Shape, SkyDef, SpawnPattern, SpawnerDef, StructureArray, StructureDef, StructureLayout,
 };
+pub use structure::{Footprint, Launch, StructureBlock};

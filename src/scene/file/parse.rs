@@ -6,10 +6,11 @@ use std::num::NonZeroU32;
 use std::path::{Path, PathBuf};
 
 use super::asset_dir::AssetDir;
+use super::count::spread_count;
 use super::location::{line_of, syntax_error};
 use super::schema::SceneToml;
-use super::spec::{SceneInfo, SceneSpec, SpawnerDef};
-use super::validate::{validate, Problem};
+use super::spec::{SceneInfo, SceneSpec};
+use super::validate::{structures_apart, validate, Problem};
 use super::SceneError;
 
 /// A checked scene file: its [`SceneSpec`] plus where it came from. Plain data, built only by
@@ -112,23 +113,31 @@ impl SceneFile {
         }
     }
 
-    /// The scene with every spawner's count scaled so that they add up to `total` (at least
-    /// one object per spawner, and no more waves than objects); the override is folded into
-    /// the hash. `total` must be at least the number of spawners.
+    /// The scene with about `total` dynamic objects: spawners' counts scaled so that they add
+    /// up to their share exactly (at least one object per spawner, and no more waves than
+    /// objects), structures' arrays to whole copies. Without structures the spawners get all
+    /// of `total`; with them, spawners and structures share it in proportion to their bodies.
+    /// Projectiles follow their structures' copies. The override is folded into the hash.
+    /// `total` must be at least the number of spawners, and grown arrays must not reach
+    /// other structures.
     pub fn with_total_count(self, total: u32) -> Result<Self, SceneError> {
         let n = self.spec.spawners.len();
-        if n == 0 {
-            return Err(self.error("spawners", "--count given but the scene has no spawners"));
+        if n == 0 && self.spec.structures.is_empty() {
+            return Err(self.error("spawners", "--count given but the scene has no spawners or structures"));
         }
         if (total as usize) < n {
             return Err(
                 self.error("spawners", format!("--count {total} is less than the number of spawners ({n})"))
             );
         }
-        let spawners = spread_count(&self.spec.spawners, total);
+        let (spawners, structures) = spread_count(&self.spec.spawners, &self.spec.structures, total);
+        // Arrays that grew may reach other structures.
+        if let Err(Problem { field, message }) = structures_apart(&structures) {
+            return Err(self.error(field, format!("with --count {total}: {message}")));
+        }
         // The override changes what is simulated: fold it into the hash.
         let source_hash = fnv1a64_extend(self.source_hash, &total.to_le_bytes());
-        Ok(SceneFile { spec: SceneSpec { spawners, ..self.spec }, source_hash, ..self })
+        Ok(SceneFile { spec: SceneSpec { spawners, structures, ..self.spec }, source_hash, ..self })
     }
 
     /// The scene simulated for `frames` frames instead of `scene.frames`; the override is
@@ -140,33 +149,6 @@ impl SceneFile {
         let scene = SceneInfo { frames, ..self.spec.scene };
         SceneFile { spec: SceneSpec { scene, ..self.spec }, source_hash, ..self }
     }
-}
-
-/// `spawners` with counts in proportion to theirs adding up to `total` (at least
-/// `spawners.len()`), each at least 1, and waves cut to the count.
-fn spread_count(spawners: &[SpawnerDef], total: u32) -> Vec<SpawnerDef> {
-    let n = spawners.len();
-    debug_assert!(n > 0 && total as usize >= n);
-    let old_total: u64 = spawners.iter().map(|s| s.count as u64).sum();
-    let mut assigned = 0u64;
-    let spread = spawners
-        .iter()
-        .enumerate()
-        .map(|(i, s)| {
-            let share = if i + 1 == n {
-                total as u64 - assigned
-            } else {
-                (total as u64 * s.count as u64 / old_total).max(1)
-            };
-            let remaining_spawners = (n - i - 1) as u64;
-            let share = share.min(total as u64 - assigned - remaining_spawners).max(1);
-            assigned += share;
-            let count = share as u32;
-            SpawnerDef { count, waves: s.waves.min(count), ..s.clone() }
-        })
-        .collect();
-    debug_assert_eq!(assigned, total as u64);
-    spread
 }
 
 /// FNV-1a, 64 bit: a small stable hash for scene identity (not for security).

@@ -29,6 +29,10 @@ pub(super) struct SceneToml {
     #[serde(default)]
     pub disturbances: Vec<DisturbanceToml>,
     #[serde(default)]
+    pub structures: Vec<StructureToml>,
+    #[serde(default)]
+    pub projectiles: Vec<ProjectileToml>,
+    #[serde(default)]
     pub cameras: Vec<CameraToml>,
     #[serde(default)]
     pub lights: Vec<LightToml>,
@@ -61,6 +65,8 @@ pub(super) struct EnvironmentToml {
     pub offset: [f32; 3],
     #[serde(default = "default_friction")]
     pub friction: f32,
+    #[serde(default = "one_u32")]
+    pub collider_cells: u32,
 }
 
 /// `[[prototypes]]`: the shape's sizes are all optional here; the shape says which it needs.
@@ -83,6 +89,7 @@ pub(super) struct PrototypeToml {
     pub friction: f32,
     #[serde(default)]
     pub restitution: f32,
+    pub color: Option<[f32; 3]>,
 }
 
 /// `shape = "..."`; its `Debug` name appears in messages (`shape Box needs ...`).
@@ -150,6 +157,64 @@ pub(super) struct DisturbanceToml {
 pub(super) enum DisturbanceTag {
     Impulse,
     Explosion,
+}
+
+/// `[[structures]]`: the prototype by name; the layout keys `kind` needs are optional here.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(rename = "StructureDef", deny_unknown_fields)]
+pub(super) struct StructureToml {
+    pub name: String,
+    pub kind: StructureKind,
+    pub prototype: String,
+    #[serde(default)]
+    pub origin: [f32; 3],
+    #[serde(default)]
+    pub yaw_degrees: f32,
+    #[serde(default)]
+    pub gap: f32,
+    pub layers: Option<u32>,
+    pub per_layer: Option<u32>,
+    pub count: Option<u32>,
+    pub spacing: Option<f32>,
+    pub counts: Option<[u32; 3]>,
+    pub array: Option<ArrayToml>,
+}
+
+/// `kind = "..."`; its `Debug` name appears in messages (`a Tower needs ...`).
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename = "StructureKind", rename_all = "snake_case")]
+pub(super) enum StructureKind {
+    Tower,
+    Wall,
+    Dominoes,
+    Grid,
+}
+
+/// A structure's `array = { counts, spacing }`.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[serde(rename = "StructureArray", deny_unknown_fields)]
+pub(super) struct ArrayToml {
+    pub counts: [u32; 2],
+    #[serde(default)]
+    pub spacing: [f32; 2],
+}
+
+/// `[[projectiles]]`: prototype and structure by name; `count`, `step` and `every` depend on
+/// whether a structure is aimed at.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(rename = "ProjectileDef", deny_unknown_fields)]
+pub(super) struct ProjectileToml {
+    pub prototype: String,
+    pub frame: u32,
+    #[serde(default)]
+    pub interval_frames: u32,
+    pub position: [f32; 3],
+    #[serde(default)]
+    pub velocity: [f32; 3],
+    pub structure: Option<String>,
+    pub count: Option<u32>,
+    pub step: Option<[f32; 3]>,
+    pub every: Option<u32>,
 }
 
 /// `[[cameras]]`: `position` and `look_at`, or `keyframes`.

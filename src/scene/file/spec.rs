@@ -16,6 +16,8 @@ pub struct SceneSpec {
     pub spawners: Vec<SpawnerDef>,
     pub kinematics: Vec<KinematicDef>,
     pub disturbances: Vec<DisturbanceDef>,
+    pub structures: Vec<StructureDef>,
+    pub projectiles: Vec<ProjectileDef>,
     pub cameras: Vec<CameraDef>,
     pub lights: Vec<LightDef>,
     /// `[sky]`: absent means the built-in daylight gradient.
@@ -104,6 +106,13 @@ pub struct EnvironmentDef {
     pub offset: [f32; 3],
     /// Friction of the static set (not negative).
     pub friction: f32,
+    /// The static set collides as this many by this many colliders over its XZ bounds (at
+    /// least 1, at most [`EnvironmentDef::MAX_COLLIDER_CELLS`]); 1 is one triangle mesh.
+    pub collider_cells: u32,
+}
+
+impl EnvironmentDef {
+    pub const MAX_COLLIDER_CELLS: u32 = 256;
 }
 
 /// Where the environment's triangles come from.
@@ -141,6 +150,8 @@ pub struct PrototypeDef {
     pub friction: f32,
     /// Within [0, 1].
     pub restitution: f32,
+    /// Linear base colour (within [0, 1]) of a primitive shape; `None`: a palette colour.
+    pub color: Option<[f32; 3]>,
 }
 
 /// A prototype's shape with exactly the sizes it takes, all greater than 0.
@@ -275,6 +286,80 @@ pub enum DisturbanceKind {
     /// Peak outward velocity change at the centre (greater than 0), falling linearly to 0 at
     /// `radius`.
     Explosion { strength: f32 },
+}
+
+/// `[[structures]]`: box bodies laid out as a tower, a wall, a domino run or a grid, repeated
+/// on an array of copies set apart from each other. Every body is spawned asleep before the
+/// first frame, and each copy sleeps as one island until something wakes it.
+#[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
+pub struct StructureDef {
+    /// Unique among the structures.
+    pub name: String,
+    /// Index into [`SceneSpec::prototypes`]: a box.
+    pub prototype: usize,
+    /// The prototype's half extents, copied from it (the layout is built from them).
+    pub half_extents: [f32; 3],
+    pub layout: StructureLayout,
+    /// The first copy's anchor: the centre of its base (dominoes: of the first domino's base).
+    pub origin: [f32; 3],
+    /// Heading of every copy, and of the array's axes, about +Y.
+    pub yaw_degrees: f32,
+    /// Space left between neighbouring blocks (not negative).
+    pub gap: f32,
+    pub array: StructureArray,
+}
+
+/// How one copy's blocks are laid out, in the copy's frame (X right, Y up, Z forward), with
+/// counts at least 1.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum StructureLayout {
+    /// Layers of `per_layer` blocks side by side, each layer turned 90 degrees from the one
+    /// below (a Jenga tower: the block's X is its length).
+    Tower { layers: u32, per_layer: u32 },
+    /// Courses (`layers`) of `per_layer` blocks end to end along X, every other course shifted
+    /// by half a block (running bond).
+    Wall { layers: u32, per_layer: u32 },
+    /// `count` blocks standing as authored, one every `spacing` units along +Z (greater than a
+    /// block's depth plus the gap).
+    Dominoes { count: u32, spacing: f32 },
+    /// A box of `counts` blocks (X, Y, Z), touching but for the gap.
+    Grid { counts: [u32; 3] },
+}
+
+/// Copies of a structure on a grid in its own frame: `counts` along X and Z (at least 1),
+/// `spacing` apart (greater than a copy's footprint, so copies never touch).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StructureArray {
+    pub counts: [u32; 2],
+    pub spacing: [f32; 2],
+}
+
+/// `[[projectiles]]`: dynamic bodies launched at a frame with a velocity, one after another.
+#[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
+pub struct ProjectileDef {
+    /// Index into [`SceneSpec::prototypes`].
+    pub prototype: usize,
+    /// Frame of the first launch (before the file's last frame).
+    pub frame: u32,
+    /// Frames between launches.
+    pub interval_frames: u32,
+    /// Where the body starts and how fast it moves: in world space, or in each aimed-at copy's
+    /// frame.
+    pub position: [f32; 3],
+    pub velocity: [f32; 3],
+    pub aim: ProjectileAim,
+}
+
+/// What a projectile table launches at.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ProjectileAim {
+    /// `count` launches (at least 1) in world space, each `step` further than the last.
+    World { count: u32, step: [f32; 3] },
+    /// One launch at every `every`-th copy (at least 1) of [`SceneSpec::structures`]`[structure]`,
+    /// in array order, at most `count` of them (all when `None`).
+    Structure { structure: usize, every: u32, count: Option<u32> },
 }
 
 /// `[[cameras]]`.

@@ -1,13 +1,16 @@
 //! The raw TOML shape to the checked [`SceneSpec`]: finite numbers, positive counts and
 //! sizes, references resolved to indices, asset files that exist. One function per section:
 //! scene, physics and the asset directory here; `world`: environment and prototypes;
-//! `motion`: spawners, kinematic bodies and disturbances; `view`: cameras, sky, lights and
-//! render settings. [`validate`] checks them in that order and stops at the first problem,
+//! `motion`: spawners, kinematic bodies and disturbances; `structures`: structures and
+//! projectiles; `view`: cameras, sky, lights and render settings. [`validate`] checks them in that order and stops at the first problem,
 //! which it reports by field path (the parser adds file and line).
 
 mod motion;
+mod structures;
 mod view;
 mod world;
+
+pub(super) use structures::apart as structures_apart;
 
 use super::asset_dir::AssetDir;
 use super::schema::SceneToml;
@@ -36,6 +39,8 @@ pub(super) fn validate(raw: &SceneToml, assets: &AssetDir) -> Result<SceneSpec, 
     let spawners = motion::spawners(&raw.spawners, &prototypes)?;
     let kinematics = motion::kinematics(&raw.kinematics, &prototypes)?;
     let disturbances = motion::disturbances(&raw.disturbances, scene.frames)?;
+    let structures = structures::structures(&raw.structures, &prototypes)?;
+    let projectiles = structures::projectiles(&raw.projectiles, &prototypes, &structures, scene.frames)?;
     let cameras = view::cameras(&raw.cameras)?;
     let sky = raw.sky.as_ref().map(view::sky).transpose()?;
     let lights = view::lights(&raw.lights)?;
@@ -48,6 +53,8 @@ pub(super) fn validate(raw: &SceneToml, assets: &AssetDir) -> Result<SceneSpec, 
         spawners,
         kinematics,
         disturbances,
+        structures,
+        projectiles,
         cameras,
         lights,
         sky,
@@ -78,6 +85,25 @@ fn physics(p: &PhysicsSettings) -> Checked<PhysicsSettings> {
     non_negative("physics.linear_damping", p.linear_damping)?;
     non_negative("physics.angular_damping", p.angular_damping)?;
     Ok(p.clone())
+}
+
+/// A table whose variant (`what`, e.g. "shape Box") takes the keys `wanted` of the optional
+/// keys `given` (name, written?): each must be written exactly when wanted.
+fn exactly_the_keys(
+    what: &str,
+    wanted: &[&str],
+    given: &[(&str, bool)],
+    at: &dyn Fn(&str) -> String,
+) -> Checked<()> {
+    for &(name, present) in given {
+        let needed = wanted.contains(&name);
+        if needed && !present {
+            return Err(problem(at(name), format!("{what} needs `{name}`")));
+        } else if !needed && present {
+            return Err(problem(at(name), format!("{what} does not use `{name}`")));
+        }
+    }
+    Ok(())
 }
 
 fn problem(field: impl Into<String>, message: impl Into<String>) -> Problem {

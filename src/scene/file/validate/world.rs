@@ -2,13 +2,13 @@
 
 use std::collections::BTreeSet;
 
-use super::{finite, finite3, non_negative, positive, problem, Checked};
+use super::{exactly_the_keys, finite, finite3, non_negative, positive, problem, Checked};
 use crate::scene::file::asset_dir::AssetDir;
 use crate::scene::file::schema::{EnvironmentToml, PrototypeToml, ShapeKind};
 use crate::scene::file::spec::{EnvironmentDef, EnvironmentSource, PrototypeDef, Shape};
 
 /// Exactly one of `gltf` (an existing file) and `generator`; a positive scale, a finite
-/// offset, friction not negative.
+/// offset, friction not negative, a grid of collider cells of a sensible size.
 pub(super) fn environment(e: &EnvironmentToml, assets: &AssetDir) -> Checked<EnvironmentDef> {
     let source = match (&e.gltf, e.generator) {
         (Some(_), Some(_)) => {
@@ -29,11 +29,21 @@ pub(super) fn environment(e: &EnvironmentToml, assets: &AssetDir) -> Checked<Env
         scale: positive("environment.scale", e.scale)?,
         offset: finite3("environment.offset", e.offset)?,
         friction: non_negative("environment.friction", e.friction)?,
+        collider_cells: collider_cells(e.collider_cells)?,
     })
 }
 
+/// At least 1 and at most [`EnvironmentDef::MAX_COLLIDER_CELLS`] per axis.
+fn collider_cells(cells: u32) -> Checked<u32> {
+    let max = EnvironmentDef::MAX_COLLIDER_CELLS;
+    if !(1..=max).contains(&cells) {
+        return Err(problem("environment.collider_cells", format!("must be within [1, {max}], got {cells}")));
+    }
+    Ok(cells)
+}
+
 /// Unique non-empty names, shapes with the sizes they take, positive density, friction not
-/// negative, restitution within [0, 1].
+/// negative, restitution and colour within [0, 1].
 pub(super) fn prototypes(raw: &[PrototypeToml], assets: &AssetDir) -> Checked<Vec<PrototypeDef>> {
     let mut names = BTreeSet::new();
     let mut prototypes = Vec::with_capacity(raw.len());
@@ -51,9 +61,30 @@ pub(super) fn prototypes(raw: &[PrototypeToml], assets: &AssetDir) -> Checked<Ve
         if !(0.0..=1.0).contains(&restitution) {
             return Err(problem(at("restitution"), format!("must be within [0, 1], got {restitution}")));
         }
-        prototypes.push(PrototypeDef { name: proto.name.clone(), shape, density, friction, restitution });
+        let color = color(proto, &at)?;
+        prototypes.push(PrototypeDef {
+            name: proto.name.clone(),
+            shape,
+            density,
+            friction,
+            restitution,
+            color,
+        });
     }
     Ok(prototypes)
+}
+
+/// A colour within [0, 1], for a primitive shape only (a glTF mesh has its own materials or a
+/// palette colour).
+fn color(p: &PrototypeToml, at: &dyn Fn(&str) -> String) -> Checked<Option<[f32; 3]>> {
+    let Some(color) = p.color else { return Ok(None) };
+    if p.shape == ShapeKind::Gltf {
+        return Err(problem(at("color"), "a glTF prototype takes its colours from its file"));
+    }
+    if finite3(&at("color"), color)?.iter().any(|c| !(0.0..=1.0).contains(c)) {
+        return Err(problem(at("color"), format!("must be within [0, 1], got {color:?}")));
+    }
+    Ok(Some(color))
 }
 
 /// The shape with exactly the keys it uses: `half_extents` (all positive) for a box, a
@@ -72,15 +103,9 @@ fn shape(p: &PrototypeToml, assets: &AssetDir, at: &dyn Fn(&str) -> String) -> C
         ("half_height", p.half_height.is_some()),
         ("gltf", p.gltf.is_some()),
     ];
-    let needs = |name: &str| problem(at(name), format!("shape {:?} needs `{name}`", p.shape));
-    for (name, present) in given {
-        let needed = wanted.contains(&name);
-        if needed && !present {
-            return Err(needs(name));
-        } else if !needed && present {
-            return Err(problem(at(name), format!("shape {:?} does not use `{name}`", p.shape)));
-        }
-    }
+    let what = format!("shape {:?}", p.shape);
+    exactly_the_keys(&what, wanted, &given, at)?;
+    let needs = |name: &str| problem(at(name), format!("{what} needs `{name}`"));
     if let Some(h) = p.half_extents {
         if finite3(&at("half_extents"), h)?.iter().any(|&x| x <= 0.0) {
             return Err(problem(at("half_extents"), format!("must all be greater than 0, got {h:?}")));
