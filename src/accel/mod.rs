@@ -4,8 +4,8 @@
 //! - **prototypes**: one bottom-level structure per mesh, shared by every instance of it;
 //! - **static geometry**: world-space triangle meshes (the environment and baked islands);
 //! - **instances**: a prototype plus an affine transform, one per body kept instanced: awake
-//!   in the per-frame top level, or at rest in a resting scene rebuilt only when its set
-//!   changes ([`Accelerator::set_instance_resting`]).
+//!   in the per-frame top level, or at rest in a resting level rebuilt on a schedule
+//!   ([`Accelerator::set_instance_resting`], `resting.rs`).
 //!
 //! Changes are staged and become visible to rays at [`Accelerator::commit`]. Queries go through
 //! [`Accelerator::query`], which fails while changes are uncommitted, so no ray ever sees a
@@ -19,6 +19,7 @@ pub mod bvh;
 pub mod embree;
 mod hit;
 mod load;
+mod resting;
 mod snapshot;
 
 pub use backend::{create, Backend};
@@ -29,6 +30,7 @@ pub use snapshot::StaticSceneSnapshot;
 use glam::Affine3A;
 
 use crate::geometry::{MeshError, Ray, TriangleMesh};
+pub(crate) use resting::{RestingCounts, RestingSchedule};
 
 /// Identifies a prototype mesh registered with [`Accelerator::add_prototype`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -74,10 +76,13 @@ pub struct CommitReport {
     pub instances: usize,
     /// Triangles skipped because they were degenerate or not finite.
     pub skipped_triangles: usize,
-    /// Whether the resting scene was rebuilt (its set of instances changed).
+    /// Whether the resting level was rebuilt.
     pub resting_rebuilt: bool,
-    /// Instances in the resting scene after the commit.
+    /// Resting instances in the resting level after the commit.
     pub resting_instances: usize,
+    /// Resting instances still in the top level after the commit, waiting for the next
+    /// rebuild of the resting level.
+    pub resting_waiting: usize,
 }
 
 /// Closest-hit and any-hit queries on a committed scene. Safe to call from many threads.
@@ -134,14 +139,22 @@ pub trait Accelerator: Send + Sync {
 
     fn remove_instance(&mut self, id: InstanceId) -> Result<(), AccelError>;
 
-    /// Moves instance `id` into (`resting`) or out of the resting scene: instances the
-    /// per-frame top level no longer holds, in a scene of their own that is rebuilt only when
-    /// its set changes or a member moves or is removed (at the next
-    /// [`Accelerator::commit_static`], which reports it; visible after [`Accelerator::commit`]).
-    /// Rays see both scenes; hits on resting instances are [`HitObject::Instance`] with the
-    /// same results as awake ones.
+    /// Declares instance `id` at rest (`resting`: it will not move until woken) or awake.
+    /// Resting instances leave the per-frame top level for a resting level that the backend
+    /// rebuilds on a schedule shared by all backends (`RestingSchedule`): a new resting
+    /// instance waits in the top level until the next rebuild; a woken one leaves a ghost in
+    /// the level that rays skip. Rebuilds happen at [`Accelerator::commit_static`] (which
+    /// reports them; visible after [`Accelerator::commit`]) or [`Accelerator::compact_resting`].
+    /// Hits on resting instances are [`HitObject::Instance`] with the same results as awake
+    /// ones, wherever the instance is.
     fn set_instance_resting(&mut self, id: InstanceId, resting: bool) -> Result<(), AccelError> {
         let _ = (id, resting);
+        Err(AccelError::RestingUnsupported(self.backend()))
+    }
+
+    /// Rebuilds the resting level now, whatever the schedule says: every resting instance in
+    /// it, no ghosts. Visible after the next [`Accelerator::commit`], which reports it.
+    fn compact_resting(&mut self) -> Result<CommitReport, AccelError> {
         Err(AccelError::RestingUnsupported(self.backend()))
     }
 

@@ -4,7 +4,8 @@
 //! `net_i = n_i * (commit gain_i - trace penalty_i) - build_i - wake_i`
 //!
 //! and one frame's candidates go in together when their positive nets pay the frame's shared
-//! fixed cost (a static build's overhead, or rebuilding the resting scene).
+//! fixed cost (a static build's overhead, or the second scene's trace penalty when the
+//! resting scene is empty).
 //!
 //! - **`n_i`**: exact when the future is known ([`super::Lookahead`]: an offline render
 //!   simulates first), counting only the frames that will be rendered; otherwise the mean
@@ -20,9 +21,12 @@
 //!     the bodies;
 //!   - resting: a second scene per ray, a fixed fraction of the trace while it is non-empty.
 //! - **build**: a least-squares line over recent builds, `a + b * triangles` (baked) or
-//!   `c + d * instances` (rebuilding the resting scene);
-//! - **wake**: resting islands that wake while rendering force a rebuild of the resting
-//!   scene then, unless one is due that frame anyway; baked islands leave by a detach.
+//!   `c + d * instances` (rebuilding the resting level; an island pays its instances' share
+//!   `d * bodies`, since the backends rebuild that level on their own schedule, when the
+//!   waiting islands have cost a rebuild: `crate::accel::RestingSchedule`);
+//! - **wake**: nothing at the wake itself: baked islands leave by a detach, resting ones leave
+//!   ghosts that rays skip until the next scheduled rebuild. (Before the schedule, every
+//!   resting wake rebuilt the resting scene, and the model priced that rebuild here.)
 //!
 //! Before there are enough samples the model uses priors (below), which the measurements
 //! replace as soon as they exist.
@@ -184,11 +188,6 @@ pub struct Candidate {
     pub age: u32,
     /// Rendered frames it will still sleep, this one included (lookahead); `None`: estimate.
     pub remaining: Option<u32>,
-    /// Whether it wakes while the run still renders (lookahead); `None`: estimate.
-    pub wakes_while_rendering: Option<bool>,
-    /// Whether a rebuild of the resting scene is due at its wake frame anyway (another
-    /// resting island wakes then).
-    pub wake_rebuild_due: bool,
 }
 
 /// The scene the candidates would join.
@@ -199,8 +198,6 @@ pub struct Situation {
     pub present_bodies: usize,
     /// Instances in the resting scene now.
     pub resting_instances: usize,
-    /// Whether the resting scene is rebuilt this frame anyway (a resting island woke).
-    pub rest_rebuild_due: bool,
     /// Rendered frames left in the run, this one included.
     pub frames_left: f64,
 }
@@ -235,11 +232,7 @@ impl Outlook {
                 let share = c.bodies as f64 / sit.present_bodies.max(1) as f64;
                 (self.build_line.1 * c.triangles as f64, self.penalty.baked * self.trace_ms * share, 0.0)
             }
-            IntegrationForm::Resting => {
-                let wakes = c.wakes_while_rendering.unwrap_or(frames < sit.frames_left);
-                let wake_ms = if wakes && !c.wake_rebuild_due { self.rest_rebuild_ms(c.bodies) } else { 0.0 };
-                (self.rest_line.1 * c.bodies as f64, 0.0, wake_ms)
-            }
+            IntegrationForm::Resting => (self.rest_line.1 * c.bodies as f64, 0.0, 0.0),
         };
         CostEstimate {
             build_ms,
@@ -251,29 +244,19 @@ impl Outlook {
     }
 
     /// The frame's shared cost of integrating `chosen` (estimates of the candidates that net
-    /// a saving): a static build's overhead, or rebuilding the resting scene now (unless due
-    /// anyway) plus, when it was empty, the second scene's trace penalty while it stays in use.
+    /// a saving): a static build's overhead, or, when the resting scene is empty, the second
+    /// scene's trace penalty while it stays in use (its rebuilds are scheduled by the backend
+    /// and priced per island).
     pub fn fixed_ms(&self, chosen: &[CostEstimate]) -> f64 {
         let sit = &self.situation;
         match sit.form {
             IntegrationForm::Baked => self.build_line.0,
-            IntegrationForm::Resting => {
-                let rebuild = if sit.rest_rebuild_due { 0.0 } else { self.rest_rebuild_ms(0) };
+            IntegrationForm::Resting if sit.resting_instances == 0 => {
                 let frames = chosen.iter().map(|e| e.expected_frames).fold(0.0, f64::max);
-                let penalty = if sit.resting_instances == 0 {
-                    self.penalty.resting * self.trace_ms * frames
-                } else {
-                    0.0
-                };
-                rebuild + penalty
+                self.penalty.resting * self.trace_ms * frames
             }
+            IntegrationForm::Resting => 0.0,
         }
-    }
-
-    /// Rebuilding the resting scene with `extra` more instances than it has now.
-    fn rest_rebuild_ms(&self, extra: usize) -> f64 {
-        let (c, d) = self.rest_line;
-        c + d * (self.situation.resting_instances + extra) as f64
     }
 
     /// Expected further rendered frames of sleep for an island asleep for `age` frames: the
@@ -509,7 +492,7 @@ mod tests {
     }
 
     fn situation(form: IntegrationForm, frames_left: f64) -> Situation {
-        Situation { form, present_bodies: 1000, resting_instances: 0, rest_rebuild_due: false, frames_left }
+        Situation { form, present_bodies: 1000, resting_instances: 0, frames_left }
     }
 
     #[test]
@@ -529,30 +512,22 @@ mod tests {
     }
 
     #[test]
-    fn lookahead_replaces_the_estimate_and_prices_resting_wakes() {
+    fn lookahead_replaces_the_estimate_and_resting_wakes_cost_nothing() {
         let mut m = CostModel::new();
         for k in 0..8 {
             m.record_frame(1000 + 100 * k, Some(1.0 + 0.1 * k as f64), 20.0);
         }
         let sit = situation(IntegrationForm::Resting, 100.0);
         let outlook = m.outlook(sit, std::iter::empty());
-        let c = Candidate {
-            bodies: 100,
-            triangles: 1200,
-            age: 0,
-            remaining: Some(50),
-            wakes_while_rendering: Some(true),
-            wake_rebuild_due: false,
-        };
+        let c = Candidate { bodies: 100, triangles: 1200, age: 0, remaining: Some(50) };
         let e = outlook.estimate(&c);
         assert!(e.exact && e.expected_frames == 50.0);
-        assert!(e.wake_ms > 0.0, "a wake while rendering rebuilds the resting scene");
-        let due = outlook.estimate(&Candidate { wake_rebuild_due: true, ..c });
-        assert_eq!(due.wake_ms, 0.0, "unless a rebuild is due that frame anyway");
-        let never = outlook.estimate(&Candidate { wakes_while_rendering: Some(false), ..c });
-        assert_eq!(never.wake_ms, 0.0);
+        assert_eq!(e.wake_ms, 0.0, "a woken resting island leaves ghosts, no rebuild");
+        assert!(e.build_ms > 0.0, "it pays its share of the scheduled rebuild");
         // The second scene's penalty is a shared cost while the resting scene is empty.
-        assert!(outlook.fixed_ms(&[e]) > outlook.rest_rebuild_ms(0));
+        assert!(outlook.fixed_ms(&[e.clone()]) > 0.0);
+        let used = Situation { resting_instances: 500, ..sit };
+        assert_eq!(m.outlook(used, std::iter::empty()).fixed_ms(&[e]), 0.0);
     }
 
     #[test]

@@ -5,15 +5,19 @@ mod awake_bounds;
 mod query;
 
 use std::sync::Arc;
+use std::time::Instant;
 
 use glam::{Affine3A, Mat3};
 use rayon::prelude::*;
 
-use super::{BuildQuality, Device, FrozenScene, InstanceGeometry, Scene, SceneFlags, TriangleGeometry};
-use crate::accel::{
-    AccelError, Accelerator, Backend, CommitReport, InstanceId, PrototypeId, SceneQuery, StaticId,
+use super::{
+    BuildQuality, Device, FrozenScene, GeometrySet, InstanceGeometry, Scene, SceneFlags, TriangleGeometry,
 };
-use crate::geometry::TriangleMesh;
+use crate::accel::{
+    AccelError, Accelerator, Backend, CommitReport, InstanceId, PrototypeId, RestingCounts, RestingSchedule,
+    SceneQuery, StaticId,
+};
+use crate::geometry::{Aabb, TriangleMesh};
 
 use awake_bounds::AwakeBounds;
 
@@ -22,10 +26,19 @@ use awake_bounds::AwakeBounds;
 const STATIC_SLOT: u32 = 0;
 
 struct InstanceSlot {
+    prototype: u32,
+    transform: Affine3A,
     /// Object-to-world normal transform: Embree reports instanced normals in object space.
     normal_matrix: Mat3,
-    /// In the resting scene rather than the top level.
+    /// Declared at rest ([`Accelerator::set_instance_resting`]).
     resting: bool,
+    /// In the resting scene (live, not a ghost) rather than the top level.
+    in_level: bool,
+}
+
+/// Elapsed milliseconds since `t`.
+fn ms_since(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64() * 1e3
 }
 
 /// Build qualities of the backend's three kinds of scene, with named presets.
@@ -78,18 +91,29 @@ impl Default for EmbreeBuildParams {
 /// - The top level is rebuilt at HIGH quality at each commit that changed an instance; it
 ///   holds only instances.
 /// - Resting instances (integrated islands kept as instances) live in a second instance
-///   scene, rebuilt only when its set changes. While it holds any, the static scene's
-///   instance moves there too, so the top level keeps only the awake bodies: a ray traces the
-///   resting scene (environment and resting bodies, like one top level without the awake
-///   ones) and then the small top level up to the first hit. With no resting instance every
-///   ray traces the top level alone, as before.
+///   scene, rebuilt on the [`RestingSchedule`]: a new resting instance waits in the top level
+///   until then, a woken one leaves a ghost there that rays skip (an argument filter reading
+///   [`GeometrySet`]) and rejoins the top level as a new instance geometry. While the resting
+///   scene holds any, the static scene's instance moves there too, so the top level keeps only
+///   the awake (and waiting) bodies: a ray traces the resting scene (environment and resting
+///   bodies, like one top level without the awake ones) and then the small top level up to the
+///   first hit. With no resting instance every ray traces the top level alone, as before.
 pub struct EmbreeAccel {
     device: Device,
     params: EmbreeBuildParams,
     prototypes: Vec<Arc<FrozenScene>>,
+    /// Object-space bounds of each prototype.
+    prototype_bounds: Vec<Aabb>,
     top: Scene,
     resting: Scene,
-    resting_count: usize,
+    /// Whether the static scene's instance is in the resting scene (it is from the rebuild
+    /// that first puts instances there to the one that leaves none).
+    static_in_resting: bool,
+    /// Live, ghost and waiting resting instances.
+    level: RestingCounts,
+    /// Geometry ids (instance id + 1) of the ghosts in the resting scene.
+    ghosts: GeometrySet,
+    schedule: RestingSchedule,
     /// Bounds of the committed top level while the resting scene is in use: rays that miss
     /// them skip the top level.
     awake_bounds: AwakeBounds,
@@ -98,6 +122,8 @@ pub struct EmbreeAccel {
     static_triangles: Vec<Option<usize>>,
     free_statics: Vec<u32>,
     pending: CommitReport,
+    /// Ghosts left or dropped since the last commit: queries wait for it.
+    ghosts_staged: bool,
 }
 
 impl EmbreeAccel {
@@ -117,15 +143,20 @@ impl EmbreeAccel {
             device,
             params,
             prototypes: Vec::new(),
+            prototype_bounds: Vec::new(),
             top,
             resting,
-            resting_count: 0,
+            static_in_resting: false,
+            level: RestingCounts::default(),
+            ghosts: GeometrySet::default(),
+            schedule: RestingSchedule::default(),
             awake_bounds: AwakeBounds::NONE,
             instances: Vec::new(),
             free_instances: Vec::new(),
             static_triangles: Vec::new(),
             free_statics: Vec::new(),
             pending: CommitReport::default(),
+            ghosts_staged: false,
         })
     }
 
@@ -136,7 +167,7 @@ impl EmbreeAccel {
     /// The scene holding the static scene's instance: the resting scene while it holds
     /// instances, else the top level.
     fn static_holder(&mut self) -> &mut Scene {
-        if self.resting_count > 0 {
+        if self.static_in_resting {
             &mut self.resting
         } else {
             &mut self.top
@@ -148,11 +179,6 @@ impl EmbreeAccel {
         Ok(inst.child_mut().expect("the static slot owns its scene"))
     }
 
-    /// The scene holding instance `id`.
-    fn holder(&mut self, id: InstanceId) -> Result<&mut Scene, AccelError> {
-        Ok(if self.slot(id)?.resting { &mut self.resting } else { &mut self.top })
-    }
-
     /// Moves the static scene's instance into the resting scene (`true`) or back to the top
     /// level.
     fn move_static(&mut self, to_resting: bool) -> Result<(), AccelError> {
@@ -160,6 +186,7 @@ impl EmbreeAccel {
             if to_resting { (&mut self.top, &mut self.resting) } else { (&mut self.resting, &mut self.top) };
         let geometry = from.detach(STATIC_SLOT)?;
         to.attach_by_id(geometry, STATIC_SLOT)?;
+        self.static_in_resting = to_resting;
         Ok(())
     }
 
@@ -203,8 +230,11 @@ impl Accelerator for EmbreeAccel {
     fn add_prototype(&mut self, mesh: &TriangleMesh) -> Result<PrototypeId, AccelError> {
         let (geometry, skipped) = self.triangle_geometry(mesh, self.params.prototype)?;
         let mut scene = Scene::new(&self.device, SceneFlags::default(), self.params.prototype)?;
-        scene.attach(geometry)?;
-        self.prototypes.push(scene.freeze()?);
+        // Hits inside ghosts of the resting scene are rejected by an argument filter.
+        scene.attach(geometry.with_argument_filter()?)?;
+        let frozen = scene.freeze()?;
+        self.prototype_bounds.push(frozen.view().bounds());
+        self.prototypes.push(frozen);
         self.pending.built_triangles += mesh.triangle_count();
         self.pending.skipped_triangles += skipped;
         Ok(PrototypeId(self.prototypes.len() as u32 - 1))
@@ -239,91 +269,118 @@ impl Accelerator for EmbreeAccel {
         prototype: PrototypeId,
         transform: Affine3A,
     ) -> Result<InstanceId, AccelError> {
-        let proto = self
-            .prototypes
-            .get(prototype.0 as usize)
-            .ok_or(AccelError::UnknownId { kind: "prototype", id: prototype.0 })?
-            .clone();
         // The id is taken only once the instance is attached: a bad transform must not lose
         // a free id.
         let id = self.free_instances.last().copied().unwrap_or(self.instances.len() as u32);
         let normal_matrix = checked_transform(id, &transform)?;
-        let geometry = InstanceGeometry::new(&self.device, &proto, &transform)?;
+        let geometry = self.instance_geometry(prototype, &transform)?;
         self.top.attach_by_id(geometry, id + 1)?;
         if id as usize == self.instances.len() {
             self.instances.push(None);
         } else {
             self.free_instances.pop();
         }
-        self.instances[id as usize] = Some(InstanceSlot { normal_matrix, resting: false });
+        self.instances[id as usize] = Some(InstanceSlot {
+            prototype: prototype.0,
+            transform,
+            normal_matrix,
+            resting: false,
+            in_level: false,
+        });
         Ok(InstanceId(id))
     }
 
+    /// A member of the resting scene that moves leaves a ghost there and moves in the top level.
     fn set_instance_transform(&mut self, id: InstanceId, transform: Affine3A) -> Result<(), AccelError> {
         let normal_matrix = checked_transform(id.0, &transform)?;
-        self.holder(id)?.instance_mut(id.0 + 1)?.set_transform(&transform)?;
+        if self.slot(id)?.in_level {
+            // Still declared resting: it waits in the top level for the next rebuild.
+            self.leave_ghost(id)?;
+            self.level.waiting += 1;
+        }
+        self.top.instance_mut(id.0 + 1)?.set_transform(&transform)?;
         if let Some(slot) = self.instances[id.0 as usize].as_mut() {
             slot.normal_matrix = normal_matrix;
+            slot.transform = transform;
         }
         Ok(())
     }
 
     fn remove_instance(&mut self, id: InstanceId) -> Result<(), AccelError> {
-        if self.slot(id)?.resting {
-            self.set_instance_resting(id, false)?;
+        let slot = self.slot(id)?;
+        let (resting, in_level) = (slot.resting, slot.in_level);
+        if in_level {
+            self.ghost(id);
+        } else {
+            self.top.detach(id.0 + 1)?;
+            if resting {
+                self.level.waiting -= 1;
+            }
         }
-        self.top.detach(id.0 + 1)?;
         self.instances[id.0 as usize] = None;
         self.free_instances.push(id.0);
         Ok(())
     }
 
     fn set_instance_resting(&mut self, id: InstanceId, resting: bool) -> Result<(), AccelError> {
-        if self.slot(id)?.resting == resting {
+        let slot = self.slot(id)?;
+        if slot.resting == resting {
             return Ok(());
         }
-        if resting && self.resting_count == 0 {
-            self.move_static(true)?;
+        if resting {
+            self.level.waiting += 1;
+        } else if slot.in_level {
+            self.leave_ghost(id)?;
+        } else {
+            self.level.waiting -= 1;
         }
-        let (from, to) =
-            if resting { (&mut self.top, &mut self.resting) } else { (&mut self.resting, &mut self.top) };
-        let geometry = from.detach(id.0 + 1)?;
-        to.attach_by_id(geometry, id.0 + 1)?;
         if let Some(slot) = self.instances[id.0 as usize].as_mut() {
             slot.resting = resting;
-        }
-        if resting {
-            self.resting_count += 1;
-        } else {
-            self.resting_count -= 1;
-            if self.resting_count == 0 {
-                self.move_static(false)?;
-            }
         }
         Ok(())
     }
 
     fn commit(&mut self) -> Result<CommitReport, AccelError> {
-        let resting = self.commit_resting()?;
+        let resting = self.commit_resting(false)?;
+        let top_changed = self.top.is_dirty();
+        let t = Instant::now();
         self.top.commit()?;
-        self.awake_bounds = match self.top.view() {
-            Some(top) if self.resting_count > 0 && self.top.geometry_count() > 0 => {
-                AwakeBounds::new(top.bounds())
-            }
-            _ => AwakeBounds::NONE,
+        let instances = self.top.geometry_count() - usize::from(!self.static_in_resting);
+        if top_changed {
+            self.schedule.record_top_build(instances, self.level.waiting, ms_since(t));
+        }
+        self.awake_bounds = if self.static_in_resting && self.top.geometry_count() > 0 {
+            let boxes: Vec<Aabb> = self
+                .top
+                .geometry_ids()
+                .filter_map(|g| self.instances.get(g.checked_sub(1)? as usize)?.as_ref())
+                .map(|s| self.prototype_bounds[s.prototype as usize].transformed(&s.transform))
+                .collect();
+            AwakeBounds::around(&boxes)
+        } else {
+            AwakeBounds::NONE
         };
         let mut report = std::mem::take(&mut self.pending);
-        report.instances = self.instances.iter().flatten().filter(|s| !s.resting).count();
+        report.instances = instances;
         report.resting_rebuilt |= resting.resting_rebuilt;
-        report.resting_instances = self.resting_count;
+        report.resting_instances = self.level.live;
+        report.resting_waiting = self.level.waiting;
+        self.ghosts_staged = false;
         Ok(report)
     }
 
     fn commit_static(&mut self) -> Result<CommitReport, AccelError> {
         // Committing the owned child scene now leaves its holder dirty (the instance changed),
         // so nothing is visible before `commit`; the report waits for it too.
-        self.static_holder().instance_mut(STATIC_SLOT)?.commit_child()?;
-        let report = self.commit_resting()?;
+        self.static_holder().commit_child_of(STATIC_SLOT)?;
+        let report = self.commit_resting(false)?;
+        self.pending.resting_rebuilt |= report.resting_rebuilt;
+        Ok(report)
+    }
+
+    fn compact_resting(&mut self) -> Result<CommitReport, AccelError> {
+        self.static_holder().commit_child_of(STATIC_SLOT)?;
+        let report = self.commit_resting(true)?;
         self.pending.resting_rebuilt |= report.resting_rebuilt;
         Ok(report)
     }
@@ -336,8 +393,12 @@ impl Accelerator for EmbreeAccel {
 
     fn query(&self) -> Result<&dyn SceneQuery, AccelError> {
         // A resting scene rebuilt by `commit_static` is committed in Embree's sense but not
-        // published before `commit`.
-        if self.top.is_dirty() || self.resting.is_dirty() || self.pending.resting_rebuilt {
+        // published before `commit`; nor are ghosts left since.
+        if self.top.is_dirty()
+            || self.resting.is_dirty()
+            || self.pending.resting_rebuilt
+            || self.ghosts_staged
+        {
             Err(AccelError::NotCommitted)
         } else {
             Ok(self)
@@ -346,17 +407,82 @@ impl Accelerator for EmbreeAccel {
 }
 
 impl EmbreeAccel {
-    /// Rebuilds the resting scene if its set changed (the static scene's instance in it
-    /// committed first).
-    fn commit_resting(&mut self) -> Result<CommitReport, AccelError> {
-        if !self.resting.is_dirty() {
-            return Ok(CommitReport { resting_instances: self.resting_count, ..CommitReport::default() });
+    /// A new instance geometry of `prototype` at `transform`.
+    fn instance_geometry(
+        &self,
+        prototype: PrototypeId,
+        transform: &Affine3A,
+    ) -> Result<InstanceGeometry, AccelError> {
+        let proto = self
+            .prototypes
+            .get(prototype.0 as usize)
+            .ok_or(AccelError::UnknownId { kind: "prototype", id: prototype.0 })?;
+        Ok(InstanceGeometry::new(&self.device, proto, transform)?)
+    }
+
+    /// Member `id` of the resting scene becomes a ghost there.
+    fn ghost(&mut self, id: InstanceId) {
+        self.ghosts.insert(id.0 + 1);
+        self.ghosts_staged = true;
+        self.level.live -= 1;
+        self.level.ghosts += 1;
+        if let Some(slot) = self.instances[id.0 as usize].as_mut() {
+            slot.in_level = false;
         }
-        self.resting.commit()?;
+    }
+
+    /// Member `id` of the resting scene becomes a ghost there and joins the top level as a new
+    /// instance geometry at its current transform.
+    fn leave_ghost(&mut self, id: InstanceId) -> Result<(), AccelError> {
+        let slot = self.slot(id)?;
+        let geometry = self.instance_geometry(PrototypeId(slot.prototype), &slot.transform)?;
+        self.ghost(id);
+        self.top.attach_by_id(geometry, id.0 + 1)?;
+        Ok(())
+    }
+
+    /// Rebuilds the resting scene when the schedule (or `force`) says so, or when it must be
+    /// committed anyway (the static scene's instance in it changed).
+    fn commit_resting(&mut self, force: bool) -> Result<CommitReport, AccelError> {
+        let due = force || self.schedule.rebuild_due(self.level);
+        if due {
+            self.regroup_resting()?;
+        }
+        let rebuilt = self.resting.is_dirty();
+        if rebuilt {
+            let t = Instant::now();
+            self.resting.commit()?;
+            if due {
+                self.schedule.record_rebuild(self.level.live, ms_since(t));
+            }
+        }
         Ok(CommitReport {
-            resting_rebuilt: true,
-            resting_instances: self.resting_count,
+            resting_rebuilt: rebuilt,
+            resting_instances: self.level.live,
+            resting_waiting: self.level.waiting,
             ..CommitReport::default()
         })
+    }
+
+    /// Drops the ghosts from the resting scene and moves every waiting instance into it (the
+    /// static scene's instance follows: there while any instance is); the rebuild is the
+    /// caller's commit.
+    fn regroup_resting(&mut self) -> Result<(), AccelError> {
+        for g in self.ghosts.iter() {
+            self.resting.detach(g)?;
+        }
+        self.ghosts.clear();
+        self.ghosts_staged = true;
+        for (i, slot) in self.instances.iter_mut().enumerate() {
+            let Some(slot) = slot.as_mut().filter(|s| s.resting && !s.in_level) else { continue };
+            let geometry = self.top.detach(i as u32 + 1)?;
+            self.resting.attach_by_id(geometry, i as u32 + 1)?;
+            slot.in_level = true;
+        }
+        self.level = RestingCounts { live: self.level.live + self.level.waiting, ghosts: 0, waiting: 0 };
+        if (self.level.live > 0) != self.static_in_resting {
+            self.move_static(self.level.live > 0)?;
+        }
+        Ok(())
     }
 }

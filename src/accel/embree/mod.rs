@@ -12,6 +12,7 @@
 mod accel;
 mod device;
 mod error;
+mod filter;
 mod geometry;
 mod packet;
 mod quality;
@@ -20,6 +21,7 @@ mod scene;
 pub use accel::{EmbreeAccel, EmbreeBuildParams};
 pub use device::{Device, Version};
 pub use error::EmbreeError;
+pub use filter::GeometrySet;
 pub use geometry::TriangleGeometry;
 pub use packet::Coherence;
 pub use quality::BuildQuality;

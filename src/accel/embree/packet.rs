@@ -6,6 +6,7 @@ use std::array;
 
 use embree4_sys as sys;
 
+use super::filter::{intersect_args, occluded_args};
 use super::scene::{EmbreeHit, SceneView};
 use crate::geometry::Ray;
 
@@ -43,28 +44,6 @@ fn valid_mask<const N: usize>(rays: &[Option<Ray>; N]) -> Aligned<[i32; N]> {
     Aligned(array::from_fn(|i| if rays[i].is_some() { -1 } else { 0 }))
 }
 
-/// rtcInitIntersectArguments (an inline function in the headers, so not in the bindings).
-fn intersect_args(coherence: Coherence) -> sys::RTCIntersectArguments {
-    sys::RTCIntersectArguments {
-        flags: coherence.flags(),
-        feature_mask: sys::RTCFeatureFlags::RTC_FEATURE_FLAG_ALL,
-        context: std::ptr::null_mut(),
-        filter: None,
-        intersect: None,
-    }
-}
-
-/// rtcInitOccludedArguments.
-fn occluded_args(coherence: Coherence) -> sys::RTCOccludedArguments {
-    sys::RTCOccludedArguments {
-        flags: coherence.flags(),
-        feature_mask: sys::RTCFeatureFlags::RTC_FEATURE_FLAG_ALL,
-        context: std::ptr::null_mut(),
-        filter: None,
-        occluded: None,
-    }
-}
-
 /// Writes the active lanes' rays into an SoA ray packet; inactive lanes keep the defaults
 /// (Embree does not read them).
 macro_rules! fill_rays {
@@ -98,11 +77,16 @@ macro_rules! packet_queries {
                 packet.0.hit.geomID = [sys::RTC_INVALID_GEOMETRY_ID; $n];
                 packet.0.hit.instID =
                     [[sys::RTC_INVALID_GEOMETRY_ID; $n]; sys::RTC_MAX_INSTANCE_LEVEL_COUNT as usize];
-                let mut args = intersect_args(coherence);
+                let mut args = intersect_args(coherence.flags());
+                let mut context = self.skip_context();
+                if let Some(c) = context.as_mut() {
+                    c.intersect_args(&mut args);
+                }
                 // SAFETY: the packet type is generated from the linked library's headers, so
                 // the library writes within it; it and the mask are 64-byte aligned (`Aligned`),
                 // beyond the required alignment for this width; the scene is committed and alive
-                // for the borrow; `args` is initialised as rtcInitIntersectArguments does.
+                // for the borrow; `args` is initialised as rtcInitIntersectArguments does, and
+                // its context, if any, lives until the call returns.
                 unsafe { sys::$rtc_intersect(valid.0.as_ptr(), self.raw, &mut packet.0, &mut args) };
                 let (r, h) = (&packet.0.ray, &packet.0.hit);
                 array::from_fn(|i| {
@@ -125,7 +109,11 @@ macro_rules! packet_queries {
                 let valid = valid_mask(rays);
                 let mut packet = Aligned(<$ray>::default());
                 fill_rays!(packet.0, rays);
-                let mut args = occluded_args(coherence);
+                let mut args = occluded_args(coherence.flags());
+                let mut context = self.skip_context();
+                if let Some(c) = context.as_mut() {
+                    c.occluded_args(&mut args);
+                }
                 // SAFETY: as in the intersect query; rtcOccluded writes only `tfar` of active
                 // lanes.
                 unsafe { sys::$rtc_occluded(valid.0.as_ptr(), self.raw, &mut packet.0, &mut args) };

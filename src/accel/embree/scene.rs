@@ -13,6 +13,7 @@ use glam::Affine3A;
 
 use super::device::Device;
 use super::error::EmbreeError;
+use super::filter::{self, GeometrySet, SkipContext};
 use super::geometry::TriangleGeometry;
 use super::quality::BuildQuality;
 
@@ -202,8 +203,27 @@ impl Scene {
         }
     }
 
+    /// Commits the owned child scene of instance `id` if it has staged changes; only then is
+    /// this scene marked for recommit (an unchanged child leaves it as it is).
+    pub fn commit_child_of(&mut self, id: u32) -> Result<bool, EmbreeError> {
+        match self.geometries.get_mut(&id) {
+            Some(Geometry::Instance(inst)) => {
+                let changed = inst.commit_child()?;
+                self.dirty |= changed;
+                Ok(changed)
+            }
+            Some(Geometry::Triangles(_)) => Err(EmbreeError::NotAnInstance { id }),
+            None => Err(EmbreeError::NotAttached(id)),
+        }
+    }
+
     pub fn geometry(&self, id: u32) -> Option<&Geometry> {
         self.geometries.get(&id)
+    }
+
+    /// Ids of the attached geometries, ascending.
+    pub fn geometry_ids(&self) -> impl Iterator<Item = u32> + '_ {
+        self.geometries.keys().copied()
     }
 
     pub fn geometry_count(&self) -> usize {
@@ -232,7 +252,7 @@ impl Scene {
 
     /// The scene for ray queries, or `None` while changes are uncommitted.
     pub fn view(&self) -> Option<SceneView<'_>> {
-        (!self.dirty).then_some(SceneView { raw: self.raw, _scene: PhantomData })
+        (!self.dirty).then_some(SceneView { raw: self.raw, skip: None, _scene: PhantomData })
     }
 
     /// Commits and makes the scene immutable, for sharing as an instancing prototype.
@@ -381,6 +401,8 @@ impl FrozenScene {
 #[derive(Clone, Copy)]
 pub struct SceneView<'a> {
     pub(super) raw: sys::RTCScene,
+    /// Instances (by geometry id in this scene) whose hits rays reject.
+    pub(super) skip: Option<&'a GeometrySet>,
     _scene: PhantomData<&'a Scene>,
 }
 
@@ -407,7 +429,18 @@ fn embree_ray(org: [f32; 3], dir: [f32; 3], tnear: f32, tfar: f32) -> sys::RTCRa
     }
 }
 
-impl SceneView<'_> {
+impl<'a> SceneView<'a> {
+    /// The same scene, with every hit inside the instances in `skip` (geometry ids in this
+    /// scene) rejected; an empty set is no filter at all.
+    pub fn skipping(self, skip: &'a GeometrySet) -> SceneView<'a> {
+        SceneView { skip: (!skip.is_empty()).then_some(skip), ..self }
+    }
+
+    /// The query context that carries the skipped set, if any.
+    pub(super) fn skip_context(&self) -> Option<SkipContext<'a>> {
+        self.skip.map(SkipContext::new)
+    }
+
     /// Closest hit in `[tnear, tfar]` (rtcIntersect1).
     pub fn intersect1(&self, org: [f32; 3], dir: [f32; 3], tnear: f32, tfar: f32) -> Option<EmbreeHit> {
         let mut rayhit = sys::RTCRayHit {
@@ -418,10 +451,21 @@ impl SceneView<'_> {
                 ..Default::default()
             },
         };
+        let mut context = self.skip_context();
+        let mut args = filter::intersect_args(sys::RTCRayQueryFlags::RTC_RAY_QUERY_FLAG_INCOHERENT);
+        let args_ptr = match context.as_mut() {
+            Some(c) => {
+                c.intersect_args(&mut args);
+                &mut args as *mut _
+            }
+            None => std::ptr::null_mut(),
+        };
         // SAFETY: `rayhit` is an `RTCRayHit` laid out by bindings generated from the linked
         // library's headers (so the library writes within it); the scene is committed and
-        // alive for the borrow; null arguments select the defaults.
-        unsafe { sys::rtcIntersect1(self.raw, &mut rayhit, std::ptr::null_mut()) };
+        // alive for the borrow; null arguments select the defaults, non-null ones are
+        // initialised as rtcInitIntersectArguments does and point to `context`, which lives
+        // until the call returns.
+        unsafe { sys::rtcIntersect1(self.raw, &mut rayhit, args_ptr) };
         let h = &rayhit.hit;
         (h.geomID != sys::RTC_INVALID_GEOMETRY_ID).then(|| EmbreeHit {
             t: rayhit.ray.tfar,
@@ -437,8 +481,17 @@ impl SceneView<'_> {
     /// Whether anything lies in `[tnear, tfar]` (rtcOccluded1).
     pub fn occluded1(&self, org: [f32; 3], dir: [f32; 3], tnear: f32, tfar: f32) -> bool {
         let mut ray = embree_ray(org, dir, tnear, tfar);
+        let mut context = self.skip_context();
+        let mut args = filter::occluded_args(sys::RTCRayQueryFlags::RTC_RAY_QUERY_FLAG_INCOHERENT);
+        let args_ptr = match context.as_mut() {
+            Some(c) => {
+                c.occluded_args(&mut args);
+                &mut args as *mut _
+            }
+            None => std::ptr::null_mut(),
+        };
         // SAFETY: as in `intersect1`; rtcOccluded1 writes only `ray.tfar`.
-        unsafe { sys::rtcOccluded1(self.raw, &mut ray, std::ptr::null_mut()) };
+        unsafe { sys::rtcOccluded1(self.raw, &mut ray, args_ptr) };
         ray.tfar == f32::NEG_INFINITY
     }
 

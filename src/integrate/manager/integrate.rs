@@ -33,8 +33,7 @@ impl SceneManager {
         if self.options.policy == IntegrationPolicy::Never {
             return Ok(false);
         }
-        let outlook =
-            (self.options.policy == IntegrationPolicy::Auto).then(|| self.outlook(frame, stats.rest_rebuilt));
+        let outlook = (self.options.policy == IntegrationPolicy::Auto).then(|| self.outlook(frame));
         let considered = self.consider(frame, outlook.as_ref());
         let accept = match &outlook {
             Some(outlook) => {
@@ -79,10 +78,6 @@ impl SceneManager {
     /// The sleeping islands not integrated yet, with the cost model's estimate under `auto`.
     fn consider(&self, frame: &ReplayFrame<'_>, outlook: Option<&Outlook>) -> Vec<Considered> {
         let lookahead = self.options.lookahead.as_deref();
-        let wakes_due: std::collections::BTreeSet<u32> = match lookahead {
-            Some(l) => self.resting.keys().filter_map(|i| l.reactivation_frame(*i)).collect(),
-            None => Default::default(),
-        };
         let mut considered = Vec::new();
         for (island, s) in &self.sleeping {
             if self.is_integrated(island) {
@@ -99,10 +94,6 @@ impl SceneManager {
                 triangles,
                 age: self.rendered - s.slept_at,
                 remaining: lookahead.map(|l| l.remaining_sleep(*island, frame.index)),
-                wakes_while_rendering: lookahead.map(|l| l.wakes_while_rendering(*island, frame.index)),
-                wake_rebuild_due: lookahead
-                    .and_then(|l| l.reactivation_frame(*island))
-                    .is_some_and(|w| wakes_due.contains(&w)),
             };
             let estimate = outlook.map(|o| o.estimate(&candidate));
             considered.push(Considered { island: *island, candidate, estimate });
@@ -111,7 +102,7 @@ impl SceneManager {
     }
 
     /// The cost model's outlook for this frame.
-    fn outlook(&self, frame: &ReplayFrame<'_>, rest_rebuild_due: bool) -> Outlook {
+    fn outlook(&self, frame: &ReplayFrame<'_>) -> Outlook {
         let frames_left = match (&self.options.lookahead, self.options.planned_frames) {
             (Some(l), _) => f64::from(l.frames_left(frame.index)),
             (None, Some(n)) => f64::from(n.saturating_sub(self.rendered)),
@@ -121,7 +112,6 @@ impl SceneManager {
             form: self.options.form,
             present_bodies: frame.present_bodies().count(),
             resting_instances: self.resting.values().map(Vec::len).sum(),
-            rest_rebuild_due,
             frames_left,
         };
         self.cost.outlook(situation, self.sleeping.values().map(|s| f64::from(self.rendered - s.slept_at)))

@@ -1,7 +1,8 @@
 //! The two-level scene and [`BvhAccel`], the pure-Rust [`Accelerator`]: one shared bottom-level
 //! BVH per prototype, a top-level BVH over awake instances (rebuilt at commit when one changed,
-//! it is small), a resting level over instances at rest (rebuilt only when its set or one of
-//! its members changes), and the persistent static BVH beside them. Changes are staged and
+//! it is small), a resting level over instances at rest (rebuilt on the [`RestingSchedule`];
+//! between rebuilds new resting instances wait in the top level and members that wake or move
+//! leave ghosts that rays skip), and the persistent static BVH beside them. Changes are staged and
 //! published at commit as a new [`BvhScene`], which owns everything rays need (Arcs and a
 //! snapshot).
 
@@ -10,6 +11,7 @@ mod query;
 pub(crate) use query::{BvhScene, Top};
 
 use std::sync::Arc;
+use std::time::Instant;
 
 use glam::Affine3A;
 
@@ -19,8 +21,8 @@ use super::triangle::{extract, Tri};
 use super::BuildParams;
 use crate::accel::snapshot::SnapshotPayload;
 use crate::accel::{
-    AccelError, Accelerator, Backend, CommitReport, InstanceId, PrototypeId, SceneQuery, StaticId,
-    StaticSceneSnapshot,
+    AccelError, Accelerator, Backend, CommitReport, InstanceId, PrototypeId, RestingCounts, RestingSchedule,
+    SceneQuery, StaticId, StaticSceneSnapshot,
 };
 use crate::geometry::TriangleMesh;
 
@@ -29,8 +31,10 @@ struct Instance {
     proto: u32,
     xf: Affine3A,
     inv: Affine3A,
-    /// In the resting level rather than the top level.
+    /// Declared at rest ([`Accelerator::set_instance_resting`]).
     resting: bool,
+    /// In the resting level (live, not a ghost) rather than the top level.
+    in_level: bool,
 }
 
 /// The inverse of `xf` when `xf` and its inverse are finite, it is invertible, and it keeps
@@ -58,9 +62,9 @@ pub struct BvhAccel {
     staged_removes: Vec<StaticId>,
     /// The top level (awake instances) must be rebuilt at the next commit.
     awake_changed: bool,
-    /// The resting level must be rebuilt at the next static build.
-    resting_changed: bool,
-    resting_count: usize,
+    /// Live, ghost and waiting resting instances.
+    level: RestingCounts,
+    schedule: RestingSchedule,
     /// A resting rebuild by `commit_static` that the next `commit` reports.
     resting_rebuilt: bool,
     dirty: bool,
@@ -90,8 +94,8 @@ impl BvhAccel {
             staged_adds: Vec::new(),
             staged_removes: Vec::new(),
             awake_changed: false,
-            resting_changed: false,
-            resting_count: 0,
+            level: RestingCounts::default(),
+            schedule: RestingSchedule::default(),
             resting_rebuilt: false,
             dirty: false,
             pending_built: 0,
@@ -128,23 +132,52 @@ impl BvhAccel {
             .ok_or(AccelError::UnknownId { kind: "instance", id: id.0 })
     }
 
-    /// Marks the level holding `resting` instances for a rebuild.
-    fn level_changed(&mut self, resting: bool) {
-        if resting {
-            self.resting_changed = true;
-        } else {
-            self.awake_changed = true;
-        }
+    /// Marks the top level for a rebuild.
+    fn awake_changed(&mut self) {
+        self.awake_changed = true;
         self.dirty = true;
     }
 
-    /// Builds the BVH over the resting (`true`) or the awake instances.
+    /// Member `id` of the resting level becomes a ghost there (rays skip it at once, so the
+    /// scene counts as changed) and joins the top level.
+    fn ghost(&mut self, id: InstanceId) {
+        let found = self.scene.resting.ghost(id.0);
+        debug_assert!(found, "instance {} is in the resting level", id.0);
+        self.level.live -= 1;
+        self.level.ghosts += 1;
+        if let Some(inst) = self.instances[id.0 as usize].as_mut() {
+            inst.in_level = false;
+        }
+        self.awake_changed();
+    }
+
+    /// Rebuilds the resting level over every resting instance (the waiting join, the ghosts
+    /// go) when the schedule (or `force`) says so; visible at the next `commit`.
+    fn rebuild_resting(&mut self, force: bool) {
+        if !force && !self.schedule.rebuild_due(self.level) {
+            return;
+        }
+        let t = Instant::now();
+        self.scene.resting = self.build_level(true);
+        for inst in self.instances.iter_mut().flatten() {
+            inst.in_level = inst.resting;
+        }
+        self.level = RestingCounts { live: self.level.live + self.level.waiting, ghosts: 0, waiting: 0 };
+        self.schedule.record_rebuild(self.level.live, t.elapsed().as_secs_f64() * 1e3);
+        self.resting_rebuilt = true;
+        self.awake_changed();
+    }
+
+    /// Builds the BVH over the resting (`true`: every resting instance) or the top level's
+    /// instances (those not in the resting level).
     fn build_level(&self, resting: bool) -> Top {
         let instances: Vec<_> = self
             .instances
             .iter()
             .enumerate()
-            .filter_map(|(i, x)| x.filter(|x| x.resting == resting).map(|x| (i as u32, x)))
+            .filter_map(|(i, x)| {
+                x.filter(|x| if resting { x.resting } else { !x.in_level }).map(|x| (i as u32, x))
+            })
             .filter(|(_, x)| !self.prototypes[x.proto as usize].bvh.is_empty())
             .map(|(id, x)| (id, self.prototypes[x.proto as usize].clone(), x.xf, x.inv))
             .collect();
@@ -221,8 +254,14 @@ impl Accelerator for BvhAccel {
         let id = self.instances.len() as u32;
         let proto = &self.prototypes[prototype.0 as usize];
         let inv = checked_inverse(&transform, proto).ok_or(AccelError::InvalidTransform { instance: id })?;
-        self.instances.push(Some(Instance { proto: prototype.0, xf: transform, inv, resting: false }));
-        self.level_changed(false);
+        self.instances.push(Some(Instance {
+            proto: prototype.0,
+            xf: transform,
+            inv,
+            resting: false,
+            in_level: false,
+        }));
+        self.awake_changed();
         Ok(InstanceId(id))
     }
 
@@ -230,37 +269,43 @@ impl Accelerator for BvhAccel {
         let proto = self.instance_mut(id)?.proto;
         let inv = checked_inverse(&transform, &self.prototypes[proto as usize])
             .ok_or(AccelError::InvalidTransform { instance: id.0 })?;
+        if self.instance_mut(id)?.in_level {
+            // Still declared resting: it waits in the top level for the next rebuild.
+            self.ghost(id);
+            self.level.waiting += 1;
+        }
         let inst = self.instance_mut(id)?;
         inst.xf = transform;
         inst.inv = inv;
-        let resting = inst.resting;
-        self.level_changed(resting);
+        self.awake_changed();
         Ok(())
     }
 
     fn remove_instance(&mut self, id: InstanceId) -> Result<(), AccelError> {
-        let resting = self.instance_mut(id)?.resting;
-        self.instances[id.0 as usize] = None;
-        if resting {
-            self.resting_count -= 1;
+        let inst = *self.instance_mut(id)?;
+        if inst.in_level {
+            self.ghost(id);
+        } else if inst.resting {
+            self.level.waiting -= 1;
         }
-        self.level_changed(resting);
+        self.instances[id.0 as usize] = None;
+        self.awake_changed();
         Ok(())
     }
 
     fn set_instance_resting(&mut self, id: InstanceId, resting: bool) -> Result<(), AccelError> {
-        let inst = self.instance_mut(id)?;
+        let inst = *self.instance_mut(id)?;
         if inst.resting == resting {
             return Ok(());
         }
-        inst.resting = resting;
         if resting {
-            self.resting_count += 1;
+            self.level.waiting += 1;
+        } else if inst.in_level {
+            self.ghost(id);
         } else {
-            self.resting_count -= 1;
+            self.level.waiting -= 1;
         }
-        self.level_changed(true);
-        self.level_changed(false);
+        self.instance_mut(id)?.resting = resting;
         Ok(())
     }
 
@@ -268,13 +313,18 @@ impl Accelerator for BvhAccel {
         let mut report = self.commit_static()?;
         report.built_triangles += std::mem::take(&mut self.pending_built);
         report.skipped_triangles += std::mem::take(&mut self.pending_skipped);
+        let instances = self.instances.iter().flatten().filter(|x| !x.in_level).count();
         if self.awake_changed {
+            let t = Instant::now();
             self.scene.top = self.build_level(false);
             self.awake_changed = false;
+            self.schedule.record_top_build(instances, self.level.waiting, t.elapsed().as_secs_f64() * 1e3);
         }
         self.scene.statics = self.statics.snapshot();
-        report.instances = self.instances.iter().flatten().filter(|x| !x.resting).count();
+        report.instances = instances;
         report.resting_rebuilt = std::mem::take(&mut self.resting_rebuilt);
+        report.resting_instances = self.level.live;
+        report.resting_waiting = self.level.waiting;
         self.dirty = false;
         Ok(report)
     }
@@ -291,16 +341,23 @@ impl Accelerator for BvhAccel {
             };
             report.built_triangles = update.built_triangles;
         }
-        // Not visible before `commit`: queries fail while the scene is dirty, which it is
-        // since the resting set changed.
-        if self.resting_changed {
-            self.scene.resting = self.build_level(true);
-            self.resting_changed = false;
-            self.resting_rebuilt = true;
-            report.resting_rebuilt = true;
-        }
-        report.resting_instances = self.resting_count;
+        // Not visible before `commit`: queries fail while the scene is dirty, which a
+        // rebuild makes it.
+        self.rebuild_resting(false);
+        report.resting_rebuilt = self.resting_rebuilt;
+        report.resting_instances = self.level.live;
+        report.resting_waiting = self.level.waiting;
         Ok(report)
+    }
+
+    fn compact_resting(&mut self) -> Result<CommitReport, AccelError> {
+        self.rebuild_resting(true);
+        Ok(CommitReport {
+            resting_rebuilt: true,
+            resting_instances: self.level.live,
+            resting_waiting: self.level.waiting,
+            ..CommitReport::default()
+        })
     }
 
     fn snapshot_static_scene(&self) -> Option<StaticSceneSnapshot> {

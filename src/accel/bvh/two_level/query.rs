@@ -44,6 +44,9 @@ pub(crate) struct TopItem {
     /// Inverse transpose of the linear part: object normals to world.
     pub normal: Mat3A,
     pub id: u32,
+    /// A ghost of the resting level: its instance woke, moved or was removed since the level
+    /// was built, and rays skip it (`crate::accel::RestingSchedule`).
+    pub ghost: bool,
 }
 
 /// A BVH over instances (the per-frame top level, or the resting level); `items` are in leaf
@@ -53,6 +56,8 @@ pub(crate) struct Top {
     pub bvh: FlatBvh,
     pub wide: Wide,
     pub items: Vec<TopItem>,
+    /// Position in `items` of each instance id (`u32::MAX`: not in this level).
+    leaf_of: Vec<u32>,
 }
 
 /// Builds a BVH over `(instance id, prototype BVH, transform, inverse)`: world bounds and
@@ -75,14 +80,30 @@ pub(crate) fn build_top(instances: &[(u32, Arc<MeshBvh>, Affine3A, Affine3A)], p
                 translation: xf.translation,
                 normal: inv.matrix3.transpose(),
                 id: *id,
+                ghost: false,
             }
         })
-        .collect();
+        .collect::<Vec<_>>();
     let wide = Wide::new(&bvh);
-    Top { bvh, wide, items }
+    let mut leaf_of = vec![u32::MAX; items.iter().map(|x| x.id as usize + 1).max().unwrap_or(0)];
+    for (i, item) in items.iter().enumerate() {
+        leaf_of[item.id as usize] = i as u32;
+    }
+    Top { bvh, wide, items, leaf_of }
 }
 
 impl Top {
+    /// Makes instance `id`'s copy a ghost that rays skip; false if it has none here.
+    pub fn ghost(&mut self, id: u32) -> bool {
+        match self.leaf_of.get(id as usize).copied().filter(|&i| i != u32::MAX) {
+            Some(i) => {
+                self.items[i as usize].ghost = true;
+                true
+            }
+            None => false,
+        }
+    }
+
     /// Closest instance hit with `t <= *t_max`; lowers `*t_max` and overwrites `hit` when it
     /// finds one.
     #[inline]
@@ -96,6 +117,9 @@ impl Top {
         let items = &self.items;
         self.wide.traverse(&self.bvh, 0, bray, t_max, &mut |first, count, t_max| {
             for item in &items[first as usize..(first + count) as usize] {
+                if item.ghost {
+                    continue;
+                }
                 let oray = object_ray(ray, item);
                 let mut best = None;
                 if item.blas.intersect_from(0, &BoxRay::new(&oray), &RayTri::new(&oray), t_max, &mut best) {
@@ -114,7 +138,7 @@ impl Top {
         let items = &self.items;
         let mut t_max = t_max;
         self.wide.traverse(&self.bvh, 0, bray, &mut t_max, &mut |first, count, t_max| {
-            items[first as usize..(first + count) as usize].iter().any(|item| {
+            items[first as usize..(first + count) as usize].iter().filter(|item| !item.ghost).any(|item| {
                 let oray = object_ray(ray, item);
                 item.blas.occluded_from(0, &BoxRay::new(&oray), &RayTri::new(&oray), *t_max)
             })

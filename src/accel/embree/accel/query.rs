@@ -39,10 +39,10 @@ const LANES: usize = 16;
 impl EmbreeAccel {
     /// The resting scene, when it holds instances (rays then trace it and the top level).
     fn resting_view(&self) -> Option<SceneView<'_>> {
-        if self.resting_count == 0 {
-            None
+        if self.static_in_resting {
+            self.resting.view().map(|v| v.skipping(&self.ghosts))
         } else {
-            self.resting.view()
+            None
         }
     }
 
