@@ -21,6 +21,8 @@ pub(crate) use stats::{FrameRecord, RunInfo, RunStats};
 pub enum ReportError {
     #[error("cannot write {path}: {source}")]
     Write { path: std::path::PathBuf, source: std::io::Error },
+    #[error("cannot read {path}: {source}")]
+    Read { path: std::path::PathBuf, source: std::io::Error },
     #[error("cannot draw {path}: {message}")]
     Plot { path: std::path::PathBuf, message: String },
 }

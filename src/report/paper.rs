@@ -25,7 +25,8 @@ pub fn write_paper(report: &PaperReport, dir: &Path) -> Result<Vec<PathBuf>, Rep
     // Through a Value, as `--json` writes it, so both print f32 fields alike.
     let value = serde_json::to_value(report).expect("the paper report serialises");
     let json = serde_json::to_string_pretty(&value).expect("JSON values serialise");
-    let md = paper_markdown(report);
+    let mut md = paper_markdown(report);
+    md.push_str(&regime_section(dir)?);
     for (name, text) in [("paper.json", json), ("paper.md", md)] {
         let path = dir.join(name);
         crate::atomic_file::write_atomic(&path, text.as_bytes())
@@ -34,6 +35,34 @@ pub fn write_paper(report: &PaperReport, dir: &Path) -> Result<Vec<PathBuf>, Rep
     }
     Ok(written)
 }
+
+/// The regime map's section of `paper.md`, when `dir/regimes/` holds one: the reading of it
+/// (`summary.md`, written by hand after a run of `dormant bench regimes --out
+/// dir/regimes`), then its measured table and figure. Empty when there is none.
+fn regime_section(dir: &Path) -> Result<String, ReportError> {
+    let regimes = dir.join(REGIMES_DIR);
+    let read = |name: &str| {
+        let path = regimes.join(name);
+        match std::fs::read_to_string(&path) {
+            Ok(text) => Ok(Some(text)),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
+            Err(source) => Err(ReportError::Read { path, source }),
+        }
+    };
+    let Some(table) = read("regimes.md")? else { return Ok(String::new()) };
+    let mut md = String::from("## Where integration pays (`dormant bench regimes`)\n\n");
+    if let Some(summary) = read("summary.md")? {
+        md.push_str(summary.trim_end());
+        md.push_str("\n\n");
+    }
+    md.push_str(&format!("![regime map]({REGIMES_DIR}/regimes.png)\n\n"));
+    md.push_str(table.trim_end());
+    md.push('\n');
+    Ok(md)
+}
+
+/// Where `paper.md` looks for the regime map, under its own directory.
+const REGIMES_DIR: &str = "regimes";
 
 fn verdict(v: Verdict) -> &'static str {
     match v {
@@ -342,5 +371,25 @@ fn every(step: u32) -> String {
         2 => "Every 2nd frame".into(),
         3 => "Every 3rd frame".into(),
         n => format!("Every {n}th frame"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_regime_map_joins_paper_md_when_its_directory_holds_one() {
+        let dir = tempfile::tempdir().unwrap();
+        assert_eq!(regime_section(dir.path()).unwrap(), "", "no regime map, no section");
+        let regimes = dir.path().join(REGIMES_DIR);
+        std::fs::create_dir_all(&regimes).unwrap();
+        std::fs::write(regimes.join("regimes.md"), "| table |\n").unwrap();
+        std::fs::write(regimes.join("summary.md"), "When it pays.\n").unwrap();
+        let md = regime_section(dir.path()).unwrap();
+        let summary = md.find("When it pays.").unwrap();
+        let figure = md.find("](regimes/regimes.png)").unwrap();
+        let table = md.find("| table |").unwrap();
+        assert!(md.starts_with("## Where integration pays") && summary < figure && figure < table, "{md}");
     }
 }
