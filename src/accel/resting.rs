@@ -11,6 +11,9 @@
 //!   reaches what a rebuild is predicted to cost (ski rental: the waiting never cost more than
 //!   twice the best schedule in hindsight, whatever the future holds);
 //! - when ghosts make up a quarter of the level (rays pay for their bounds);
+//! - when the waiting are most of the top level ([`WAITING_OVER_AWAKE`] times the awake
+//!   bodies or more): the top level then costs rays more than its builds cost, and a settled
+//!   scene may not commit at all, so the waiting would never be charged;
 //! - when the level is empty (the first build costs only the waiting instances, which the
 //!   cost model chose to integrate) or holds only ghosts (a rebuild of nothing is free).
 //!
@@ -30,6 +33,9 @@ const REBUILD_WEIGHT: f64 = 0.3;
 
 /// Rebuild when ghosts are more than this share of the level's instances.
 const MAX_GHOST_SHARE: f64 = 0.25;
+
+/// Rebuild when the waiting instances are at least this many times the awake ones.
+const WAITING_OVER_AWAKE: usize = 4;
 
 /// What the resting level holds and what waits for it.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -80,16 +86,19 @@ impl RestingSchedule {
         self.rebuild_ms_per_instance * (counts.live + counts.waiting) as f64
     }
 
-    /// Whether the level should be rebuilt now.
-    pub fn rebuild_due(&self, counts: RestingCounts) -> bool {
+    /// Whether the level should be rebuilt now, with `awake` instances in the top level
+    /// beside the waiting ones.
+    pub fn rebuild_due(&self, counts: RestingCounts, awake: usize) -> bool {
         if counts.waiting == 0 && counts.ghosts == 0 {
             return false;
         }
         let level = counts.live + counts.ghosts;
         let first = level == 0;
         let only_ghosts = counts.live == 0 && counts.waiting == 0;
+        let mostly_waiting = counts.waiting > 0 && counts.waiting >= WAITING_OVER_AWAKE * awake;
         first
             || only_ghosts
+            || mostly_waiting
             || counts.ghosts as f64 > MAX_GHOST_SHARE * level as f64
             || (counts.waiting > 0 && self.waited_ms >= self.predicted_rebuild_ms(counts))
     }
@@ -105,32 +114,40 @@ mod tests {
 
     #[test]
     fn nothing_to_do_is_never_due() {
-        assert!(!RestingSchedule::default().rebuild_due(counts(1000, 0, 0)));
+        assert!(!RestingSchedule::default().rebuild_due(counts(1000, 0, 0), 10));
     }
 
     #[test]
     fn waiting_is_rebuilt_once_it_has_cost_a_rebuild() {
         let mut s = RestingSchedule::default();
-        assert!(s.rebuild_due(counts(0, 0, 100)), "the first build is not delayed");
+        assert!(s.rebuild_due(counts(0, 0, 100), 100), "the first build is not delayed");
         let c = counts(10_000, 0, 100);
-        assert!(!s.rebuild_due(c));
+        assert!(!s.rebuild_due(c, 1000));
         // 4 ms predicted; each top build of 1,100 instances charges the 100 waiting 1/11.
         for _ in 0..44 {
             s.record_top_build(1100, 100, 1.0);
         }
-        assert!(!s.rebuild_due(c), "{} ms waited", s.waited_ms);
+        assert!(!s.rebuild_due(c, 1000), "{} ms waited", s.waited_ms);
         s.record_top_build(1100, 100, 1.0);
-        assert!(s.rebuild_due(c));
+        assert!(s.rebuild_due(c, 1000));
         s.record_rebuild(10_100, 4.04);
-        assert!(!s.rebuild_due(counts(10_100, 0, 1)));
+        assert!(!s.rebuild_due(counts(10_100, 0, 1), 1000));
     }
 
     #[test]
     fn ghosts_are_dropped_at_a_quarter_of_the_level() {
         let s = RestingSchedule::default();
-        assert!(!s.rebuild_due(counts(750, 250, 0)));
-        assert!(s.rebuild_due(counts(749, 251, 0)));
-        assert!(s.rebuild_due(counts(0, 1, 0)));
+        assert!(!s.rebuild_due(counts(750, 250, 0), 10));
+        assert!(s.rebuild_due(counts(749, 251, 0), 10));
+        assert!(s.rebuild_due(counts(0, 1, 0), 10));
+    }
+
+    #[test]
+    fn a_top_level_of_mostly_waiting_instances_is_rebuilt() {
+        let s = RestingSchedule::default();
+        assert!(!s.rebuild_due(counts(10_000, 0, 399), 100));
+        assert!(s.rebuild_due(counts(10_000, 0, 400), 100));
+        assert!(s.rebuild_due(counts(10_000, 0, 1), 0), "a settled scene");
     }
 
     #[test]

@@ -444,7 +444,10 @@ impl EmbreeAccel {
     /// Rebuilds the resting scene when the schedule (or `force`) says so, or when it must be
     /// committed anyway (the static scene's instance in it changed).
     fn commit_resting(&mut self, force: bool) -> Result<CommitReport, AccelError> {
-        let due = force || self.schedule.rebuild_due(self.level);
+        let top_instances = self.top.geometry_count() - usize::from(!self.static_in_resting);
+        debug_assert!(top_instances >= self.level.waiting, "waiting instances are in the top level");
+        let awake = top_instances.saturating_sub(self.level.waiting);
+        let due = force || self.schedule.rebuild_due(self.level, awake);
         if due {
             self.regroup_resting()?;
         }

@@ -453,19 +453,14 @@ impl<'a> SceneView<'a> {
         };
         let mut context = self.skip_context();
         let mut args = filter::intersect_args(sys::RTCRayQueryFlags::RTC_RAY_QUERY_FLAG_INCOHERENT);
-        let args_ptr = match context.as_mut() {
-            Some(c) => {
-                c.intersect_args(&mut args);
-                &mut args as *mut _
-            }
-            None => std::ptr::null_mut(),
-        };
+        if let Some(c) = context.as_mut() {
+            c.intersect_args(&mut args);
+        }
         // SAFETY: `rayhit` is an `RTCRayHit` laid out by bindings generated from the linked
         // library's headers (so the library writes within it); the scene is committed and
-        // alive for the borrow; null arguments select the defaults, non-null ones are
-        // initialised as rtcInitIntersectArguments does and point to `context`, which lives
-        // until the call returns.
-        unsafe { sys::rtcIntersect1(self.raw, &mut rayhit, args_ptr) };
+        // alive for the borrow; `args` is initialised as rtcInitIntersectArguments does and
+        // its context, if any, lives until the call returns.
+        unsafe { sys::rtcIntersect1(self.raw, &mut rayhit, &mut args) };
         let h = &rayhit.hit;
         (h.geomID != sys::RTC_INVALID_GEOMETRY_ID).then(|| EmbreeHit {
             t: rayhit.ray.tfar,
@@ -483,15 +478,11 @@ impl<'a> SceneView<'a> {
         let mut ray = embree_ray(org, dir, tnear, tfar);
         let mut context = self.skip_context();
         let mut args = filter::occluded_args(sys::RTCRayQueryFlags::RTC_RAY_QUERY_FLAG_INCOHERENT);
-        let args_ptr = match context.as_mut() {
-            Some(c) => {
-                c.occluded_args(&mut args);
-                &mut args as *mut _
-            }
-            None => std::ptr::null_mut(),
-        };
+        if let Some(c) = context.as_mut() {
+            c.occluded_args(&mut args);
+        }
         // SAFETY: as in `intersect1`; rtcOccluded1 writes only `ray.tfar`.
-        unsafe { sys::rtcOccluded1(self.raw, &mut ray, args_ptr) };
+        unsafe { sys::rtcOccluded1(self.raw, &mut ray, &mut args) };
         ray.tfar == f32::NEG_INFINITY
     }
 

@@ -154,7 +154,8 @@ impl BvhAccel {
     /// Rebuilds the resting level over every resting instance (the waiting join, the ghosts
     /// go) when the schedule (or `force`) says so; visible at the next `commit`.
     fn rebuild_resting(&mut self, force: bool) {
-        if !force && !self.schedule.rebuild_due(self.level) {
+        let awake = self.instances.iter().flatten().filter(|x| !x.in_level && !x.resting).count();
+        if !force && !self.schedule.rebuild_due(self.level, awake) {
             return;
         }
         let t = Instant::now();
