@@ -37,8 +37,15 @@ use std::collections::VecDeque;
 const WINDOW: usize = 64;
 /// Prior build throughput before two builds were measured: 4 M triangles/s plus 0.5 ms.
 const PRIOR_BUILD_MS: (f64, f64) = (0.5, 2.5e-4);
-/// Prior gain per instance and frame before the fits have spread in instance counts.
-const PRIOR_GAIN_MS_PER_INSTANCE: f64 = 2e-3;
+/// Prior commit ms per top-level instance before a commit of at least
+/// [`MIN_COMMIT_INSTANCES`] was measured: Embree 4.4's HIGH top level measured 0.35 us per
+/// instance on the demolition's 80,000 and 0.45 us on 8,000 ducks, the BVH 0.5 us.
+const PRIOR_GAIN_MS_PER_INSTANCE: f64 = 5e-4;
+/// Commits of fewer top-level instances do not measure the per-instance cost: a commit's
+/// fixed part (about 0.1 ms) dominates them. Counted in, the few awake bodies left once
+/// everything else rests made the ratio 200 times too large (70 us per instance on the
+/// demolition at 2,000 bodies), and `auto` integrated islands worth nothing.
+const MIN_COMMIT_INSTANCES: usize = 1000;
 /// Prior expected sleep, in frames, before any island has slept.
 const PRIOR_SLEEP_FRAMES: f64 = 30.0;
 /// Prior rebuild of the resting scene: 0.2 ms plus 0.5 us per instance (Embree 4.4, HIGH:
@@ -338,7 +345,7 @@ impl CostModel {
     /// A frame with `instances` in the top level took `commit_ms` to commit (only frames that
     /// rebuilt the top level) and `trace_ms` to trace.
     pub fn record_frame(&mut self, instances: usize, commit_ms: Option<f64>, trace_ms: f64) {
-        if let Some(ms) = commit_ms {
+        if let Some(ms) = commit_ms.filter(|_| instances >= MIN_COMMIT_INSTANCES) {
             self.commit.push(instances as f64, ms);
         }
         if self.committed.len() == WINDOW {
