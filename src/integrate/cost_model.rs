@@ -51,9 +51,10 @@ const PRIOR_SLEEP_FRAMES: f64 = 30.0;
 /// Prior rebuild of the resting scene: 0.2 ms plus 0.5 us per instance (Embree 4.4, HIGH:
 /// 0.41-0.43 us per instance on 7,920 instances; the BVH 0.44-0.59 us; `dormant bench accel`).
 const PRIOR_REST_MS: (f64, f64) = (0.2, 5e-4);
-/// Prior trace penalties until a probe measured them: a second scene per ray costs a few
-/// percent of the trace; baking every body about 15% (docs/performance.md).
-const PRIOR_RESTING_PENALTY: f64 = 0.05;
+/// Prior trace penalties until a probe measured them: a second scene per ray cost 0.98x on
+/// the monastery with 8,000 ducks and on the atrium but 1.07-1.3x on the demolition
+/// (docs/performance.md), so 10%; baking every body about 15%.
+const PRIOR_RESTING_PENALTY: f64 = 0.10;
 const PRIOR_BAKED_PENALTY: f64 = 0.15;
 
 /// A running least-squares line over the last [`WINDOW`] samples.
@@ -399,6 +400,11 @@ impl CostModel {
     pub fn build_ms(&self, triangles: usize) -> f64 {
         let (a, b) = Self::line(&self.build, PRIOR_BUILD_MS);
         (a + b * triangles as f64).max(0.0)
+    }
+
+    /// Whether a frame's trace time has been recorded (the trace penalty is priced in it).
+    pub fn knows_trace(&self) -> bool {
+        self.trace_ms.is_some()
     }
 
     /// The model's current estimates, fixed for one frame's decisions: the fits are computed
