@@ -317,6 +317,9 @@ pub struct CostModel {
     commit: LineFit,
     /// Running mean of a frame's trace, ms.
     trace_ms: Option<f64>,
+    /// `trace_ms` is an estimate made before any frame was traced ([`Self::assume_trace`]):
+    /// the first measured frame replaces it.
+    trace_assumed: bool,
     penalty: Penalties,
     /// Whether each recent frame committed (a frame where nothing moved commits nothing, so
     /// an instance fewer saves nothing there).
@@ -354,7 +357,9 @@ impl CostModel {
         }
         self.committed.push_back(commit_ms.is_some());
         if trace_ms.is_finite() {
-            self.trace_ms = Some(self.trace_ms.map_or(trace_ms, |m| m + TRACE_EMA * (trace_ms - m)));
+            let mean = self.trace_ms.filter(|_| !self.trace_assumed);
+            self.trace_ms = Some(mean.map_or(trace_ms, |m| m + TRACE_EMA * (trace_ms - m)));
+            self.trace_assumed = false;
         }
     }
 
@@ -402,9 +407,18 @@ impl CostModel {
         (a + b * triangles as f64).max(0.0)
     }
 
-    /// Whether a frame's trace time has been recorded (the trace penalty is priced in it).
+    /// Whether a frame's trace time is known, measured or assumed (the trace penalty is
+    /// priced in it).
     pub fn knows_trace(&self) -> bool {
         self.trace_ms.is_some()
+    }
+
+    /// Takes `ms` as a frame's trace until one is measured.
+    pub fn assume_trace(&mut self, ms: f64) {
+        if self.trace_ms.is_none() && ms.is_finite() && ms > 0.0 {
+            self.trace_ms = Some(ms);
+            self.trace_assumed = true;
+        }
     }
 
     /// The model's current estimates, fixed for one frame's decisions: the fits are computed
@@ -541,6 +555,20 @@ mod tests {
         assert!(outlook.fixed_ms(&[e.clone()]) > 0.0);
         let used = Situation { resting_instances: 500, ..sit };
         assert_eq!(m.outlook(used, std::iter::empty()).fixed_ms(&[e]), 0.0);
+    }
+
+    #[test]
+    fn an_assumed_trace_stands_until_the_first_measured_frame() {
+        let mut m = CostModel::new();
+        assert!(!m.knows_trace());
+        m.assume_trace(40.0);
+        assert!(m.knows_trace() && m.trace_ms == Some(40.0));
+        m.assume_trace(80.0);
+        assert_eq!(m.trace_ms, Some(40.0), "a second estimate changes nothing");
+        m.record_frame(2000, Some(1.0), 10.0);
+        assert_eq!(m.trace_ms, Some(10.0), "the measured frame replaces it, not averaged in");
+        m.record_frame(2000, Some(1.0), 20.0);
+        assert!(m.trace_ms.unwrap() > 10.0 && m.trace_ms.unwrap() < 20.0);
     }
 
     #[test]

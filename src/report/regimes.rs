@@ -137,8 +137,13 @@ fn panel(cells: &[&RegimeCell], budget: Budget, area: &Area<'_>) -> PlotResult {
     let one = vec![(lo * 0.8, 1.0), (hi * 1.25, 1.0)];
     chart.draw_series(LineSeries::new(one, BLACK.mix(0.4))).map_err(err)?;
     let colours = [RGBColor(31, 119, 180), RGBColor(214, 39, 40)];
-    let mut backends: Vec<_> = cells.iter().map(|c| c.backend).collect();
-    backends.dedup();
+    // Cells come count by count, each with every backend: one series per backend.
+    let mut backends = Vec::new();
+    for c in cells {
+        if !backends.contains(&c.backend) {
+            backends.push(c.backend);
+        }
+    }
     for (backend, colour) in backends.into_iter().zip(colours.iter().cycle()) {
         let series = |get: fn(&RegimeCell) -> f64| -> Vec<(f64, f64)> {
             cells

@@ -76,7 +76,9 @@ impl Sequence {
         renderer: &FrameRenderer<'_>,
     ) -> Result<RenderedFrame, RenderError> {
         let camera = self.assets.camera_at(self.time_of(frame.index));
-        manager.set_probe_rays(PinholeCamera::pixel_centre_rays(&camera, PROBE_SIZE.0, PROBE_SIZE.1));
+        let samples = u64::from(renderer.width) * u64::from(renderer.height) * u64::from(renderer.spp);
+        manager
+            .set_probe_rays(PinholeCamera::pixel_centre_rays(&camera, PROBE_SIZE.0, PROBE_SIZE.1), samples);
         manager.prepare(frame)?;
         // Emissive prototypes are light-sampled where their bodies are this frame.
         let bodies =

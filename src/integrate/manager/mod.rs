@@ -272,9 +272,10 @@ impl SceneManager {
     }
 
     /// Camera rays of the coming frames, for the probes that measure what integration costs
-    /// the trace (a small image's worth is enough).
-    pub fn set_probe_rays(&mut self, rays: Vec<Ray>) {
-        self.probe.set_rays(rays);
+    /// the trace (a small image's worth is enough), and the camera samples of a rendered frame
+    /// (pixels times samples per pixel), to estimate a frame's trace before one is measured.
+    pub fn set_probe_rays(&mut self, rays: Vec<Ray>, frame_samples: u64) {
+        self.probe.set_rays(rays, frame_samples);
     }
 
     /// The world-space meshes of the baked islands in the static scene now.

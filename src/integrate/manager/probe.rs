@@ -33,17 +33,40 @@ pub(super) struct Probe {
     sun: Vec3,
     camera: Vec<Ray>,
     shadow: Vec<Ray>,
+    /// Camera samples of a rendered frame (pixels times samples per pixel).
+    frame_samples: u64,
     pending: Option<Pending>,
     done: [u32; 2],
 }
 
 impl Probe {
     pub fn new(sun: Vec3) -> Self {
-        Self { sun, camera: Vec::new(), shadow: Vec::new(), pending: None, done: [0; 2] }
+        Self { sun, camera: Vec::new(), shadow: Vec::new(), frame_samples: 0, pending: None, done: [0; 2] }
     }
 
-    pub fn set_rays(&mut self, camera: Vec<Ray>) {
+    /// The probe's camera rays, and how many camera samples a rendered frame takes.
+    pub fn set_rays(&mut self, camera: Vec<Ray>, frame_samples: u64) {
         self.camera = camera;
+        self.frame_samples = frame_samples;
+    }
+
+    /// A frame's trace time estimated before any was measured: the probe's camera rays (closest
+    /// hit, no shadow rays) traced on `query`, scaled to the frame's camera samples. A lower
+    /// bound for the shaded preview and path tracing, which trace more rays per sample; `None`
+    /// without rays.
+    pub fn frame_trace_estimate(&self, query: &dyn SceneQuery) -> Option<f64> {
+        if self.camera.is_empty() || self.frame_samples == 0 {
+            return None;
+        }
+        let ms = (0..REPEATS)
+            .map(|_| {
+                let t = Instant::now();
+                let hits = self.camera.par_iter().filter(|r| query.intersect(r).is_some()).count();
+                std::hint::black_box(hits);
+                t.elapsed().as_secs_f64() * 1e3
+            })
+            .fold(f64::INFINITY, f64::min);
+        Some(ms * self.frame_samples as f64 / self.camera.len() as f64)
     }
 
     /// Before integrating `moved` of `present` bodies in `form` (the resting scene empty or
