@@ -552,7 +552,7 @@ mod tests {
         assert_eq!(e.wake_ms, 0.0, "a woken resting island leaves ghosts, no rebuild");
         assert!(e.build_ms > 0.0, "it pays its share of the scheduled rebuild");
         // The second scene's penalty is a shared cost while the resting scene is empty.
-        assert!(outlook.fixed_ms(&[e.clone()]) > 0.0);
+        assert!(outlook.fixed_ms(std::slice::from_ref(&e)) > 0.0);
         let used = Situation { resting_instances: 500, ..sit };
         assert_eq!(m.outlook(used, std::iter::empty()).fixed_ms(&[e]), 0.0);
     }
