@@ -101,7 +101,7 @@ pub struct RenderArgs {
     #[arg(long, value_enum, default_value_t = IntegrationPolicy::Auto)]
     pub integration: IntegrationPolicy,
     /// With SCENE or --trajectory: how integrated islands are held: baked into the static
-    /// scene, or as instances in a resting scene rebuilt only when its set changes.
+    /// scene, or as instances in a resting scene rebuilt on a schedule.
     #[arg(long, value_enum, default_value_t = IntegrationForm::default())]
     pub integrate_as: IntegrationForm,
     /// With SCENE or --trajectory: serve reactivations of baked islands from the geometry cache.

@@ -119,7 +119,7 @@ pub enum IntegrationForm {
     /// The island's triangles in world space, in the static scene (one incremental insert).
     Baked,
     /// The island's bodies stay instances, in a resting scene beside the per-frame top level:
-    /// rebuilt only when its set changes, traced as a second scene per ray. The default: on
+    /// rebuilt on a schedule, traced as a second scene per ray. The default: on
     /// the monastery with 8,000 ducks it traces 0.98x (Embree) and 0.87-1.0x (BVH) as fast as
     /// every body instanced in one top level, where baking every body traces 1.7-1.8x slower
     /// (`dormant bench accel`, docs/performance.md).

@@ -3,7 +3,7 @@
 //! - [`SceneManager`] keeps one accelerator in step with a simulation: awake bodies are
 //!   instances; sleeping islands the [`IntegrationPolicy`] accepts are integrated in an
 //!   [`IntegrationForm`]: baked into the static scene, or resting (instances in a scene
-//!   rebuilt only when its set changes); woken ones leave, baked ones through the geometry
+//!   rebuilt on a schedule); woken ones leave, baked ones through the geometry
 //!   cache or by removal.
 //! - The cost model decides, under the `auto` policy, whether integrating pays off, with the
 //!   run's future when it is known ([`Lookahead`]).

@@ -4,7 +4,7 @@
 //! - Awake bodies (and sleeping ones not integrated) are instances in the per-frame top level.
 //! - Integrated islands are held in one of two forms ([`IntegrationForm`]): baked into the
 //!   static scene (the pristine environment plus baked islands), or as instances in the
-//!   resting scene, which is rebuilt only when its set changes.
+//!   resting scene, which the accelerator rebuilds on a schedule (`accel/resting.rs`).
 //!
 //! Per rendered frame ([`SceneManager::prepare`]), in stages with their own timers:
 //! 1. **reactivate**: integrated islands that woke leave: baked ones by removal or by a cached
