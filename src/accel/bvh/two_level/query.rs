@@ -7,14 +7,18 @@
 //! far. The order was measured (resting over all-instanced CPU time of 1280x720 primary rays and
 //! their bounces, best of 5-8 interleaved runs, two invocations each; monastery + 8,000 ducks
 //! with the last 1% awake / the built-in default scene):
-//! - static tree, resting level, top level: 1.007-1.009 / 0.978-0.997;
+//! - static tree, resting level, top level (kept since 2026-12): 1.007-1.009 / 0.978-0.997;
 //! - top level first, then static and resting: 1.022-1.024;
 //! - a root over the three (their root boxes in order of entry distance, skipping those beyond
 //!   the nearest hit): 1.013-1.022; the static root contains the camera, so it always comes
 //!   first and the root only adds box tests;
 //! - resting level, top level, static tree: 0.921-0.931 / 1.011-1.016;
-//! - resting level, static tree, top level (kept): 0.926-0.938 / 0.950-0.967. Rays meet the
-//!   bodies before the floor behind them, and the floor then needs no search.
+//! - resting level, static tree, top level: 0.926-0.938 / 0.950-0.967. Rays meet the bodies
+//!   before the floor behind them, and the floor then needs no search. Kept until the atrium
+//!   (bodies in piles inside a large environment, where most rays end on the environment)
+//!   measured a resting trace penalty of 1.43-1.51 with it in `bench integration`, against
+//!   1.03 static first; the demolition 0.94-1.03 against 0.95. Static first costs the ducks a
+//!   few percent and no scene a lot.
 //!
 //! Without resting instances the resting level is empty and rays trace the static tree and
 //! then the top level, as before. Any-hit queries keep that order (static first).
@@ -175,9 +179,9 @@ fn unit(n: Vec3) -> Vec3 {
 }
 
 impl SceneQuery for BvhScene {
-    /// The resting level, the static tree, then the top level, each up to the closest hit
-    /// found so far. Without resting instances that is the static tree and the top level, as
-    /// it always was; with them, resting bodies first (see the measurements at the top).
+    /// The static tree, the resting level, then the top level, each up to the closest hit
+    /// found so far (see the measurements at the top). Without resting instances that is the
+    /// static tree and the top level, as it always was.
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
         if !interval_is_valid(ray) {
             return None;
@@ -185,14 +189,11 @@ impl SceneQuery for BvhScene {
         let bray = BoxRay::new(ray);
         let tray = RayTri::new(ray);
         let mut t_max = ray.t_max;
-        let mut inst_hit: Option<(PrimHit, &TopItem)> = None;
-        self.resting.intersect_with(ray, &bray, &mut t_max, &mut inst_hit);
         let mut static_hit: Option<PrimHit> = None;
         self.statics.intersect_with(&bray, &tray, &mut t_max, &mut static_hit);
-        if static_hit.is_some() {
-            // Found within the resting hit's distance: nearer.
-            inst_hit = None;
-        }
+        // Instances record only hits up to the nearest so far: one found is nearer.
+        let mut inst_hit: Option<(PrimHit, &TopItem)> = None;
+        self.resting.intersect_with(ray, &bray, &mut t_max, &mut inst_hit);
         self.top.intersect_with(ray, &bray, &mut t_max, &mut inst_hit);
         if let Some((h, item)) = inst_hit {
             return Some(Hit {
