@@ -200,11 +200,7 @@ pub(super) fn run(
 }
 
 fn paper(args: &PaperArgs, threads: Option<usize>, quiet: bool, json: &JsonOutput) -> Result<(), CliError> {
-    let backends = if args.backend.is_empty() {
-        crate::accel::Backend::compiled()
-    } else {
-        args.backend.iter().map(|&b| super::render::choose_backend(Some(b))).collect::<Result<_, _>>()?
-    };
+    let backends = chosen_backends(&args.backend)?;
     let rain = args.env.as_ref().map(|env| RainAssets { env: env.clone(), objects: args.object.clone() });
     let options = PaperBenchOptions {
         preset: if args.quick { PaperPreset::Quick } else { PaperPreset::Full },
@@ -212,16 +208,8 @@ fn paper(args: &PaperArgs, threads: Option<usize>, quiet: bool, json: &JsonOutpu
         backends,
         threads,
     };
-    // Before minutes of benchmarking, not after.
-    std::fs::create_dir_all(&args.out).map_err(|e| {
-        CliError::Runtime(format!("cannot create output directory {}: {e}", args.out.display()))
-    })?;
-    let start = std::time::Instant::now();
-    let mut log = |line: &str| {
-        if !quiet {
-            eprintln!("bench paper [{:>5.0} s] {line}", start.elapsed().as_secs_f64());
-        }
-    };
+    create_out_dir(&args.out)?;
+    let mut log = timed_log("bench paper", quiet);
     let report = bench::bench_paper(&options, &mut log).map_err(|e| match e.is_input() {
         true => CliError::Input(e.to_string()),
         false => CliError::Runtime(e.to_string()),
@@ -229,11 +217,7 @@ fn paper(args: &PaperArgs, threads: Option<usize>, quiet: bool, json: &JsonOutpu
     let written =
         crate::report::write_paper(&report, &args.out).map_err(|e| CliError::Runtime(e.to_string()))?;
     json.emit(&serde_json::to_value(&report).expect("the paper report serialises"))?;
-    if !quiet && !json.is_requested() {
-        for path in written {
-            println!("wrote {}", path.display());
-        }
-    }
+    print_written(&written, json, quiet);
     Ok(())
 }
 
@@ -283,11 +267,7 @@ fn regimes(
 ) -> Result<(), CliError> {
     let scene =
         crate::scene::file::SceneFile::load(&args.scene).map_err(|e| CliError::Input(e.to_string()))?;
-    let backends = if args.backend.is_empty() {
-        crate::accel::Backend::compiled()
-    } else {
-        args.backend.iter().map(|&b| super::render::choose_backend(Some(b))).collect::<Result<_, _>>()?
-    };
+    let backends = chosen_backends(&args.backend)?;
     let budgets = if args.budgets.is_empty() { bench::Budget::ALL.to_vec() } else { args.budgets.clone() };
     let (counts, frame_count, sizes) = match args.quick {
         true => (vec![300, 1200], Some(240), bench::RegimeSizes { preview_frames: 24, production_frames: 1 }),
@@ -311,26 +291,47 @@ fn regimes(
         quick: args.quick,
         threads,
     };
-    // Before minutes of benchmarking, not after.
-    std::fs::create_dir_all(&args.out).map_err(|e| {
-        CliError::Runtime(format!("cannot create output directory {}: {e}", args.out.display()))
-    })?;
-    let start = std::time::Instant::now();
-    let mut log = |line: &str| {
-        if !quiet {
-            eprintln!("bench regimes [{:>5.0} s] {line}", start.elapsed().as_secs_f64());
-        }
-    };
+    create_out_dir(&args.out)?;
+    let mut log = timed_log("bench regimes", quiet);
     let report = bench::bench_regimes(&options, &mut log)?;
     let written =
         crate::report::write_regimes(&report, &args.out).map_err(|e| CliError::Runtime(e.to_string()))?;
     json.emit(&serde_json::to_value(&report).expect("the regimes report serialises"))?;
+    print_written(&written, json, quiet);
+    Ok(())
+}
+
+/// The backends named on the command line, or every compiled one.
+fn chosen_backends(named: &[crate::accel::Backend]) -> Result<Vec<crate::accel::Backend>, CliError> {
+    if named.is_empty() {
+        return Ok(crate::accel::Backend::compiled());
+    }
+    named.iter().map(|&b| super::render::choose_backend(Some(b))).collect()
+}
+
+/// Creates a report's output directory: before minutes of benchmarking, not after.
+fn create_out_dir(out: &std::path::Path) -> Result<(), CliError> {
+    std::fs::create_dir_all(out)
+        .map_err(|e| CliError::Runtime(format!("cannot create output directory {}: {e}", out.display())))
+}
+
+/// Progress lines on stderr, prefixed with `label` and the seconds since this call.
+fn timed_log(label: &'static str, quiet: bool) -> impl FnMut(&str) {
+    let start = std::time::Instant::now();
+    move |line: &str| {
+        if !quiet {
+            eprintln!("{label} [{:>5.0} s] {line}", start.elapsed().as_secs_f64());
+        }
+    }
+}
+
+/// Names the files a report wrote, unless quiet or the JSON goes to stdout.
+fn print_written(written: &[std::path::PathBuf], json: &JsonOutput, quiet: bool) {
     if !quiet && !json.is_requested() {
         for path in written {
             println!("wrote {}", path.display());
         }
     }
-    Ok(())
 }
 
 fn physics(args: &PhysicsArgs, quiet: bool, json: &JsonOutput) -> Result<(), CliError> {

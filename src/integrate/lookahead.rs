@@ -36,19 +36,6 @@ impl Lookahead {
         self.wakes.get(&island).copied()
     }
 
-    /// The rendered frame that reactivates `island`: the first one at or after its wake
-    /// (`None` if it sleeps through the run's last rendered frame).
-    pub fn reactivation_frame(&self, island: IslandId) -> Option<u32> {
-        let w = self.wake_frame(island)?;
-        self.rendered.get(self.rendered.partition_point(|&f| f < w)).copied()
-    }
-
-    /// Whether `island`, integrated at `now`, wakes while the run still renders (so its wake
-    /// costs a reactivation).
-    pub fn wakes_while_rendering(&self, island: IslandId, now: u32) -> bool {
-        self.reactivation_frame(island).is_some_and(|f| f > now)
-    }
-
     /// Rendered frames from `now` (inclusive) before `island` wakes: the frames integrating it
     /// now would serve.
     pub fn remaining_sleep(&self, island: IslandId, now: u32) -> u32 {
@@ -83,17 +70,12 @@ mod tests {
         // Integrated at frame 10, it serves frames 10 and 20; at 30 it is awake again.
         assert_eq!(l.remaining_sleep(IslandId(7), 10), 2);
         assert_eq!(l.remaining_sleep(IslandId(7), 11), 1);
-        assert!(l.wakes_while_rendering(IslandId(7), 10));
         // An island that never wakes sleeps to the end of the run.
         assert_eq!(l.remaining_sleep(IslandId(8), 55), 4);
-        assert!(!l.wakes_while_rendering(IslandId(8), 55));
         assert_eq!(l.frames_left(90), 1);
-        // A wake after the last rendered frame costs nothing while rendering.
+        // A wake after the last rendered frame: asleep for every frame left.
         let late = IslandEvent::Woke { island: IslandId(9) };
         let l = Lookahead::new([(95, &late)], (0..100).step_by(10).collect());
-        assert!(!l.wakes_while_rendering(IslandId(9), 50));
-        assert_eq!(l.reactivation_frame(IslandId(9)), None);
-        let l = Lookahead::new([(31, &woke)], (0..100).step_by(10).collect());
-        assert_eq!(l.reactivation_frame(IslandId(7)), Some(40));
+        assert_eq!(l.remaining_sleep(IslandId(9), 50), 5);
     }
 }

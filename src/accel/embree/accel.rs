@@ -345,7 +345,7 @@ impl Accelerator for EmbreeAccel {
         let top_changed = self.top.is_dirty();
         let t = Instant::now();
         self.top.commit()?;
-        let instances = self.top.geometry_count() - usize::from(!self.static_in_resting);
+        let instances = self.top_instances();
         if top_changed {
             self.schedule.record_top_build(instances, self.level.waiting, ms_since(t));
         }
@@ -372,17 +372,11 @@ impl Accelerator for EmbreeAccel {
     fn commit_static(&mut self) -> Result<CommitReport, AccelError> {
         // Committing the owned child scene now leaves its holder dirty (the instance changed),
         // so nothing is visible before `commit`; the report waits for it too.
-        self.static_holder().commit_child_of(STATIC_SLOT)?;
-        let report = self.commit_resting(false)?;
-        self.pending.resting_rebuilt |= report.resting_rebuilt;
-        Ok(report)
+        self.commit_static_and_resting(false)
     }
 
     fn compact_resting(&mut self) -> Result<CommitReport, AccelError> {
-        self.static_holder().commit_child_of(STATIC_SLOT)?;
-        let report = self.commit_resting(true)?;
-        self.pending.resting_rebuilt |= report.resting_rebuilt;
-        Ok(report)
+        self.commit_static_and_resting(true)
     }
 
     /// Removal is a detach: the two-level builder keeps every other mesh's BVH and rebuilds
@@ -420,6 +414,21 @@ impl EmbreeAccel {
         Ok(InstanceGeometry::new(&self.device, proto, transform)?)
     }
 
+    /// Instances in the top level: awake ones and resting ones waiting for the resting scene
+    /// (the static scene's instance is not counted).
+    fn top_instances(&self) -> usize {
+        self.top.geometry_count() - usize::from(!self.static_in_resting)
+    }
+
+    /// Commits the static scene, then the resting scene (rebuilt when due, or when `force`);
+    /// the next `commit` publishes both.
+    fn commit_static_and_resting(&mut self, force: bool) -> Result<CommitReport, AccelError> {
+        self.static_holder().commit_child_of(STATIC_SLOT)?;
+        let report = self.commit_resting(force)?;
+        self.pending.resting_rebuilt |= report.resting_rebuilt;
+        Ok(report)
+    }
+
     /// Member `id` of the resting scene becomes a ghost there.
     fn ghost(&mut self, id: InstanceId) {
         self.ghosts.insert(id.0 + 1);
@@ -444,7 +453,7 @@ impl EmbreeAccel {
     /// Rebuilds the resting scene when the schedule (or `force`) says so, or when it must be
     /// committed anyway (the static scene's instance in it changed).
     fn commit_resting(&mut self, force: bool) -> Result<CommitReport, AccelError> {
-        let top_instances = self.top.geometry_count() - usize::from(!self.static_in_resting);
+        let top_instances = self.top_instances();
         debug_assert!(top_instances >= self.level.waiting, "waiting instances are in the top level");
         let awake = top_instances.saturating_sub(self.level.waiting);
         let due = force || self.schedule.rebuild_due(self.level, awake);

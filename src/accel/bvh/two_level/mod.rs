@@ -62,6 +62,8 @@ pub struct BvhAccel {
     staged_removes: Vec<StaticId>,
     /// The top level (awake instances) must be rebuilt at the next commit.
     awake_changed: bool,
+    /// Instances present (the top level holds those not live in the resting level).
+    present: usize,
     /// Live, ghost and waiting resting instances.
     level: RestingCounts,
     schedule: RestingSchedule,
@@ -94,6 +96,7 @@ impl BvhAccel {
             staged_adds: Vec::new(),
             staged_removes: Vec::new(),
             awake_changed: false,
+            present: 0,
             level: RestingCounts::default(),
             schedule: RestingSchedule::default(),
             resting_rebuilt: false,
@@ -132,6 +135,11 @@ impl BvhAccel {
             .ok_or(AccelError::UnknownId { kind: "instance", id: id.0 })
     }
 
+    /// Instances in the top level: awake ones and resting ones waiting for the resting level.
+    fn top_instances(&self) -> usize {
+        self.present - self.level.live
+    }
+
     /// Marks the top level for a rebuild.
     fn awake_changed(&mut self) {
         self.awake_changed = true;
@@ -154,7 +162,7 @@ impl BvhAccel {
     /// Rebuilds the resting level over every resting instance (the waiting join, the ghosts
     /// go) when the schedule (or `force`) says so; visible at the next `commit`.
     fn rebuild_resting(&mut self, force: bool) {
-        let awake = self.instances.iter().flatten().filter(|x| !x.in_level && !x.resting).count();
+        let awake = self.top_instances() - self.level.waiting;
         if !force && !self.schedule.rebuild_due(self.level, awake) {
             return;
         }
@@ -262,6 +270,7 @@ impl Accelerator for BvhAccel {
             resting: false,
             in_level: false,
         }));
+        self.present += 1;
         self.awake_changed();
         Ok(InstanceId(id))
     }
@@ -290,6 +299,7 @@ impl Accelerator for BvhAccel {
             self.level.waiting -= 1;
         }
         self.instances[id.0 as usize] = None;
+        self.present -= 1;
         self.awake_changed();
         Ok(())
     }
@@ -314,7 +324,7 @@ impl Accelerator for BvhAccel {
         let mut report = self.commit_static()?;
         report.built_triangles += std::mem::take(&mut self.pending_built);
         report.skipped_triangles += std::mem::take(&mut self.pending_skipped);
-        let instances = self.instances.iter().flatten().filter(|x| !x.in_level).count();
+        let instances = self.top_instances();
         if self.awake_changed {
             let t = Instant::now();
             self.scene.top = self.build_level(false);
