@@ -410,6 +410,6 @@ mod tests {
     fn invalid_size_is_an_error_not_a_panic() {
         let desc = crate::scene::default_scene();
         let opts = RenderBenchOptions { width: 0, ..RenderBenchOptions::default() };
-        assert!(matches!(bench_render(&desc, &opts), Err(RenderError::InvalidSize { .. })));
+        assert!(matches!(bench_render(&desc, &opts), Err(RenderError::InvalidSize(_))));
     }
 }

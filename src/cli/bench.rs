@@ -10,6 +10,7 @@ use crate::bench::{
     self, AccelBenchOptions, IntegrationBenchOptions, PaperBenchOptions, PaperPreset, RainAssets,
     RenderBenchOptions,
 };
+use crate::scene::limits::MAX_SAMPLES_PER_PIXEL;
 use crate::sequence::{FrameRange, SequenceSource};
 
 #[derive(Debug, Args)]
@@ -139,7 +140,7 @@ pub struct IntegrationArgs {
     #[arg(long, value_name = "WxH", default_value = "320x180")]
     pub size: super::render::Size,
     /// Samples per pixel.
-    #[arg(long, value_name = "N", default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=65536))]
+    #[arg(long, value_name = "N", default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=MAX_SAMPLES_PER_PIXEL as i64))]
     pub spp: u32,
     /// What each frame traces: by default the interactive preview (primary and shadow rays),
     /// where structure updates are a sizeable part of a frame.
@@ -176,7 +177,7 @@ pub struct RenderBenchArgs {
     #[arg(long, value_name = "WxH", default_value = "640x360")]
     pub size: super::render::Size,
     /// Samples per pixel of the path-traced frame.
-    #[arg(long, value_name = "N", default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=65536))]
+    #[arg(long, value_name = "N", default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=MAX_SAMPLES_PER_PIXEL as i64))]
     pub spp: u32,
     /// Repetitions of each measurement; the best is reported.
     #[arg(long, value_name = "N", default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]

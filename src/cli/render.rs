@@ -16,6 +16,7 @@ use crate::render::{
 };
 use crate::report::{self, FrameRecord, RunInfo, RunStats};
 use crate::scene::file::SceneFile;
+use crate::scene::limits::{image_size_problem, MAX_IMAGE_SIDE, MAX_SAMPLES_PER_PIXEL};
 use crate::sequence::{
     FrameRange, FrameRenderer, RenderedFrame, SeedMode, Sequence, SequenceError, SequenceSource,
 };
@@ -30,13 +31,15 @@ pub struct Size {
 impl std::str::FromStr for Size {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, Self::Err> {
-        let parse = |v: &str| v.trim().parse::<u32>().ok().filter(|&n| (1..=16384).contains(&n));
-        match s.split_once(['x', 'X']) {
-            Some((w, h)) => match (parse(w), parse(h)) {
-                (Some(width), Some(height)) => Ok(Size { width, height }),
-                _ => Err(format!("'{s}': width and height must be whole numbers from 1 to 16384")),
-            },
-            None => Err(format!("'{s}': expected WIDTHxHEIGHT, e.g. 1280x720")),
+        let Some((w, h)) = s.split_once(['x', 'X']) else {
+            return Err(format!("'{s}': expected WIDTHxHEIGHT, e.g. 1280x720"));
+        };
+        let (Ok(width), Ok(height)) = (w.trim().parse::<u32>(), h.trim().parse::<u32>()) else {
+            return Err(format!("'{s}': width and height must be whole numbers from 1 to {MAX_IMAGE_SIDE}"));
+        };
+        match image_size_problem(width, height) {
+            Some(problem) => Err(problem),
+            None => Ok(Size { width, height }),
         }
     }
 }
@@ -78,7 +81,7 @@ pub struct RenderArgs {
     #[arg(long, value_name = "WxH", default_value = "960x540")]
     pub size: Size,
     /// Samples per pixel.
-    #[arg(long, value_name = "N", default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=65536))]
+    #[arg(long, value_name = "N", default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=MAX_SAMPLES_PER_PIXEL as i64))]
     pub spp: u32,
     /// Rendering mode: path tracing, direct light only, or ambient occlusion.
     #[arg(long, value_enum, default_value_t = RenderMode::Path)]

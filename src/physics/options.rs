@@ -5,6 +5,7 @@ use super::PhysicsError;
 use std::num::NonZeroU32;
 
 use crate::scene::file::SceneFile;
+use crate::scene::limits::{MAX_BODIES, MAX_FRAMES};
 
 /// Overrides a command line can apply to a scene before simulating it.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
@@ -22,15 +23,18 @@ impl SimulateOptions {
     pub fn effective_scene(&self, file: &SceneFile) -> Result<SceneFile, PhysicsError> {
         let mut file = file.clone();
         if let Some(count) = self.count {
-            if count == 0 {
-                return Err(PhysicsError::Option { option: "--count", message: "must be at least 1".into() });
+            if count == 0 || count as u64 > MAX_BODIES {
+                let message = format!("must be from 1 to {MAX_BODIES}, got {count}");
+                return Err(PhysicsError::Option { option: "--count", message });
             }
             file = file.with_total_count(count)?;
         }
         if let Some(frames) = self.frames {
-            let frames = NonZeroU32::new(frames).ok_or_else(|| PhysicsError::Option {
-                option: "--frame-count",
-                message: "must be at least 1".into(),
+            let frames = NonZeroU32::new(frames).filter(|f| f.get() <= MAX_FRAMES).ok_or_else(|| {
+                PhysicsError::Option {
+                    option: "--frame-count",
+                    message: format!("must be from 1 to {MAX_FRAMES}, got {frames}"),
+                }
             })?;
             file = file.with_frames(frames);
         }

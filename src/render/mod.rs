@@ -35,9 +35,9 @@ use crate::accel::AccelError;
 
 #[derive(Debug, thiserror::Error)]
 pub enum RenderError {
-    #[error("image size {width}x{height} is invalid: both sides must be between 1 and 16384")]
-    InvalidSize { width: u32, height: u32 },
-    #[error("samples per pixel must be at least 1")]
+    #[error("image size {0}")]
+    InvalidSize(String),
+    #[error("samples per pixel must be from 1 to {}", crate::scene::limits::MAX_SAMPLES_PER_PIXEL)]
     InvalidSpp,
     #[error("cannot write {path}: {source}")]
     Io {

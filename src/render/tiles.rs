@@ -13,6 +13,7 @@ use super::{
 };
 use crate::accel::SceneQuery;
 use crate::geometry::Ray;
+use crate::scene::limits::{image_size_problem, MAX_SAMPLES_PER_PIXEL};
 
 /// Pixel offset distributed as a tent filter of radius one pixel per axis. Filter importance
 /// sampling (as in pbrt-v4): each sample is weighted 1 and lands where the filter puts it, so
@@ -46,11 +47,10 @@ pub struct RenderSettings {
 
 impl RenderSettings {
     pub(crate) fn validate(&self) -> Result<(), RenderError> {
-        let side_ok = |s: u32| (1..=16384).contains(&s);
-        if !side_ok(self.width) || !side_ok(self.height) {
-            return Err(RenderError::InvalidSize { width: self.width, height: self.height });
+        if let Some(problem) = image_size_problem(self.width, self.height) {
+            return Err(RenderError::InvalidSize(problem));
         }
-        if self.spp == 0 {
+        if !(1..=MAX_SAMPLES_PER_PIXEL).contains(&self.spp) {
             return Err(RenderError::InvalidSpp);
         }
         Ok(())

@@ -188,9 +188,25 @@ fn read_document(path: &Path) -> Result<(gltf::Document, Vec<gltf::buffer::Data>
     check_extensions(path, &document)?;
     let document = gltf::Document::from_json(document.into_json())
         .map_err(|e| GltfError::new(path, "(document)", e.to_string()))?;
-    let buffers = gltf::import_buffers(&document, path.parent(), blob)
-        .map_err(|e| GltfError::new(path, "buffers", e.to_string()))?;
+    let buffers =
+        gltf::import_buffers(&document, path.parent(), blob).map_err(|e| buffer_error(path, &document, e))?;
     Ok((document, buffers))
+}
+
+/// The error for buffers that could not be loaded, naming the first external buffer file
+/// that is missing when there is one (the importer's I/O error names no file).
+fn buffer_error(path: &Path, document: &gltf::Document, e: gltf::Error) -> GltfError {
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let missing = document.buffers().find_map(|b| match b.source() {
+        gltf::buffer::Source::Uri(uri) if !uri.starts_with("data:") && !dir.join(uri).is_file() => {
+            Some((b.index(), uri))
+        }
+        _ => None,
+    });
+    match missing {
+        Some((i, uri)) => GltfError::new(path, format!("buffers[{i}]"), format!("cannot read '{uri}': {e}")),
+        None => GltfError::new(path, "buffers", e.to_string()),
+    }
 }
 
 /// Calls `visit` with every node of the default scene (else the first scene, else every node

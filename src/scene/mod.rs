@@ -6,6 +6,7 @@ mod builtin;
 mod description;
 pub mod file;
 pub mod gltf;
+pub mod limits;
 mod pile;
 pub mod texture;
 

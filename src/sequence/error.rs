@@ -31,6 +31,13 @@ pub enum SequenceError {
         .0.display()
     )]
     RecordedSceneHash(PathBuf),
+    /// `--trajectory` given with a SCENE (and overrides) it was not simulated from.
+    #[error(
+        "{}: it was simulated from another scene than {} (or with other --count/--frame-count \
+         overrides): simulate the scene again, or render the trajectory alone, which records its scene",
+        .trajectory.display(), .scene.display()
+    )]
+    TrajectoryOfAnotherScene { trajectory: PathBuf, scene: PathBuf },
     #[error("--count: {} was simulated with its own object count; simulate again to change it", .0.display())]
     CountOverride(PathBuf),
     /// A frame range past the trajectory's end (callers name the flag that gave it).

@@ -11,7 +11,7 @@ use crate::accel::{self, Backend};
 use std::sync::Arc;
 
 use crate::integrate::{IntegrationSettings, Lookahead, ManagerOptions, SceneManager};
-use crate::physics::{self, SimulateOptions, SimulatedFrame, Trajectory};
+use crate::physics::{self, SimulateOptions, SimulatedFrame, Trajectory, TrajectoryError};
 use crate::scene::file::SceneFile;
 use crate::scene::{SceneAssets, SceneDescription};
 
@@ -65,7 +65,13 @@ impl Sequence {
         match source {
             SequenceSource::Scene { file, options, trajectory: Some(path) } => {
                 let expected = options.effective_scene(&file)?.source_hash();
-                let trajectory = Trajectory::read(&path, expected)?;
+                let trajectory = Trajectory::read(&path, expected).map_err(|e| match e {
+                    TrajectoryError::SceneMismatch { .. } => SequenceError::TrajectoryOfAnotherScene {
+                        trajectory: path.clone(),
+                        scene: file.path().into(),
+                    },
+                    e => e.into(),
+                })?;
                 Self::new(&file, trajectory, PhysicsSource::Trajectory, Vec::new())
             }
             SequenceSource::Scene { file, options, trajectory: None } => {

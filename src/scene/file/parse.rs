@@ -10,7 +10,7 @@ use super::count::spread_count;
 use super::location::{line_of, syntax_error};
 use super::schema::SceneToml;
 use super::spec::{SceneInfo, SceneSpec};
-use super::validate::{structures_apart, validate, Problem};
+use super::validate::{structures_apart, validate, within_body_budget, Problem};
 use super::SceneError;
 
 /// A checked scene file: its [`SceneSpec`] plus where it came from. Plain data, built only by
@@ -131,13 +131,16 @@ impl SceneFile {
             );
         }
         let (spawners, structures) = spread_count(&self.spec.spawners, &self.spec.structures, total);
-        // Arrays that grew may reach other structures.
-        if let Err(Problem { field, message }) = structures_apart(&structures) {
+        let spec = SceneSpec { spawners, structures, ..self.spec.clone() };
+        // Arrays that grew may reach other structures, and their projectiles grow with them.
+        if let Err(Problem { field, message }) =
+            structures_apart(&spec.structures).and_then(|()| within_body_budget(&spec))
+        {
             return Err(self.error(field, format!("with --count {total}: {message}")));
         }
         // The override changes what is simulated: fold it into the hash.
         let source_hash = fnv1a64_extend(self.source_hash, &total.to_le_bytes());
-        Ok(SceneFile { spec: SceneSpec { spawners, structures, ..self.spec }, source_hash, ..self })
+        Ok(SceneFile { spec, source_hash, ..self })
     }
 
     /// The scene simulated for `frames` frames instead of `scene.frames`; the override is

@@ -14,7 +14,8 @@ pub(super) use structures::apart as structures_apart;
 
 use super::asset_dir::AssetDir;
 use super::schema::SceneToml;
-use super::spec::{PhysicsSettings, SceneInfo, SceneSpec};
+use super::spec::{PhysicsSettings, ProjectileAim, ProjectileDef, SceneInfo, SceneSpec, StructureDef};
+use crate::scene::limits::{MAX_BODIES, MAX_FRAMES};
 
 /// One thing wrong with a scene, at a field path such as `spawners[1].count`.
 #[derive(Debug)]
@@ -45,7 +46,7 @@ pub(super) fn validate(raw: &SceneToml, assets: &AssetDir) -> Result<SceneSpec, 
     let sky = raw.sky.as_ref().map(view::sky).transpose()?;
     let lights = view::lights(&raw.lights)?;
     let render = view::render(&raw.render, &cameras)?;
-    Ok(SceneSpec {
+    let spec = SceneSpec {
         scene,
         physics,
         environment,
@@ -59,7 +60,40 @@ pub(super) fn validate(raw: &SceneToml, assets: &AssetDir) -> Result<SceneSpec, 
         lights,
         sky,
         render,
-    })
+    };
+    within_body_budget(&spec)?;
+    Ok(spec)
+}
+
+/// All dynamic bodies together (spawned, built, thrown and key-framed) within
+/// [`MAX_BODIES`]; the error names the section whose bodies pass it. Each section's counts
+/// were bounded on their own, so the sums cannot overflow.
+pub(super) fn within_body_budget(spec: &SceneSpec) -> Checked<()> {
+    let thrown = |p: &ProjectileDef| match p.aim {
+        ProjectileAim::World { count, .. } => count as u64,
+        ProjectileAim::Structure { structure, every, count } => {
+            let copies = (spec.structures[structure].copies() as u64).div_ceil(every as u64);
+            count.map_or(copies, |c| copies.min(c as u64))
+        }
+    };
+    let sections: [(&str, u64); 4] = [
+        ("spawners", spec.spawners.iter().map(|s| s.count as u64).sum()),
+        ("structures", spec.structures.iter().map(StructureDef::body_count).sum()),
+        ("projectiles", spec.projectiles.iter().map(thrown).sum()),
+        ("kinematics", spec.kinematics.len() as u64),
+    ];
+    let mut total = 0u64;
+    for (section, bodies) in sections {
+        total += bodies;
+        if total > MAX_BODIES {
+            let message = format!(
+                "the scene would have {total} bodies with these {section}, more than the {MAX_BODIES} allowed \
+                 (what simulates in the memory of a 24 GiB machine; see docs/errors.md)"
+            );
+            return Err(problem(section, message));
+        }
+    }
+    Ok(())
 }
 
 /// `[scene]`: a name and at least one frame.
@@ -67,7 +101,7 @@ fn scene(s: &SceneInfo) -> Checked<SceneInfo> {
     if s.name.trim().is_empty() {
         return Err(problem("scene.name", "must not be empty"));
     }
-    at_least_one("scene.frames", s.frames)?;
+    at_most("scene.frames", at_least_one("scene.frames", s.frames)?, MAX_FRAMES)?;
     Ok(s.clone())
 }
 
@@ -134,6 +168,15 @@ fn positive(field: &str, v: f32) -> Checked<f32> {
 fn non_negative(field: &str, v: f32) -> Checked<f32> {
     if finite(field, v)? < 0.0 {
         return Err(problem(field, format!("must not be negative, got {v}")));
+    }
+    Ok(v)
+}
+
+/// `v` no more than `max`, the bound of [`crate::scene::limits`] that `field` falls under.
+fn at_most(field: &str, v: u32, max: impl Into<u64>) -> Checked<u32> {
+    let max = max.into();
+    if v as u64 > max {
+        return Err(problem(field, format!("must be at most {max}, got {v} (see docs/errors.md)")));
     }
     Ok(v)
 }

@@ -2,11 +2,12 @@
 
 use std::collections::BTreeSet;
 
-use super::{at_least_one, finite, finite3, non_negative, positive, problem, Checked};
+use super::{at_least_one, at_most, finite, finite3, non_negative, positive, problem, Checked};
 use crate::scene::file::schema::{DisturbanceTag, DisturbanceToml, KinematicToml, SpawnerToml};
 use crate::scene::file::spec::{
     DisturbanceDef, DisturbanceKind, KeyframeDef, KinematicDef, PrototypeDef, SpawnerDef,
 };
+use crate::scene::limits::MAX_BODIES;
 
 /// The index of the prototype called `name`.
 fn prototype_index(prototypes: &[PrototypeDef], name: &str) -> Option<usize> {
@@ -34,7 +35,7 @@ fn spawner(i: usize, s: &SpawnerToml, prototypes: &[PrototypeDef]) -> Checked<Sp
             })
         })
         .collect::<Checked<Vec<_>>>()?;
-    let count = at_least_one(&at("count"), s.count)?;
+    let count = at_most(&at("count"), at_least_one(&at("count"), s.count)?, MAX_BODIES)?;
     let waves = at_least_one(&at("waves"), s.waves)?;
     if waves > count {
         return Err(problem(

@@ -3,16 +3,13 @@
 
 use std::collections::BTreeSet;
 
-use super::{at_least_one, exactly_the_keys, finite, finite3, non_negative, problem, Checked};
+use super::{at_least_one, at_most, exactly_the_keys, finite, finite3, non_negative, problem, Checked};
 use crate::geometry::Aabb;
 use crate::scene::file::schema::{ArrayToml, ProjectileToml, StructureKind, StructureToml};
 use crate::scene::file::spec::{
     ProjectileAim, ProjectileDef, PrototypeDef, Shape, StructureArray, StructureDef, StructureLayout,
 };
-
-/// The most bodies all structures together may have: far beyond what simulates in hours, and
-/// small enough that a typo in a count is an error rather than an allocation that fails.
-const MAX_STRUCTURE_BODIES: u64 = 10_000_000;
+use crate::scene::limits::MAX_BODIES;
 
 pub(super) fn structures(raw: &[StructureToml], prototypes: &[PrototypeDef]) -> Checked<Vec<StructureDef>> {
     let mut names = BTreeSet::new();
@@ -29,10 +26,9 @@ pub(super) fn structures(raw: &[StructureToml], prototypes: &[PrototypeDef]) -> 
         }
         let structure = structure(i, s, prototypes)?;
         total += structure.body_count();
-        if total > MAX_STRUCTURE_BODIES {
-            let message = format!(
-                "the structures so far have {total} bodies, more than the {MAX_STRUCTURE_BODIES} allowed"
-            );
+        if total > MAX_BODIES {
+            let message =
+                format!("the structures so far have {total} bodies, more than the {MAX_BODIES} allowed");
             return Err(problem(format!("structures[{i}]"), message));
         }
         structures.push(structure);
@@ -122,7 +118,8 @@ fn layout(
     ];
     exactly_the_keys(&format!("a {:?} structure", s.kind), wanted, &given, at)?;
     // Every key the kind needs is present (checked above).
-    let count = |name: &str, v: Option<u32>| at_least_one(&at(name), v.unwrap_or(0));
+    let count =
+        |name: &str, v: Option<u32>| at_most(&at(name), at_least_one(&at(name), v.unwrap_or(0))?, MAX_BODIES);
     Ok(match s.kind {
         StructureKind::Tower => StructureLayout::Tower {
             layers: count("layers", s.layers)?,
@@ -146,6 +143,7 @@ fn layout(
             if counts.contains(&0) {
                 return Err(problem(at("counts"), format!("must all be at least 1, got {counts:?}")));
             }
+            within_bodies(&at("counts"), &counts)?;
             StructureLayout::Grid { counts }
         }
     })
@@ -157,6 +155,7 @@ fn array(a: &ArrayToml, structure: &StructureDef, at: &dyn Fn(&str) -> String) -
     if a.counts.contains(&0) {
         return Err(problem(at("array.counts"), format!("must all be at least 1, got {:?}", a.counts)));
     }
+    within_bodies(&at("array.counts"), &a.counts)?;
     let size = structure.footprint().size();
     for axis in 0..2 {
         let spacing = finite(&at("array.spacing"), a.spacing[axis])?;
@@ -169,6 +168,18 @@ fn array(a: &ArrayToml, structure: &StructureDef, at: &dyn Fn(&str) -> String) -
         }
     }
     Ok(StructureArray { counts: a.counts, spacing: a.spacing })
+}
+
+/// Counts whose product (blocks, or copies of at least one block each) is within
+/// [`MAX_BODIES`], so that every later product of counts fits its integer.
+fn within_bodies(field: &str, counts: &[u32]) -> Checked<()> {
+    let product = counts.iter().try_fold(1u64, |p, &c| p.checked_mul(c as u64).filter(|&p| p <= MAX_BODIES));
+    if product.is_none() {
+        let message =
+            format!("{counts:?} make more than the {MAX_BODIES} bodies allowed (see docs/errors.md)");
+        return Err(problem(field, message));
+    }
+    Ok(())
 }
 
 pub(super) fn projectiles(
@@ -199,7 +210,8 @@ fn projectile(
         let message = format!("frame {} is past the last frame ({})", p.frame, frames.saturating_sub(1));
         return Err(problem(at("frame"), message));
     }
-    let count = p.count.map(|c| at_least_one(&at("count"), c)).transpose()?;
+    let count =
+        p.count.map(|c| at_most(&at("count"), at_least_one(&at("count"), c)?, MAX_BODIES)).transpose()?;
     let aim = match &p.structure {
         Some(name) => {
             if p.step.is_some() {

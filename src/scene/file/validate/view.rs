@@ -2,11 +2,12 @@
 
 use std::collections::BTreeSet;
 
-use super::{at_least_one, finite, finite3, non_negative, positive, problem, Checked};
+use super::{at_least_one, at_most, finite, finite3, non_negative, positive, problem, Checked};
 use crate::scene::file::schema::{CameraToml, LightTag, LightToml, RenderToml, SkyToml};
 use crate::scene::file::spec::{
     CameraDef, CameraKeyframeDef, CameraPlacement, LightDef, LightKind, RenderDef, SkyDef,
 };
+use crate::scene::limits::{image_size_problem, MAX_IMAGE_SIDE, MAX_SAMPLES_PER_PIXEL};
 
 /// Unique names, each camera fixed or key-framed.
 pub(super) fn cameras(raw: &[CameraToml]) -> Checked<Vec<CameraDef>> {
@@ -182,7 +183,12 @@ fn light_kind(light: &LightToml, at: &dyn Fn(&str) -> String) -> Checked<LightKi
 pub(super) fn render(r: &RenderToml, cameras: &[CameraDef]) -> Checked<RenderDef> {
     let width = at_least_one("render.width", r.width)?;
     let height = at_least_one("render.height", r.height)?;
+    if let Some(message) = image_size_problem(width, height) {
+        let field = if height > MAX_IMAGE_SIDE { "render.height" } else { "render.width" };
+        return Err(problem(field, message));
+    }
     let samples_per_pixel = at_least_one("render.samples_per_pixel", r.samples_per_pixel)?;
+    let samples_per_pixel = at_most("render.samples_per_pixel", samples_per_pixel, MAX_SAMPLES_PER_PIXEL)?;
     let frame_step = at_least_one("render.frame_step", r.frame_step)?;
     let camera = match &r.camera {
         None => None,

@@ -1,0 +1,39 @@
+//! The largest counts, sizes and resolutions dormant accepts, from a scene file or the command
+//! line: what a 24 GiB machine can hold, so that a typo such as `count = 4000000000` is an
+//! error naming the field instead of an allocation that grows until the machine gives up.
+//! Scene-file validation and the CLI's parsers both check against these constants.
+//!
+//! The budgets come from measurement (docs/errors.md): simulating the demolition's 80,456
+//! bodies peaks at 505 MB resident (about 6.3 KB a body with Rapier's broad phase, islands and
+//! the trajectory), so [`MAX_BODIES`] bodies need about 13 GB; a frame holds about 100 bytes a
+//! pixel over its film, AOVs and output buffers, so [`MAX_PIXELS`] need about 7 GB.
+
+/// Dynamic bodies in one scene: spawned objects, structure blocks, projectiles and
+/// key-framed bodies together.
+pub const MAX_BODIES: u64 = 2_000_000;
+
+/// Frames in one scene (4.6 hours at 60 frames a second).
+pub const MAX_FRAMES: u32 = 1_000_000;
+
+/// Width or height of an image, in pixels.
+pub const MAX_IMAGE_SIDE: u32 = 16_384;
+
+/// Pixels in one image (8192 x 8192).
+pub const MAX_PIXELS: u64 = 1 << 26;
+
+/// Samples per pixel.
+pub const MAX_SAMPLES_PER_PIXEL: u32 = 65_536;
+
+/// Why an image size is out of bounds, or `None` when `width` x `height` is allowed.
+pub fn image_size_problem(width: u32, height: u32) -> Option<String> {
+    if !(1..=MAX_IMAGE_SIDE).contains(&width) || !(1..=MAX_IMAGE_SIDE).contains(&height) {
+        return Some(format!("{width}x{height}: width and height must be from 1 to {MAX_IMAGE_SIDE}"));
+    }
+    let pixels = width as u64 * height as u64;
+    if pixels > MAX_PIXELS {
+        return Some(format!(
+            "{width}x{height} is {pixels} pixels, more than the {MAX_PIXELS} (8192x8192) allowed"
+        ));
+    }
+    None
+}
