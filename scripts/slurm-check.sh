@@ -184,7 +184,7 @@ for _ in $(seq 120); do
     sleep 0.5
 done
 [ "$state" = idle ] || die "node $node is not idle after 60 s (state: '${state:-no answer}')"
-say "Slurm up: slurmctld on 127.0.0.1:$ctld_port, node $node with $cpus CPUs ($(sinfo --version))"
+say "Slurm up in $(( $(date +%s) - started )) s: slurmctld on 127.0.0.1:$ctld_port, node $node with $cpus CPUs ($(sinfo --version))"
 
 # --- the sequence, whole and as a job array ------------------------------------------------
 # Relative paths, as in the README: the job runs in the directory it is submitted from.
@@ -206,6 +206,7 @@ job=$(DORMANT="$bin" TRAJECTORY=out/tiny.traj FRAMES=$frames PER_TASK=$per_task 
       --chdir="$work" --output="$tmp/log/task-%a.out" "$root/scripts/slurm-array.sh")
 job=${job%%;*}
 say "job $job submitted; waiting"
+submitted=$(date +%s%N)
 deadline=$(( $(date +%s) + timeout_s ))
 while [ -n "$(squeue -h -j "$job" 2>/dev/null)" ]; do
     [ "$(date +%s)" -lt "$deadline" ] || die "job $job still queued or running after $timeout_s s: $(squeue -h -j "$job" -o '%i %T %R' | head -n 3 | tr '\n' ';')"
@@ -217,7 +218,7 @@ done
 states=$(scontrol -o show job "$job" | sed -E 's/.*ArrayTaskId=([0-9]+).* JobState=([A-Z_]+).* ExitCode=([0-9:]+).*/\1 \2 \3/' | sort -n)
 [ "$(echo "$states" | grep -c ' COMPLETED 0:0$')" -eq "$tasks" ] \
     || die "job $job: not every task completed with exit code 0 (task state exit): $(echo "$states" | grep -v ' COMPLETED 0:0$' | head -n 5 | tr '\n' ';') (task logs above)"
-say "job $job finished: $tasks tasks completed"
+say "job $job finished: $tasks tasks completed in $(( ($(date +%s%N) - submitted) / 1000000 )) ms"
 
 "$root/scripts/slurm-gather.sh" out/tiny
 
