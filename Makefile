@@ -4,7 +4,7 @@
 CARGO ?= cargo
 RELEASE_BIN := target/release/dormant
 
-.PHONY: setup build demo test test-no-embree lint fmt bench clean
+.PHONY: setup build demo test test-no-embree lint fmt bench clean slurm-check
 
 setup:
 	bash scripts/setup.sh
@@ -23,6 +23,11 @@ test: setup
 
 test-no-embree:
 	$(CARGO) test --release -p dormant --no-default-features
+
+# The README's job array on a real single-node Slurm started on this machine (root; installs
+# slurm-wlm and munge), checked against one uninterrupted run. See docs/slurm.md.
+slurm-check: build
+	bash scripts/slurm-check.sh
 
 lint:
 	$(CARGO) fmt --all --check

@@ -287,6 +287,70 @@ fn replayed_frames_have_no_physics_time() {
     check_csv(&std::fs::read_to_string(out.join("stats.csv")).unwrap(), 100..110);
 }
 
+/// `frame,islands_slept,islands_woke` of every row of `dir`'s stats.csv.
+fn island_event_columns(dir: &std::path::Path) -> Vec<String> {
+    let text = std::fs::read_to_string(dir.join("stats.csv")).unwrap();
+    let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+    let at = |name: &str| header.iter().position(|c| *c == name).unwrap();
+    let columns = [at("frame"), at("islands_slept"), at("islands_woke")];
+    text.lines()
+        .skip(1)
+        .map(|line| {
+            let cells: Vec<&str> = line.split(',').collect();
+            columns.map(|c| cells[c]).join(",")
+        })
+        .collect()
+}
+
+/// The README's job array joins the slices' stats.csv into one table: a slice's first row must
+/// count the island events since the frame a whole run rendered before it, not since frame 0.
+#[test]
+fn slices_count_island_events_as_a_whole_run_does() {
+    let dir = tempfile::tempdir().unwrap();
+    let traj = dir.path().join("tiny.traj");
+    let root = env!("CARGO_MANIFEST_DIR");
+    let status = dormant()
+        .args(["simulate", "scenes/tiny.toml", "--quiet", "--out"])
+        .arg(&traj)
+        .current_dir(root)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let render = |frames: &str, out: &std::path::Path| {
+        let status = dormant()
+            .args([
+                "render",
+                "--quiet",
+                "--size",
+                "16x9",
+                "--spp",
+                "1",
+                "--frame-step",
+                "3",
+                "--frames",
+                frames,
+            ])
+            .arg("--trajectory")
+            .arg(&traj)
+            .arg("--out")
+            .arg(out)
+            .status()
+            .unwrap();
+        assert!(status.success(), "render --frames {frames}");
+        island_event_columns(out)
+    };
+    let whole = render("0..480", &dir.path().join("whole"));
+    // 100 and 301 are off the step grid: the slices start at frames 102 and 303.
+    let mut joined = Vec::new();
+    for (i, frames) in ["0..100", "100..301", "301..480"].into_iter().enumerate() {
+        joined.extend(render(frames, &dir.path().join(format!("part_{i}"))));
+    }
+    let events: u32 =
+        whole.iter().map(|row| row.split(',').skip(1).map(|n| n.parse::<u32>().unwrap()).sum::<u32>()).sum();
+    assert!(events > 0, "tiny's trajectory has island events");
+    assert_eq!(joined, whole);
+}
+
 #[test]
 fn built_in_single_frame_writes_no_stats() {
     let dir = tempfile::tempdir().unwrap();

@@ -25,6 +25,12 @@ impl Sequence {
             }
             for manager in managers.iter_mut() {
                 manager.observe(frame.events);
+                // A slice (`--frames A..B`, A > 0) counts island events from the frame a whole
+                // run would have rendered last, so that its rows join into the whole run's
+                // table; the events themselves still all reach the manager.
+                if selection.skipped_on_grid(frame.index) {
+                    manager.forget_event_counts();
+                }
             }
             if selection.selects(frame.index) {
                 on_frame(&frame, managers)?;

@@ -55,6 +55,16 @@ impl FrameSelection {
         }
     }
 
+    /// Whether frame `index` comes before the first selected frame and a run of the same step
+    /// from frame 0 would render it: a slice's first frame reports the island events since
+    /// the last such frame, as that run would, not since frame 0.
+    pub fn skipped_on_grid(&self, index: u32) -> bool {
+        match &self.0 {
+            Selected::Stepped { start, step, .. } => index < *start && index % step == 0,
+            Selected::List(_) => false,
+        }
+    }
+
     /// One past the last frame that can be selected: replay stops there.
     pub fn end(&self) -> u32 {
         match &self.0 {
@@ -109,5 +119,7 @@ mod tests {
         let l = FrameSelection::list(vec![9, 3, 3]);
         assert_eq!((l.frames(), l.count(), l.end()), (vec![3, 9], 2, 10));
         assert!(l.selects(9) && !l.selects(4));
+        assert_eq!((0..9).filter(|&f| s.skipped_on_grid(f)).collect::<Vec<_>>(), vec![0, 4]);
+        assert!(!l.skipped_on_grid(0));
     }
 }

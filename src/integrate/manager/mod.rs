@@ -325,6 +325,12 @@ impl SceneManager {
         }
     }
 
+    /// Zeroes the island events counted for the next prepared frame's `islands_slept` and
+    /// `islands_woke` (the events themselves stay applied).
+    pub fn forget_event_counts(&mut self) {
+        self.pending_events = (0, 0);
+    }
+
     /// Brings the accelerator to `frame` (see the module docs) and commits. Events up to and
     /// including this frame must have been [`observe`](Self::observe)d.
     pub fn prepare(&mut self, frame: &ReplayFrame<'_>) -> Result<&FrameStats, AccelError> {
