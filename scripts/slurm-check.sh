@@ -190,7 +190,6 @@ say "Slurm up in $(( $(date +%s) - started )) s: slurmctld on 127.0.0.1:$ctld_po
 # Relative paths, as in the README: the job runs in the directory it is submitted from.
 work="$tmp/work"
 cd "$work"
-mkdir -p out   # simulate does not create its output's directory (render does)
 "$bin" --quiet simulate "$root/scenes/tiny.toml" --out out/tiny.traj
 read -r -a args <<< "$render_args"
 t0=$(date +%s%N)

@@ -397,6 +397,15 @@ fn cli_output_path_not_writable_is_a_runtime_error() {
     let mut cmd = dormant();
     cmd.args(["--quiet", "simulate", "--out"]).arg(file.join("t.traj")).arg(repo("scenes/tiny.toml"));
     expect_exit(&mut cmd, 1, &["not-a-dir"], None);
+    // A directory that does not exist yet is created, as for `render --out`.
+    let traj = dir.path().join("new/dir/t.traj");
+    let status = dormant()
+        .args(["--quiet", "simulate", "--frame-count", "2", "--out"])
+        .arg(&traj)
+        .arg(repo("scenes/tiny.toml"))
+        .status()
+        .unwrap();
+    assert!(status.success() && traj.is_file());
 }
 
 // ---------------------------------------------------------------------------------------------

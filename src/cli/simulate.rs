@@ -52,6 +52,13 @@ pub struct SimulateArgs {
 
 pub(super) fn run(args: &SimulateArgs, quiet: bool, json_out: &JsonOutput) -> Result<(), CliError> {
     let (file, options) = args.scene.load()?;
+    // Like `render --out`, the trajectory's directory is created, and before simulating, so a
+    // path that cannot be written fails at once rather than after the whole simulation.
+    if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(|e| {
+            CliError::Runtime(format!("cannot create the directory of {}: {e}", args.out.display()))
+        })?;
+    }
     let bar = super::progress::frames_bar(quiet, "simulating", None);
     let trajectory = physics::simulate_observed(&file, &options, &mut |step| {
         bar.set_length(u64::from(step.frames));
