@@ -54,5 +54,7 @@ if [ "$a" -ge "$frames" ]; then
 fi
 part=$(printf '%s/part_%04d' "$out" "$SLURM_ARRAY_TASK_ID")
 say "frames $a..$b into $part on $(hostname), $threads threads"
-"$dormant" --quiet --threads "$threads" render --trajectory "$trajectory" --frames "$a..$b" \
+# --resume: a resubmitted task keeps the frames it finished before it was killed (none on a
+# first run, where its directory holds no stats.json yet).
+"$dormant" --quiet --threads "$threads" render --resume --trajectory "$trajectory" --frames "$a..$b" \
     "${render_args[@]}" --out "$part"

@@ -53,6 +53,17 @@ const RUN: &[(&str, &str)] = &[
     ("height", "integer"),
     ("spp", "integer"),
     ("physics", "string"),
+    ("scene_hash", "string"),
+    ("trajectory_frames", "integer"),
+    ("frame_start", "integer"),
+    ("frame_end", "integer"),
+    ("frame_step", "integer"),
+    ("max_depth", "integer|null"),
+    ("seed", "string"),
+    ("reuse", "boolean"),
+    ("exposure", "number"),
+    ("aovs", "array"),
+    ("exr", "boolean"),
 ];
 
 const FRAME: &[(&str, &str)] = &[

@@ -337,7 +337,7 @@ fn never_always_and_auto_render_the_same_images() {
                 sequence.manager(backend, Some(2), sequence.manager_options(&frames, settings)).unwrap();
             let mut images = Vec::new();
             sequence
-                .render(&frames, &mut manager, &renderer, &mut |f, stats| {
+                .render(&frames, &mut manager, &renderer, &[], &mut |f, stats, _| {
                     integrated = integrated.max(stats.integrated_islands);
                     images.push(f.film.clone());
                     Ok::<(), SequenceError>(())
@@ -388,7 +388,7 @@ fn baked_debug_view_shows_integrated_bodies_in_orange() {
         let mut manager = sequence.manager(Backend::Bvh, Some(2), options).unwrap();
         let mut baked_pixels = 0;
         sequence
-            .render(&frames, &mut manager, &renderer, &mut |f, _| {
+            .render(&frames, &mut manager, &renderer, &[], &mut |f, _, _| {
                 baked_pixels += f.film.pixels.iter().filter(|p| orange(**p)).count();
                 Ok::<(), SequenceError>(())
             })

@@ -5,6 +5,7 @@ mod bench;
 mod info;
 mod progress;
 mod render;
+mod resume;
 mod simulate;
 mod verify;
 

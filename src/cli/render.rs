@@ -14,11 +14,12 @@ use crate::render::{
     self, AmbientOcclusion, Aov, AovIntegrator, DirectLighting, Integrator, PathTracer, RenderScene,
     RenderSettings,
 };
-use crate::report::{self, FrameRecord, RunInfo, RunStats};
+use crate::report::{self, FrameRecord, RunInfo, StatsFile};
 use crate::scene::file::SceneFile;
 use crate::scene::limits::{image_size_problem, MAX_IMAGE_SIDE, MAX_SAMPLES_PER_PIXEL};
 use crate::sequence::{
-    FrameRange, FrameRenderer, RenderedFrame, SeedMode, Sequence, SequenceError, SequenceSource,
+    FrameRange, FrameRenderer, FrameSelection, KeptFrame, RenderedFrame, SeedMode, Sequence, SequenceError,
+    SequenceSource,
 };
 
 /// Image size as `WIDTHxHEIGHT`.
@@ -123,6 +124,13 @@ pub struct RenderArgs {
     /// the camera stayed, instead of tracing them (`off` traces every frame).
     #[arg(long, value_enum, default_value_t = Switch::On)]
     pub reuse: Switch,
+    /// With SCENE or --trajectory: continue a run that was interrupted in --out DIR. Frames
+    /// whose files are all there and whose statistics DIR/stats.json holds are not rendered
+    /// again (the island events and decisions up to them are replayed); the rest are. DIR's
+    /// stats.json must come from the same options (exit 2 otherwise); without one, every
+    /// frame renders.
+    #[arg(long)]
+    pub resume: bool,
     /// With SCENE or --trajectory: also encode the frames as DIR/video.mp4 (needs ffmpeg on PATH).
     #[arg(long)]
     pub video: bool,
@@ -190,7 +198,8 @@ pub(super) fn run(
         CliError::Runtime(format!("cannot create output directory {}: {e}", args.out.display()))
     })?;
     let integrator = integrator(args.mode, args.max_depth);
-    let mut writer = FrameWriter { args, backend, quiet: quiet || json.is_requested(), records: Vec::new() };
+    let mut writer =
+        FrameWriter { args, backend, quiet: quiet || json.is_requested(), records: Vec::new(), kept: 0 };
     let (scene_name, is_sequence) = match sequence_source(args)? {
         None => (render_still(args, backend, threads, integrator.as_ref(), &mut writer)?, false),
         Some(source) => {
@@ -210,6 +219,7 @@ pub(super) fn run(
         "mode": args.mode,
         "integration": is_sequence.then_some(args.integration),
         "frames": writer.records,
+        "kept_frames": writer.kept,
     }))
 }
 
@@ -220,9 +230,11 @@ fn check_flags(args: &RenderArgs) -> Result<(), CliError> {
     }
     let sequence = args.scene_file.is_some() || args.trajectory.is_some();
     if !sequence {
-        for (flag, given) in
-            [("--frames", args.frames.is_some()), ("--frame-step", args.frame_step.is_some())]
-        {
+        for (flag, given) in [
+            ("--frames", args.frames.is_some()),
+            ("--frame-step", args.frame_step.is_some()),
+            ("--resume", args.resume),
+        ] {
             if given {
                 return Err(CliError::Input(format!("{flag} needs a SCENE file or --trajectory")));
             }
@@ -285,8 +297,9 @@ fn render_still(
     Ok(description.name)
 }
 
-/// The selected frames of `sequence` through one scene manager, then `stats.json`,
-/// `stats.csv`, `report.png` and, with `--video`, `video.mp4`; returns the scene's name.
+/// The selected frames of `sequence` through one scene manager, with `stats.json` and
+/// `stats.csv` written as frames finish, then `report.png` and, with `--video`, `video.mp4`;
+/// with `--resume`, the frames an earlier run finished are kept. Returns the scene's name.
 fn render_sequence(
     args: &RenderArgs,
     sequence: &Sequence,
@@ -315,25 +328,83 @@ fn render_sequence(
         seed: args.seed,
         reuse_static: args.reuse == Switch::On,
     };
+    let info = run_info(args, sequence, backend, &frames);
+    let kept = if args.resume { super::resume::kept_frames(args, &info, &frames)? } else { Vec::new() };
+    if args.resume && !writer.quiet {
+        println!("{}", super::resume::summary(&kept, &frames));
+    }
+    writer.kept = kept.len();
+    let mut frame_paths: Vec<PathBuf> = kept.iter().map(|r| frame_files(args, r.frame).remove(0)).collect();
+    let kept_frames: Vec<KeptFrame> = kept.iter().map(FrameRecord::kept).collect();
+    let physics_total_ms = (!sequence.physics_ms.is_empty()).then(|| sequence.physics_ms.iter().sum::<f64>());
+    let mut stats_file = StatsFile::new(&args.out, info, physics_total_ms, kept);
     let progress = super::progress::frames_bar(quiet, "rendering", Some(u64::from(frames.count())));
-    let (mut records, mut frame_paths) = (Vec::new(), Vec::new());
+    progress.set_position(kept_frames.len() as u64);
     let (mut rays, mut trace_seconds) = (0u64, 0.0f64);
-    sequence.render(&frames, &mut manager, &renderer, &mut |frame, stats| {
-        frame_paths.push(writer.write(frame, Some(stats), &progress)?);
-        let physics = sequence.physics_ms.get(frame.index as usize).copied();
-        records.push(FrameRecord::new(stats, frame.render.mrays_per_second(), physics));
-        rays += frame.render.rays;
-        trace_seconds += frame.render.seconds;
-        let mrays = if trace_seconds > 0.0 { rays as f64 / trace_seconds / 1e6 } else { 0.0 };
-        progress.set_message(format!(
-            "frame {} | {mrays:.1} Mrays/s | {} islands integrated",
-            frame.index, stats.integrated_islands
-        ));
-        progress.inc(1);
-        Ok::<(), CliError>(())
-    })?;
+    let runtime = |e: &dyn std::fmt::Display| CliError::Runtime(e.to_string());
+    let rendered =
+        sequence.render(&frames, &mut manager, &renderer, &kept_frames, &mut |frame, stats, manager| {
+            frame_paths.push(writer.write(frame, Some(stats), &progress)?);
+            let physics = sequence.physics_ms.get(frame.index as usize).copied();
+            let record = FrameRecord::new(stats, frame.render.mrays_per_second(), physics);
+            stats_file.push(record, manager).map_err(|e| runtime(&e))?;
+            rays += frame.render.rays;
+            trace_seconds += frame.render.seconds;
+            let mrays = if trace_seconds > 0.0 { rays as f64 / trace_seconds / 1e6 } else { 0.0 };
+            progress.set_message(format!(
+                "frame {} | {mrays:.1} Mrays/s | {} islands integrated",
+                frame.index, stats.integrated_islands
+            ));
+            progress.inc(1);
+            Ok::<(), LoopError>(())
+        });
+    rendered.map_err(|e| e.into_cli(&args.out))?;
     progress.finish_and_clear();
-    let info = RunInfo {
+    let run_stats = stats_file.finish(&manager).map_err(|e| runtime(&e))?;
+    report::write_report_png(&run_stats, &args.out.join("report.png")).map_err(|e| runtime(&e))?;
+    if args.video {
+        let fps = 1.0 / (f64::from(sequence.trajectory.timestep) * f64::from(frames.step()));
+        encode_video(args, &frame_paths, fps, writer.quiet)?;
+    }
+    Ok(sequence.template.name.clone())
+}
+
+/// What stops a sequence's render loop: the sequence, or writing a frame's files.
+enum LoopError {
+    Sequence(SequenceError),
+    Cli(CliError),
+}
+
+impl From<SequenceError> for LoopError {
+    fn from(e: SequenceError) -> Self {
+        LoopError::Sequence(e)
+    }
+}
+
+impl From<CliError> for LoopError {
+    fn from(e: CliError) -> Self {
+        LoopError::Cli(e)
+    }
+}
+
+impl LoopError {
+    /// The error as the CLI reports it; a kept frame that does not replay names the statistics
+    /// file in `out` it was kept from.
+    fn into_cli(self, out: &Path) -> CliError {
+        match self {
+            LoopError::Sequence(e @ SequenceError::KeptMismatch { .. }) => CliError::Input(format!(
+                "{}: {e}; remove it to render every frame again",
+                out.join("stats.json").display()
+            )),
+            LoopError::Sequence(e) => sequence_error(e, "--frames"),
+            LoopError::Cli(e) => e,
+        }
+    }
+}
+
+/// The header of the run's statistics: every option that decides its images and statistics.
+fn run_info(args: &RenderArgs, sequence: &Sequence, backend: Backend, frames: &FrameSelection) -> RunInfo {
+    RunInfo {
         scene: sequence.template.name.clone(),
         backend: backend.to_string(),
         mode: json_name(&args.mode),
@@ -345,18 +416,18 @@ fn render_sequence(
         height: args.size.height,
         spp: args.spp,
         physics: sequence.physics,
-    };
-    let physics_total_ms = (!sequence.physics_ms.is_empty()).then(|| sequence.physics_ms.iter().sum::<f64>());
-    let run_stats =
-        RunStats::new(info, records, manager.cache_stats(), manager.cost_model(), physics_total_ms);
-    let runtime = |e: &dyn std::fmt::Display| CliError::Runtime(e.to_string());
-    run_stats.write(&args.out).map_err(|e| runtime(&e))?;
-    report::write_report_png(&run_stats, &args.out.join("report.png")).map_err(|e| runtime(&e))?;
-    if args.video {
-        let fps = 1.0 / (f64::from(sequence.trajectory.timestep) * f64::from(frames.step()));
-        encode_video(args, &frame_paths, fps, writer.quiet)?;
+        scene_hash: format!("{:016x}", sequence.trajectory.scene_hash),
+        trajectory_frames: sequence.frame_count(),
+        frame_start: frames.start(),
+        frame_end: frames.end(),
+        frame_step: frames.step(),
+        max_depth: (args.mode == RenderMode::Path).then_some(args.max_depth),
+        seed: json_name(&args.seed),
+        reuse: args.reuse == Switch::On,
+        exposure: args.exposure,
+        aovs: args.aov.iter().map(|a| a.name().to_string()).collect(),
+        exr: args.exr,
     }
-    Ok(sequence.template.name.clone())
 }
 
 /// `video.mp4` from the written frames.
@@ -379,6 +450,8 @@ struct FrameWriter<'a> {
     /// No per-frame line on stdout (`--quiet`, or the JSON report goes there).
     quiet: bool,
     records: Vec<serde_json::Value>,
+    /// Frames kept from an earlier run (`--resume`), not written again.
+    kept: usize,
 }
 
 impl FrameWriter<'_> {
@@ -459,7 +532,7 @@ impl FrameWriter<'_> {
 
 /// The files frame `index` writes, in order: the image (PNG, then EXR with `--exr`), then each
 /// AOV pass the same way.
-fn frame_files(args: &RenderArgs, index: u32) -> Vec<PathBuf> {
+pub(super) fn frame_files(args: &RenderArgs, index: u32) -> Vec<PathBuf> {
     let base = args.out.join(format!("frame_{index:04}"));
     let mut names = vec![String::new()];
     names.extend(args.aov.iter().map(|a| format!(".{}", a.name())));

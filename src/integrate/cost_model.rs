@@ -149,7 +149,7 @@ impl std::fmt::Display for IntegrationForm {
 }
 
 /// The numbers behind one decision.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct CostEstimate {
     /// This island's own share of the build, ms (baked: its triangles; resting: its
     /// instances in the rebuilt resting scene); the frame's shared cost is apart.

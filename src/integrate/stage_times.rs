@@ -3,13 +3,13 @@
 
 use std::ops::{AddAssign, Div};
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Milliseconds spent in each stage of a frame (or summed, or averaged, over frames), in the
 /// order the scene manager runs them: structure updates, then the trace. Serialised as
 /// `update_ms`, `integrate_ms`, `reactivate_ms`, `commit_ms`, `trace_ms`; records that also
 /// report the whole frame add `frame_ms` beside it ([`Self::frame_ms`]).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct StageTimes {
     /// Instances follow the awake bodies (added, moved, removed).
     pub update_ms: f64,

@@ -15,7 +15,7 @@ use std::collections::BTreeMap;
 use super::body::{BodyId, BodyPose};
 
 /// A sleeping island's identity; never reused within a simulation.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize, serde::Deserialize)]
 pub struct IslandId(pub u64);
 
 /// A change in the set of sleeping islands.

@@ -1,5 +1,6 @@
-//! Run reports: the per-frame statistics of a rendered sequence (`stats.json`, `stats.csv`)
-//! and their plot (`report.png`); and the output of `dormant bench paper` (`paper.json`,
+//! Run reports: the per-frame statistics of a rendered sequence (`stats.json`, `stats.csv`,
+//! written as frames finish and read back by `render --resume`) and their plot
+//! (`report.png`); and the output of `dormant bench paper` (`paper.json`,
 //! `paper.md`, one figure per workload). Fed by the CLI from the scene manager's [`FrameStats`];
 //! the schema is documented in docs/stats-format.md.
 //!
@@ -10,11 +11,13 @@ mod paper_plot;
 mod plot;
 mod regimes;
 mod stats;
+mod stats_file;
 
 pub(crate) use paper::write_paper;
 pub(crate) use plot::write_report_png;
 pub(crate) use regimes::write_regimes;
-pub(crate) use stats::{FrameRecord, RunInfo, RunStats};
+pub(crate) use stats::{FrameRecord, RunInfo};
+pub(crate) use stats_file::{read_kept_frames, StatsFile};
 
 /// Failures writing a report file.
 #[derive(Debug, thiserror::Error)]
@@ -23,6 +26,14 @@ pub enum ReportError {
     Write { path: std::path::PathBuf, source: std::io::Error },
     #[error("cannot read {path}: {source}")]
     Read { path: std::path::PathBuf, source: std::io::Error },
+    #[error("{path}: not a statistics file dormant can read: {source}")]
+    Parse { path: std::path::PathBuf, source: serde_json::Error },
+    /// `render --resume` found the statistics of another run configuration.
+    #[error(
+        "{path}: written by a run of another configuration ({differences}); --resume continues only \
+         the same run: give another --out, or remove its files to start over"
+    )]
+    OtherRun { path: std::path::PathBuf, differences: String },
     #[error("cannot draw {path}: {message}")]
     Plot { path: std::path::PathBuf, message: String },
 }

@@ -3,11 +3,11 @@
 
 use std::path::Path;
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::ReportError;
 use crate::integrate::{CacheStats, CostModelState, Decision, FrameStats, StageTimes, FRACTION_BUCKETS};
-use crate::sequence::PhysicsSource;
+use crate::sequence::{KeptFrame, PhysicsSource};
 
 /// `format` field of stats.json.
 pub const STATS_FORMAT: &str = "dormant-stats";
@@ -15,7 +15,7 @@ pub const STATS_FORMAT: &str = "dormant-stats";
 pub const STATS_VERSION: u32 = 2;
 
 /// One rendered frame.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FrameRecord {
     pub frame: u32,
     /// Physics step of this frame, ms; `None` when the frames are replayed from a trajectory.
@@ -75,6 +75,21 @@ impl FrameRecord {
         }
     }
 
+    /// What `render --resume` needs of this frame, finished by an earlier run, to bring the
+    /// scene manager through it as that run did.
+    pub fn kept(&self) -> KeptFrame {
+        KeptFrame {
+            index: self.frame,
+            reused: self.reused,
+            decisions: self.decisions.iter().map(|d| (d.island, d.integrate)).collect(),
+            trace_ms: self.stages.trace_ms,
+            rays: self.rays,
+            instances: self.instances,
+            integrated_islands: self.integrated_islands,
+            sleeping_islands: self.sleeping_islands,
+        }
+    }
+
     /// Decisions to integrate, and to decline.
     pub fn decision_counts(&self) -> (usize, usize) {
         let yes = self.decisions.iter().filter(|d| d.integrate).count();
@@ -88,8 +103,9 @@ impl FrameRecord {
     }
 }
 
-/// What was rendered, for the header of stats.json.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+/// What was rendered, for the header of stats.json: everything that decides a run's images
+/// and statistics, so that `render --resume` continues only the same run.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct RunInfo {
     pub scene: String,
     pub backend: String,
@@ -103,6 +119,26 @@ pub struct RunInfo {
     pub height: u32,
     pub spp: u32,
     pub physics: PhysicsSource,
+    /// The simulated scene (scene file and overrides): the trajectory's scene hash, 16 hex
+    /// digits.
+    pub scene_hash: String,
+    /// Frames the trajectory holds.
+    pub trajectory_frames: u32,
+    /// The rendered frames: every `frame_step`-th frame of `frame_start..frame_end`, counted
+    /// from frame 0.
+    pub frame_start: u32,
+    pub frame_end: u32,
+    pub frame_step: u32,
+    /// Longest path in `path` mode; `None` in the other modes.
+    pub max_depth: Option<u32>,
+    /// `fixed` or `per-frame`.
+    pub seed: String,
+    /// Static-frame reuse (`--reuse on`).
+    pub reuse: bool,
+    pub exposure: f32,
+    /// Extra passes (`--aov`), in request order.
+    pub aovs: Vec<String>,
+    pub exr: bool,
 }
 
 /// Sums over the run.
@@ -343,6 +379,17 @@ mod tests {
             height: 1,
             spp: 1,
             physics: PhysicsSource::Trajectory,
+            scene_hash: format!("{:016x}", 1),
+            trajectory_frames: 3,
+            frame_start: 0,
+            frame_end: 3,
+            frame_step: 1,
+            max_depth: Some(6),
+            seed: "fixed".into(),
+            reuse: true,
+            exposure: 1.0,
+            aovs: Vec::new(),
+            exr: false,
         };
         let stats = RunStats::new(run, frames, CacheStats::default(), CostModelState::default(), None);
         let csv = stats.to_csv();

@@ -43,6 +43,12 @@ pub enum SequenceError {
     /// A frame range past the trajectory's end (callers name the flag that gave it).
     #[error("{start}..{end}: the trajectory has {total} frames (0..{total})")]
     Range { start: u32, end: u32, total: u32 },
+    /// A frame kept from an earlier run (`render --resume`) whose recorded state the replay
+    /// does not reach (callers name the statistics file it came from).
+    #[error(
+        "frame {frame}: the kept statistics record {what} = {recorded}, replaying them gives {replayed}"
+    )]
+    KeptMismatch { frame: u32, what: &'static str, recorded: String, replayed: String },
     #[error(transparent)]
     Render(#[from] RenderError),
     #[error(transparent)]

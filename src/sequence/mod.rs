@@ -9,6 +9,8 @@
 //! - [`Sequence::render_frame`] and [`Sequence::render`]: the per-frame call into the
 //!   renderer through a [`SceneManager`](crate::integrate::SceneManager), whose trace time
 //!   goes back to its cost model;
+//! - [`KeptFrame`]: a frame an earlier run finished (`render --resume`), which the driver
+//!   brings the manager through as that run did instead of rendering it;
 //! - [`Sequence::describe_frame`]: a frame with every present body an instance, the
 //!   reference integrated scenes are checked against.
 //!
@@ -16,13 +18,15 @@
 
 mod describe;
 mod error;
+mod kept;
 mod render;
 mod replay;
 mod selection;
 mod source;
 
 pub use error::SequenceError;
-pub use render::{FrameRenderer, RenderedFrame, SeedMode};
+pub use kept::KeptFrame;
+pub use render::{FrameHandler, FrameRenderer, RenderedFrame, SeedMode};
 pub use replay::FrameVisitor;
 pub use selection::{FrameRange, FrameSelection};
 pub use source::{PhysicsSource, Sequence, SequenceSource};

@@ -2,7 +2,7 @@
 //! scene rendered with the run's integrator and AOVs, and the trace time reported back to the
 //! manager's cost model.
 
-use super::{FrameSelection, Sequence, SequenceError};
+use super::{FrameSelection, KeptFrame, Sequence, SequenceError};
 use crate::integrate::{FrameStats, SceneManager};
 use crate::physics::ReplayFrame;
 use crate::render::{
@@ -56,6 +56,8 @@ impl FrameRenderer<'_> {
 /// one; the manager keeps the statistics of the last frame it prepared.
 pub struct RenderedFrame {
     pub index: u32,
+    /// The image; empty (0x0, no AOVs) when it is the image of a frame kept from an earlier
+    /// run (`reused_from` names it; its files hold the image).
     pub film: Film,
     pub render: RenderStats,
     /// The requested AOV passes, in request order.
@@ -64,6 +66,30 @@ pub struct RenderedFrame {
     /// ray was traced.
     pub reused_from: Option<u32>,
 }
+
+impl RenderedFrame {
+    /// Frame `index`, kept from an earlier run: no image in memory.
+    fn kept(index: u32) -> Self {
+        Self {
+            index,
+            film: Film::new(0, 0),
+            render: RenderStats::default(),
+            aovs: Vec::new(),
+            reused_from: None,
+        }
+    }
+
+    /// This frame's image handed on as frame `index`'s (static-frame reuse).
+    fn reuse_as(&mut self, index: u32) {
+        self.reused_from = Some(self.reused_from.unwrap_or(self.index));
+        self.index = index;
+        self.render = RenderStats::default();
+    }
+}
+
+/// What [`Sequence::render`] calls with each frame it renders or reuses: the frame, its
+/// statistics and the manager (for its cache and cost model so far).
+pub type FrameHandler<'h, E> = dyn FnMut(&RenderedFrame, &FrameStats, &SceneManager) -> Result<(), E> + 'h;
 
 impl Sequence {
     /// Renders `frame` through `manager`, whose island events up to this frame must have been
@@ -75,11 +101,9 @@ impl Sequence {
         frame: &ReplayFrame<'_>,
         renderer: &FrameRenderer<'_>,
     ) -> Result<RenderedFrame, RenderError> {
-        let camera = self.assets.camera_at(self.time_of(frame.index));
-        let samples = u64::from(renderer.width) * u64::from(renderer.height) * u64::from(renderer.spp);
-        manager
-            .set_probe_rays(PinholeCamera::pixel_centre_rays(&camera, PROBE_SIZE.0, PROBE_SIZE.1), samples);
+        self.aim_probes(manager, frame, renderer);
         manager.prepare(frame)?;
+        let camera = self.assets.camera_at(self.time_of(frame.index));
         // Emissive prototypes are light-sampled where their bodies are this frame.
         let bodies =
             if Emitters::prototypes_emit(&self.template) { self.bodies_at(frame) } else { Vec::new() };
@@ -99,6 +123,20 @@ impl Sequence {
         Ok(RenderedFrame { index: frame.index, film, render, aovs, reused_from: None })
     }
 
+    /// Points the manager's trace-penalty probes along `frame`'s camera, with the samples of
+    /// one of `renderer`'s frames.
+    pub(super) fn aim_probes(
+        &self,
+        manager: &mut SceneManager,
+        frame: &ReplayFrame<'_>,
+        renderer: &FrameRenderer<'_>,
+    ) {
+        let camera = self.assets.camera_at(self.time_of(frame.index));
+        let samples = u64::from(renderer.width) * u64::from(renderer.height) * u64::from(renderer.spp);
+        manager
+            .set_probe_rays(PinholeCamera::pixel_centre_rays(&camera, PROBE_SIZE.0, PROBE_SIZE.1), samples);
+    }
+
     /// Whether frames `a` and `b > a` show the same scene: no body moved, appeared or left in
     /// between (kinematic bodies included), and the camera is where it was. Lights, sky and
     /// materials do not change over a sequence.
@@ -110,37 +148,51 @@ impl Sequence {
     }
 
     /// Renders the frames `selection` selects through `manager` and hands each to
-    /// `on_frame` with its statistics. The accelerator is brought up to date at the first
+    /// `on_frame` with its statistics and the manager. The accelerator is brought up to date at the first
     /// selected frame, so a slice of a sequence renders the same images as a whole run, up to
     /// float noise (integrated and instanced bodies are hit alike).
     ///
     /// With a fixed seed, a frame that shows the same scene as the previous rendered frame
     /// ([`Sequence::unchanged_between`]) is that frame's image again: it is handed on with
     /// `reused_from` set and statistics marked `reused`, and the manager is not touched.
+    ///
+    /// `kept`: the first selected frames, in order, that an earlier run of the same
+    /// configuration finished (`render --resume`; empty otherwise). They are neither rendered
+    /// nor handed on: the manager is brought through them as that run did
+    /// ([`KeptFrame`]), so the frames after them render as in an uninterrupted run.
     pub fn render<E: From<SequenceError>>(
         &self,
         selection: &FrameSelection,
         manager: &mut SceneManager,
         renderer: &FrameRenderer<'_>,
-        on_frame: &mut dyn FnMut(&RenderedFrame, &FrameStats) -> Result<(), E>,
+        kept: &[KeptFrame],
+        on_frame: &mut FrameHandler<'_, E>,
     ) -> Result<(), E> {
         let mut last: Option<RenderedFrame> = None;
+        let mut kept = kept.iter().peekable();
+        let reusable = renderer.reuse_static && renderer.seed == SeedMode::Fixed;
         self.replay(selection, std::slice::from_mut(manager), &mut |frame, managers| {
             let manager = &mut managers[0];
-            let reusable = renderer.reuse_static && renderer.seed == SeedMode::Fixed;
-            if let Some(prev) =
-                last.as_mut().filter(|p| reusable && self.unchanged_between(p.index, frame.index))
-            {
-                prev.reused_from = Some(prev.reused_from.unwrap_or(prev.index));
-                prev.index = frame.index;
-                prev.render = RenderStats::default();
+            let previous = last.as_mut().filter(|p| reusable && self.unchanged_between(p.index, frame.index));
+            if let Some(k) = kept.next_if(|k| k.index == frame.index) {
+                self.replay_kept(manager, frame, renderer, k, previous.is_some())?;
+                match previous {
+                    Some(prev) => prev.reuse_as(frame.index),
+                    None => last = Some(RenderedFrame::kept(frame.index)),
+                }
+                return Ok(());
+            }
+            if let Some(prev) = previous {
+                prev.reuse_as(frame.index);
                 let stats = manager.last_frame().reused_as(frame.index);
-                return on_frame(prev, &stats);
+                return on_frame(prev, &stats, manager);
             }
             let rendered = self.render_frame(manager, frame, renderer).map_err(SequenceError::from)?;
-            on_frame(&rendered, manager.last_frame())?;
+            on_frame(&rendered, manager.last_frame(), manager)?;
             last = Some(rendered);
             Ok(())
-        })
+        })?;
+        debug_assert!(kept.next().is_none(), "kept frames are the first selected ones");
+        Ok(())
     }
 }

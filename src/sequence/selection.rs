@@ -65,6 +65,14 @@ impl FrameSelection {
         }
     }
 
+    /// The first frame that can be selected.
+    pub fn start(&self) -> u32 {
+        match &self.0 {
+            Selected::Stepped { start, .. } => *start,
+            Selected::List(frames) => frames.first().copied().unwrap_or(0),
+        }
+    }
+
     /// One past the last frame that can be selected: replay stops there.
     pub fn end(&self) -> u32 {
         match &self.0 {
@@ -115,7 +123,7 @@ mod tests {
         let s = FrameSelection::stepped(FrameRange { start: 5, end: 20 }, 4);
         assert_eq!(s.frames(), vec![8, 12, 16]);
         assert_eq!(s.count(), 3);
-        assert_eq!(s.end(), 20);
+        assert_eq!((s.start(), s.end()), (5, 20));
         let l = FrameSelection::list(vec![9, 3, 3]);
         assert_eq!((l.frames(), l.count(), l.end()), (vec![3, 9], 2, 10));
         assert!(l.selects(9) && !l.selects(4));

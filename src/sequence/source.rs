@@ -33,7 +33,7 @@ impl SequenceSource {
 }
 
 /// Where the frames' motion came from.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum PhysicsSource {
     /// Simulated in this run, before rendering: the step times are known.

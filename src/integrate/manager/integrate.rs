@@ -23,42 +23,39 @@ struct Considered {
     estimate: Option<CostEstimate>,
 }
 
+/// A candidate, whether to integrate it, and whether the decision is recorded (an island is
+/// recorded when integrated, and when first declined).
+type Verdict = (Considered, bool, bool);
+
 impl SceneManager {
-    /// Returns whether anything was integrated.
+    /// Returns whether anything was integrated. `decided`: an earlier run's decisions for this
+    /// frame (island, integrated), made again instead of asking the policy.
     pub(super) fn integrate(
         &mut self,
         frame: &ReplayFrame<'_>,
+        decided: Option<&[(IslandId, bool)]>,
         stats: &mut FrameStats,
     ) -> Result<bool, AccelError> {
         if self.options.policy == IntegrationPolicy::Never {
             return Ok(false);
         }
-        // `auto` prices the trace penalty in trace time, unknown before a frame was traced
-        // (milliseconds in a preview, seconds in a production frame). Priced at 0, everything
-        // was integrated at the first of four production frames, 3-8% slower; waiting for a
-        // traced frame cost the preview of 150,000 bodies a whole `never` frame (4% of the
-        // run). So the probe's rays, scaled to the frame's samples, stand in until then.
-        if self.options.policy == IntegrationPolicy::Auto && !self.cost.knows_trace() {
-            match self.accel.query().ok().and_then(|q| self.probe.frame_trace_estimate(q)) {
-                Some(ms) => self.cost.assume_trace(ms),
+        let verdicts = match decided {
+            Some(decided) => self
+                .consider(frame, None)
+                .into_iter()
+                .map(|c| {
+                    let recorded = decided.iter().find(|(island, _)| *island == c.island);
+                    (c, recorded.is_some_and(|r| r.1), recorded.is_some())
+                })
+                .collect(),
+            None => match self.policy_verdicts(frame) {
+                Some(verdicts) => verdicts,
                 None => return Ok(false),
-            }
-        }
-        let outlook = (self.options.policy == IntegrationPolicy::Auto).then(|| self.outlook(frame));
-        let considered = self.consider(frame, outlook.as_ref());
-        let accept = match &outlook {
-            Some(outlook) => {
-                let estimates: Vec<CostEstimate> = considered.iter().filter_map(|c| c.estimate).collect();
-                let positive: Vec<CostEstimate> =
-                    estimates.iter().copied().filter(|e| e.net_ms() > 0.0).collect();
-                choose_batch(&estimates, outlook.fixed_ms(&positive))
-            }
-            None => vec![true; considered.len()],
+            },
         };
         let mut chosen = Vec::new();
-        for (c, integrate) in considered.into_iter().zip(accept) {
-            let s = self.sleeping.get_mut(&c.island).expect("candidate is asleep");
-            if integrate || !s.decided {
+        for (c, integrate, record) in verdicts {
+            if record {
                 stats.decisions.push(Decision {
                     island: c.island,
                     bodies: c.candidate.bodies,
@@ -67,7 +64,7 @@ impl SceneManager {
                     integrate,
                     estimate: c.estimate,
                 });
-                s.decided = true;
+                self.sleeping.get_mut(&c.island).expect("candidate is asleep").decided = true;
             }
             if integrate {
                 chosen.push(c.island);
@@ -84,6 +81,42 @@ impl SceneManager {
             IntegrationForm::Resting => self.rest_islands(&chosen, stats)?,
         }
         Ok(true)
+    }
+
+    /// What the policy decides about each candidate this frame; `None` when `auto` cannot
+    /// price a decision yet.
+    fn policy_verdicts(&mut self, frame: &ReplayFrame<'_>) -> Option<Vec<Verdict>> {
+        // `auto` prices the trace penalty in trace time, unknown before a frame was traced
+        // (milliseconds in a preview, seconds in a production frame). Priced at 0, everything
+        // was integrated at the first of four production frames, 3-8% slower; waiting for a
+        // traced frame cost the preview of 150,000 bodies a whole `never` frame (4% of the
+        // run). So the probe's rays, scaled to the frame's samples, stand in until then.
+        if self.options.policy == IntegrationPolicy::Auto && !self.cost.knows_trace() {
+            match self.accel.query().ok().and_then(|q| self.probe.frame_trace_estimate(q)) {
+                Some(ms) => self.cost.assume_trace(ms),
+                None => return None,
+            }
+        }
+        let outlook = (self.options.policy == IntegrationPolicy::Auto).then(|| self.outlook(frame));
+        let considered = self.consider(frame, outlook.as_ref());
+        let accept = match &outlook {
+            Some(outlook) => {
+                let estimates: Vec<CostEstimate> = considered.iter().filter_map(|c| c.estimate).collect();
+                let positive: Vec<CostEstimate> =
+                    estimates.iter().copied().filter(|e| e.net_ms() > 0.0).collect();
+                choose_batch(&estimates, outlook.fixed_ms(&positive))
+            }
+            None => vec![true; considered.len()],
+        };
+        let verdicts = considered
+            .into_iter()
+            .zip(accept)
+            .map(|(c, integrate)| {
+                let record = integrate || !self.sleeping[&c.island].decided;
+                (c, integrate, record)
+            })
+            .collect();
+        Some(verdicts)
     }
 
     /// The sleeping islands not integrated yet, with the cost model's estimate under `auto`.

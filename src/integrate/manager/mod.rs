@@ -99,7 +99,7 @@ pub enum ReactivationPath {
 }
 
 /// One integration decision, with the numbers behind it.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Decision {
     pub island: IslandId,
     pub bodies: usize,
@@ -334,6 +334,26 @@ impl SceneManager {
     /// Brings the accelerator to `frame` (see the module docs) and commits. Events up to and
     /// including this frame must have been [`observe`](Self::observe)d.
     pub fn prepare(&mut self, frame: &ReplayFrame<'_>) -> Result<&FrameStats, AccelError> {
+        self.prepare_with(frame, None)
+    }
+
+    /// [`prepare`](Self::prepare), making the decisions an earlier run recorded for this frame
+    /// instead of asking the policy: each island decided on, and whether it was integrated
+    /// (`render --resume` brings the manager through frames that run finished, so that the
+    /// frames after them start from the state it had).
+    pub fn prepare_decided(
+        &mut self,
+        frame: &ReplayFrame<'_>,
+        decisions: &[(IslandId, bool)],
+    ) -> Result<&FrameStats, AccelError> {
+        self.prepare_with(frame, Some(decisions))
+    }
+
+    fn prepare_with(
+        &mut self,
+        frame: &ReplayFrame<'_>,
+        decided: Option<&[(IslandId, bool)]>,
+    ) -> Result<&FrameStats, AccelError> {
         debug_assert_eq!(frame.states.len(), self.bodies.len());
         self.frame = frame.index;
         let mut stats = FrameStats {
@@ -350,7 +370,7 @@ impl SceneManager {
         stats.stages.reactivate_ms = ms(t);
 
         let t = Instant::now();
-        let integrated = self.integrate(frame, &mut stats)?;
+        let integrated = self.integrate(frame, decided, &mut stats)?;
         stats.stages.integrate_ms = ms(t);
 
         let t = Instant::now();

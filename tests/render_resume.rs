@@ -1,0 +1,264 @@
+//! `dormant render --resume`: a render killed mid-sequence and resumed leaves the files of an
+//! uninterrupted run (frames byte for byte, statistics in every field but the timings), a
+//! resumed static stretch copies the kept frames' files, and the statistics of another
+//! configuration, or records the replay does not reach, are refused.
+
+use std::ffi::OsString;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+use serde_json::Value;
+
+fn dormant() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_dormant"))
+}
+
+fn scene(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name)
+}
+
+/// A slice of the tiny scene, every sixth frame (40 frames), islands integrated (baked, so the
+/// geometry cache serves their wakes), an albedo pass and EXRs: every output kind, and about
+/// 0.1 s a frame, so that a kill lands mid-sequence.
+fn tiny_run(out: &Path) -> Vec<OsString> {
+    let mut args: Vec<OsString> =
+        ["--quiet", "render", "--size", "96x54", "--spp", "16", "--frames", "90..330"]
+            .iter()
+            .chain(&["--frame-step", "6", "--integration", "always", "--integrate-as", "baked"])
+            .chain(&["--aov", "albedo", "--exr", "--out"])
+            .map(OsString::from)
+            .collect();
+    args.push(out.into());
+    args.push(scene("tiny.toml").into());
+    args
+}
+
+fn run(args: &[OsString], extra: &[&str]) -> Output {
+    let output = dormant().args(args).args(extra).output().unwrap();
+    assert!(output.status.success(), "{extra:?}: {}", String::from_utf8_lossy(&output.stderr));
+    output
+}
+
+fn stats(dir: &Path) -> Value {
+    serde_json::from_slice(&std::fs::read(dir.join("stats.json")).unwrap()).unwrap()
+}
+
+fn frame_count(dir: &Path) -> usize {
+    let names = std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap());
+    names.filter(|n| n.starts_with("frame_") && n.ends_with(".png") && n.matches('.').count() == 1).count()
+}
+
+/// Whether a stats.json field holds a measured time, or follows from measured times: the
+/// fields a repeated run may change (docs/stats-format.md).
+fn is_timing(field: &str) -> bool {
+    // `_ms`: stage times, totals, medians and the cost model's fits (`build_ms_intercept`,
+    // `trace_ms_mean`, ...); `baked`/`resting`: its measured trace penalties; the resting
+    // scene's rebuild schedule (always false with --integrate-as baked, as here).
+    field.contains("_ms")
+        || ["mrays_per_second", "estimate", "baked", "resting", "rest_rebuilt", "rest_rebuilds"]
+            .contains(&field)
+}
+
+fn without_timings(value: &Value) -> Value {
+    match value {
+        Value::Object(map) => Value::Object(
+            map.iter().filter(|(k, _)| !is_timing(k)).map(|(k, v)| (k.clone(), without_timings(v))).collect(),
+        ),
+        Value::Array(items) => Value::Array(items.iter().map(without_timings).collect()),
+        other => other.clone(),
+    }
+}
+
+/// stats.csv without its timing columns.
+fn csv_without_timings(dir: &Path) -> Vec<Vec<String>> {
+    let text = std::fs::read_to_string(dir.join("stats.csv")).unwrap();
+    let rows: Vec<Vec<&str>> = text.lines().map(|l| l.split(',').collect()).collect();
+    let keep: Vec<usize> = (0..rows[0].len()).filter(|&i| !is_timing(rows[0][i])).collect();
+    rows.iter().map(|r| keep.iter().map(|&i| r[i].to_string()).collect()).collect()
+}
+
+/// Every file of `whole` but the plot (timings) is in `resumed` with the same bytes, the
+/// statistics are equal but for timings, and no temporary file is left.
+fn assert_same_outputs(whole: &Path, resumed: &Path) {
+    let mut compared = 0;
+    for entry in std::fs::read_dir(whole).unwrap() {
+        let name = entry.unwrap().file_name().into_string().unwrap();
+        if name.starts_with("frame_") {
+            let a = std::fs::read(whole.join(&name)).unwrap();
+            assert!(a == std::fs::read(resumed.join(&name)).unwrap(), "{name} differs after resuming");
+            compared += 1;
+        }
+    }
+    assert!(compared > 0);
+    let (a, b) = (without_timings(&stats(whole)), without_timings(&stats(resumed)));
+    let (frames_a, frames_b) = (a["frames"].as_array().unwrap(), b["frames"].as_array().unwrap());
+    assert_eq!(frames_a.len(), frames_b.len());
+    for (fa, fb) in frames_a.iter().zip(frames_b) {
+        assert_eq!(fa, fb, "stats.json: a frame differs");
+    }
+    assert_eq!(a, b, "stats.json differs");
+    assert_eq!(csv_without_timings(whole), csv_without_timings(resumed), "stats.csv differs");
+    assert!(resumed.join("report.png").is_file());
+    let names = std::fs::read_dir(resumed).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap());
+    let temporaries: Vec<String> = names.filter(|n| n.ends_with(".tmp")).collect();
+    assert!(temporaries.is_empty(), "left behind: {temporaries:?}");
+}
+
+/// Starts `args` and kills it (SIGKILL) once its stats.json records `frames` frames.
+fn kill_after(args: &[OsString], out: &Path, frames: usize) {
+    let mut child = dormant().args(args).stdout(Stdio::null()).stderr(Stdio::null()).spawn().unwrap();
+    let deadline = Instant::now() + Duration::from_secs(300);
+    loop {
+        let recorded = std::fs::read(out.join("stats.json"))
+            .ok()
+            .and_then(|b| serde_json::from_slice::<Value>(&b).ok())
+            .map_or(0, |s| s["frames"].as_array().map_or(0, Vec::len));
+        if recorded >= frames || Instant::now() > deadline {
+            break;
+        }
+        assert!(child.try_wait().unwrap().is_none(), "the run ended before {frames} frames were recorded");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+}
+
+#[test]
+fn killed_render_resumes_to_the_files_of_an_uninterrupted_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let (whole, killed) = (dir.path().join("whole"), dir.path().join("killed"));
+    run(&tiny_run(&whole), &[]);
+    let total = frame_count(&whole);
+    assert_eq!(total, 40);
+    assert!(stats(&whole)["summary"]["totals"]["islands_reactivated"].as_u64().unwrap() > 0);
+
+    kill_after(&tiny_run(&killed), &killed, 4);
+    let recorded = stats(&killed)["frames"].as_array().unwrap().len();
+    let written = frame_count(&killed);
+    assert!(recorded >= 4 && written < total, "killed with {written} of {total} frames written");
+
+    let report = dir.path().join("resume.json");
+    let mut args = tiny_run(&killed);
+    args.splice(0..0, [OsString::from("--json"), report.clone().into()]);
+    run(&args, &["--resume"]);
+    let report: Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+    let kept = report["kept_frames"].as_u64().unwrap() as usize;
+    assert_eq!(kept, recorded, "the frames stats.json recorded are kept");
+    assert_eq!(report["frames"].as_array().unwrap().len(), total - kept, "only the rest is rendered");
+    assert_same_outputs(&whole, &killed);
+}
+
+/// Six crates dropped onto the ground: at rest (bit for bit) from about frame 70 on.
+const SETTLING_SCENE: &str = r#"
+[scene]
+name = "settle"
+seed = 3
+frames = 160
+
+[physics]
+timestep = 0.016666667
+
+[environment]
+generator = "ground"
+
+[[prototypes]]
+name = "crate"
+shape = "box"
+half_extents = [0.25, 0.25, 0.25]
+
+[[spawners]]
+prototypes = ["crate"]
+count = 6
+region = { min = [-1.0, 0.3, -1.0], max = [1.0, 0.3, 1.0] }
+random_rotation = false
+
+[[cameras]]
+name = "main"
+position = [0.0, 3.0, 6.0]
+look_at = [0.0, 0.3, 0.0]
+"#;
+
+#[test]
+fn resumed_static_frames_copy_the_kept_frames_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("settle.toml");
+    std::fs::write(&scene, SETTLING_SCENE).unwrap();
+    let settle_run = |out: &Path| -> Vec<OsString> {
+        let args = ["--quiet", "render", "--size", "48x27", "--spp", "2", "--frames", "50..100"];
+        let mut args: Vec<OsString> = args
+            .iter()
+            .chain(&["--aov", "depth", "--exr", "--integration", "always"])
+            .map(OsString::from)
+            .collect();
+        args.extend([OsString::from("--out"), out.into(), scene.clone().into()]);
+        args
+    };
+    let (whole, cut) = (dir.path().join("whole"), dir.path().join("cut"));
+    run(&settle_run(&whole), &[]);
+    // A kill as it can land: the statistics hold frame `first_missing`, but one of its files
+    // (the EXR) and every later frame are not written yet. It reuses a kept frame's image.
+    let frames = stats(&whole)["frames"].as_array().unwrap().clone();
+    let reused = |f: &Value| f["reused"].as_bool().unwrap();
+    let first_missing =
+        frames.windows(2).find(|w| reused(&w[0]) && reused(&w[1])).unwrap()[1]["frame"].as_u64().unwrap();
+    copy_dir(&whole, &cut);
+    for entry in std::fs::read_dir(&cut).unwrap() {
+        let path = entry.unwrap().path();
+        let name = path.file_name().unwrap().to_string_lossy().into_owned();
+        let frame = name.strip_prefix("frame_").and_then(|n| n[..4].parse::<u64>().ok());
+        if frame.is_some_and(|f| f > first_missing) || name == format!("frame_{first_missing:04}.exr") {
+            std::fs::remove_file(path).unwrap();
+        }
+    }
+    run(&settle_run(&cut), &["--resume"]);
+    assert_same_outputs(&whole, &cut);
+    assert!(stats(&cut)["summary"]["totals"]["reused_frames"].as_u64().unwrap() > 2);
+}
+
+fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for entry in std::fs::read_dir(from).unwrap() {
+        let path = entry.unwrap().path();
+        std::fs::copy(&path, to.join(path.file_name().unwrap())).unwrap();
+    }
+}
+
+#[test]
+fn resume_refuses_the_statistics_of_another_configuration() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let short = |spp: &str| -> Vec<OsString> {
+        ["--quiet", "render", "--size", "32x18", "--spp", spp, "--frames", "100..110", "--resume", "--out"]
+            .iter()
+            .map(OsString::from)
+            .chain([out.clone().into(), scene("tiny.toml").into()])
+            .collect()
+    };
+    // Nothing to resume in a new directory: every frame renders.
+    run(&short("2"), &[]);
+    assert_eq!(frame_count(&out), 10);
+    let before = std::fs::read(out.join("stats.json")).unwrap();
+    let frame = std::fs::read(out.join("frame_0105.png")).unwrap();
+    let output = dormant().args(short("4")).output().unwrap();
+    assert_eq!(output.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(stderr.contains("stats.json") && stderr.contains("spp 2 there, 4 now"), "{stderr}");
+    assert_eq!(std::fs::read(out.join("stats.json")).unwrap(), before, "stats.json was touched");
+    assert_eq!(std::fs::read(out.join("frame_0105.png")).unwrap(), frame, "a frame was touched");
+    // A kept record that the replay does not reach (here: edited) is refused too.
+    let mut edited: Value = serde_json::from_slice(&before).unwrap();
+    let instances = edited["frames"][2]["instances"].as_u64().unwrap();
+    edited["frames"][2]["instances"] = (instances + 1).into();
+    std::fs::write(out.join("stats.json"), serde_json::to_vec(&edited).unwrap()).unwrap();
+    let output = dormant().args(short("2")).output().unwrap();
+    assert_eq!(output.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        stderr.contains("stats.json") && stderr.contains("frame 102") && stderr.contains("instances"),
+        "{stderr}"
+    );
+    // --resume needs a sequence.
+    let output = dormant().args(["render", "--resume", "--out"]).arg(&out).output().unwrap();
+    assert_eq!(output.status.code(), Some(2));
+}
