@@ -8,7 +8,7 @@ use indicatif::ProgressBar;
 
 use super::CliError;
 use crate::accel::{self, Backend};
-use crate::integrate::{FrameStats, IntegrationForm, IntegrationPolicy, IntegrationSettings};
+use crate::integrate::{CacheBudget, FrameStats, IntegrationForm, IntegrationPolicy, IntegrationSettings};
 use crate::physics::SimulateOptions;
 use crate::render::{
     self, AmbientOcclusion, Aov, AovIntegrator, DirectLighting, Integrator, PathTracer, RenderScene,
@@ -107,6 +107,13 @@ pub struct RenderArgs {
     /// With SCENE or --trajectory: serve reactivations of baked islands from the geometry cache.
     #[arg(long, value_enum, default_value_t = Switch::On)]
     pub cache: Switch,
+    /// With SCENE or --trajectory: memory the geometry cache's saved scenes may keep alive
+    /// beyond the live scene, in MiB (least valuable entries are evicted beyond it).
+    #[arg(long, value_name = "MIB", default_value_t = CacheBudget::DEFAULT.bytes >> 20)]
+    pub cache_mib: usize,
+    /// With SCENE or --trajectory: most saved scenes in the geometry cache at once.
+    #[arg(long, value_name = "N", default_value_t = CacheBudget::DEFAULT.entries)]
+    pub cache_entries: usize,
     /// With SCENE or --trajectory: let `auto` use the run's known future (each island's true
     /// remaining sleep over the rendered frames) instead of estimating it.
     #[arg(long, value_enum, default_value_t = Switch::On)]
@@ -306,7 +313,11 @@ fn render_sequence(
         cache: args.cache == Switch::On,
         lookahead: args.lookahead == Switch::On,
     };
-    let manager_options = sequence.manager_options(&frames, settings);
+    let mut manager_options = sequence.manager_options(&frames, settings);
+    let cache_bytes = args.cache_mib.checked_mul(1 << 20).ok_or_else(|| {
+        CliError::Input(format!("--cache-mib {}: too large for this machine", args.cache_mib))
+    })?;
+    manager_options.cache_budget = CacheBudget { bytes: cache_bytes, entries: args.cache_entries };
     let mut manager =
         sequence.manager(backend, threads, manager_options).map_err(|e| sequence_error(e, "--frames"))?;
     let renderer = FrameRenderer {
