@@ -82,11 +82,11 @@ def mean(values):
     return sum(values) / len(values) if values else float("nan")
 
 
-def rss_near(samples, frame, window):
-    """Mean RSS (kB) of the samples whose frame is in [frame - window, frame] (at 0.5 s a
-    sample, several frames apart, so a window rather than one sample)."""
-    near = [kb for _, f, kb in samples if frame - window <= f <= frame]
-    return mean(near)
+def rss_before(samples, frame, count=5):
+    """Mean RSS (kB) of the last `count` samples taken at or before `frame` (at 0.5 s a
+    sample, up to a hundred frames apart: several samples rather than one)."""
+    before = [kb for _, f, kb in samples if f <= frame][-count:]
+    return mean(before)
 
 
 def figures(label, samples, stats, wall, warmup_fraction):
@@ -96,13 +96,12 @@ def figures(label, samples, stats, wall, warmup_fraction):
     frames = summary["frames"]
     last_frame = summary["last_frame"]
     warmup_frame = int(last_frame * warmup_fraction)
-    window = max(1, last_frame // 100)
     # Samples at the last frame are the finish: stats.json, stats.csv and report.png written
-    # from every frame's record. The end of the run is the last 1% of its frames before that.
+    # from every frame's record. The end of the run is the last samples before that.
     rendering = [s for s in samples if 0 <= s[1] < last_frame]
     finish = [kb for _, f, kb in samples if f == last_frame]
-    warm = rss_near(rendering, warmup_frame, window)
-    end = rss_near(rendering, last_frame - 1, window)
+    warm = rss_before(rendering, warmup_frame)
+    end = rss_before(rendering, last_frame)
     after = [(f, kb) for _, f, kb in rendering if f >= warmup_frame]
     cache, totals = summary["cache"], summary["totals"]
     return {
