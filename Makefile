@@ -24,9 +24,9 @@ test: setup
 test-no-embree:
 	$(CARGO) test --release -p dormant --no-default-features
 
-# The soak (not in CI; about 6 minutes after the build): 10,000 frames per backend and form
+# The soak (not in CI; about 7 minutes after the build): 10,000 frames per backend and form
 # with resident memory sampled; fails if it grows 5% or more after warm-up or the geometry
-# cache exceeds its budget. See scripts/soak.sh and docs/performance.md#soak.
+# cache exceeds its budget. See scripts/soak.sh and docs/performance.md#soak-make-soak.
 soak: build
 	bash scripts/soak.sh
 

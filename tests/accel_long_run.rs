@@ -1,7 +1,7 @@
 //! What a long run needs from every compiled backend: instance ids of removed instances are
 //! given out again, so the tables indexed by them (the backend's and the scene manager's
 //! owners) stay as large as the most instances alive at once, not the number ever added. The
-//! BVH gave every instance a new id until the soak (docs/performance.md#soak) showed its
+//! BVH gave every instance a new id until the soak (docs/performance.md#soak-make-soak) showed its
 //! tables growing with every island that woke.
 
 use dormant::accel::{self, Backend, InstanceId};

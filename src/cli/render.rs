@@ -399,9 +399,9 @@ struct FrameWriter<'a> {
     backend: Backend,
     /// No per-frame line on stdout (`--quiet`, or the JSON report goes there).
     quiet: bool,
-    /// Keep each frame's record for the `--json` report. Only then: a record is about 5.8 kB,
-    /// which a long sequence would otherwise accumulate for nothing (48 MB over the soak's
-    /// 10,000 frames, docs/performance.md).
+    /// Keep each frame's record for the `--json` report. Only then: a record is about 5.5 kB,
+    /// which a long sequence would otherwise accumulate for nothing (some 55 MB over the
+    /// soak's 10,000 frames, docs/performance.md#soak-make-soak).
     keep_records: bool,
     records: Vec<serde_json::Value>,
 }
