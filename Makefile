@@ -4,7 +4,7 @@
 CARGO ?= cargo
 RELEASE_BIN := target/release/dormant
 
-.PHONY: setup build demo test test-no-embree lint fmt bench clean slurm-check
+.PHONY: setup build demo test test-no-embree lint fmt bench soak slurm-check clean
 
 setup:
 	bash scripts/setup.sh
@@ -28,6 +28,12 @@ test-no-embree:
 # slurm-wlm and munge), checked against one uninterrupted run. See docs/slurm.md.
 slurm-check: build
 	bash scripts/slurm-check.sh
+
+# The soak (not in CI; about 7 minutes after the build): 10,000 frames per backend and form
+# with resident memory sampled; fails if it grows 5% or more after warm-up or the geometry
+# cache exceeds its budget. See scripts/soak.sh and docs/performance.md#soak-make-soak.
+soak: build
+	bash scripts/soak.sh
 
 lint:
 	$(CARGO) fmt --all --check

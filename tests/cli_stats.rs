@@ -166,6 +166,10 @@ const CACHE: &[(&str, &str)] = &[
     ("fraction_buckets", "array"),
     ("entries", "integer"),
     ("bytes", "integer"),
+    ("peak_entries", "integer"),
+    ("peak_bytes", "integer"),
+    ("budget_entries", "integer"),
+    ("budget_bytes", "integer"),
 ];
 
 const COST_MODEL: &[(&str, &str)] = &[
@@ -360,6 +364,30 @@ fn slices_count_island_events_as_a_whole_run_does() {
         whole.iter().map(|row| row.split(',').skip(1).map(|n| n.parse::<u32>().unwrap()).sum::<u32>()).sum();
     assert!(events > 0, "tiny's trajectory has island events");
     assert_eq!(joined, whole);
+}
+
+/// `--cache-entries` and `--cache-mib` bound the geometry cache, and stats.json reports the
+/// budget and the peak it stayed within (the soak checks the same over 10,000 frames).
+#[test]
+fn cache_flags_set_the_budget_the_cache_keeps() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("cache");
+    let status = dormant()
+        .args(["render", "scenes/tiny.toml", "--size", "32x18", "--spp", "1", "--backend", "bvh"])
+        .args(["--integration", "always", "--integrate-as", "baked", "--cache-entries", "1"])
+        .args(["--cache-mib", "1", "--quiet", "--out"])
+        .arg(&out)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let stats: Value = serde_json::from_slice(&std::fs::read(out.join("stats.json")).unwrap()).unwrap();
+    let cache = &stats["summary"]["cache"];
+    assert_eq!((cache["budget_entries"].as_u64(), cache["budget_bytes"].as_u64()), (Some(1), Some(1 << 20)));
+    assert!(cache["recorded"].as_u64().unwrap() >= 2, "the run must record several scenes: {cache}");
+    assert!(cache["evicted"].as_u64().unwrap() >= 1, "{cache}");
+    assert_eq!(cache["peak_entries"].as_u64(), Some(1), "{cache}");
+    assert!(cache["peak_bytes"].as_u64().unwrap() <= 1 << 20, "{cache}");
 }
 
 #[test]

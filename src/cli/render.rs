@@ -8,7 +8,7 @@ use indicatif::ProgressBar;
 
 use super::CliError;
 use crate::accel::{self, Backend};
-use crate::integrate::{FrameStats, IntegrationForm, IntegrationPolicy, IntegrationSettings};
+use crate::integrate::{CacheBudget, FrameStats, IntegrationForm, IntegrationPolicy, IntegrationSettings};
 use crate::physics::SimulateOptions;
 use crate::render::{
     self, AmbientOcclusion, Aov, AovIntegrator, DirectLighting, Integrator, PathTracer, RenderScene,
@@ -111,6 +111,13 @@ pub struct RenderArgs {
     /// With SCENE or --trajectory: serve reactivations of baked islands from the geometry cache.
     #[arg(long, value_enum, default_value_t = Switch::On)]
     pub cache: Switch,
+    /// With SCENE or --trajectory: memory the geometry cache's saved scenes may keep alive
+    /// beyond the live scene, in MiB (least valuable entries are evicted beyond it).
+    #[arg(long, value_name = "MIB", default_value_t = CacheBudget::DEFAULT.bytes >> 20)]
+    pub cache_mib: usize,
+    /// With SCENE or --trajectory: most saved scenes in the geometry cache at once.
+    #[arg(long, value_name = "N", default_value_t = CacheBudget::DEFAULT.entries)]
+    pub cache_entries: usize,
     /// With SCENE or --trajectory: let `auto` use the run's known future (each island's true
     /// remaining sleep over the rendered frames) instead of estimating it.
     #[arg(long, value_enum, default_value_t = Switch::On)]
@@ -198,8 +205,14 @@ pub(super) fn run(
         CliError::Runtime(format!("cannot create output directory {}: {e}", args.out.display()))
     })?;
     let integrator = integrator(args.mode, args.max_depth);
-    let mut writer =
-        FrameWriter { args, backend, quiet: quiet || json.is_requested(), records: Vec::new(), kept: 0 };
+    let mut writer = FrameWriter {
+        args,
+        backend,
+        quiet: quiet || json.is_requested(),
+        keep_records: json.is_requested(),
+        records: Vec::new(),
+        kept: 0,
+    };
     let (scene_name, is_sequence) = match sequence_source(args)? {
         None => (render_still(args, backend, threads, integrator.as_ref(), &mut writer)?, false),
         Some(source) => {
@@ -316,7 +329,11 @@ fn render_sequence(
         cache: args.cache == Switch::On,
         lookahead: args.lookahead == Switch::On,
     };
-    let manager_options = sequence.manager_options(&frames, settings);
+    let mut manager_options = sequence.manager_options(&frames, settings);
+    let cache_bytes = args.cache_mib.checked_mul(1 << 20).ok_or_else(|| {
+        CliError::Input(format!("--cache-mib {}: too large for this machine", args.cache_mib))
+    })?;
+    manager_options.cache_budget = CacheBudget { bytes: cache_bytes, entries: args.cache_entries };
     let mut manager =
         sequence.manager(backend, threads, manager_options).map_err(|e| sequence_error(e, "--frames"))?;
     let renderer = FrameRenderer {
@@ -334,17 +351,27 @@ fn render_sequence(
         println!("{}", super::resume::summary(&kept, &frames));
     }
     writer.kept = kept.len();
-    let mut frame_paths: Vec<PathBuf> = kept.iter().map(|r| frame_files(args, r.frame).remove(0)).collect();
+    let mut frame_paths: Vec<PathBuf> = match args.video {
+        true => kept.iter().map(|r| frame_files(args, r.frame).remove(0)).collect(),
+        false => Vec::new(),
+    };
     let kept_frames: Vec<KeptFrame> = kept.iter().map(FrameRecord::kept).collect();
     let physics_total_ms = (!sequence.physics_ms.is_empty()).then(|| sequence.physics_ms.iter().sum::<f64>());
-    let mut stats_file = StatsFile::new(&args.out, info, physics_total_ms, kept);
+    // Reserved up front: doubling a long run's records leaves the old buffers behind as holes
+    // in the heap (resident memory jumped 1.2 MB at 8,192 frames in the soak).
+    let mut records = Vec::with_capacity(frames.count() as usize);
+    records.extend(kept);
+    let mut stats_file = StatsFile::new(&args.out, info, physics_total_ms, records);
     let progress = super::progress::frames_bar(quiet, "rendering", Some(u64::from(frames.count())));
     progress.set_position(kept_frames.len() as u64);
     let (mut rays, mut trace_seconds) = (0u64, 0.0f64);
     let runtime = |e: &dyn std::fmt::Display| CliError::Runtime(e.to_string());
     let rendered =
         sequence.render(&frames, &mut manager, &renderer, &kept_frames, &mut |frame, stats, manager| {
-            frame_paths.push(writer.write(frame, Some(stats), &progress)?);
+            let path = writer.write(frame, Some(stats), &progress)?;
+            if args.video {
+                frame_paths.push(path);
+            }
             let physics = sequence.physics_ms.get(frame.index as usize).copied();
             let record = FrameRecord::new(stats, frame.render.mrays_per_second(), physics);
             stats_file.push(record, manager).map_err(|e| runtime(&e))?;
@@ -443,12 +470,17 @@ fn encode_video(args: &RenderArgs, frame_paths: &[PathBuf], fps: f64, quiet: boo
     Ok(())
 }
 
-/// Writes each rendered frame's files (image, EXR, AOVs) and keeps its JSON record.
+/// Writes each rendered frame's files (image, EXR, AOVs) and, for `--json`, keeps its JSON
+/// record.
 struct FrameWriter<'a> {
     args: &'a RenderArgs,
     backend: Backend,
     /// No per-frame line on stdout (`--quiet`, or the JSON report goes there).
     quiet: bool,
+    /// Keep each frame's record for the `--json` report. Only then: a record is about 5.5 kB,
+    /// which a long sequence would otherwise accumulate for nothing (some 55 MB over the
+    /// soak's 10,000 frames, docs/performance.md#soak-make-soak).
+    keep_records: bool,
     records: Vec<serde_json::Value>,
     /// Frames kept from an earlier run (`--resume`), not written again.
     kept: usize,
@@ -477,6 +509,9 @@ impl FrameWriter<'_> {
         let stats = &frame.render;
         if !self.quiet {
             progress.suspend(|| println!("{}", self.summary(&path, frame)));
+        }
+        if !self.keep_records {
+            return Ok(path);
         }
         let aov_paths: Vec<&PathBuf> =
             files.iter().skip(1).filter(|p| p.extension().is_some_and(|e| e == "png")).collect();

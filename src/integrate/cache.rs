@@ -56,6 +56,13 @@ pub struct CacheStats {
     /// Entries and the bytes they keep alive, after the latest change.
     pub entries: usize,
     pub bytes: usize,
+    /// The most entries and bytes held at once so far (measured at every change and whenever
+    /// the manager re-measures after a static commit).
+    pub peak_entries: usize,
+    pub peak_bytes: usize,
+    /// The budget ([`CacheBudget`]) that `entries` and `bytes` are kept within.
+    pub budget_entries: usize,
+    pub budget_bytes: usize,
 }
 
 impl CacheStats {
@@ -114,7 +121,12 @@ pub struct GeometryCache<S> {
 
 impl<S> GeometryCache<S> {
     pub fn new(budget: CacheBudget) -> Self {
-        Self { budget, entries: Vec::new(), clock: 0.0, stats: CacheStats::default(), empty: BTreeSet::new() }
+        let stats = CacheStats {
+            budget_entries: budget.entries,
+            budget_bytes: budget.bytes,
+            ..CacheStats::default()
+        };
+        Self { budget, entries: Vec::new(), clock: 0.0, stats, empty: BTreeSet::new() }
     }
 
     pub fn stats(&self) -> &CacheStats {
@@ -149,12 +161,17 @@ impl<S> GeometryCache<S> {
         let priority = self.priority(triangles, bytes);
         self.entries.push(Entry { key: key.clone(), snapshot, triangles, bytes, priority });
         self.stats.recorded += 1;
+        self.remeasure(bytes_of);
+    }
+
+    /// Measures again what each entry keeps alive (it grows as the live scene moves away from
+    /// the entry) and evicts until the budget holds; an entry larger than the whole budget
+    /// is not kept.
+    pub fn remeasure(&mut self, bytes_of: impl Fn(&S) -> usize) {
         for e in &mut self.entries {
             e.bytes = bytes_of(&e.snapshot);
         }
-        while self.entries.len() > self.budget.entries
-            || (self.entries.len() > 1 && self.total_bytes() > self.budget.bytes)
-        {
+        while self.entries.len() > self.budget.entries || self.total_bytes() > self.budget.bytes {
             let victim = (0..self.entries.len())
                 .min_by(|&a, &b| self.entries[a].priority.total_cmp(&self.entries[b].priority))
                 .expect("non-empty");
@@ -172,6 +189,8 @@ impl<S> GeometryCache<S> {
     fn refresh_stats(&mut self) {
         self.stats.entries = self.entries.len();
         self.stats.bytes = self.total_bytes();
+        self.stats.peak_entries = self.stats.peak_entries.max(self.stats.entries);
+        self.stats.peak_bytes = self.stats.peak_bytes.max(self.stats.bytes);
     }
 
     /// The best entry for a static scene holding exactly `request`: an equal set (full hit),
@@ -258,5 +277,38 @@ mod tests {
             cache.record(&set(&[i]), 0usize, 1, |b| *b);
         }
         assert!(cache.len() <= budget.entries);
+        let s = cache.stats();
+        assert_eq!((s.budget_bytes, s.budget_entries), (10_000, 8));
+        assert_eq!(s.peak_entries, 8);
+        assert_eq!(s.peak_bytes, 8_000, "measured after evictions: the budget always held");
+    }
+
+    #[test]
+    fn an_entry_larger_than_the_budget_is_not_kept() {
+        let mut cache = GeometryCache::new(CacheBudget { bytes: 1_000, entries: 8 });
+        cache.record(&set(&[1]), 5_000usize, 1_000_000, |b| *b);
+        assert_eq!(cache.len(), 0);
+        assert_eq!((cache.stats().evicted, cache.stats().peak_bytes), (1, 0));
+    }
+
+    #[test]
+    fn remeasuring_evicts_entries_that_grew_past_the_budget() {
+        // Entries share structure with the live scene and grow as it moves on: here each
+        // holds its size in a cell the "live scene" changes.
+        use std::cell::Cell;
+        let sizes = [Cell::new(100usize), Cell::new(100), Cell::new(100)];
+        let mut cache = GeometryCache::new(CacheBudget { bytes: 1_000, entries: 8 });
+        // Entry 0 saves the most work per byte; entry 1 the least.
+        for (i, triangles) in [1_000, 10, 20].into_iter().enumerate() {
+            cache.record(&set(&[i as u64]), i, triangles, |&j| sizes[j].get());
+        }
+        assert_eq!((cache.len(), cache.stats().bytes), (3, 300));
+        sizes[1].set(600);
+        sizes[2].set(600);
+        cache.remeasure(|&j| sizes[j].get());
+        assert_eq!((cache.len(), cache.stats().evicted), (2, 1));
+        assert_eq!(cache.lookup(&set(&[1])).outcome, CacheOutcome::Miss, "entry 1 went");
+        assert!(cache.stats().bytes <= 1_000);
+        assert_eq!(cache.stats().peak_bytes, 700, "the peak is what the cache kept, after eviction");
     }
 }

@@ -385,6 +385,12 @@ impl SceneManager {
         stats.stages.commit_ms = ms(t);
         stats.instances = self.instance_owner.awake();
         self.last_commit_ms = stats.committed.then_some(stats.stages.commit_ms);
+        if reactivated || integrated {
+            // The live static scene moved on: cached scenes share less of it now.
+            if let Some(cache) = &mut self.cache {
+                cache.remeasure(|e| e.snapshot.as_ref().map_or(0, |s| s.unique_bytes()));
+            }
+        }
         // A probe started before an integration measures the scene after it now.
         let t = Instant::now();
         if self.probe.finish(self.accel.query()?, &mut self.cost) {

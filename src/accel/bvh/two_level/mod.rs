@@ -56,6 +56,9 @@ pub struct BvhAccel {
     pool: Option<rayon::ThreadPool>,
     prototypes: Vec<Arc<MeshBvh>>,
     instances: Vec<Option<Instance>>,
+    /// Ids of removed instances, given out again: a long run adds and removes instances
+    /// without end, and the slots (and every scan over them) must not grow with it.
+    free_instances: Vec<u32>,
     statics: StaticBvh,
     next_static: u32,
     staged_adds: Vec<(StaticId, Vec<Tri>)>,
@@ -91,6 +94,7 @@ impl BvhAccel {
             pool,
             prototypes: Vec::new(),
             instances: Vec::new(),
+            free_instances: Vec::new(),
             statics: StaticBvh::new(mesh),
             next_static: 0,
             staged_adds: Vec::new(),
@@ -260,16 +264,17 @@ impl Accelerator for BvhAccel {
         if prototype.0 as usize >= self.prototypes.len() {
             return Err(AccelError::UnknownId { kind: "prototype", id: prototype.0 });
         }
-        let id = self.instances.len() as u32;
+        // The id is taken only once the transform is accepted: a bad one must not lose a free id.
+        let id = self.free_instances.last().copied().unwrap_or(self.instances.len() as u32);
         let proto = &self.prototypes[prototype.0 as usize];
         let inv = checked_inverse(&transform, proto).ok_or(AccelError::InvalidTransform { instance: id })?;
-        self.instances.push(Some(Instance {
-            proto: prototype.0,
-            xf: transform,
-            inv,
-            resting: false,
-            in_level: false,
-        }));
+        let instance = Instance { proto: prototype.0, xf: transform, inv, resting: false, in_level: false };
+        if id as usize == self.instances.len() {
+            self.instances.push(Some(instance));
+        } else {
+            self.free_instances.pop();
+            self.instances[id as usize] = Some(instance);
+        }
         self.present += 1;
         self.awake_changed();
         Ok(InstanceId(id))
@@ -299,6 +304,7 @@ impl Accelerator for BvhAccel {
             self.level.waiting -= 1;
         }
         self.instances[id.0 as usize] = None;
+        self.free_instances.push(id.0);
         self.present -= 1;
         self.awake_changed();
         Ok(())
