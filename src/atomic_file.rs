@@ -10,14 +10,25 @@ use std::path::Path;
 /// Writes `bytes` to `path` atomically. The error is the underlying I/O error; callers name
 /// the file in their own error types.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> io::Result<()> {
+    write_atomic_with(path, |w| w.write_all(bytes))
+}
+
+/// Writes what `contents` writes to `path` atomically, through a buffer: for large files
+/// written again and again (a long run's statistics), building them in memory first grows
+/// the heap with every write (the soak measured +1.4 MB per 1,000 frames).
+pub fn write_atomic_with(
+    path: &Path,
+    contents: impl FnOnce(&mut dyn Write) -> io::Result<()>,
+) -> io::Result<()> {
     let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
     let name = path
         .file_name()
         .ok_or_else(|| io::Error::new(io::ErrorKind::InvalidInput, "path has no file name"))?;
     let tmp = dir.join(temporary_name(&name.to_string_lossy(), std::process::id()));
     let result = (|| {
-        let mut f = fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
+        let mut w = io::BufWriter::new(fs::File::create(&tmp)?);
+        contents(&mut w)?;
+        let f = w.into_inner().map_err(io::IntoInnerError::into_error)?;
         f.sync_all()?;
         fs::rename(&tmp, path)
     })();

@@ -1,6 +1,7 @@
 //! The statistics model of a rendered sequence: one [`FrameRecord`] per frame and a
 //! [`Summary`], written as `stats.json` and `stats.csv` (docs/stats-format.md).
 
+use std::io::Write;
 use std::path::Path;
 
 use serde::{Deserialize, Serialize};
@@ -311,33 +312,34 @@ impl RunStats {
     }
 
     /// One header line, then one line per frame (decisions as counts).
-    pub fn to_csv(&self) -> String {
+    /// Writes stats.csv's table: a header, then a row per frame.
+    fn write_csv(&self, w: &mut dyn Write) -> std::io::Result<()> {
         let columns = csv_columns();
-        let mut out = columns.iter().map(|(name, _)| *name).collect::<Vec<_>>().join(",");
-        out.push('\n');
+        let header = columns.iter().map(|(name, _)| *name).collect::<Vec<_>>().join(",");
+        writeln!(w, "{header}")?;
         for f in &self.frames {
-            let cells: Vec<String> = columns
-                .iter()
-                .map(|(_, cell)| match cell {
-                    Cell::Stage(get) => format!("{:.4}", get(&f.stages)),
-                    Cell::Text(text) => text(f),
-                })
-                .collect();
-            out.push_str(&cells.join(","));
-            out.push('\n');
-        }
-        out
-    }
-
-    /// Writes `stats.json` and `stats.csv` into `dir`, each atomically.
-    pub fn write(&self, dir: &Path) -> Result<(), ReportError> {
-        let json = serde_json::to_string_pretty(self).expect("run statistics serialise");
-        for (name, bytes) in [("stats.json", json.into_bytes()), ("stats.csv", self.to_csv().into_bytes())] {
-            let path = dir.join(name);
-            crate::atomic_file::write_atomic(&path, &bytes)
-                .map_err(|source| ReportError::Write { path, source })?;
+            for (i, (_, cell)) in columns.iter().enumerate() {
+                let separator = if i == 0 { "" } else { "," };
+                match cell {
+                    Cell::Stage(get) => write!(w, "{separator}{:.4}", get(&f.stages))?,
+                    Cell::Text(text) => write!(w, "{separator}{}", text(f))?,
+                }
+            }
+            writeln!(w)?;
         }
         Ok(())
+    }
+
+    /// Writes `stats.json` and `stats.csv` into `dir`, each atomically and streamed to the
+    /// file rather than built in memory: they are rewritten as a run's frames finish.
+    pub fn write(&self, dir: &Path) -> Result<(), ReportError> {
+        let write = |name: &str, contents: &dyn Fn(&mut dyn Write) -> std::io::Result<()>| {
+            let path = dir.join(name);
+            crate::atomic_file::write_atomic_with(&path, |w| contents(w))
+                .map_err(|source| ReportError::Write { path, source })
+        };
+        write("stats.json", &|w| serde_json::to_writer_pretty(w, self).map_err(std::io::Error::from))?;
+        write("stats.csv", &|w| self.write_csv(w))
     }
 }
 
@@ -392,7 +394,9 @@ mod tests {
             exr: false,
         };
         let stats = RunStats::new(run, frames, CacheStats::default(), CostModelState::default(), None);
-        let csv = stats.to_csv();
+        let mut csv = Vec::new();
+        stats.write_csv(&mut csv).unwrap();
+        let csv = String::from_utf8(csv).unwrap();
         let lines: Vec<&str> = csv.lines().collect();
         assert_eq!(lines.len(), 4);
         let n = csv_columns().len();

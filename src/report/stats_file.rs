@@ -54,23 +54,34 @@ impl StatsFile {
 
     /// Writes the files after the last frame; returns the run's statistics.
     pub fn finish(mut self, manager: &SceneManager) -> Result<RunStats, ReportError> {
-        self.write(manager)
+        let stats = self.take_stats(manager);
+        stats.write(&self.dir)?;
+        Ok(stats)
     }
 
-    fn write(&mut self, manager: &SceneManager) -> Result<RunStats, ReportError> {
+    fn write(&mut self, manager: &SceneManager) -> Result<(), ReportError> {
         let start = Instant::now();
-        let stats = RunStats::new(
-            self.run.clone(),
-            self.frames.clone(),
-            manager.cache_stats(),
-            manager.cost_model(),
-            self.physics_total_ms,
-        );
-        stats.write(&self.dir)?;
+        let stats = self.take_stats(manager);
+        let written = stats.write(&self.dir);
+        // The records move back: a long run's are not copied at every write.
+        self.frames = stats.frames;
+        written?;
         self.written_at = Instant::now();
         self.write_cost = self.written_at - start;
         tracing::debug!(frames = self.frames.len(), ms = self.write_cost.as_secs_f64() * 1e3, "wrote stats");
-        Ok(stats)
+        Ok(())
+    }
+
+    /// The run's statistics so far, holding the records moved out of `self`.
+    fn take_stats(&mut self, manager: &SceneManager) -> RunStats {
+        let frames = std::mem::take(&mut self.frames);
+        RunStats::new(
+            self.run.clone(),
+            frames,
+            manager.cache_stats(),
+            manager.cost_model(),
+            self.physics_total_ms,
+        )
     }
 }
 
