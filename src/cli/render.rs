@@ -8,7 +8,9 @@ use indicatif::ProgressBar;
 
 use super::CliError;
 use crate::accel::{self, Backend};
-use crate::integrate::{CacheBudget, FrameStats, IntegrationForm, IntegrationPolicy, IntegrationSettings};
+use crate::integrate::{
+    CacheBudget, FrameStats, IntegrationForm, IntegrationPolicy, IntegrationSettings, SceneManager,
+};
 use crate::physics::SimulateOptions;
 use crate::render::{
     self, AmbientOcclusion, Aov, AovIntegrator, DirectLighting, Integrator, PathTracer, RenderScene,
@@ -323,19 +325,7 @@ fn render_sequence(
     quiet: bool,
 ) -> Result<String, CliError> {
     let frames = sequence.select(args.frames, args.frame_step).map_err(|e| sequence_error(e, "--frames"))?;
-    let settings = IntegrationSettings {
-        policy: args.integration,
-        form: args.integrate_as,
-        cache: args.cache == Switch::On,
-        lookahead: args.lookahead == Switch::On,
-    };
-    let mut manager_options = sequence.manager_options(&frames, settings);
-    let cache_bytes = args.cache_mib.checked_mul(1 << 20).ok_or_else(|| {
-        CliError::Input(format!("--cache-mib {}: too large for this machine", args.cache_mib))
-    })?;
-    manager_options.cache_budget = CacheBudget { bytes: cache_bytes, entries: args.cache_entries };
-    let mut manager =
-        sequence.manager(backend, threads, manager_options).map_err(|e| sequence_error(e, "--frames"))?;
+    let mut manager = scene_manager(args, sequence, &frames, backend, threads)?;
     let renderer = FrameRenderer {
         integrator,
         aovs: &args.aov,
@@ -394,6 +384,29 @@ fn render_sequence(
         encode_video(args, &frame_paths, fps, writer.quiet)?;
     }
     Ok(sequence.template.name.clone())
+}
+
+/// The scene manager of a sequence's run: the integration flags, and the geometry cache's
+/// budget.
+fn scene_manager(
+    args: &RenderArgs,
+    sequence: &Sequence,
+    frames: &FrameSelection,
+    backend: Backend,
+    threads: Option<usize>,
+) -> Result<SceneManager, CliError> {
+    let settings = IntegrationSettings {
+        policy: args.integration,
+        form: args.integrate_as,
+        cache: args.cache == Switch::On,
+        lookahead: args.lookahead == Switch::On,
+    };
+    let mut manager_options = sequence.manager_options(frames, settings);
+    let cache_bytes = args.cache_mib.checked_mul(1 << 20).ok_or_else(|| {
+        CliError::Input(format!("--cache-mib {}: too large for this machine", args.cache_mib))
+    })?;
+    manager_options.cache_budget = CacheBudget { bytes: cache_bytes, entries: args.cache_entries };
+    sequence.manager(backend, threads, manager_options).map_err(|e| sequence_error(e, "--frames"))
 }
 
 /// What stops a sequence's render loop: the sequence, or writing a frame's files.
