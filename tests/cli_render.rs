@@ -203,41 +203,12 @@ fn frame_flags_without_a_sequence_are_input_errors() {
     }
 }
 
-/// Six crates dropped onto the ground: at rest (bit for bit) from about frame 70 on.
-const SETTLING_SCENE: &str = r#"
-[scene]
-name = "settle"
-seed = 3
-frames = 160
-
-[physics]
-timestep = 0.016666667
-
-[environment]
-generator = "ground"
-
-[[prototypes]]
-name = "crate"
-shape = "box"
-half_extents = [0.25, 0.25, 0.25]
-
-[[spawners]]
-prototypes = ["crate"]
-count = 6
-region = { min = [-1.0, 0.3, -1.0], max = [1.0, 0.3, 1.0] }
-random_rotation = false
-
-[[cameras]]
-name = "main"
-position = [0.0, 3.0, 6.0]
-look_at = [0.0, 0.3, 0.0]
-"#;
-
 #[test]
 fn static_frames_reuse_the_previous_image_byte_for_byte() {
     let dir = tempfile::tempdir().unwrap();
     let scene = dir.path().join("settle.toml");
-    std::fs::write(&scene, SETTLING_SCENE).unwrap();
+    // Six crates dropped onto the ground: at rest (bit for bit) from about frame 70 on.
+    std::fs::copy(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/settle.toml"), &scene).unwrap();
     let render = |reuse: &str| {
         let out = dir.path().join(format!("reuse-{reuse}"));
         let status = dormant()

@@ -149,41 +149,12 @@ fn killed_render_resumes_to_the_files_of_an_uninterrupted_run() {
     assert_same_outputs(&whole, &killed);
 }
 
-/// Six crates dropped onto the ground: at rest (bit for bit) from about frame 70 on.
-const SETTLING_SCENE: &str = r#"
-[scene]
-name = "settle"
-seed = 3
-frames = 160
-
-[physics]
-timestep = 0.016666667
-
-[environment]
-generator = "ground"
-
-[[prototypes]]
-name = "crate"
-shape = "box"
-half_extents = [0.25, 0.25, 0.25]
-
-[[spawners]]
-prototypes = ["crate"]
-count = 6
-region = { min = [-1.0, 0.3, -1.0], max = [1.0, 0.3, 1.0] }
-random_rotation = false
-
-[[cameras]]
-name = "main"
-position = [0.0, 3.0, 6.0]
-look_at = [0.0, 0.3, 0.0]
-"#;
-
 #[test]
 fn resumed_static_frames_copy_the_kept_frames_files() {
     let dir = tempfile::tempdir().unwrap();
     let scene = dir.path().join("settle.toml");
-    std::fs::write(&scene, SETTLING_SCENE).unwrap();
+    // Six crates dropped onto the ground: at rest (bit for bit) from about frame 70 on.
+    std::fs::copy(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/settle.toml"), &scene).unwrap();
     let settle_run = |out: &Path| -> Vec<OsString> {
         let args = ["--quiet", "render", "--size", "48x27", "--spp", "2", "--frames", "50..100"];
         let mut args: Vec<OsString> = args
