@@ -126,8 +126,29 @@ pub fn load_gltf(path: &Path) -> Result<GltfAsset, GltfError> {
     load(path, true)
 }
 
+/// [`load_gltf`] on the bytes of a `.glb` or `.gltf` held in memory; `name` names it in
+/// errors. Its buffers and images must be inside it (the GLB binary chunk or `data:` URIs):
+/// a reference to another file is an error (a missing image, a warning), and nothing is read
+/// from disk.
+pub fn load_gltf_slice(bytes: &[u8], name: &Path) -> Result<GltfAsset, GltfError> {
+    from_bytes(bytes, &Source { name, base: None }, true)
+}
+
+/// Where a glTF's bytes came from: `name` for messages, `base` (the file's directory) for
+/// its relative URIs; `None` when it was given in memory and may reference no other file.
+struct Source<'a> {
+    name: &'a Path,
+    base: Option<&'a Path>,
+}
+
 fn load(path: &Path, with_materials: bool) -> Result<GltfAsset, GltfError> {
-    let (document, buffers) = read_document(path)?;
+    let bytes = std::fs::read(path).map_err(|e| GltfError::new(path, "(file)", e.to_string()))?;
+    from_bytes(&bytes, &Source { name: path, base: path.parent() }, with_materials)
+}
+
+fn from_bytes(bytes: &[u8], source: &Source, with_materials: bool) -> Result<GltfAsset, GltfError> {
+    let path = source.name;
+    let (document, buffers) = read_document(bytes, source)?;
     let mut triangles = Triangles::default();
     let mut lights = Vec::new();
     let mut cameras = Vec::new();
@@ -167,7 +188,7 @@ fn load(path: &Path, with_materials: bool) -> Result<GltfAsset, GltfError> {
         }
         mesh.material_ids = Some(material_ids);
         if with_materials {
-            let mut textures = TextureLoader::new(path, &document, &buffers);
+            let mut textures = TextureLoader::new(source, &document, &buffers);
             asset.materials = document.materials().map(|m| material(path, &m, &mut textures)).collect();
             if mesh.max_material_slot() == default_slot {
                 asset.materials.push(Material::gltf_default());
@@ -180,15 +201,18 @@ fn load(path: &Path, with_materials: bool) -> Result<GltfAsset, GltfError> {
     Ok(asset)
 }
 
-/// The file's document, checked for extensions, and its buffers' data.
-fn read_document(path: &Path) -> Result<(gltf::Document, Vec<gltf::buffer::Data>), GltfError> {
-    let bytes = std::fs::read(path).map_err(|e| GltfError::new(path, "(file)", e.to_string()))?;
-    let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(&bytes)
+/// The document in `bytes`, checked for extensions, and its buffers' data.
+fn read_document(
+    bytes: &[u8],
+    source: &Source,
+) -> Result<(gltf::Document, Vec<gltf::buffer::Data>), GltfError> {
+    let path = source.name;
+    let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(bytes)
         .map_err(|e| GltfError::new(path, "(document)", e.to_string()))?;
     check_extensions(path, &document)?;
     let document = gltf::Document::from_json(document.into_json())
         .map_err(|e| GltfError::new(path, "(document)", e.to_string()))?;
-    let buffers = gltf::import_buffers(&document, path.parent(), blob)
+    let buffers = gltf::import_buffers(&document, source.base, blob)
         .map_err(|e| GltfError::new(path, "buffers", e.to_string()))?;
     Ok((document, buffers))
 }
@@ -483,7 +507,7 @@ fn material(path: &Path, m: &gltf::Material, textures: &mut TextureLoader) -> Ma
 
 /// Decodes the textures materials use, each glTF texture once (and each image once).
 struct TextureLoader<'a> {
-    path: &'a Path,
+    source: &'a Source<'a>,
     document: &'a gltf::Document,
     buffers: &'a [gltf::buffer::Data],
     /// glTF texture index -> index in `textures`.
@@ -493,9 +517,9 @@ struct TextureLoader<'a> {
 }
 
 impl<'a> TextureLoader<'a> {
-    fn new(path: &'a Path, document: &'a gltf::Document, buffers: &'a [gltf::buffer::Data]) -> Self {
+    fn new(source: &'a Source<'a>, document: &'a gltf::Document, buffers: &'a [gltf::buffer::Data]) -> Self {
         Self {
-            path,
+            source,
             document,
             buffers,
             by_texture: BTreeMap::new(),
@@ -510,8 +534,8 @@ impl<'a> TextureLoader<'a> {
         }
         let image = texture.source();
         let decoded = self.images.entry(image.index()).or_insert_with(|| {
-            let name = format!("{}: images[{}]", self.path.display(), image.index());
-            decode_image(self.path, self.document, self.buffers, &image).unwrap_or_else(|why| {
+            let name = format!("{}: images[{}]", self.source.name.display(), image.index());
+            decode_image(self.source, self.document, self.buffers, &image).unwrap_or_else(|why| {
                 tracing::warn!("{name}: {why}; using a magenta texture");
                 Texture::magenta(&name)
             })
@@ -534,7 +558,7 @@ impl<'a> TextureLoader<'a> {
 /// The encoded bytes of an image (buffer view, data URI or file next to the glTF), decoded by
 /// whatever format the bytes are in (PNG and JPEG are compiled in).
 fn decode_image(
-    path: &Path,
+    source: &Source,
     document: &gltf::Document,
     buffers: &[gltf::buffer::Data],
     image: &gltf::Image,
@@ -548,7 +572,7 @@ fn decode_image(
             data.0.get(view.offset()..end).ok_or("buffer view lies outside its buffer")?.to_vec()
         }
         (None, Some(uri)) => {
-            gltf::buffer::Data::from_source(gltf::buffer::Source::Uri(uri), path.parent())
+            gltf::buffer::Data::from_source(gltf::buffer::Source::Uri(uri), source.base)
                 .map_err(|e| format!("cannot read '{uri}': {e}"))?
                 .0
         }
@@ -560,7 +584,7 @@ fn decode_image(
         return Err(format!("image is {width}x{height}"));
     }
     Ok(Texture {
-        name: format!("{}: images[{}]", path.display(), image.index()),
+        name: format!("{}: images[{}]", source.name.display(), image.index()),
         width,
         height,
         texels: decoded.pixels().map(|p| p.0).collect(),
