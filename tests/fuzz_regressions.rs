@@ -69,6 +69,17 @@ fn tex_coord_accessor_with_count_zero_is_refused() {
     );
 }
 
+/// Found by review, not by the fuzzer (which did not build a deep enough hierarchy): each of
+/// 40 nodes lists the next twice as a child, so the walk would visit the last node 2^40 times.
+#[test]
+fn node_reached_through_two_parents_is_refused() {
+    rejected(
+        "gltf_json",
+        "node-reached-through-two-parents.gltf",
+        &["fuzz.gltf", "nodes[40]", "reached twice"],
+    );
+}
+
 /// The files under `dir`, sorted (none when it does not exist).
 fn files(dir: &Path) -> Vec<PathBuf> {
     let mut files: Vec<PathBuf> = match std::fs::read_dir(dir) {

@@ -259,7 +259,8 @@ fn check_position_accessors(path: &Path, json: &gltf::json::Root) -> Result<(), 
 
 /// Calls `visit` with every node of the default scene (else the first scene, else every node
 /// that is no other node's child) and its world transform, depth first; stops at the first
-/// error, `visit`'s or a hierarchy deeper than 256 or a non-finite transform.
+/// error, `visit`'s or a node reached twice (a cycle, or a node with two parents), a hierarchy
+/// deeper than 256 or a non-finite transform.
 fn walk_nodes<'d>(
     path: &Path,
     document: &'d gltf::Document,
@@ -276,12 +277,22 @@ fn walk_nodes<'d>(
     };
     let mut stack: Vec<(gltf::Node, Mat4, usize)> =
         roots.into_iter().map(|n| (n, Mat4::IDENTITY, 0)).collect();
+    // A node reached twice would be walked again with all its descendants: a node listed
+    // twice as a child, at every level, doubles the walk per level.
+    let mut reached = vec![false; document.nodes().len()];
     while let Some((node, parent, depth)) = stack.pop() {
+        if std::mem::replace(&mut reached[node.index()], true) {
+            return Err(GltfError::new(
+                path,
+                format!("nodes[{}]", node.index()),
+                "reached twice: a node may have one parent and belong to a scene once",
+            ));
+        }
         if depth > 256 {
             return Err(GltfError::new(
                 path,
                 format!("nodes[{}]", node.index()),
-                "node hierarchy deeper than 256 (a cycle?)",
+                "node hierarchy deeper than 256",
             ));
         }
         let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
