@@ -4,7 +4,7 @@
 CARGO ?= cargo
 RELEASE_BIN := target/release/dormant
 
-.PHONY: setup build demo test test-no-embree lint fmt bench soak slurm-check clean
+.PHONY: setup build demo test test-no-embree lint fmt bench soak slurm-check fuzz clean
 
 setup:
 	bash scripts/setup.sh
@@ -39,6 +39,12 @@ lint:
 	$(CARGO) fmt --all --check
 	$(CARGO) clippy --workspace --all-targets -- -D warnings
 	$(CARGO) clippy -p dormant --no-default-features --all-targets -- -D warnings
+
+# Every cargo-fuzz target for FUZZ_SECONDS seconds (default 60) over a temporary copy of its
+# committed corpus; installs cargo-fuzz when missing (docs/fuzzing.md). Not part of `test`.
+FUZZ_SECONDS ?= 60
+fuzz:
+	FUZZ_SECONDS=$(FUZZ_SECONDS) bash scripts/fuzz.sh
 
 fmt:
 	$(CARGO) fmt --all

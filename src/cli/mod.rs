@@ -17,6 +17,8 @@ use clap::{Args, Parser, Subcommand};
 
 use crate::scene::{self, SceneDescription};
 
+pub use render::Size;
+
 /// Errors that end a command, with the exit code they map to.
 #[derive(Debug, thiserror::Error)]
 pub(crate) enum CliError {

@@ -13,6 +13,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use glam::{Affine3A, Mat4, Vec2, Vec3};
+use gltf::accessor::{DataType, Dimensions};
 
 use crate::geometry::TriangleMesh;
 use crate::scene::texture::{Texture, Wrap};
@@ -126,8 +127,29 @@ pub fn load_gltf(path: &Path) -> Result<GltfAsset, GltfError> {
     load(path, true)
 }
 
+/// [`load_gltf`] on the bytes of a `.glb` or `.gltf` held in memory; `name` names it in
+/// errors. Its buffers and images must be inside it (the GLB binary chunk or `data:` URIs):
+/// a reference to another file is an error (a missing image, a warning), and nothing is read
+/// from disk.
+pub fn load_gltf_slice(bytes: &[u8], name: &Path) -> Result<GltfAsset, GltfError> {
+    from_bytes(bytes, &Source { name, base: None }, true)
+}
+
+/// Where a glTF's bytes came from: `name` for messages, `base` (the file's directory) for
+/// its relative URIs; `None` when it was given in memory and may reference no other file.
+struct Source<'a> {
+    name: &'a Path,
+    base: Option<&'a Path>,
+}
+
 fn load(path: &Path, with_materials: bool) -> Result<GltfAsset, GltfError> {
-    let (document, buffers) = read_document(path)?;
+    let bytes = std::fs::read(path).map_err(|e| GltfError::new(path, "(file)", e.to_string()))?;
+    from_bytes(&bytes, &Source { name: path, base: path.parent() }, with_materials)
+}
+
+fn from_bytes(bytes: &[u8], source: &Source, with_materials: bool) -> Result<GltfAsset, GltfError> {
+    let path = source.name;
+    let (document, buffers) = read_document(bytes, source)?;
     let mut triangles = Triangles::default();
     let mut lights = Vec::new();
     let mut cameras = Vec::new();
@@ -167,7 +189,7 @@ fn load(path: &Path, with_materials: bool) -> Result<GltfAsset, GltfError> {
         }
         mesh.material_ids = Some(material_ids);
         if with_materials {
-            let mut textures = TextureLoader::new(path, &document, &buffers);
+            let mut textures = TextureLoader::new(source, &document, &buffers);
             asset.materials = document.materials().map(|m| material(path, &m, &mut textures)).collect();
             if mesh.max_material_slot() == default_slot {
                 asset.materials.push(Material::gltf_default());
@@ -180,38 +202,84 @@ fn load(path: &Path, with_materials: bool) -> Result<GltfAsset, GltfError> {
     Ok(asset)
 }
 
-/// The file's document, checked for extensions, and its buffers' data.
-fn read_document(path: &Path) -> Result<(gltf::Document, Vec<gltf::buffer::Data>), GltfError> {
-    let bytes = std::fs::read(path).map_err(|e| GltfError::new(path, "(file)", e.to_string()))?;
-    let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(&bytes)
+/// The document in `bytes`, checked for extensions, and its buffers' data.
+fn read_document(
+    bytes: &[u8],
+    source: &Source,
+) -> Result<(gltf::Document, Vec<gltf::buffer::Data>), GltfError> {
+    let path = source.name;
+    check_glb_length(path, bytes)?;
+    let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(bytes)
         .map_err(|e| GltfError::new(path, "(document)", e.to_string()))?;
     check_extensions(path, &document)?;
-    let document = gltf::Document::from_json(document.into_json())
-        .map_err(|e| GltfError::new(path, "(document)", e.to_string()))?;
+    let json = document.into_json();
+    check_position_accessors(path, &json)?;
+    let document =
+        gltf::Document::from_json(json).map_err(|e| GltfError::new(path, "(document)", e.to_string()))?;
     let buffers =
-        gltf::import_buffers(&document, path.parent(), blob).map_err(|e| buffer_error(path, &document, e))?;
+        gltf::import_buffers(&document, source.base, blob).map_err(|e| buffer_error(source, &document, e))?;
     Ok((document, buffers))
 }
 
 /// The error for buffers that could not be loaded, naming the first external buffer file
 /// that is missing when there is one (the importer's I/O error names no file).
-fn buffer_error(path: &Path, document: &gltf::Document, e: gltf::Error) -> GltfError {
-    let dir = path.parent().unwrap_or(Path::new("."));
-    let missing = document.buffers().find_map(|b| match b.source() {
-        gltf::buffer::Source::Uri(uri) if !uri.starts_with("data:") && !dir.join(uri).is_file() => {
-            Some((b.index(), uri))
-        }
-        _ => None,
+fn buffer_error(source: &Source, document: &gltf::Document, e: gltf::Error) -> GltfError {
+    let missing = source.base.and_then(|dir| {
+        document.buffers().find_map(|b| match b.source() {
+            gltf::buffer::Source::Uri(uri) if !uri.starts_with("data:") && !dir.join(uri).is_file() => {
+                Some((b.index(), uri))
+            }
+            _ => None,
+        })
     });
     match missing {
-        Some((i, uri)) => GltfError::new(path, format!("buffers[{i}]"), format!("cannot read '{uri}': {e}")),
-        None => GltfError::new(path, "buffers", e.to_string()),
+        Some((i, uri)) => {
+            GltfError::new(source.name, format!("buffers[{i}]"), format!("cannot read '{uri}': {e}"))
+        }
+        None => GltfError::new(source.name, "buffers", e.to_string()),
     }
+}
+
+/// Refuses a GLB whose header declares a total length shorter than the 12-byte header itself
+/// (the gltf crate subtracts the header's size from it unchecked).
+fn check_glb_length(path: &Path, bytes: &[u8]) -> Result<(), GltfError> {
+    const HEADER_LEN: u32 = 12;
+    if let Some(length) = bytes.strip_prefix(b"glTF").and_then(|rest| rest.get(4..8)) {
+        let length = u32::from_le_bytes(length.try_into().expect("4 bytes"));
+        if length < HEADER_LEN {
+            let message = format!("GLB header declares {length} bytes, less than its own {HEADER_LEN}");
+            return Err(GltfError::new(path, "(header)", message));
+        }
+    }
+    Ok(())
+}
+
+/// Refuses a primitive whose POSITION names an accessor that does not exist (the gltf crate's
+/// validation indexes the accessors with it unchecked).
+fn check_position_accessors(path: &Path, json: &gltf::json::Root) -> Result<(), GltfError> {
+    use gltf::json::{mesh::Semantic, validation::Checked};
+    for (m, mesh) in json.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            let Some(accessor) = primitive.attributes.get(&Checked::Valid(Semantic::Positions)) else {
+                continue;
+            };
+            let count = json.accessors.len();
+            if accessor.value() >= count {
+                return Err(GltfError::new(
+                    path,
+                    format!("meshes[{m}].primitives[{p}].attributes.POSITION"),
+                    format!("accessor {} does not exist ({count} accessors)", accessor.value()),
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Calls `visit` with every node of the default scene (else the first scene, else every node
 /// that is no other node's child) and its world transform, depth first; stops at the first
-/// error, `visit`'s or a hierarchy deeper than 256 or a non-finite transform.
+/// error, `visit`'s or a node reached twice (a cycle, or a node with two parents), a hierarchy
+/// deeper than 256 or a non-finite transform.
 fn walk_nodes<'d>(
     path: &Path,
     document: &'d gltf::Document,
@@ -228,12 +296,22 @@ fn walk_nodes<'d>(
     };
     let mut stack: Vec<(gltf::Node, Mat4, usize)> =
         roots.into_iter().map(|n| (n, Mat4::IDENTITY, 0)).collect();
+    // A node reached twice would be walked again with all its descendants: a node listed
+    // twice as a child, at every level, doubles the walk per level.
+    let mut reached = vec![false; document.nodes().len()];
     while let Some((node, parent, depth)) = stack.pop() {
+        if std::mem::replace(&mut reached[node.index()], true) {
+            return Err(GltfError::new(
+                path,
+                format!("nodes[{}]", node.index()),
+                "reached twice: a node may have one parent and belong to a scene once",
+            ));
+        }
         if depth > 256 {
             return Err(GltfError::new(
                 path,
                 format!("nodes[{}]", node.index()),
-                "node hierarchy deeper than 256 (a cycle?)",
+                "node hierarchy deeper than 256",
             ));
         }
         let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
@@ -310,6 +388,7 @@ impl Triangles {
             if prim.mode() != gltf::mesh::Mode::Triangles {
                 continue;
             }
+            check_attributes(path, &element, &prim, buffers)?;
             let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
             let unreadable = |what: &str, accessor| unreadable(path, &element, what, accessor);
             let positions: Vec<Vec3> = reader
@@ -397,6 +476,134 @@ impl Triangles {
         self.mesh.positions.extend(positions.iter().map(|&p| xf.transform_point3(p)));
         self.mesh.indices.extend(indices.chunks_exact(3).map(|t| [t[0] + base, t[1] + base, t[2] + base]));
         Ok(())
+    }
+}
+
+/// What the importer reads from an accessor: the element's dimensions and the component
+/// types it accepts.
+struct Layout {
+    what: &'static str,
+    dimensions: Dimensions,
+    types: &'static [DataType],
+}
+
+const POSITIONS: Layout = Layout { what: "POSITION", dimensions: Dimensions::Vec3, types: &[DataType::F32] };
+const NORMALS: Layout = Layout { what: "NORMAL", dimensions: Dimensions::Vec3, types: &[DataType::F32] };
+const TEX_COORDS: Layout = Layout {
+    what: "TEXCOORD_0",
+    dimensions: Dimensions::Vec2,
+    types: &[DataType::U8, DataType::U16, DataType::F32],
+};
+const INDICES: Layout = Layout {
+    what: "indices",
+    dimensions: Dimensions::Scalar,
+    types: &[DataType::U8, DataType::U16, DataType::U32],
+};
+
+/// Checks every accessor of `prim` the importer reads, before the gltf crate's reader does:
+/// its reader trusts accessors' types, counts, strides and ranges, and panics, or yields
+/// more elements than the file holds, when they are wrong.
+fn check_attributes(
+    path: &Path,
+    element: &str,
+    prim: &gltf::Primitive,
+    buffers: &[gltf::buffer::Data],
+) -> Result<(), GltfError> {
+    let attributes = [
+        (prim.get(&gltf::Semantic::Positions), &POSITIONS),
+        (prim.get(&gltf::Semantic::Normals), &NORMALS),
+        (prim.get(&gltf::Semantic::TexCoords(0)), &TEX_COORDS),
+        (prim.indices(), &INDICES),
+    ];
+    for (accessor, layout) in attributes {
+        let Some(accessor) = accessor else { continue };
+        check_accessor(&accessor, layout, buffers).map_err(|message| {
+            GltfError::new(
+                path,
+                element,
+                format!("{} (accessors[{}]) {message}", layout.what, accessor.index()),
+            )
+        })?;
+    }
+    Ok(())
+}
+
+/// Whether the reader can read `accessor` as `layout`: the right type, at least one element,
+/// and every element (and every sparse index and value) inside its buffer view and buffer.
+/// Without a buffer view its elements are zeros the reader makes up: no more are allowed
+/// than the file's buffers have bytes.
+fn check_accessor(
+    accessor: &gltf::Accessor,
+    layout: &Layout,
+    buffers: &[gltf::buffer::Data],
+) -> Result<(), String> {
+    let (dimensions, data_type) = (accessor.dimensions(), accessor.data_type());
+    if dimensions != layout.dimensions || !layout.types.contains(&data_type) {
+        let expected = format!("{:?} of {:?}", layout.dimensions, layout.types);
+        return Err(format!("is {dimensions:?} of {data_type:?}, expected {expected}"));
+    }
+    let size = data_type.size() * dimensions.multiplicity();
+    let count = accessor.count();
+    if count == 0 {
+        return Err("has no elements (count 0)".into());
+    }
+    match accessor.view() {
+        Some(view) => check_elements(&view, accessor.offset(), count, size, buffers)?,
+        None if accessor.sparse().is_none() => {
+            return Err("has neither a bufferView nor sparse values".into())
+        }
+        None => {
+            let held: usize = buffers.iter().map(|b| b.len()).sum();
+            if count > held {
+                return Err(format!(
+                    "declares {count} elements without a bufferView, more than the {held} bytes of the file's buffers"
+                ));
+            }
+        }
+    }
+    if let Some(sparse) = accessor.sparse() {
+        let n = sparse.count();
+        if n == 0 || n > count {
+            return Err(format!("has {n} sparse values, expected 1 to its count {count}"));
+        }
+        let (indices, values) = (sparse.indices(), sparse.values());
+        check_elements(&indices.view(), indices.offset(), n, indices.index_type().size(), buffers)
+            .map_err(|e| format!("sparse indices: {e}"))?;
+        check_elements(&values.view(), values.offset(), n, size, buffers)
+            .map_err(|e| format!("sparse values: {e}"))?;
+    }
+    Ok(())
+}
+
+/// Whether `count` elements of `size` bytes from `offset` in `view`, at the view's stride (or
+/// packed), lie inside the view, and the view inside its buffer.
+fn check_elements(
+    view: &gltf::buffer::View,
+    offset: usize,
+    count: usize,
+    size: usize,
+    buffers: &[gltf::buffer::Data],
+) -> Result<(), String> {
+    let stride = view.stride().unwrap_or(size);
+    if stride < size {
+        return Err(format!(
+            "bufferViews[{}] has stride {stride}, less than its {size}-byte elements",
+            view.index()
+        ));
+    }
+    let end =
+        stride.checked_mul(count - 1).and_then(|n| n.checked_add(size)).and_then(|n| n.checked_add(offset));
+    let buffer = buffers.get(view.buffer().index()).map_or(0, |b| b.len());
+    let view_end = view.offset().checked_add(view.length());
+    match (end, view_end) {
+        (Some(end), Some(view_end)) if end <= view.length() && view_end <= buffer => Ok(()),
+        _ => Err(format!(
+            "{count} elements of {size} bytes at offset {offset} (stride {stride}) do not fit in bufferViews[{}] \
+             ({} bytes at offset {} of a {buffer}-byte buffer)",
+            view.index(),
+            view.length(),
+            view.offset()
+        )),
     }
 }
 
@@ -499,7 +706,7 @@ fn material(path: &Path, m: &gltf::Material, textures: &mut TextureLoader) -> Ma
 
 /// Decodes the textures materials use, each glTF texture once (and each image once).
 struct TextureLoader<'a> {
-    path: &'a Path,
+    source: &'a Source<'a>,
     document: &'a gltf::Document,
     buffers: &'a [gltf::buffer::Data],
     /// glTF texture index -> index in `textures`.
@@ -509,9 +716,9 @@ struct TextureLoader<'a> {
 }
 
 impl<'a> TextureLoader<'a> {
-    fn new(path: &'a Path, document: &'a gltf::Document, buffers: &'a [gltf::buffer::Data]) -> Self {
+    fn new(source: &'a Source<'a>, document: &'a gltf::Document, buffers: &'a [gltf::buffer::Data]) -> Self {
         Self {
-            path,
+            source,
             document,
             buffers,
             by_texture: BTreeMap::new(),
@@ -526,8 +733,8 @@ impl<'a> TextureLoader<'a> {
         }
         let image = texture.source();
         let decoded = self.images.entry(image.index()).or_insert_with(|| {
-            let name = format!("{}: images[{}]", self.path.display(), image.index());
-            decode_image(self.path, self.document, self.buffers, &image).unwrap_or_else(|why| {
+            let name = format!("{}: images[{}]", self.source.name.display(), image.index());
+            decode_image(self.source, self.document, self.buffers, &image).unwrap_or_else(|why| {
                 tracing::warn!("{name}: {why}; using a magenta texture");
                 Texture::magenta(&name)
             })
@@ -550,7 +757,7 @@ impl<'a> TextureLoader<'a> {
 /// The encoded bytes of an image (buffer view, data URI or file next to the glTF), decoded by
 /// whatever format the bytes are in (PNG and JPEG are compiled in).
 fn decode_image(
-    path: &Path,
+    source: &Source,
     document: &gltf::Document,
     buffers: &[gltf::buffer::Data],
     image: &gltf::Image,
@@ -564,7 +771,7 @@ fn decode_image(
             data.0.get(view.offset()..end).ok_or("buffer view lies outside its buffer")?.to_vec()
         }
         (None, Some(uri)) => {
-            gltf::buffer::Data::from_source(gltf::buffer::Source::Uri(uri), path.parent())
+            gltf::buffer::Data::from_source(gltf::buffer::Source::Uri(uri), source.base)
                 .map_err(|e| format!("cannot read '{uri}': {e}"))?
                 .0
         }
@@ -576,7 +783,7 @@ fn decode_image(
         return Err(format!("image is {width}x{height}"));
     }
     Ok(Texture {
-        name: format!("{}: images[{}]", path.display(), image.index()),
+        name: format!("{}: images[{}]", source.name.display(), image.index()),
         width,
         height,
         texels: decoded.pixels().map(|p| p.0).collect(),

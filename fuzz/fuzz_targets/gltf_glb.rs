@@ -1,0 +1,9 @@
+//! Fuzz target `gltf_glb`: see `tests/fuzz_harness/mod.rs` (`gltf_glb`) and docs/fuzzing.md.
+#![no_main]
+
+#[path = "../../tests/fuzz_harness/mod.rs"]
+mod harness;
+
+libfuzzer_sys::fuzz_target!(|data: &[u8]| {
+    let _ = harness::gltf_glb(data);
+});

@@ -1,0 +1,137 @@
+//! What each fuzz target does with its input, shared by the cargo-fuzz targets (`fuzz/`,
+//! which include this file by path) and the regression tests (`tests/fuzz_regressions.rs`,
+//! which replay the inputs the fuzzer found). Each function returns `Ok` when the input was
+//! accepted and `Err(message)` when it was rejected cleanly; a panic, a hang or an unbounded
+//! allocation is the bug the fuzzer looks for. Inputs are taken from memory: nothing is read
+//! from disk but what an input names itself (and a scene's relative assets resolve into a
+//! directory that does not exist).
+
+// Each user (a fuzz target, the tests) calls only some of these.
+#![allow(dead_code)]
+
+use std::path::Path;
+
+use dormant::cli::Size;
+use dormant::physics::Trajectory;
+use dormant::scene::file::SceneFile;
+use dormant::scene::gltf::load_gltf_slice;
+use dormant::scene::SceneAssets;
+use dormant::sequence::FrameRange;
+
+/// Where fuzzed scene files pretend to live: relative asset paths resolve under it, and it
+/// does not exist.
+pub const SCENE_PATH: &str = "/nonexistent/dormant-fuzz/scene.toml";
+
+/// A scene file's text as `dormant render SCENE` takes it before simulating: parsed and
+/// validated, its environment and prototypes loaded, and the scene (without bodies)
+/// described at its first and last frame.
+pub fn scene_toml(data: &[u8]) -> Result<(), String> {
+    let text = std::str::from_utf8(data).map_err(|e| format!("not UTF-8: {e}"))?;
+    let file = SceneFile::parse(SCENE_PATH, text).map_err(|e| e.to_string())?;
+    let assets = SceneAssets::load(&file).map_err(|e| e.to_string())?;
+    let scene = &file.spec().scene;
+    let end = scene.frames as f32 * file.spec().physics.timestep;
+    for time in [0.0, end] {
+        assets.describe(time);
+    }
+    Ok(())
+}
+
+/// The bytes of a `.glb` (or any glTF) imported from memory with materials and textures.
+pub fn gltf_glb(data: &[u8]) -> Result<(), String> {
+    load_gltf_slice(data, Path::new("fuzz.glb")).map(|_| ()).map_err(|e| e.to_string())
+}
+
+/// Where [`gltf_json`] puts its binary buffer: every occurrence in the JSON is replaced by a
+/// `data:` URI holding the bytes after the first NUL.
+pub const BIN_PLACEHOLDER: &str = "@BIN@";
+
+/// A `.gltf` JSON document with one binary buffer: the bytes before the first NUL are the
+/// JSON, the bytes after it the buffer, which the JSON references as
+/// `"uri": "@BIN@"` ([`BIN_PLACEHOLDER`], replaced by a base64 `data:` URI).
+pub fn gltf_json(data: &[u8]) -> Result<(), String> {
+    let (json, bin) = match data.iter().position(|&b| b == 0) {
+        Some(i) => (&data[..i], &data[i + 1..]),
+        None => (data, &[][..]),
+    };
+    let uri = format!("data:application/octet-stream;base64,{}", base64(bin));
+    let text = String::from_utf8_lossy(json).replace(BIN_PLACEHOLDER, &uri);
+    load_gltf_slice(text.as_bytes(), Path::new("fuzz.gltf")).map(|_| ()).map_err(|e| e.to_string())
+}
+
+/// Standard base64 with padding.
+pub fn base64(bytes: &[u8]) -> String {
+    const ALPHABET: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut out = String::with_capacity(bytes.len().div_ceil(3) * 4);
+    for chunk in bytes.chunks(3) {
+        let b = [chunk[0], *chunk.get(1).unwrap_or(&0), *chunk.get(2).unwrap_or(&0)];
+        let n = (u32::from(b[0]) << 16) | (u32::from(b[1]) << 8) | u32::from(b[2]);
+        for i in 0..4 {
+            if i <= chunk.len() {
+                out.push(ALPHABET[(n >> (18 - 6 * i) & 63) as usize] as char);
+            } else {
+                out.push('=');
+            }
+        }
+    }
+    out
+}
+
+/// A trajectory file's bytes, read as they are and then with their trailing checksum made
+/// right (so that mutations reach past it), as `dormant render --trajectory` reads them: the
+/// frames replayed, island statistics taken, the recorded scene parsed and its hash checked.
+/// A trajectory that reads must write back to bytes that read to the same trajectory.
+pub fn trajectory(data: &[u8]) -> Result<(), String> {
+    let name = Path::new("fuzz.traj");
+    let _ = Trajectory::from_bytes(data, name);
+    let t = Trajectory::from_bytes(&with_checksum(data), name).map_err(|e| e.to_string())?;
+    let mut replay = t.replay();
+    while let Some(frame) = replay.next_frame() {
+        frame.present_bodies().count();
+    }
+    t.states_at_end();
+    t.island_stats();
+    let again = Trajectory::from_bytes(&t.to_bytes(), name).expect("a written trajectory reads back");
+    assert_eq!(again, t, "a trajectory reads back as it was written");
+    let recorded = t.scene.as_ref().ok_or("no recorded scene")?;
+    let file = recorded.scene_file().map_err(|e| e.to_string())?;
+    let effective = recorded.options.effective_scene(&file).map_err(|e| e.to_string())?;
+    if effective.source_hash() != t.scene_hash {
+        return Err("the recorded scene's hash differs".into());
+    }
+    Ok(())
+}
+
+/// `data` with its last 8 bytes replaced by the FNV-1a 64 checksum of the bytes before them
+/// (unchanged when shorter than a trajectory's header and checksum).
+pub fn with_checksum(data: &[u8]) -> Vec<u8> {
+    let mut bytes = data.to_vec();
+    if bytes.len() >= 20 {
+        let end = bytes.len() - 8;
+        let hash = bytes[..end]
+            .iter()
+            .fold(0xcbf2_9ce4_8422_2325_u64, |h, &b| (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3));
+        bytes[end..].copy_from_slice(&hash.to_le_bytes());
+    }
+    bytes
+}
+
+/// A command-line value as `--frames A..B` and `--size WxH` parse it; what parses must hold
+/// what the parsers promise and print back to itself.
+pub fn cli_values(data: &[u8]) -> Result<(), String> {
+    let text = std::str::from_utf8(data).map_err(|e| format!("not UTF-8: {e}"))?;
+    let frames = text.parse::<FrameRange>();
+    if let Ok(r) = frames {
+        assert!(r.start < r.end, "{text:?} parsed to an empty range {r:?}");
+        assert_eq!(format!("{}..{}", r.start, r.end).parse::<FrameRange>(), Ok(r));
+    }
+    let size = text.parse::<Size>();
+    if let Ok(s) = size {
+        assert!((1..=16384).contains(&s.width) && (1..=16384).contains(&s.height), "{text:?}: {s:?}");
+        assert_eq!(format!("{}x{}", s.width, s.height).parse::<Size>(), Ok(s));
+    }
+    match (frames, size) {
+        (Err(a), Err(b)) => Err(format!("{a}; {b}")),
+        _ => Ok(()),
+    }
+}
