@@ -156,6 +156,10 @@ pub struct RenderArgs {
     /// .noisy.exr with --exr), like Cycles' "Noisy Image" pass.
     #[arg(long, requires = "denoise")]
     pub keep_noisy: bool,
+    /// With --denoise: denoise the albedo and normal guides first (like Cycles' "Accurate"
+    /// prefilter): less error on fine texture edges, about six times the denoising time.
+    #[arg(long, requires = "denoise")]
+    pub denoise_prefilter: bool,
 }
 
 /// The requested backend, or the first compiled in.
@@ -213,7 +217,11 @@ pub(super) fn run(
 ) -> Result<(), CliError> {
     let backend = choose_backend(args.backend)?;
     check_flags(args)?;
-    let denoiser = args.denoise.then(|| Denoiser::new(threads)).transpose().map_err(denoise_error)?;
+    let denoiser = args
+        .denoise
+        .then(|| Denoiser::new(threads).map(|d| d.prefilter(args.denoise_prefilter)))
+        .transpose()
+        .map_err(denoise_error)?;
     std::fs::create_dir_all(&args.out).map_err(|e| {
         CliError::Runtime(format!("cannot create output directory {}: {e}", args.out.display()))
     })?;

@@ -10,8 +10,9 @@
 //! [0, 1] (for metals that is their reflectivity at normal incidence, as OIDN recommends);
 //! normals are world-space shading normals in [-1, 1]; both guides average the same pixel
 //! samples as the beauty image (the same tent filter, importance-sampled), and pixels whose
-//! camera ray escapes have albedo and normal 0. The guides are left noisy (`cleanAux` false):
-//! only edges and textures vary between a pixel's samples.
+//! camera ray escapes have albedo and normal 0. By default the guides are passed as they are,
+//! noisy where a pixel's samples straddle an edge (`cleanAux` false, OIDN's fast path);
+//! [`Denoiser::prefilter`] denoises them first and sets `cleanAux`.
 
 #[cfg(feature = "oidn")]
 mod oidn;
@@ -74,6 +75,9 @@ pub const fn compiled() -> bool {
 /// An OIDN CPU device, made once and used for every frame of a run. Not `Sync`: OIDN reports
 /// errors per thread, so one thread drives it.
 pub struct Denoiser {
+    /// Denoise the guides first and tell the filter they are clean (see [`Denoiser::prefilter`]).
+    #[cfg_attr(not(feature = "oidn"), allow(dead_code))]
+    prefilter: bool,
     #[cfg(feature = "oidn")]
     device: oidn::Device,
     #[cfg(not(feature = "oidn"))]
@@ -85,13 +89,22 @@ impl Denoiser {
     pub fn new(threads: Option<usize>) -> Result<Self, DenoiseError> {
         #[cfg(feature = "oidn")]
         {
-            Ok(Self { device: oidn::Device::new(threads)? })
+            Ok(Self { prefilter: false, device: oidn::Device::new(threads)? })
         }
         #[cfg(not(feature = "oidn"))]
         {
             let _ = threads;
             Err(DenoiseError::NotCompiled)
         }
+    }
+
+    /// With `on`, [`Denoiser::denoise`] first denoises the albedo and normal guides (OIDN's
+    /// prefiltering, Cycles' "Accurate" prefilter) and then filters the image with `cleanAux`:
+    /// OIDN's recommendation for final frames, at three filter runs instead of one (measured in
+    /// docs/performance.md).
+    pub fn prefilter(mut self, on: bool) -> Self {
+        self.prefilter = on;
+        self
     }
 
     /// The linked library's version, `major.minor.patch`.
@@ -124,14 +137,20 @@ impl Denoiser {
         #[cfg(feature = "oidn")]
         {
             let start = Instant::now();
+            let size = (beauty.width as usize, beauty.height as usize);
             let color = packed(&beauty.pixels, |p| p.max(Vec3::ZERO));
-            let albedo = packed(&albedo.pixels, |p| p.clamp(Vec3::ZERO, Vec3::ONE));
-            let normal = packed(&normal.pixels, |p| p.clamp(-Vec3::ONE, Vec3::ONE));
-            let (width, height) = (beauty.width, beauty.height);
-            let output = self.device.filter_rt(width as usize, height as usize, &color, &albedo, &normal)?;
+            let mut albedo = packed(&albedo.pixels, |p| p.clamp(Vec3::ZERO, Vec3::ONE));
+            let mut normal = packed(&normal.pixels, |p| p.clamp(-Vec3::ONE, Vec3::ONE));
+            if self.prefilter {
+                albedo = self.device.filter_rt(size, &[(c"albedo", &albedo)], false, false)?;
+                normal = self.device.filter_rt(size, &[(c"normal", &normal)], false, false)?;
+            }
+            let inputs: [(&std::ffi::CStr, &[f32]); 3] =
+                [(c"color", &color), (c"albedo", &albedo), (c"normal", &normal)];
+            let output = self.device.filter_rt(size, &inputs, true, self.prefilter)?;
             let pixels =
                 output.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2]).max(Vec3::ZERO)).collect();
-            Ok((Film { width, height, pixels }, start.elapsed().as_secs_f64()))
+            Ok((Film { width: beauty.width, height: beauty.height, pixels }, start.elapsed().as_secs_f64()))
         }
         #[cfg(not(feature = "oidn"))]
         match self.never {}

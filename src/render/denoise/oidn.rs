@@ -97,21 +97,18 @@ impl Device {
         format!("{}.{}.{}", v / 10000, v / 100 % 100, v % 100)
     }
 
-    /// Runs the `RT` filter on a `width` x `height` HDR `color` image (packed RGB floats) with
-    /// `albedo` and `normal` guides; returns the denoised image in the same layout.
+    /// Runs the `RT` filter on `width` x `height` images of packed RGB floats: `inputs` names
+    /// each (`color`, `albedo`, `normal`; a guide alone is prefiltered); `hdr` says the color
+    /// image is HDR, `clean_aux` that the guides are noise-free. Returns the output image.
     pub(super) fn filter_rt(
         &self,
-        width: usize,
-        height: usize,
-        color: &[f32],
-        albedo: &[f32],
-        normal: &[f32],
+        (width, height): (usize, usize),
+        inputs: &[(&CStr, &[f32])],
+        hdr: bool,
+        clean_aux: bool,
     ) -> Result<Vec<f32>, DenoiseError> {
         let len = width * height * 3;
-        assert!(
-            color.len() == len && albedo.len() == len && normal.len() == len,
-            "images of {width}x{height} RGB"
-        );
+        assert!(inputs.iter().all(|(_, data)| data.len() == len), "images of {width}x{height} RGB");
         let mut output = vec![0.0f32; len];
         // SAFETY: `raw` is a live, committed device.
         let filter = Filter { raw: unsafe { sys::oidnNewFilter(self.raw, c"RT".as_ptr()) } };
@@ -124,12 +121,10 @@ impl Device {
             });
         }
         // Inputs are only read by OIDN; the pointer type of the C API is not const.
-        let images = [
-            (c"color", color.as_ptr() as *mut c_void),
-            (c"albedo", albedo.as_ptr() as *mut c_void),
-            (c"normal", normal.as_ptr() as *mut c_void),
-            (c"output", output.as_mut_ptr() as *mut c_void),
-        ];
+        let images = inputs
+            .iter()
+            .map(|(name, data)| (*name, data.as_ptr() as *mut c_void))
+            .chain([(c"output", output.as_mut_ptr() as *mut c_void)]);
         // SAFETY: `filter.raw` is a live filter; every image pointer addresses `len` floats
         // (width * height packed FLOAT3 pixels, strides computed by OIDN) that outlive the
         // filter, which is released before this function returns; only `output` is written,
@@ -148,7 +143,8 @@ impl Device {
                     0,
                 );
             }
-            sys::oidnSetFilterBool(filter.raw, c"hdr".as_ptr(), true);
+            sys::oidnSetFilterBool(filter.raw, c"hdr".as_ptr(), hdr);
+            sys::oidnSetFilterBool(filter.raw, c"cleanAux".as_ptr(), clean_aux);
             sys::oidnSetFilterInt(filter.raw, c"quality".as_ptr(), sys::OIDN_QUALITY_HIGH);
             sys::oidnCommitFilter(filter.raw);
         }
