@@ -509,6 +509,8 @@ fn run_info(args: &RenderArgs, sequence: &Sequence, backend: Backend, frames: &F
         exposure: args.exposure,
         aovs: args.aov.iter().map(|a| a.name().to_string()).collect(),
         exr: args.exr,
+        denoise: args.denoise.then(|| if args.denoise_prefilter { "oidn-prefilter" } else { "oidn" }.into()),
+        keep_noisy: args.keep_noisy,
     }
 }
 
