@@ -67,11 +67,6 @@ pub const OIDN_VERSION: &str = "2.5.1";
 /// The AOVs the denoiser takes as guides, rendered whenever a frame is denoised.
 pub const GUIDE_AOVS: [Aov; 2] = [Aov::Albedo, Aov::Normal];
 
-/// Whether this build can denoise (the `oidn` feature).
-pub const fn compiled() -> bool {
-    cfg!(feature = "oidn")
-}
-
 /// An OIDN CPU device, made once and used for every frame of a run. Not `Sync`: OIDN reports
 /// errors per thread, so one thread drives it.
 pub struct Denoiser {
