@@ -1,15 +1,24 @@
-//! Adds an rpath for the Embree library directory that `embree4-sys` found (its `links`
-//! metadata, `DEP_EMBREE4_LIBDIR`), so the binary, tests and benches run without
-//! `LD_LIBRARY_PATH` when Embree lives in a non-system prefix such as `.deps/embree4`.
+//! Adds an rpath for the library directories that `embree4-sys` and `oidn-sys` found (their
+//! `links` metadata, `DEP_EMBREE4_LIBDIR` and `DEP_OPENIMAGEDENOISE_LIBDIR`), so the binary,
+//! tests and benches run without `LD_LIBRARY_PATH` when Embree or Open Image Denoise live in a
+//! non-system prefix such as `.deps/embree4` or `.deps/oidn`.
 
 use std::path::Path;
 
 fn main() {
-    println!("cargo:rerun-if-env-changed=DEP_EMBREE4_LIBDIR");
-    if std::env::var_os("CARGO_FEATURE_EMBREE").is_none() {
-        return;
+    for (feature, libdir) in [
+        ("CARGO_FEATURE_EMBREE", "DEP_EMBREE4_LIBDIR"),
+        ("CARGO_FEATURE_OIDN", "DEP_OPENIMAGEDENOISE_LIBDIR"),
+    ] {
+        println!("cargo:rerun-if-env-changed={libdir}");
+        if std::env::var_os(feature).is_some() {
+            add_rpath(std::env::var_os(libdir));
+        }
     }
-    let Some(dir) = std::env::var_os("DEP_EMBREE4_LIBDIR") else {
+}
+
+fn add_rpath(dir: Option<std::ffi::OsString>) {
+    let Some(dir) = dir else {
         return;
     };
     let dir = Path::new(&dir);

@@ -2,17 +2,28 @@
 # Installs everything dormant needs to build and test, on Debian 12 or 13, as root.
 # Idempotent: a second run checks, prints what it found, and changes nothing.
 #
+# Embree 4 (feature `embree`):
 #   Debian >= 13: apt's libembree-dev (Embree 4.3).
 #   Debian 12:    a git-ignored prefix .deps/embree4/{include,lib} holding the headers from
 #                 Debian 13's libembree-dev .deb (fetched with a private apt configuration; the
 #                 system's stays untouched) and the official Embree 4.4 runtime with its TBB
 #                 from PyPI's embreex==4.4.0.post1 wheel. See docs/embree.md for why.
 #   Elsewhere:    set EMBREE_DIR to an Embree 4 prefix (include/embree4, lib/libembree4.so).
+# Intel Open Image Denoise 2.5.1 (feature `oidn`, for `dormant render --denoise`):
+#   Debian 12/13: neither ships it; a git-ignored prefix .deps/oidn/lib holding the official
+#                 OIDN 2.5.1 runtime from PyPI's pyoidn==2.5.1.0 wheel (checked against a pinned
+#                 sha256): the library, its core, the CPU device and TBB only (no GPU devices).
+#                 The bindings (ffi/oidn-sys) are hand-written, so no headers are needed.
+#   Elsewhere:    set OIDN_DIR to an OIDN 2.x prefix (lib/libOpenImageDenoise.so).
 set -euo pipefail
 
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 prefix="$root/.deps/embree4"
 embreex_version="4.4.0.post1"
+oidn_prefix="$root/.deps/oidn"
+oidn_version="2.5.1"
+pyoidn_version="2.5.1.0"
+pyoidn_sha256="32ad13368f8de1ef63001942ad05b02a00cd732d1206d97f352d3a3f606d823e"
 
 say() { printf 'setup: %s\n' "$*"; }
 die() { printf 'setup: error: %s\n' "$*" >&2; exit 1; }
@@ -51,6 +62,50 @@ fi
 command -v python3 >/dev/null 2>&1 && python3 -m pip --version >/dev/null 2>&1 \
     && apt_packages=(build-essential pkg-config libclang-dev ca-certificates)
 apt_install "${apt_packages[@]}"
+
+# --- Open Image Denoise 2 (before Embree, whose section ends the script) -------------------
+# The wheel's libraries carry RPATH $ORIGIN/../lib, and the core loads its device modules
+# from its own directory by their versioned names, so they keep the wheel's names under lib/.
+oidn_libs=(libOpenImageDenoise.so.$oidn_version libOpenImageDenoise_core.so.$oidn_version
+           libOpenImageDenoise_device_cpu.so.$oidn_version libtbb.so.12)
+oidn_stamp="OIDN $oidn_version (CPU device, TBB) from pyoidn $pyoidn_version"
+if [ -n "${OIDN_DIR:-}" ]; then
+    [ -e "$OIDN_DIR/lib/libOpenImageDenoise.so" ] || die "OIDN_DIR=$OIDN_DIR has no lib/libOpenImageDenoise.so"
+    say "using OIDN_DIR=$OIDN_DIR; nothing to install"
+elif [ -f "$oidn_prefix/.complete" ] && [ "$(cat "$oidn_prefix/.complete")" = "$oidn_stamp" ] \
+    && [ -e "$oidn_prefix/lib/libOpenImageDenoise.so" ]; then
+    say "OIDN prefix present: $oidn_prefix ($oidn_stamp)"
+else
+    oidn_work=$(mktemp -d "${TMPDIR:-/tmp}/dormant-setup-oidn.XXXXXX")
+    trap 'rm -rf "$oidn_work"' EXIT
+    mkdir -p "$oidn_work/prefix/lib"
+    echo "pyoidn==$pyoidn_version --hash=sha256:$pyoidn_sha256" > "$oidn_work/requirements.txt"
+    say "fetching pyoidn==$pyoidn_version wheel (official OIDN $oidn_version runtime, about 90 MB)"
+    python3 -m pip download -q --no-deps --only-binary=:all: --platform manylinux2014_x86_64 \
+        --python-version 3.11 --require-hashes -r "$oidn_work/requirements.txt" -d "$oidn_work/wheel"
+    wheel=$(ls "$oidn_work"/wheel/pyoidn-*.whl | head -n1)
+    python3 - "$wheel" "$oidn_work/prefix/lib" "${oidn_libs[@]}" <<'PY'
+import os, sys, zipfile
+wheel, dest, names = sys.argv[1], sys.argv[2], sys.argv[3:]
+with zipfile.ZipFile(wheel) as z:
+    for name in names:
+        member = "pyoidn/oidn/lib/" + name
+        if member not in z.namelist():
+            sys.exit(f"setup: error: the pyoidn wheel has no {member}")
+        target = os.path.join(dest, name)
+        with z.open(member) as src, open(target, "wb") as out:
+            out.write(src.read())
+        os.chmod(target, 0o755)
+PY
+    ln -sf "libOpenImageDenoise.so.$oidn_version" "$oidn_work/prefix/lib/libOpenImageDenoise.so.2"
+    ln -sf "libOpenImageDenoise.so.$oidn_version" "$oidn_work/prefix/lib/libOpenImageDenoise.so"
+    echo "$oidn_stamp" > "$oidn_work/prefix/.complete"
+    rm -rf "$oidn_prefix"
+    mkdir -p "$(dirname "$oidn_prefix")"
+    mv "$oidn_work/prefix" "$oidn_prefix"
+    rm -rf "$oidn_work"
+    say "installed $oidn_stamp into $oidn_prefix"
+fi
 
 # --- Embree 4 ------------------------------------------------------------------------------
 if [ -n "${EMBREE_DIR:-}" ]; then

@@ -64,6 +64,8 @@ const RUN: &[(&str, &str)] = &[
     ("exposure", "number"),
     ("aovs", "array"),
     ("exr", "boolean"),
+    ("denoise", "string|null"),
+    ("keep_noisy", "boolean"),
 ];
 
 const FRAME: &[(&str, &str)] = &[

@@ -9,6 +9,16 @@ pub struct InfoReport {
     pub dormant_version: &'static str,
     pub backends: Vec<Backend>,
     pub embree: Option<EmbreeInfo>,
+    /// Intel Open Image Denoise (`render --denoise`), when compiled in.
+    pub oidn: Option<OidnInfo>,
+}
+
+#[derive(Debug, Serialize)]
+pub struct OidnInfo {
+    /// Version of the library loaded at run time (from a CPU device).
+    pub library_version: String,
+    /// Directory of the library the build linked against.
+    pub library_dir: &'static str,
 }
 
 #[derive(Debug, Serialize)]
@@ -28,6 +38,7 @@ impl InfoReport {
             dormant_version: env!("CARGO_PKG_VERSION"),
             backends: Backend::compiled(),
             embree: embree_info(threads)?,
+            oidn: oidn_info(threads)?,
         })
     }
 }
@@ -47,6 +58,15 @@ fn embree_info(threads: Option<usize>) -> Result<Option<EmbreeInfo>, CliError> {
 #[cfg(not(feature = "embree"))]
 fn embree_info(_threads: Option<usize>) -> Result<Option<EmbreeInfo>, CliError> {
     Ok(None)
+}
+
+/// The OIDN version from a CPU device; `None` without the `oidn` feature.
+fn oidn_info(threads: Option<usize>) -> Result<Option<OidnInfo>, CliError> {
+    let Some(library_dir) = crate::render::Denoiser::library_dir() else {
+        return Ok(None);
+    };
+    let device = crate::render::Denoiser::new(threads).map_err(|e| CliError::Runtime(e.to_string()))?;
+    Ok(Some(OidnInfo { library_version: device.version(), library_dir }))
 }
 
 /// Prints the report as JSON, or writes it where `--json FILE` says.

@@ -96,8 +96,8 @@ pub(crate) enum Command {
     Verify(verify::VerifyArgs),
     /// Benchmarks, run side by side in one process; results as JSON.
     Bench(bench::BenchArgs),
-    /// Print dormant's version, the Embree library and header versions, and the compiled
-    /// backends, as JSON.
+    /// Print dormant's version, the Embree library and header versions, the Open Image
+    /// Denoise library version, and the compiled backends, as JSON.
     Info,
 }
 

@@ -5,6 +5,7 @@
 mod aov;
 mod bsdf;
 mod camera;
+pub mod denoise;
 mod emitters;
 mod film;
 mod integrator;
@@ -17,6 +18,7 @@ mod video;
 pub use aov::{Aov, AovIntegrator};
 pub(crate) use bsdf::{sample_cone, sample_cosine};
 pub use camera::PinholeCamera;
+pub use denoise::{DenoiseError, Denoiser};
 pub(crate) use emitters::Emitters;
 pub use film::Film;
 pub(crate) use film::{write_aov_png_atomic, write_exr_atomic, write_png_atomic};

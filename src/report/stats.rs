@@ -140,6 +140,13 @@ pub struct RunInfo {
     /// Extra passes (`--aov`), in request order.
     pub aovs: Vec<String>,
     pub exr: bool,
+    /// `--denoise`: `null` off, `oidn`, or `oidn-prefilter` (`--denoise-prefilter`). Absent in
+    /// runs from before denoising, which did not denoise.
+    #[serde(default)]
+    pub denoise: Option<String>,
+    /// `--keep-noisy`.
+    #[serde(default)]
+    pub keep_noisy: bool,
 }
 
 /// Sums over the run.
@@ -392,6 +399,8 @@ mod tests {
             exposure: 1.0,
             aovs: Vec::new(),
             exr: false,
+            denoise: None,
+            keep_noisy: false,
         };
         let stats = RunStats::new(run, frames, CacheStats::default(), CostModelState::default(), None);
         let mut csv = Vec::new();

@@ -170,6 +170,8 @@ mod tests {
             exposure: 1.1,
             aovs: vec!["albedo".into()],
             exr: false,
+            denoise: None,
+            keep_noisy: false,
         };
         let mut then = serde_json::to_value(&now).unwrap();
         assert_eq!(differences(&then, &now), "its run header does not read");

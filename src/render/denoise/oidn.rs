@@ -1,0 +1,173 @@
+//! The only `unsafe` code of denoising: an owned OIDN CPU device and `RT` filters over
+//! caller-owned pixel buffers, every call checked with `oidnGetDeviceError`.
+
+use std::ffi::{c_void, CStr};
+use std::ptr;
+
+use oidn_sys as sys;
+
+use super::DenoiseError;
+
+/// OIDN's name for an error code.
+fn code_name(code: sys::OIDNError) -> &'static str {
+    match code {
+        sys::OIDN_ERROR_NONE => "OIDN_ERROR_NONE",
+        sys::OIDN_ERROR_UNKNOWN => "OIDN_ERROR_UNKNOWN",
+        sys::OIDN_ERROR_INVALID_ARGUMENT => "OIDN_ERROR_INVALID_ARGUMENT",
+        sys::OIDN_ERROR_INVALID_OPERATION => "OIDN_ERROR_INVALID_OPERATION",
+        sys::OIDN_ERROR_OUT_OF_MEMORY => "OIDN_ERROR_OUT_OF_MEMORY",
+        sys::OIDN_ERROR_UNSUPPORTED_HARDWARE => "OIDN_ERROR_UNSUPPORTED_HARDWARE",
+        sys::OIDN_ERROR_CANCELLED => "OIDN_ERROR_CANCELLED",
+        _ => "unknown OIDN error code",
+    }
+}
+
+/// The first unqueried error of `device` on this thread (a null device: the thread's global
+/// error, e.g. why a device could not be created), cleared by the query.
+fn take_error(device: sys::OIDNDevice) -> Option<(sys::OIDNError, String)> {
+    let mut message = ptr::null();
+    // SAFETY: `device` is null or a live device; `message` is a valid out pointer.
+    let code = unsafe { sys::oidnGetDeviceError(device, &mut message) };
+    if code == sys::OIDN_ERROR_NONE {
+        return None;
+    }
+    let text = if message.is_null() {
+        String::new()
+    } else {
+        // SAFETY: a non-null message is a NUL-terminated string owned by the library, valid
+        // until the next OIDN call on this thread; it is copied before any.
+        unsafe { CStr::from_ptr(message) }.to_string_lossy().into_owned()
+    };
+    Some((code, text))
+}
+
+/// An OIDN CPU device; released on drop. Raw pointers keep it `!Send` and `!Sync`, which
+/// suits OIDN's per-thread error reporting.
+pub(super) struct Device {
+    raw: sys::OIDNDevice,
+}
+
+impl Drop for Device {
+    fn drop(&mut self) {
+        // SAFETY: `raw` is a live device this struct holds the only reference to; every filter
+        // made from it was released before `filter_rt` returned.
+        unsafe { sys::oidnReleaseDevice(self.raw) };
+    }
+}
+
+impl Device {
+    /// Creates and commits a CPU device with `threads` worker threads (0: all cores) and no
+    /// thread pinning (the renderer's own threads share the cores).
+    pub(super) fn new(threads: Option<usize>) -> Result<Self, DenoiseError> {
+        // SAFETY: plain call; a null result is handled below.
+        let raw = unsafe { sys::oidnNewDevice(sys::OIDN_DEVICE_TYPE_CPU) };
+        if raw.is_null() {
+            let message = take_error(ptr::null_mut()).map(|(_, m)| m).unwrap_or_default();
+            return Err(DenoiseError::NoDevice { message, lib_dir: sys::LIB_DIR.to_string() });
+        }
+        let device = Device { raw };
+        let threads = threads.map_or(0, |n| i32::try_from(n).unwrap_or(i32::MAX));
+        // SAFETY: `raw` is a live, not yet committed device; the names are NUL-terminated.
+        unsafe {
+            sys::oidnSetDeviceInt(raw, c"numThreads".as_ptr(), threads);
+            sys::oidnSetDeviceBool(raw, c"setAffinity".as_ptr(), false);
+            sys::oidnCommitDevice(raw);
+        }
+        device.check("oidnCommitDevice")?;
+        // SAFETY: `raw` is a live, committed device; the name is NUL-terminated.
+        let major = unsafe { sys::oidnGetDeviceInt(raw, c"versionMajor".as_ptr()) };
+        if major != 2 {
+            return Err(DenoiseError::Version { found: device.version() });
+        }
+        Ok(device)
+    }
+
+    /// The pending error of the last calls, as a [`DenoiseError`] naming `call`.
+    fn check(&self, call: &'static str) -> Result<(), DenoiseError> {
+        match take_error(self.raw) {
+            None => Ok(()),
+            Some((code, message)) => Err(DenoiseError::Oidn { call, code: code_name(code), message }),
+        }
+    }
+
+    /// The library's version, `major.minor.patch`.
+    pub(super) fn version(&self) -> String {
+        // SAFETY: `raw` is a live, committed device; `version` is a constant parameter.
+        let v = unsafe { sys::oidnGetDeviceInt(self.raw, c"version".as_ptr()) };
+        format!("{}.{}.{}", v / 10000, v / 100 % 100, v % 100)
+    }
+
+    /// Runs the `RT` filter on `width` x `height` images of packed RGB floats: `inputs` names
+    /// each (`color`, `albedo`, `normal`; a guide alone is prefiltered); `hdr` says the color
+    /// image is HDR, `clean_aux` that the guides are noise-free. Returns the output image.
+    pub(super) fn filter_rt(
+        &self,
+        (width, height): (usize, usize),
+        inputs: &[(&CStr, &[f32])],
+        hdr: bool,
+        clean_aux: bool,
+    ) -> Result<Vec<f32>, DenoiseError> {
+        let len = width * height * 3;
+        assert!(inputs.iter().all(|(_, data)| data.len() == len), "images of {width}x{height} RGB");
+        let mut output = vec![0.0f32; len];
+        // SAFETY: `raw` is a live, committed device.
+        let filter = Filter { raw: unsafe { sys::oidnNewFilter(self.raw, c"RT".as_ptr()) } };
+        self.check("oidnNewFilter")?;
+        if filter.raw.is_null() {
+            return Err(DenoiseError::Oidn {
+                call: "oidnNewFilter",
+                code: "null filter",
+                message: String::new(),
+            });
+        }
+        // Inputs are only read by OIDN; the pointer type of the C API is not const.
+        let images = inputs
+            .iter()
+            .map(|(name, data)| (*name, data.as_ptr() as *mut c_void))
+            .chain([(c"output", output.as_mut_ptr() as *mut c_void)]);
+        // SAFETY: `filter.raw` is a live filter; every image pointer addresses `len` floats
+        // (width * height packed FLOAT3 pixels, strides computed by OIDN) that outlive the
+        // filter, which is released before this function returns; only `output` is written,
+        // and nothing else reads or writes it meanwhile.
+        unsafe {
+            for (name, data) in images {
+                sys::oidnSetSharedFilterImage(
+                    filter.raw,
+                    name.as_ptr(),
+                    data,
+                    sys::OIDN_FORMAT_FLOAT3,
+                    width,
+                    height,
+                    0,
+                    0,
+                    0,
+                );
+            }
+            sys::oidnSetFilterBool(filter.raw, c"hdr".as_ptr(), hdr);
+            sys::oidnSetFilterBool(filter.raw, c"cleanAux".as_ptr(), clean_aux);
+            sys::oidnSetFilterInt(filter.raw, c"quality".as_ptr(), sys::OIDN_QUALITY_HIGH);
+            sys::oidnCommitFilter(filter.raw);
+        }
+        self.check("oidnCommitFilter")?;
+        // SAFETY: a committed filter whose images are valid (above).
+        unsafe { sys::oidnExecuteFilter(filter.raw) };
+        self.check("oidnExecuteFilter")?;
+        drop(filter);
+        Ok(output)
+    }
+}
+
+/// An OIDN filter; released on drop (also on early error returns, before the images it
+/// points at go away).
+struct Filter {
+    raw: sys::OIDNFilter,
+}
+
+impl Drop for Filter {
+    fn drop(&mut self) {
+        if !self.raw.is_null() {
+            // SAFETY: `raw` is a live filter this struct holds the only reference to.
+            unsafe { sys::oidnReleaseFilter(self.raw) };
+        }
+    }
+}
