@@ -69,6 +69,28 @@ fn tex_coord_accessor_with_count_zero_is_refused() {
     );
 }
 
+/// Found by reading the gltf crate's reader while fixing the two above: it reaches
+/// `unreachable!()` for indices of a float type, in release builds too.
+#[test]
+fn indices_of_a_float_type_are_refused() {
+    rejected(
+        "gltf_json",
+        "indices-of-float-type.gltf",
+        &["fuzz.gltf", "indices (accessors[1])", "expected Scalar"],
+    );
+}
+
+/// Found with the two above: positions made up of zeros (a sparse accessor without a buffer
+/// view) declaring 2^40 elements made the reader allocate for all of them.
+#[test]
+fn implicit_positions_with_a_huge_count_are_refused_before_allocating() {
+    rejected(
+        "gltf_json",
+        "implicit-positions-with-huge-count.gltf",
+        &["fuzz.gltf", "POSITION (accessors[0])", "declares 1099511627776 elements without a bufferView"],
+    );
+}
+
 /// Found by review, not by the fuzzer (which did not build a deep enough hierarchy): each of
 /// 40 nodes lists the next twice as a child, so the walk would visit the last node 2^40 times.
 #[test]
