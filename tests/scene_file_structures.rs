@@ -98,7 +98,12 @@ fn structure_counts_and_sizes_are_checked() {
     );
     expect_error(&GOOD.replace("[1.0, 0.0, 2.0]", "[1.0, nan, 2.0]"), "structures[0].origin", Some(25));
     expect_error(&GOOD.replace("counts = [3, 2]", "counts = [3, 0]"), "structures[0].array.counts", Some(26));
+    // Copies beyond the body budget are refused at the array; blocks x copies beyond it at
+    // the structure.
     let huge = GOOD.replace("counts = [3, 2]", "counts = [100000, 1000]");
+    let err = expect_error(&huge, "structures[0].array.counts", Some(26));
+    assert!(err.to_string().contains("2000000 bodies"), "{err}");
+    let huge = GOOD.replace("counts = [3, 2]", "counts = [1000, 1000]");
     let err = expect_error(&huge, "structures[0]", Some(19));
     assert!(err.to_string().contains("bodies"), "{err}");
     let duplicate = format!(
