@@ -265,18 +265,23 @@ fn render_writes_stats_csv_and_report_for_a_simulated_scene() {
     assert!(image.width() > 0 && image.height() > 0);
 }
 
-#[test]
-fn replayed_frames_have_no_physics_time() {
-    let dir = tempfile::tempdir().unwrap();
-    let traj = dir.path().join("tiny.traj");
-    let root = env!("CARGO_MANIFEST_DIR");
+/// scenes/tiny.toml simulated into `dir/tiny.traj`.
+fn simulate_tiny(dir: &std::path::Path) -> std::path::PathBuf {
+    let traj = dir.join("tiny.traj");
     let status = dormant()
         .args(["simulate", "scenes/tiny.toml", "--quiet", "--out"])
         .arg(&traj)
-        .current_dir(root)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
         .status()
         .unwrap();
     assert!(status.success());
+    traj
+}
+
+#[test]
+fn replayed_frames_have_no_physics_time() {
+    let dir = tempfile::tempdir().unwrap();
+    let traj = simulate_tiny(dir.path());
     let out = dir.path().join("slice");
     let status = dormant()
         .args([
@@ -294,7 +299,7 @@ fn replayed_frames_have_no_physics_time() {
         .arg(&traj)
         .arg("--out")
         .arg(&out)
-        .current_dir(root)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
         .status()
         .unwrap();
     assert!(status.success());
@@ -324,15 +329,7 @@ fn island_event_columns(dir: &std::path::Path) -> Vec<String> {
 #[test]
 fn slices_count_island_events_as_a_whole_run_does() {
     let dir = tempfile::tempdir().unwrap();
-    let traj = dir.path().join("tiny.traj");
-    let root = env!("CARGO_MANIFEST_DIR");
-    let status = dormant()
-        .args(["simulate", "scenes/tiny.toml", "--quiet", "--out"])
-        .arg(&traj)
-        .current_dir(root)
-        .status()
-        .unwrap();
-    assert!(status.success());
+    let traj = simulate_tiny(dir.path());
     let render = |frames: &str, out: &std::path::Path| {
         let status = dormant()
             .args([
