@@ -42,10 +42,15 @@ pub(crate) struct BsdfSample {
     pub pdf: f32,
 }
 
-/// The BSDF at one surface point.
+/// The BSDF at one surface point, seen from one outgoing direction `wo` (a path vertex
+/// evaluates it for several incident directions: sun, sky, emitter and the next bounce).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Bsdf {
     n: Vec3,
+    wo: Vec3,
+    /// `n . wo`, and Smith's `lambda` of it: the same for every incident direction.
+    cos_o: f32,
+    lambda_o: f32,
     diffuse: Vec3,
     f0: Vec3,
     alpha: f32,
@@ -57,13 +62,21 @@ pub(crate) fn luminance(c: Vec3) -> f32 {
     c.dot(Vec3::new(0.2126, 0.7152, 0.0722))
 }
 
+/// Smith's `lambda` for GGX of roughness `alpha` at a direction of cosine `cos` to the normal.
+fn lambda(alpha: f32, cos: f32) -> f32 {
+    let c2 = (cos * cos).max(1e-8);
+    let tan2 = (1.0 - c2) / c2;
+    0.5 * ((1.0 + alpha * alpha * tan2).sqrt() - 1.0)
+}
+
 fn fresnel(f0: Vec3, cos: f32) -> Vec3 {
     f0 + (Vec3::ONE - f0) * (1.0 - cos.clamp(0.0, 1.0)).powi(5)
 }
 
 impl Bsdf {
-    /// `n` is the unit shading normal on the side the ray came from.
-    pub fn new(material: &Material, n: Vec3) -> Self {
+    /// `n` is the unit shading normal on the side the ray came from, `wo` the unit direction
+    /// back along the ray.
+    pub fn new(material: &Material, n: Vec3, wo: Vec3) -> Self {
         let metallic = material.metallic.clamp(0.0, 1.0);
         let roughness = material.roughness.clamp(0.03, 1.0);
         let diffuse = material.base_color * (1.0 - metallic);
@@ -78,7 +91,9 @@ impl Bsdf {
         } else {
             (ls.max(0.04) / (ls.max(0.04) + ld)).clamp(0.1, 0.9)
         };
-        Self { n, diffuse, f0, alpha: roughness * roughness, p_spec }
+        let alpha = roughness * roughness;
+        let cos_o = n.dot(wo);
+        Self { n, wo, cos_o, lambda_o: lambda(alpha, cos_o), diffuse, f0, alpha, p_spec }
     }
 
     fn d(&self, cos_h: f32) -> f32 {
@@ -87,40 +102,34 @@ impl Bsdf {
         a2 / (PI * t * t)
     }
 
-    fn lambda(&self, cos: f32) -> f32 {
-        let c2 = (cos * cos).max(1e-8);
-        let tan2 = (1.0 - c2) / c2;
-        0.5 * ((1.0 + self.alpha * self.alpha * tan2).sqrt() - 1.0)
-    }
-
     /// `f(wo, wi) * cos(wi)`; zero below the surface.
-    pub fn eval(&self, wo: Vec3, wi: Vec3) -> Vec3 {
-        let (co, ci) = (self.n.dot(wo), self.n.dot(wi));
-        if co <= 0.0 || ci <= 0.0 {
-            return Vec3::ZERO;
-        }
-        let h = (wo + wi).normalize();
-        let f = fresnel(self.f0, wo.dot(h));
-        let g = 1.0 / (1.0 + self.lambda(co) + self.lambda(ci));
-        let spec = f * (self.d(self.n.dot(h)) * g / (4.0 * co * ci));
-        let diff = self.diffuse * (Vec3::ONE - f) / PI;
-        (spec + diff) * ci
+    pub fn eval(&self, wi: Vec3) -> Vec3 {
+        self.eval_pdf(wi).0
     }
 
-    /// Solid-angle pdf of [`Self::sample`] returning `wi`.
-    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        let (co, ci) = (self.n.dot(wo), self.n.dot(wi));
+    /// [`Self::eval`] and the solid-angle pdf of [`Self::sample`] returning `wi`, together: they share the half vector and the
+    /// microfacet distribution, and every light sample needs both (the pdf for its MIS
+    /// weight). Computed as the two would be apart, so the results are bit-identical.
+    pub fn eval_pdf(&self, wi: Vec3) -> (Vec3, f32) {
+        let (wo, co, ci) = (self.wo, self.cos_o, self.n.dot(wi));
         if co <= 0.0 || ci <= 0.0 {
-            return 0.0;
+            return (Vec3::ZERO, 0.0);
         }
         let h = (wo + wi).normalize();
-        let pdf_spec = self.d(self.n.dot(h)) * self.n.dot(h) / (4.0 * wo.dot(h).max(1e-8));
-        self.p_spec * pdf_spec + (1.0 - self.p_spec) * ci / PI
+        let (cos_h, wo_h) = (self.n.dot(h), wo.dot(h));
+        let d = self.d(cos_h);
+        let f = fresnel(self.f0, wo_h);
+        let g = 1.0 / (1.0 + self.lambda_o + lambda(self.alpha, ci));
+        let spec = f * (d * g / (4.0 * co * ci));
+        let diff = self.diffuse * (Vec3::ONE - f) / PI;
+        let pdf_spec = d * cos_h / (4.0 * wo_h.max(1e-8));
+        ((spec + diff) * ci, self.p_spec * pdf_spec + (1.0 - self.p_spec) * ci / PI)
     }
 
     /// Picks a lobe with `u_lobe`, then a direction with `u`.
-    pub fn sample(&self, wo: Vec3, u: Vec2, u_lobe: f32) -> Option<BsdfSample> {
-        if self.n.dot(wo) <= 0.0 {
+    pub fn sample(&self, u: Vec2, u_lobe: f32) -> Option<BsdfSample> {
+        let wo = self.wo;
+        if self.cos_o <= 0.0 {
             return None;
         }
         let wi = if u_lobe < self.p_spec {
@@ -135,11 +144,10 @@ impl Bsdf {
         } else {
             sample_cosine(self.n, u)
         };
-        let pdf = self.pdf(wo, wi);
+        let (f, pdf) = self.eval_pdf(wi);
         if pdf <= 0.0 || !pdf.is_finite() {
             return None;
         }
-        let f = self.eval(wo, wi);
         Some(BsdfSample { wi, weight: f / pdf, pdf })
     }
 }
@@ -152,14 +160,14 @@ mod tests {
     fn albedo(m: &Material, cos_o: f32) -> Vec3 {
         let n = Vec3::Z;
         let wo = Vec3::new((1.0 - cos_o * cos_o).sqrt(), 0.0, cos_o);
-        let b = Bsdf::new(m, n);
+        let b = Bsdf::new(m, n, wo);
         let k = 64;
         let mut sum = Vec3::ZERO;
         for i in 0..k {
             for j in 0..k {
                 let u = Vec2::new((i as f32 + 0.5) / k as f32, (j as f32 + 0.5) / k as f32);
                 let lobe = ((i * k + j) as f32 * 0.618_034).fract();
-                if let Some(s) = b.sample(wo, u, lobe) {
+                if let Some(s) = b.sample(u, lobe) {
                     sum += s.weight;
                 }
             }
@@ -193,12 +201,13 @@ mod tests {
     #[test]
     fn sample_weight_matches_eval_over_pdf() {
         let m = Material { roughness: 0.3, metallic: 0.4, ..Material::diffuse(Vec3::new(0.8, 0.5, 0.2)) };
-        let b = Bsdf::new(&m, Vec3::Y);
         let wo = Vec3::new(0.3, 0.9, 0.1).normalize();
+        let b = Bsdf::new(&m, Vec3::Y, wo);
         for i in 0..50 {
             let u = Vec2::new(i as f32 / 50.0 + 0.005, (i * 7 % 50) as f32 / 50.0 + 0.005);
-            if let Some(s) = b.sample(wo, u, (i as f32 * 0.37).fract()) {
-                let expect = b.eval(wo, s.wi) / b.pdf(wo, s.wi);
+            if let Some(s) = b.sample(u, (i as f32 * 0.37).fract()) {
+                let (f, pdf) = b.eval_pdf(s.wi);
+                let expect = f / pdf;
                 assert!((s.weight - expect).abs().max_element() < 1e-3);
             }
         }

@@ -37,7 +37,11 @@ impl PixelSampler {
         let h = hash(self.seed ^ hash(dim.wrapping_mul(0x68e3_1da4)));
         let offset = Vec2::new(unit(h), unit(hash(h)));
         let p = offset + index as f32 * R2;
-        p - p.floor()
+        // `p` is non-negative, so truncation is its floor: a plain conversion instead of a call
+        // to libm's `floorf` (x86-64's baseline SSE2 has no rounding instruction), which was
+        // 2% of a path-traced frame's profile. Same bits as `p - p.floor()`.
+        debug_assert!(p.x >= 0.0 && p.y >= 0.0);
+        p - p.as_uvec2().as_vec2()
     }
 }
 

@@ -110,11 +110,10 @@ impl Path<'_> {
     }
 }
 
-/// A path vertex being shaded: the surface, the unit direction back along the path, the BSDF
-/// there, the offset origin of rays leaving it, and its depth (0 at the camera ray's hit).
+/// A path vertex being shaded: the surface, the BSDF there seen from the direction back along
+/// the path, the offset origin of rays leaving it, and its depth (0 at the camera ray's hit).
 struct Vertex {
     s: SurfaceHit,
-    wo: Vec3,
     bsdf: Bsdf,
     origin: Vec3,
     depth: u32,
@@ -123,9 +122,9 @@ struct Vertex {
 impl Vertex {
     fn new(s: SurfaceHit, ray: &Ray, depth: u32) -> Self {
         let wo = -ray.dir.normalize();
-        let bsdf = Bsdf::new(&s.material, s.ns);
+        let bsdf = Bsdf::new(&s.material, s.ns, wo);
         let origin = offset_origin(s.p, s.ng);
-        Self { s, wo, bsdf, origin, depth }
+        Self { s, bsdf, origin, depth }
     }
 
     /// First sampler dimension pair of this vertex's BSDF, sun and sky samples.
@@ -216,7 +215,7 @@ impl PathTracerFrame<'_> {
     fn punctual_lights(&self, v: &Vertex, path: &mut Path) {
         for light in &self.frame.scene.lights {
             let Some((l, e, distance)) = punctual_light(light, v.s.p) else { continue };
-            let f = v.bsdf.eval(v.wo, l);
+            let f = v.bsdf.eval(l);
             if f != Vec3::ZERO
                 && v.s.ng.dot(l) > 0.0
                 && self.frame.unoccluded(&shadow_ray(v.origin, l, distance), path.rays)
@@ -235,10 +234,10 @@ impl PathTracerFrame<'_> {
     fn sun(&self, v: &Vertex, path: &mut Path) {
         let sun = &self.sun;
         let l = sample_cone(sun.dir, sun.cos_max, path.sampler.get_2d(path.index, v.dim()));
-        let f = v.bsdf.eval(v.wo, l);
+        let (f, pdf_bsdf) = v.bsdf.eval_pdf(l);
         if f != Vec3::ZERO && v.s.ng.dot(l) > 0.0 && self.frame.unoccluded(&Ray::new(v.origin, l), path.rays)
         {
-            let w = power_heuristic(sun.pdf, v.bsdf.pdf(v.wo, l));
+            let w = power_heuristic(sun.pdf, pdf_bsdf);
             path.add(path.beta * f * sun.radiance * (w / sun.pdf), v.depth);
         }
     }
@@ -248,13 +247,13 @@ impl PathTracerFrame<'_> {
     fn sky(&self, v: &Vertex, path: &mut Path) {
         let d = sample_cosine(v.s.ns, path.sampler.get_2d(path.index, v.dim() + 1));
         let pdf_sky = v.s.ns.dot(d).max(0.0) / PI;
-        let f = v.bsdf.eval(v.wo, d);
+        let (f, pdf_bsdf) = v.bsdf.eval_pdf(d);
         if f != Vec3::ZERO
             && pdf_sky > 0.0
             && v.s.ng.dot(d) > 0.0
             && self.frame.unoccluded(&Ray::new(v.origin, d), path.rays)
         {
-            let w = power_heuristic(pdf_sky, v.bsdf.pdf(v.wo, d));
+            let w = power_heuristic(pdf_sky, pdf_bsdf);
             path.add(path.beta * f * self.frame.scene.sky.radiance(d) * (w / pdf_sky), v.depth);
         }
     }
@@ -274,12 +273,12 @@ impl PathTracerFrame<'_> {
         let dist2 = d.length_squared();
         let wi = d / dist2.sqrt();
         let cos_light = e.n.dot(wi).abs();
-        let f = v.bsdf.eval(v.wo, wi);
+        let (f, pdf_bsdf) = v.bsdf.eval_pdf(wi);
         if dist2 > 0.0 && cos_light > 0.0 && f != Vec3::ZERO && v.s.ng.dot(wi) > 0.0 {
             let pdf_light = e.pdf_area * dist2 / cos_light;
             let shadow = Ray::segment(v.origin, wi, 0.0, dist2.sqrt() * (1.0 - 1e-3));
             if self.frame.unoccluded(&shadow, path.rays) {
-                let w = power_heuristic(pdf_light, v.bsdf.pdf(v.wo, wi));
+                let w = power_heuristic(pdf_light, pdf_bsdf);
                 path.add(path.beta * f * le * (w / pdf_light), v.depth);
             }
         }
@@ -291,7 +290,7 @@ impl PathTracerFrame<'_> {
 fn continue_path(v: &Vertex, path: &mut Path) -> Option<Ray> {
     let u = path.sampler.get_2d(path.index, v.dim() + 2);
     let u_lobe = path.sampler.get_2d(path.index, v.dim() + 3);
-    let sample = v.bsdf.sample(v.wo, u, u_lobe.x)?;
+    let sample = v.bsdf.sample(u, u_lobe.x)?;
     if v.s.ng.dot(sample.wi) <= 0.0 {
         return None;
     }
