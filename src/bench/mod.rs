@@ -3,6 +3,7 @@
 //! it. (Domain-internal benchmarks, like physics stepping, live in their domain.)
 
 pub mod accel;
+mod frame_rays;
 pub mod integration;
 pub mod paper;
 pub mod regimes;

@@ -10,12 +10,16 @@
 //!   the same order, runs interleaved, with the packet-over-single ratio;
 //! - **frame**: a whole frame of the path tracer (as `dormant render`, camera rays in packets),
 //!   and the same frame through single rays only, runs interleaved, best of N runs each, as
-//!   samples per second and the integrator's rays per second (all types together).
+//!   samples per second and the integrator's rays per second (all types together);
+//! - **bare frame rays**: the frame's own rays, recorded in an untimed render and traced again
+//!   with no shading in between ([`super::frame_rays`]); the frame's Mrays/s over theirs is
+//!   the share of the frame spent tracing.
 
 use glam::Vec2;
 use rayon::prelude::*;
 use serde::Serialize;
 
+use super::frame_rays::{trace_bare, BareFrameRays, RecordingQuery};
 use super::timed;
 use crate::accel::{self, Backend, SceneQuery};
 use crate::crosscheck::camera_rays;
@@ -91,6 +95,11 @@ pub struct BackendRenderTiming {
     /// The same frame with every ray traced alone (packet queries fall back to the per-ray
     /// loop): what packets of camera rays gain on a whole frame.
     pub frame_single_rays: FrameTiming,
+    /// The frame's rays traced again without the renderer (runs interleaved with the frames).
+    pub bare_frame_rays: BareFrameRays,
+    /// The frame's Mrays/s over the bare trace's of the same rays: the share of the frame
+    /// spent tracing (issue 15's target: at least 0.5).
+    pub frame_over_bare_rays: f64,
 }
 
 /// One ray set grouped by one pixel tile, traced ray by ray and as packets.
@@ -329,15 +338,22 @@ pub fn bench_render(
         let shadow = best_of(opts.runs, || trace_any(query, &sets.shadow));
         let bounce = best_of(opts.runs, || trace_closest(query, &sets.bounce));
         let packets = bench_packets(query, sets, opts.runs);
-        // The renderer as it is (camera rays in packets) and through single rays only, runs
-        // interleaved.
-        let (mut rays, mut frame_ms, mut single_ms) = (0, f64::INFINITY, f64::INFINITY);
+        // The frame's own rays, recorded once (untimed) for the bare trace.
+        let recorder = RecordingQuery::new(query);
+        render_frame(&scene, &recorder, &integrator, &settings)?;
+        let frame_rays = recorder.into_rays();
+        // The renderer as it is (camera rays in packets), through single rays only, and its
+        // rays traced bare, runs interleaved.
+        let (mut rays, mut frame_ms, mut single_ms, mut bare_ms) =
+            (0, f64::INFINITY, f64::INFINITY, f64::INFINITY);
         for _ in 0..opts.runs.max(1) {
             let (_, stats) = render_frame(&scene, query, &integrator, &settings)?;
             (rays, frame_ms) = (stats.rays, frame_ms.min(stats.seconds * 1e3));
             let (_, stats) = render_frame(&scene, &SingleRays(query), &integrator, &settings)?;
             single_ms = single_ms.min(stats.seconds * 1e3);
+            bare_ms = bare_ms.min(trace_bare(query, &frame_rays));
         }
+        debug_assert_eq!(frame_rays.len() as u64, rays, "the recorder saw every ray the frame counted");
         let samples = opts.width as f64 * opts.height as f64 * opts.spp as f64;
         tracing::info!(
             "bench render: {backend} frame in {frame_ms:.1} ms ({single_ms:.1} ms in single rays)"
@@ -351,6 +367,8 @@ pub fn bench_render(
             packets,
             frame: FrameTiming::new(frame_ms, samples, rays),
             frame_single_rays: FrameTiming::new(single_ms, samples, rays),
+            bare_frame_rays: BareFrameRays::new(&frame_rays, bare_ms),
+            frame_over_bare_rays: bare_ms / frame_ms.max(1e-9),
         });
     }
     let find = |b: Backend| backends.iter().find(|t| t.backend == b);
