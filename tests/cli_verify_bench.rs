@@ -20,33 +20,52 @@ fn verify_default_scene_has_no_mismatches() {
     let dir = tempfile::tempdir().unwrap();
     let json = dir.path().join("verify.json");
     let status = dormant()
-        .args(["verify", "--size", "160x90", "--surface-rays", "20000", "--json"])
+        .args(["verify", "--size", "160x90", "--surface-rays", "20000", "--shadow-rays", "5000", "--json"])
         .arg(&json)
         .status()
         .unwrap();
     assert!(status.success());
     let report = read_json(&json);
-    for key in ["rays", "mismatches", "ties", "max_t_rel_err"] {
+    for key in [
+        "rays",
+        "mismatches",
+        "ties",
+        "closest",
+        "occlusion",
+        "bound",
+        "max_t_err_over_bound",
+        "max_t_rel_err",
+    ] {
         assert!(report.get(key).is_some(), "missing {key}");
     }
-    assert_eq!(report["rays"], 160 * 90 + 20000);
+    assert_eq!(report["rays"], 160 * 90 + 20000 + 5000);
     assert_eq!(report["mismatches"], 0);
+    for query in ["closest", "occlusion"] {
+        let counts = &report[query];
+        let total: u64 = ["agree", "tie", "mismatch"].iter().map(|k| counts[k].as_u64().unwrap()).sum();
+        assert_eq!(total, 160 * 90 + 20000 + 5000, "{query}: {counts}");
+    }
+    // Every hit either backend reported lies within the derived bound of its f64 `t`.
+    assert!(report["max_t_err_over_bound"].as_f64().unwrap() <= 1.0);
     assert!(report["max_t_rel_err"].as_f64().unwrap() <= 1e-4);
+}
+
+/// `dormant verify` on `scenes/NAME.toml` with `args`: its JSON report, after checking that
+/// it succeeded.
+fn verify_scene_file(name: &str, args: &[&str]) -> serde_json::Value {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("verify.json");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("scenes/{name}.toml"));
+    let status = dormant().arg("verify").args(args).arg("--json").arg(&json).arg(&scene).status().unwrap();
+    let report = read_json(&json);
+    assert!(status.success(), "{report:#}");
+    report
 }
 
 #[test]
 fn verify_simulated_frames_of_a_scene_file_has_no_mismatches() {
-    let dir = tempfile::tempdir().unwrap();
-    let json = dir.path().join("verify.json");
-    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/tiny.toml");
-    let status = dormant()
-        .args(["verify", "--size", "96x54", "--surface-rays", "20000", "--check-frames", "3", "--json"])
-        .arg(&json)
-        .arg(&scene)
-        .status()
-        .unwrap();
-    let report = read_json(&json);
-    assert!(status.success(), "{report:#}");
+    let report =
+        verify_scene_file("tiny", &["--size", "96x54", "--surface-rays", "20000", "--check-frames", "3"]);
     assert_eq!(report["frames"].as_array().unwrap().len(), 3);
     assert_eq!(report["mismatches"], 0);
 }
@@ -68,6 +87,21 @@ fn verify_monastery_with_ducks_has_no_mismatches() {
     let report = read_json(&json);
     assert!(status.success(), "{report:#}");
     assert_eq!(report["mismatches"], 0);
+}
+
+/// The teddy bear (scanned, near-coincident triangles), ducks and soccer balls piled 40 units
+/// from the origin: f32 instance transforms and ray origins far out (docs/crosscheck.md).
+#[test]
+fn verify_assets_far_from_the_origin_has_no_mismatches() {
+    if common::shared_assets().is_none() {
+        return;
+    }
+    let report = verify_scene_file(
+        "far-assets",
+        &["--size", "160x90", "--surface-rays", "20000", "--check-frames", "2"],
+    );
+    assert_eq!(report["mismatches"], 0);
+    assert!(report["max_t_err_over_bound"].as_f64().unwrap() <= 1.0);
 }
 
 #[test]

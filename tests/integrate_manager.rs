@@ -9,7 +9,7 @@
 use std::path::Path;
 
 use dormant::accel::{self, load_scene, Backend};
-use dormant::crosscheck::{camera_rays, compare_mapped, surface_rays, MappedQuery, Tolerance, VerifyReport};
+use dormant::crosscheck::{camera_rays, compare, surface_rays, MappedQuery, VerifyReport};
 use dormant::geometry::{primitives, Ray};
 use dormant::integrate::{
     CacheBudget, IntegrationForm, IntegrationPolicy, IntegrationSettings, LoadedObjectMap, ManagerOptions,
@@ -54,11 +54,11 @@ fn check_against(
     let loaded = load_scene(reference, fresh.as_mut()).unwrap();
     fresh.commit().unwrap();
     let map = LoadedObjectMap::with_body_ids(reference, &loaded, body_ids);
-    compare_mapped(
-        MappedQuery { query: fresh.query().unwrap(), objects: Some(&map) },
-        MappedQuery { query: manager.query().unwrap(), objects: Some(manager) },
+    compare(
+        reference,
+        MappedQuery { query: fresh.query().unwrap(), objects: &map },
+        MappedQuery { query: manager.query().unwrap(), objects: manager },
         rays,
-        &Tolerance::default(),
     )
 }
 

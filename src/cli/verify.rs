@@ -4,7 +4,8 @@ use clap::Args;
 
 use super::{CliError, JsonOutput, SceneSource};
 use crate::accel::{self, Backend};
-use crate::crosscheck::{self, Tolerance, VerifyReport};
+use crate::crosscheck::{self, MappedQuery, VerifyReport, BOUND};
+use crate::integrate::LoadedObjectMap;
 use crate::physics::SimulateOptions;
 use crate::scene::file::SceneFile;
 use crate::scene::SceneDescription;
@@ -30,7 +31,11 @@ pub struct VerifyArgs {
     /// Random rays leaving random points on the scene's surfaces.
     #[arg(long, value_name = "N", default_value_t = 100_000)]
     pub surface_rays: usize,
-    /// Seed for the surface rays.
+    /// Shadow-ray segments between two random surface points, ending short of the second:
+    /// occlusion queries over a finite interval.
+    #[arg(long, value_name = "N", default_value_t = 20_000)]
+    pub shadow_rays: usize,
+    /// Seed for the surface and shadow rays.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
 }
@@ -52,25 +57,14 @@ pub(super) fn run(
         Some(path) => simulated_frames(path, args, quiet)?,
         None => (vec![args.scene.load()?], Vec::new()),
     };
-    let runtime = |e: &dyn std::fmt::Display| CliError::Runtime(e.to_string());
-    let tolerance = Tolerance::default();
     let mut report = VerifyReport::default();
-    let (mut camera_rays, mut surface_rays) = (0, 0);
+    let mut counts = [0; 3];
     for (i, desc) in descs.iter().enumerate() {
-        let mut reference = accel::create(Backend::Embree, threads).map_err(|e| runtime(&e))?;
-        let mut candidate = accel::create(Backend::Bvh, threads).map_err(|e| runtime(&e))?;
-        for a in [&mut reference, &mut candidate] {
-            accel::load_scene(desc, a.as_mut()).map_err(|e| runtime(&e))?;
-            a.commit().map_err(|e| runtime(&e))?;
-        }
-        let (a, b) =
-            (reference.query().map_err(|e| runtime(&e))?, candidate.query().map_err(|e| runtime(&e))?);
-        let camera = crosscheck::camera_rays(desc, args.size.width, args.size.height);
-        let surface = crosscheck::surface_rays(desc, args.surface_rays, args.seed + i as u64);
-        report.merge(crosscheck::compare(a, b, &camera, &tolerance));
-        report.merge(crosscheck::compare(a, b, &surface, &tolerance));
-        (camera_rays, surface_rays) = (camera_rays + camera.len(), surface_rays + surface.len());
+        let (r, n) = check_description(desc, args, args.seed.wrapping_add(i as u64), threads)?;
+        report.merge(r);
+        counts = [counts[0] + n[0], counts[1] + n[1], counts[2] + n[2]];
     }
+    let [camera_rays, surface_rays, shadow_rays] = counts;
     let desc = &descs[0];
 
     let json = serde_json::json!({
@@ -80,31 +74,33 @@ pub(super) fn run(
         "frames": frames,
         "camera_rays": camera_rays,
         "surface_rays": surface_rays,
-        "tolerance": tolerance,
+        "shadow_rays": shadow_rays,
+        "bound": BOUND,
         "rays": report.rays,
         "hits": report.hits,
         "misses": report.misses,
         "mismatches": report.mismatches,
         "ties": report.ties,
-        "precision_ties": report.precision_ties,
-        "max_precision_err": report.max_precision_err,
+        "closest": report.closest,
+        "occlusion": report.occlusion,
+        "max_t_err_over_bound": report.max_t_err_over_bound,
         "max_t_rel_err": report.max_t_rel_err,
         "examples": report.examples,
     });
     json_out.emit(&json)?;
     if !quiet && !json_out.is_requested() {
         println!(
-            "verify {}: {} rays ({} camera, {} surface): {} hits, {} misses, {} ties, {} precision ties, {} mismatches, max t rel err {:.2e}",
+            "verify {}: {} rays ({} camera, {} surface, {} shadow): {} hits, {} misses, {} ties, {} mismatches, max t error {:.2} of the bound",
             desc.name,
             report.rays,
             camera_rays,
             surface_rays,
+            shadow_rays,
             report.hits,
             report.misses,
             report.ties,
-            report.precision_ties,
             report.mismatches,
-            report.max_t_rel_err
+            report.max_t_err_over_bound
         );
     }
     if report.mismatches > 0 {
@@ -114,6 +110,37 @@ pub(super) fn run(
         )));
     }
     Ok(())
+}
+
+/// Loads `desc` into Embree and the BVH and compares them on its camera, surface and shadow
+/// rays; returns the report and the three ray counts.
+fn check_description(
+    desc: &SceneDescription,
+    args: &VerifyArgs,
+    seed: u64,
+    threads: Option<usize>,
+) -> Result<(VerifyReport, [usize; 3]), CliError> {
+    let runtime = |e: &dyn std::fmt::Display| CliError::Runtime(e.to_string());
+    let mut reference = accel::create(Backend::Embree, threads).map_err(|e| runtime(&e))?;
+    let mut candidate = accel::create(Backend::Bvh, threads).map_err(|e| runtime(&e))?;
+    let mut maps = Vec::new();
+    for a in [&mut reference, &mut candidate] {
+        let loaded = accel::load_scene(desc, a.as_mut()).map_err(|e| runtime(&e))?;
+        maps.push(LoadedObjectMap::new(desc, &loaded));
+        a.commit().map_err(|e| runtime(&e))?;
+    }
+    let a = MappedQuery { query: reference.query().map_err(|e| runtime(&e))?, objects: &maps[0] };
+    let b = MappedQuery { query: candidate.query().map_err(|e| runtime(&e))?, objects: &maps[1] };
+    let rays = [
+        crosscheck::camera_rays(desc, args.size.width, args.size.height),
+        crosscheck::surface_rays(desc, args.surface_rays, seed),
+        crosscheck::shadow_rays(desc, args.shadow_rays, !seed),
+    ];
+    let mut report = VerifyReport::default();
+    for r in &rays {
+        report.merge(crosscheck::compare(desc, a, b, r));
+    }
+    Ok((report, rays.map(|r| r.len())))
 }
 
 /// Simulates the scene file and describes `check_frames` frames of it, evenly spaced and

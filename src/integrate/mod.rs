@@ -25,6 +25,6 @@ pub use lookahead::Lookahead;
 pub use manager::{
     Decision, FrameStats, ManagerOptions, ReactivationPath, ReactivationStrategy, SceneManager,
 };
-pub use object_map::{LoadedObjectMap, MeshRef, ObjectMap, ResolvedHit};
+pub use object_map::{HitTriangle, LoadedObjectMap, MeshRef, ObjectMap, ResolvedHit};
 pub use policy::{IntegrationPolicy, IntegrationSettings};
 pub use stage_times::StageTimes;

@@ -1,19 +1,42 @@
 //! Hit to object mapping: what a hit on the accelerator's ids means in scene terms, so shading
 //! is the same whether a body is an instance or baked into the static scene.
 
-use glam::{Affine3A, Mat3};
+use glam::{Affine3A, Mat3, Vec3};
 
 use crate::accel::{HitObject, LoadedScene};
+use crate::geometry::TriangleMesh;
 use crate::physics::BodyId;
 use crate::scene::SceneDescription;
 
 /// The mesh a hit lies on, as the scene description names it.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
 pub enum MeshRef {
     /// `SceneDescription::statics[i]` (the environment).
     Static(u32),
     /// `SceneDescription::prototypes[i]`, placed by a body's transform.
     Prototype(u32),
+}
+
+impl MeshRef {
+    /// The mesh in `desc`, if `desc` has it.
+    pub fn mesh(self, desc: &SceneDescription) -> Option<&TriangleMesh> {
+        match self {
+            MeshRef::Static(i) => desc.statics.get(i as usize).map(|s| &s.mesh),
+            MeshRef::Prototype(i) => desc.prototypes.get(i as usize).map(|p| &p.mesh),
+        }
+    }
+}
+
+/// A hit's triangle exactly as the accelerator was given it: what the cross-check
+/// re-intersects in f64 (`crosscheck`, docs/crosscheck.md).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HitTriangle {
+    /// In the space the accelerator holds them: object space for instances, world space for
+    /// static geometry (the environment and baked islands).
+    pub vertices: [Vec3; 3],
+    /// The f32 object-to-world transform the accelerator was given (instances); `None` when
+    /// the vertices are in world space.
+    pub transform: Option<Affine3A>,
 }
 
 /// A hit resolved to its scene object.
@@ -35,6 +58,15 @@ pub struct ResolvedHit {
 pub trait ObjectMap: Sync {
     /// `None` for ids the map does not know (a correct accelerator never reports them).
     fn resolve(&self, object: HitObject, prim: u32) -> Option<ResolvedHit>;
+
+    /// The triangle a hit is on as the accelerator holds it, given `desc`, the description
+    /// the scene shows (meshes named by [`MeshRef`]). `None` as for [`ObjectMap::resolve`].
+    fn hit_triangle(&self, desc: &SceneDescription, object: HitObject, prim: u32) -> Option<HitTriangle>;
+}
+
+/// Triangle `prim` of `mesh`, if it has one.
+pub(crate) fn mesh_triangle(mesh: &TriangleMesh, prim: u32) -> Option<[Vec3; 3]> {
+    ((prim as usize) < mesh.triangle_count()).then(|| mesh.triangle(prim as usize))
 }
 
 /// The normal matrix of an object-to-world transform.
@@ -46,7 +78,15 @@ pub fn normal_matrix(transform: &Affine3A) -> Mat3 {
 #[derive(Clone, Debug, Default)]
 pub struct LoadedObjectMap {
     statics: Vec<Option<u32>>,
-    instances: Vec<Option<(u32, BodyId, Mat3)>>,
+    instances: Vec<Option<LoadedInstance>>,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct LoadedInstance {
+    prototype: u32,
+    body: BodyId,
+    normal_matrix: Mat3,
+    transform: Affine3A,
 }
 
 fn place<T>(v: &mut Vec<Option<T>>, index: u32, value: T) {
@@ -72,7 +112,13 @@ impl LoadedObjectMap {
             place(&mut map.statics, id.0, i as u32);
         }
         for ((body, id), b) in desc.bodies.iter().zip(&loaded.instances).zip(body_ids) {
-            place(&mut map.instances, id.0, (body.prototype, *b, normal_matrix(&body.transform)));
+            let instance = LoadedInstance {
+                prototype: body.prototype,
+                body: *b,
+                normal_matrix: normal_matrix(&body.transform),
+                transform: body.transform,
+            };
+            place(&mut map.instances, id.0, instance);
         }
         map
     }
@@ -91,14 +137,24 @@ impl ObjectMap for LoadedObjectMap {
                 })
             }
             HitObject::Instance(id) => {
-                self.instances.get(id.0 as usize).copied().flatten().map(|(proto, body, m)| ResolvedHit {
-                    mesh: MeshRef::Prototype(proto),
+                self.instances.get(id.0 as usize).copied().flatten().map(|i| ResolvedHit {
+                    mesh: MeshRef::Prototype(i.prototype),
                     prim,
-                    body: Some(body),
-                    normal_matrix: m,
+                    body: Some(i.body),
+                    normal_matrix: i.normal_matrix,
                     integrated: false,
                 })
             }
         }
+    }
+
+    fn hit_triangle(&self, desc: &SceneDescription, object: HitObject, prim: u32) -> Option<HitTriangle> {
+        let transform = match object {
+            HitObject::Static(_) => None,
+            HitObject::Instance(id) => Some(self.instances.get(id.0 as usize).copied().flatten()?.transform),
+        };
+        let resolved = self.resolve(object, prim)?;
+        let vertices = mesh_triangle(resolved.mesh.mesh(desc)?, resolved.prim)?;
+        Some(HitTriangle { vertices, transform })
     }
 }

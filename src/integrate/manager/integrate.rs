@@ -183,6 +183,7 @@ impl SceneManager {
                     body: *b,
                     prototype: slot.prototype,
                     normal_matrix: normal_matrix(&xf),
+                    transform: xf,
                     resting: true,
                 };
                 self.instance_owner.set(id, Some(owner));

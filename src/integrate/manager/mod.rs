@@ -34,7 +34,7 @@ use glam::Mat3;
 use super::cache::{CacheBudget, CacheOutcome, CacheStats, GeometryCache};
 use super::cost_model::{CostEstimate, CostModel, CostModelState, IntegrationForm};
 use super::lookahead::Lookahead;
-use super::object_map::{MeshRef, ObjectMap, ResolvedHit};
+use super::object_map::{mesh_triangle, HitTriangle, MeshRef, ObjectMap, ResolvedHit};
 use super::policy::IntegrationPolicy;
 use super::stage_times::StageTimes;
 use crate::accel::{AccelError, Accelerator, HitObject, PrototypeId, SceneQuery};
@@ -469,6 +469,23 @@ impl ObjectMap for SceneManager {
                     })
                 }
             },
+        }
+    }
+
+    fn hit_triangle(&self, desc: &SceneDescription, object: HitObject, prim: u32) -> Option<HitTriangle> {
+        match object {
+            HitObject::Instance(id) => {
+                let owner = self.instance_owner.get(id)?;
+                let mesh = MeshRef::Prototype(owner.prototype).mesh(desc)?;
+                Some(HitTriangle { vertices: mesh_triangle(mesh, prim)?, transform: Some(owner.transform) })
+            }
+            HitObject::Static(id) => {
+                let vertices = match self.static_owner.get(id)? {
+                    StaticOwner::Environment(i) => mesh_triangle(MeshRef::Static(*i).mesh(desc)?, prim)?,
+                    StaticOwner::Island(baked) => mesh_triangle(&baked.mesh, prim)?,
+                };
+                Some(HitTriangle { vertices, transform: None })
+            }
         }
     }
 }

@@ -4,7 +4,7 @@
 use std::collections::BTreeMap;
 use std::sync::Arc;
 
-use glam::Mat3;
+use glam::{Affine3A, Mat3};
 
 use crate::accel::{InstanceId, StaticId, StaticSceneSnapshot};
 use crate::integrate::baked::BakedIsland;
@@ -96,6 +96,8 @@ pub(super) struct InstanceOwner {
     pub body: BodyId,
     pub prototype: u32,
     pub normal_matrix: Mat3,
+    /// The object-to-world transform the accelerator was given.
+    pub transform: Affine3A,
     pub resting: bool,
 }
 

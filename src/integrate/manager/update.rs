@@ -17,11 +17,15 @@ impl SceneManager {
         for (b, slot) in self.bodies.iter_mut().enumerate() {
             let present = frame.is_present(b);
             let (pose, prototype) = (frame.poses[b], slot.prototype);
-            let owner = |resting| InstanceOwner {
-                body: BodyId(b as u32),
-                prototype,
-                normal_matrix: normal_matrix(&pose.to_affine()),
-                resting,
+            let owner = |resting| {
+                let transform = pose.to_affine();
+                InstanceOwner {
+                    body: BodyId(b as u32),
+                    prototype,
+                    normal_matrix: normal_matrix(&transform),
+                    transform,
+                    resting,
+                }
             };
             match slot.placement {
                 Placement::Baked(island) if self.integrated.contains_key(&island) => {}
