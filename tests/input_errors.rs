@@ -105,6 +105,21 @@ fn scene_unknown_key_is_rejected() {
 }
 
 #[test]
+fn scene_adaptive_sampling_out_of_range_names_the_field() {
+    let render = "[render]\nnoise_threshold = -0.5\n\n[environment]";
+    expect_scene_error("[environment]", render, 6, &["render.noise_threshold", "must not be negative"]);
+    let render = "[render]\nnoise_threshold = 0.05\nmin_spp = 0\n\n[environment]";
+    expect_scene_error("[environment]", render, 7, &["render.min_spp", "at least 1"]);
+    // Above the run's --spp (1 in `render_scene`): named as the scene's field.
+    let dir = TempDir::new().unwrap();
+    let scene = dir.path().join("bad.toml");
+    let render = "[render]\nnoise_threshold = 0.05\nmin_spp = 4\n\n[environment]";
+    std::fs::write(&scene, SCENE.replace("[environment]", render)).unwrap();
+    let needles = ["render.min_spp 4", "--spp (1)"];
+    expect_exit(&mut render_scene(dir.path(), &scene), 2, &needles, Some(&dir.path().join("out")));
+}
+
+#[test]
 fn scene_dangling_reference_names_the_missing_name() {
     expect_scene_error(
         "prototypes = [\"box\"]",
@@ -369,6 +384,29 @@ fn cli_size_malformed_or_beyond_the_machine() {
 fn cli_spp_out_of_range() {
     expect_usage_error(&["render", "--spp", "0"], &["--spp"]);
     expect_usage_error(&["render", "--spp", "100000"], &["--spp", "65536"]);
+}
+
+#[test]
+fn cli_noise_threshold_negative_or_not_a_number() {
+    expect_usage_error(
+        &["render", "--noise-threshold", "-0.1"],
+        &["--noise-threshold -0.1", "0 (off) or more"],
+    );
+    expect_usage_error(&["render", "--noise-threshold", "NaN"], &["--noise-threshold NaN"]);
+    expect_usage_error(&["render", "--noise-threshold", "low"], &["--noise-threshold"]);
+}
+
+#[test]
+fn cli_min_spp_above_spp_or_without_adaptive_sampling() {
+    let adaptive = ["render", "--noise-threshold", "0.05", "--spp", "16"];
+    expect_usage_error(&[&adaptive[..], &["--min-spp", "32"]].concat(), &["--min-spp 32", "--spp (16)"]);
+    expect_usage_error(&[&adaptive[..], &["--min-spp", "0"]].concat(), &["--min-spp 0"]);
+    expect_usage_error(&["render", "--min-spp", "4"], &["--min-spp", "--noise-threshold"]);
+}
+
+#[test]
+fn cli_aov_unknown() {
+    expect_usage_error(&["render", "--aov", "albedo,glossy"], &["--aov", "glossy", "spp"]);
 }
 
 #[test]

@@ -323,6 +323,7 @@ fn never_always_and_auto_render_the_same_images() {
         width: 64,
         height: 36,
         spp: 4,
+        adaptive: dormant::render::AdaptiveSampling::OFF,
         seed: SeedMode::PerFrame,
         reuse_static: false,
     };
@@ -379,6 +380,7 @@ fn baked_debug_view_shows_integrated_bodies_in_orange() {
         width: 96,
         height: 54,
         spp: 1,
+        adaptive: dormant::render::AdaptiveSampling::OFF,
         seed: SeedMode::PerFrame,
         reuse_static: false,
     };

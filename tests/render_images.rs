@@ -7,7 +7,8 @@ use std::process::Command;
 use dormant::accel::{self, Backend, Hit, SceneQuery};
 use dormant::geometry::{primitives, Ray};
 use dormant::render::{
-    render_frame, AmbientOcclusion, DirectLighting, Film, Integrator, PathTracer, RenderScene, RenderSettings,
+    render_frame, AdaptiveSampling, AmbientOcclusion, DirectLighting, Film, Integrator, PathTracer,
+    RenderScene, RenderSettings,
 };
 use dormant::scene::{Body, Camera, Material, Prototype, SceneDescription, Sky, StaticMesh, Sun};
 use glam::{Affine3A, Vec3};
@@ -25,7 +26,8 @@ fn render(
 ) -> Film {
     let mut a = accel::create(backend, None).unwrap();
     let scene = RenderScene::build(desc, a.as_mut()).unwrap();
-    let settings = RenderSettings { width: size, height: size, spp, seed: 0 };
+    let settings =
+        RenderSettings { width: size, height: size, spp, seed: 0, adaptive: AdaptiveSampling::OFF };
     render_frame(&scene, a.query().unwrap(), integrator, &settings).unwrap().0
 }
 
@@ -156,7 +158,8 @@ fn camera_ray_packets_give_the_same_image_as_single_rays() {
         let q = a.query().unwrap();
         // Odd sizes leave partial 16x16 tiles and partial packets at the borders.
         for (integrator, spp) in integrators.into_iter().zip([3, 1, 2]) {
-            let settings = RenderSettings { width: 37, height: 23, spp, seed: 1 };
+            let settings =
+                RenderSettings { width: 37, height: 23, spp, seed: 1, adaptive: AdaptiveSampling::OFF };
             let (packets, p_stats) = render_frame(&scene, q, integrator, &settings).unwrap();
             let (single, s_stats) = render_frame(&scene, &SingleRays(q), integrator, &settings).unwrap();
             assert!(packets.pixels == single.pixels, "{backend}: packets changed the image");

@@ -11,7 +11,8 @@ use std::process::Command;
 use dormant::accel::{self, Backend};
 use dormant::geometry::{primitives, Ray};
 use dormant::render::{
-    render_frame, DirectLighting, Film, Integrator, PathTracer, PinholeCamera, RenderScene, RenderSettings,
+    render_frame, AdaptiveSampling, DirectLighting, Film, Integrator, PathTracer, PinholeCamera, RenderScene,
+    RenderSettings,
 };
 use dormant::scene::file::SceneFile;
 use dormant::scene::gltf::{load_gltf, load_gltf_mesh};
@@ -27,7 +28,7 @@ const BLACK_SKY: Sky = Sky { zenith: Vec3::ZERO, horizon: Vec3::ZERO, ground: Ve
 fn render(desc: &SceneDescription, integrator: &dyn Integrator, width: u32, height: u32, spp: u32) -> Film {
     let mut a = accel::create(Backend::compiled()[0], None).unwrap();
     let scene = RenderScene::build(desc, a.as_mut()).unwrap();
-    let settings = RenderSettings { width, height, spp, seed: 0 };
+    let settings = RenderSettings { width, height, spp, seed: 0, adaptive: AdaptiveSampling::OFF };
     render_frame(&scene, a.query().unwrap(), integrator, &settings).unwrap().0
 }
 

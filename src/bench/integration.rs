@@ -24,7 +24,7 @@ use crate::integrate::{
     ManagerOptions, ReactivationPath, SceneManager, StageTimes, FRACTION_BUCKETS,
 };
 use crate::physics::{BodyKind, BodyState};
-use crate::render::Integrator;
+use crate::render::{AdaptiveSampling, Integrator};
 use crate::scene::{SceneDescription, StaticMesh};
 use crate::sequence::{FrameRenderer, FrameSelection, SeedMode, Sequence, SequenceError};
 
@@ -370,6 +370,7 @@ pub fn bench_integration(
         width: options.width,
         height: options.height,
         spp: options.spp,
+        adaptive: AdaptiveSampling::OFF,
         // Every frame traced, and noise decorrelated as in a per-frame-seeded render.
         seed: SeedMode::PerFrame,
         reuse_static: false,

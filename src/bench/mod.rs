@@ -3,6 +3,7 @@
 //! it. (Domain-internal benchmarks, like physics stepping, live in their domain.)
 
 pub mod accel;
+pub mod adaptive;
 mod frame_rays;
 pub mod integration;
 pub mod paper;
@@ -10,6 +11,7 @@ pub mod regimes;
 pub mod render;
 
 pub(crate) use accel::{bench_accel, AccelBenchOptions};
+pub(crate) use adaptive::{bench_adaptive, AdaptiveBenchOptions};
 pub(crate) use integration::{bench_integration, IntegrationBenchOptions};
 pub(crate) use paper::{bench_paper, PaperBenchOptions, PaperPreset, RainAssets};
 pub(crate) use regimes::{bench_regimes, Budget, RegimeSizes, RegimesOptions};

@@ -25,7 +25,8 @@ use crate::accel::{self, Backend, SceneQuery};
 use crate::crosscheck::camera_rays;
 use crate::geometry::Ray;
 use crate::render::{
-    render_frame, sample_cone, sample_cosine, PathTracer, RenderError, RenderScene, RenderSettings,
+    render_frame, sample_cone, sample_cosine, AdaptiveSampling, PathTracer, RenderError, RenderScene,
+    RenderSettings,
 };
 use crate::rng::SplitMix64;
 use crate::scene::SceneDescription;
@@ -322,7 +323,13 @@ pub fn bench_render(
     desc: &SceneDescription,
     opts: &RenderBenchOptions,
 ) -> Result<RenderBenchReport, RenderError> {
-    let settings = RenderSettings { width: opts.width, height: opts.height, spp: opts.spp, seed: 0 };
+    let settings = RenderSettings {
+        width: opts.width,
+        height: opts.height,
+        spp: opts.spp,
+        seed: 0,
+        adaptive: AdaptiveSampling::OFF,
+    };
     settings.validate()?;
     let integrator = PathTracer::default();
     let mut sets: Option<RaySets> = None;

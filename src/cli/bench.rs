@@ -7,8 +7,8 @@ use clap::{Args, Subcommand};
 
 use super::{CliError, JsonOutput, SceneSource};
 use crate::bench::{
-    self, AccelBenchOptions, IntegrationBenchOptions, PaperBenchOptions, PaperPreset, RainAssets,
-    RenderBenchOptions,
+    self, AccelBenchOptions, AdaptiveBenchOptions, IntegrationBenchOptions, PaperBenchOptions, PaperPreset,
+    RainAssets, RenderBenchOptions,
 };
 use crate::scene::limits::MAX_SAMPLES_PER_PIXEL;
 use crate::sequence::{FrameRange, SequenceSource};
@@ -32,6 +32,13 @@ pub enum BenchCommand {
         after_help = "Examples:\n  dormant bench render --json out/render.json\n  dormant bench render --size 1280x720 --spp 16 --runs 1\n  dormant bench render --env ../shared/assets/monastery.glb --object ../shared/assets/duck.glb --count 8000 --json out/render.json"
     )]
     Render(RenderBenchArgs),
+    /// Adaptive sampling: relative MSE against a high-spp reference of uniform frames at
+    /// several spp and adaptive frames at several noise thresholds (optionally denoised), and
+    /// the samples adaptive sampling needs for each uniform frame's error.
+    #[command(
+        after_help = "Examples:\n  dormant bench adaptive --size 480x270 --reference out/ref-480.exr --json out/adaptive.json\n  dormant bench adaptive --thresholds 0.02,0.04 --adaptive-spp 128 --denoise"
+    )]
+    Adaptive(AdaptiveBenchArgs),
     /// Integration policies never/always/auto, cache on and off, on one simulated scene.
     #[command(
         after_help = "Examples:\n  dormant bench integration scenes/atrium.toml --json out/integration.json\n  dormant bench integration scenes/tiny.toml --backend bvh --size 160x90"
@@ -184,6 +191,41 @@ pub struct RenderBenchArgs {
     pub runs: u32,
 }
 
+#[derive(Debug, Args)]
+pub struct AdaptiveBenchArgs {
+    #[command(flatten)]
+    pub scene: SceneSource,
+    /// Ray tracing backend (default: the first compiled in).
+    #[arg(long)]
+    pub backend: Option<crate::accel::Backend>,
+    #[arg(long, value_name = "WxH", default_value = "480x270")]
+    pub size: super::render::Size,
+    /// Longest path (bounces).
+    #[arg(long, value_name = "N", default_value_t = 6, value_parser = clap::value_parser!(u32).range(1..=64))]
+    pub max_depth: u32,
+    /// Samples per pixel of the reference (rendered with another seed than the frames).
+    #[arg(long, value_name = "N", default_value_t = 1024, value_parser = clap::value_parser!(u32).range(1..=MAX_SAMPLES_PER_PIXEL as i64))]
+    pub reference_spp: u32,
+    /// Reference EXR: read when it exists at --size, else rendered and written there.
+    #[arg(long, value_name = "FILE")]
+    pub reference: Option<PathBuf>,
+    /// Samples per pixel of the uniform frames.
+    #[arg(long, value_name = "N,...", value_delimiter = ',', default_value = "16,32,64,128")]
+    pub uniform_spp: Vec<u32>,
+    /// Noise thresholds of the adaptive frames.
+    #[arg(long, value_name = "T,...", value_delimiter = ',', default_value = "0.08,0.04,0.02,0.01")]
+    pub thresholds: Vec<f32>,
+    /// Most samples per pixel of the adaptive frames.
+    #[arg(long, value_name = "N", default_value_t = 256)]
+    pub adaptive_spp: u32,
+    /// Adaptive sampling's minimum (default: as `render --min-spp`).
+    #[arg(long, value_name = "N")]
+    pub min_spp: Option<u32>,
+    /// Also denoise every frame (OIDN) and report its error.
+    #[arg(long)]
+    pub denoise: bool,
+}
+
 pub(super) fn run(
     args: &BenchArgs,
     threads: Option<usize>,
@@ -193,6 +235,7 @@ pub(super) fn run(
     match &args.which {
         BenchCommand::Accel(a) => accel(a, threads, quiet, json),
         BenchCommand::Render(r) => render(r, threads, quiet, json),
+        BenchCommand::Adaptive(a) => adaptive(a, threads, quiet, json),
         BenchCommand::Physics(p) => physics(p, quiet, json),
         BenchCommand::Integration(i) => integration(i, threads, quiet, json),
         BenchCommand::Paper(p) => paper(p, threads, quiet, json),
@@ -378,5 +421,46 @@ fn render(
         threads,
     };
     let report = bench::bench_render(&desc, &opts).map_err(|e| CliError::Runtime(e.to_string()))?;
+    emit(&serde_json::to_value(&report).expect("bench report serialises"), json, quiet)
+}
+
+fn adaptive(
+    args: &AdaptiveBenchArgs,
+    threads: Option<usize>,
+    quiet: bool,
+    json: &JsonOutput,
+) -> Result<(), CliError> {
+    let desc = args.scene.load()?;
+    let input = |flag: &str, what: &str| Err(CliError::Input(format!("{flag}: {what}")));
+    if args.uniform_spp.iter().chain([&args.adaptive_spp]).any(|&s| !(1..=MAX_SAMPLES_PER_PIXEL).contains(&s))
+    {
+        return input("--uniform-spp/--adaptive-spp", &format!("must be from 1 to {MAX_SAMPLES_PER_PIXEL}"));
+    }
+    if args.thresholds.iter().any(|&t| !(t.is_finite() && t > 0.0)) {
+        return input("--thresholds", "must be numbers greater than 0");
+    }
+    if args.min_spp.is_some_and(|m| m == 0 || m > args.adaptive_spp) {
+        return input("--min-spp", "must be from 1 to --adaptive-spp");
+    }
+    let denoiser = match args.denoise {
+        true => Some(crate::render::Denoiser::new(threads).map_err(|e| CliError::Input(e.to_string()))?),
+        false => None,
+    };
+    let opts = AdaptiveBenchOptions {
+        backend: super::render::choose_backend(args.backend)?,
+        width: args.size.width,
+        height: args.size.height,
+        max_depth: args.max_depth,
+        reference_spp: args.reference_spp,
+        reference: args.reference.clone(),
+        uniform_spp: args.uniform_spp.clone(),
+        thresholds: args.thresholds.clone(),
+        adaptive_spp: args.adaptive_spp,
+        min_spp: args.min_spp,
+        denoiser,
+    };
+    let mut log = timed_log("bench adaptive", quiet);
+    let report = bench::bench_adaptive(&desc, &opts, threads, &mut log)
+        .map_err(|e| CliError::Runtime(e.to_string()))?;
     emit(&serde_json::to_value(&report).expect("bench report serialises"), json, quiet)
 }

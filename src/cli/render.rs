@@ -14,7 +14,7 @@ use crate::integrate::{
 };
 use crate::physics::SimulateOptions;
 use crate::render::{
-    self, AmbientOcclusion, Aov, AovIntegrator, DenoiseError, Denoiser, DirectLighting, Film, Integrator,
+    self, AdaptiveSampling, AmbientOcclusion, Aov, DenoiseError, Denoiser, DirectLighting, Film, Integrator,
     PathTracer, RenderScene, RenderSettings,
 };
 use crate::report::{self, FrameRecord, RunInfo, StatsFile};
@@ -84,9 +84,18 @@ pub struct RenderArgs {
     /// Image size.
     #[arg(long, value_name = "WxH", default_value = "960x540")]
     pub size: Size,
-    /// Samples per pixel.
+    /// Samples per pixel; with --noise-threshold, the most a pixel gets.
     #[arg(long, value_name = "N", default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=MAX_SAMPLES_PER_PIXEL as i64))]
     pub spp: u32,
+    /// Adaptive sampling: a pixel stops once its estimated relative error (the standard error
+    /// of its mean over its value, the value at least 0.1) is below T, e.g. 0.02; 0 = off,
+    /// every pixel gets --spp (default: the scene's render.noise_threshold, else 0).
+    #[arg(long, value_name = "T", allow_negative_numbers = true)]
+    pub noise_threshold: Option<f32>,
+    /// With --noise-threshold: samples every pixel gets before its error is first checked
+    /// (then every 4); default: the scene's render.min_spp, else max(8, √spp), at most spp.
+    #[arg(long, value_name = "N")]
+    pub min_spp: Option<u32>,
     /// Rendering mode: path tracing, direct light only, or ambient occlusion.
     #[arg(long, value_enum, default_value_t = RenderMode::Path)]
     pub mode: RenderMode,
@@ -101,7 +110,8 @@ pub struct RenderArgs {
     pub exr: bool,
     /// Also write these passes (comma-separated) as frame_NNNN.KIND.png, and as .exr with
     /// --exr: albedo (textured base colour), normal (shading normal), depth (distance),
-    /// baked (debug: instanced bodies blue, integrated ones orange, environment grey).
+    /// baked (debug: instanced bodies blue, integrated ones orange, environment grey), spp
+    /// (camera samples per pixel, grey up to the frame's most; the counts in the EXR).
     #[arg(long, value_enum, value_delimiter = ',', value_name = "KIND")]
     pub aov: Vec<Aov>,
     /// With SCENE or --trajectory: when sleeping islands are baked into the static scene.
@@ -251,6 +261,8 @@ pub(super) fn run(
         "width": args.size.width,
         "height": args.size.height,
         "spp": args.spp,
+        "noise_threshold": args.noise_threshold,
+        "min_spp": args.min_spp,
         "mode": args.mode,
         "denoise": args.denoise,
         "integration": is_sequence.then_some(args.integration),
@@ -309,6 +321,37 @@ fn check_flags(args: &RenderArgs) -> Result<(), CliError> {
     Ok(())
 }
 
+/// Adaptive sampling from `--noise-threshold` and `--min-spp`, else from the scene file of
+/// `sequence` (`render.noise_threshold`, `render.min_spp`), else off; each checked naming the
+/// flag or field it came from.
+fn adaptive_sampling(args: &RenderArgs, sequence: Option<&Sequence>) -> Result<AdaptiveSampling, CliError> {
+    let file = sequence.map(|s| s.adaptive).unwrap_or_default();
+    let noise_threshold = args.noise_threshold.unwrap_or(file.noise_threshold);
+    if !(noise_threshold.is_finite() && noise_threshold >= 0.0) {
+        return Err(CliError::Input(format!(
+            "--noise-threshold {noise_threshold}: must be a number, 0 (off) or more"
+        )));
+    }
+    let adaptive = AdaptiveSampling { noise_threshold, min_spp: args.min_spp.or(file.min_spp) };
+    if !adaptive.is_on() {
+        return match args.min_spp {
+            Some(_) => Err(CliError::Input(
+                "--min-spp needs adaptive sampling: --noise-threshold (or the scene's render.noise_threshold) \
+                 above 0"
+                    .into(),
+            )),
+            None => Ok(AdaptiveSampling::OFF),
+        };
+    }
+    match adaptive.min_spp {
+        Some(min) if min == 0 || min > args.spp => {
+            let from = if args.min_spp.is_some() { "--min-spp" } else { "the scene's render.min_spp" };
+            Err(CliError::Input(format!("{from} {min}: must be from 1 to --spp ({})", args.spp)))
+        }
+        _ => Ok(adaptive),
+    }
+}
+
 /// A sequence: a scene file, maybe with a trajectory of it, or a trajectory alone with the
 /// scene recorded in it; `None` for a still.
 fn sequence_source(args: &RenderArgs) -> Result<Option<SequenceSource>, CliError> {
@@ -338,16 +381,16 @@ fn render_still(
     let mut accel = accel::create(backend, threads).map_err(|e| runtime(&e))?;
     let scene = RenderScene::build(&description, accel.as_mut()).map_err(|e| runtime(&e))?;
     let query = accel.query().map_err(|e| runtime(&e))?;
-    let settings =
-        RenderSettings { width: args.size.width, height: args.size.height, spp: args.spp, seed: 0 };
-    let (film, stats) =
-        render::render_frame(&scene, query, integrator, &settings).map_err(|e| runtime(&e))?;
-    let mut aovs = Vec::new();
-    for aov in aov_passes(args) {
-        let (film, _) =
-            render::render_frame(&scene, query, &AovIntegrator(aov), &settings).map_err(|e| runtime(&e))?;
-        aovs.push((aov, film));
-    }
+    let settings = RenderSettings {
+        width: args.size.width,
+        height: args.size.height,
+        spp: args.spp,
+        seed: 0,
+        adaptive: adaptive_sampling(args, None)?,
+    };
+    let (film, stats, aovs) =
+        render::render_with_aovs(&scene, query, integrator, &settings, &aov_passes(args))
+            .map_err(|e| runtime(&e))?;
     let frame = RenderedFrame { index: 0, film, render: stats, aovs, reused_from: None };
     writer.write(&frame, None, &ProgressBar::hidden())?;
     Ok(description.name)
@@ -374,10 +417,11 @@ fn render_sequence(
         width: args.size.width,
         height: args.size.height,
         spp: args.spp,
+        adaptive: adaptive_sampling(args, Some(sequence))?,
         seed: args.seed,
         reuse_static: args.reuse == Switch::On,
     };
-    let info = run_info(args, sequence, backend, &frames);
+    let info = run_info(args, sequence, backend, &frames, renderer.adaptive);
     let kept = if args.resume { super::resume::kept_frames(args, &info, &frames)? } else { Vec::new() };
     if args.resume && !writer.quiet {
         println!("{}", super::resume::summary(&kept, &frames));
@@ -405,7 +449,7 @@ fn render_sequence(
                 frame_paths.push(path);
             }
             let physics = sequence.physics_ms.get(frame.index as usize).copied();
-            let record = FrameRecord::new(stats, frame.render.mrays_per_second(), physics);
+            let record = FrameRecord::new(stats, &frame.render, physics);
             stats_file.push(record, manager).map_err(|e| runtime(&e))?;
             rays += frame.render.rays;
             trace_seconds += frame.render.seconds;
@@ -485,7 +529,13 @@ impl LoopError {
 }
 
 /// The header of the run's statistics: every option that decides its images and statistics.
-fn run_info(args: &RenderArgs, sequence: &Sequence, backend: Backend, frames: &FrameSelection) -> RunInfo {
+fn run_info(
+    args: &RenderArgs,
+    sequence: &Sequence,
+    backend: Backend,
+    frames: &FrameSelection,
+    adaptive: AdaptiveSampling,
+) -> RunInfo {
     RunInfo {
         scene: sequence.template.name.clone(),
         backend: backend.to_string(),
@@ -497,6 +547,8 @@ fn run_info(args: &RenderArgs, sequence: &Sequence, backend: Backend, frames: &F
         width: args.size.width,
         height: args.size.height,
         spp: args.spp,
+        noise_threshold: adaptive.noise_threshold,
+        min_spp: adaptive.is_on().then(|| adaptive.min_spp(args.spp)),
         physics: sequence.physics,
         scene_hash: format!("{:016x}", sequence.trajectory.scene_hash),
         trajectory_frames: sequence.frame_count(),
@@ -583,6 +635,7 @@ impl FrameWriter<'_> {
             .collect();
         self.records.push(serde_json::json!({ "frame": index, "path": path, "rays": stats.rays,
             "seconds": stats.seconds, "mrays_per_second": stats.mrays_per_second(), "aovs": aov_paths,
+            "spp_mean": stats.spp.mean, "spp_min": stats.spp.min, "spp_max": stats.spp.max,
             "denoise_seconds": denoise_seconds, "noisy_path": noisy_path,
             "reused_from": frame.reused_from, "scene": scene_stats }));
         Ok(path)
@@ -638,12 +691,17 @@ impl FrameWriter<'_> {
             );
         }
         let stats = &frame.render;
+        let spp = if stats.spp.min == stats.spp.max {
+            format!("{} spp", stats.spp.max)
+        } else {
+            format!("{:.1} spp mean, {} to {}", stats.spp.mean, stats.spp.min, stats.spp.max)
+        };
         format!(
-            "rendered {} ({}x{}, {} spp, {:?} mode, {}): {:.2} s, {} rays, {:.1} Mrays/s",
+            "rendered {} ({}x{}, {}, {:?} mode, {}): {:.2} s, {} rays, {:.1} Mrays/s",
             path.display(),
             args.size.width,
             args.size.height,
-            args.spp,
+            spp,
             args.mode,
             self.backend,
             stats.seconds,

@@ -1,11 +1,14 @@
 //! Arbitrary output variables: per-pixel albedo (the textured base colour), shading normal
 //! and depth at the first hit, rendered as integrators so they share tiles, sampling and the
-//! film with the beauty pass.
+//! film with the beauty pass; and the samples each pixel got.
 
 use glam::Vec3;
 
-use super::{FrameContext, FrameIntegrator, Integrator, PixelSampler, RenderScene, SurfaceKind};
-use crate::accel::Hit;
+use super::{
+    render_frame_counted, Film, FrameContext, FrameIntegrator, Integrator, PixelSampler, RenderError,
+    RenderScene, RenderSettings, RenderStats, SurfaceKind,
+};
+use crate::accel::{Hit, SceneQuery};
 use crate::geometry::Ray;
 
 /// What an AOV pass records. Pixels whose camera ray escapes are 0.
@@ -21,6 +24,10 @@ pub enum Aov {
     /// Debug view of integration: instanced bodies blue, baked (integrated) bodies orange, the
     /// environment grey, each shaded by the facing ratio so shapes stay readable.
     Baked,
+    /// Camera samples the pixel got (the effective spp of adaptive sampling, `--spp`
+    /// everywhere without it), in all three channels. Not an integrator's pass: it is the
+    /// beauty pass's sample counts ([`render_with_aovs`]).
+    Spp,
 }
 
 impl Aov {
@@ -30,8 +37,37 @@ impl Aov {
             Aov::Normal => "normal",
             Aov::Depth => "depth",
             Aov::Baked => "baked",
+            Aov::Spp => "spp",
         }
     }
+}
+
+/// AOV passes of a frame, each with what it records.
+pub type AovPasses = Vec<(Aov, Film)>;
+
+/// A frame's image with `integrator` and its `aovs` passes, in order. The passes see the
+/// image's camera samples: with adaptive sampling, each pixel as many as the image gave it.
+pub fn render_with_aovs(
+    scene: &RenderScene,
+    query: &dyn SceneQuery,
+    integrator: &dyn Integrator,
+    settings: &RenderSettings,
+    aovs: &[Aov],
+) -> Result<(Film, RenderStats, AovPasses), RenderError> {
+    let (film, stats, samples) = render_frame_counted(scene, query, integrator, settings, None)?;
+    let mut passes = Vec::with_capacity(aovs.len());
+    for &aov in aovs {
+        let pass = match aov {
+            Aov::Spp => Film {
+                width: film.width,
+                height: film.height,
+                pixels: samples.iter().map(|&n| Vec3::splat(n as f32)).collect(),
+            },
+            aov => render_frame_counted(scene, query, &AovIntegrator(aov), settings, Some(&samples))?.0,
+        };
+        passes.push((aov, pass));
+    }
+    Ok((film, stats, passes))
 }
 
 /// An [`Integrator`] that returns one AOV at the camera ray's first hit.
@@ -76,6 +112,8 @@ impl FrameIntegrator for AovFrame<'_> {
                 };
                 colour * (0.35 + 0.65 * s.ns.dot(-ray.dir).abs())
             }
+            // Filled from the sample counts by `render_with_aovs`, never traced.
+            Aov::Spp => Vec3::ZERO,
         }
     }
 }

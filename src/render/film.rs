@@ -51,7 +51,7 @@ pub(crate) fn write_png_atomic(film: &Film, exposure: f32, path: &Path) -> Resul
 
 /// Writes an AOV pass as an 8-bit PNG, atomically, without tone mapping: albedo sRGB-encoded,
 /// normals as `0.5 * n + 0.5`, depth as grey from 0 (at the camera) to 1 (the farthest hit;
-/// rays that hit nothing are white too).
+/// rays that hit nothing are white too), sample counts as grey from 0 to the frame's most.
 pub(crate) fn write_aov_png_atomic(film: &Film, aov: super::Aov, path: &Path) -> Result<(), RenderError> {
     let far = film.pixels.iter().map(|p| p.x).filter(|d| d.is_finite()).fold(0.0f32, f32::max).max(1e-6);
     let byte = |c: f32| (c.clamp(0.0, 1.0) * 255.0 + 0.5) as u8;
@@ -67,6 +67,7 @@ pub(crate) fn write_aov_png_atomic(film: &Film, aov: super::Aov, path: &Path) ->
                 super::Aov::Normal => (p * 0.5 + Vec3::splat(0.5)).to_array().map(byte),
                 super::Aov::Depth if p.x <= 0.0 => [255; 3],
                 super::Aov::Depth => [byte(p.x / far); 3],
+                super::Aov::Spp => [byte(p.x / far); 3],
             }
         })
         .collect();

@@ -2,6 +2,7 @@
 //! image output. Talks to geometry only through [`crate::accel::SceneQuery`] and the scene
 //! manager's hit mapping; image sequences of simulations are `crate::sequence`'s.
 
+mod adaptive;
 mod aov;
 mod bsdf;
 mod camera;
@@ -15,7 +16,8 @@ mod texture;
 mod tiles;
 mod video;
 
-pub use aov::{Aov, AovIntegrator};
+pub use adaptive::{default_min_spp, relative_error, AdaptiveSampling, SppStats, CHECK_EVERY, DARK_FLOOR};
+pub use aov::{render_with_aovs, Aov, AovIntegrator};
 pub(crate) use bsdf::{sample_cone, sample_cosine};
 pub use camera::PinholeCamera;
 pub use denoise::{DenoiseError, Denoiser};
@@ -28,7 +30,7 @@ pub use integrator::{
 pub use render_scene::RenderScene;
 pub(crate) use render_scene::{SurfaceHit, SurfaceKind};
 pub use sampler::PixelSampler;
-pub use tiles::{render_frame, RenderSettings, RenderStats};
+pub use tiles::{render_frame, render_frame_counted, RenderSettings, RenderStats};
 pub(crate) use video::{encode_video, ffmpeg_available, VideoError};
 
 use std::path::PathBuf;
@@ -41,6 +43,10 @@ pub enum RenderError {
     InvalidSize(String),
     #[error("samples per pixel must be from 1 to {}", crate::scene::limits::MAX_SAMPLES_PER_PIXEL)]
     InvalidSpp,
+    #[error("noise threshold {0}: must be a number, 0 (off) or more")]
+    InvalidNoiseThreshold(f32),
+    #[error("minimum samples per pixel {min}: must be from 1 to the samples per pixel ({spp})")]
+    InvalidMinSpp { min: u32, spp: u32 },
     #[error("cannot write {path}: {source}")]
     Io {
         path: PathBuf,

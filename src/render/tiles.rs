@@ -7,6 +7,7 @@ use std::time::Instant;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
+use super::adaptive::{AdaptiveSampling, SppStats, Stopping};
 use super::integrator::dims;
 use super::{
     Film, FrameContext, FrameIntegrator, Integrator, PinholeCamera, PixelSampler, RenderError, RenderScene,
@@ -39,10 +40,13 @@ const BLOCK_PIXELS: usize = (BLOCK.0 * BLOCK.1) as usize;
 pub struct RenderSettings {
     pub width: u32,
     pub height: u32,
+    /// Samples per pixel; with adaptive sampling, the most a pixel gets.
     pub spp: u32,
     /// Seeds the pixel sampler: a sequence passes the frame number so consecutive frames
     /// decorrelate, or one value for every frame (`--seed fixed`).
     pub seed: u32,
+    /// When a pixel may stop before `spp` samples (off: never).
+    pub adaptive: AdaptiveSampling,
 }
 
 impl RenderSettings {
@@ -53,7 +57,7 @@ impl RenderSettings {
         if !(1..=MAX_SAMPLES_PER_PIXEL).contains(&self.spp) {
             return Err(RenderError::InvalidSpp);
         }
-        Ok(())
+        self.adaptive.validate(self.spp)
     }
 }
 
@@ -61,6 +65,9 @@ impl RenderSettings {
 pub struct RenderStats {
     pub rays: u64,
     pub seconds: f64,
+    /// Camera samples per pixel: mean, least and most.
+    #[serde(flatten)]
+    pub spp: SppStats,
 }
 
 impl RenderStats {
@@ -95,36 +102,67 @@ pub fn render_frame(
     integrator: &dyn Integrator,
     settings: &RenderSettings,
 ) -> Result<(Film, RenderStats), RenderError> {
+    render_frame_counted(scene, query, integrator, settings, None).map(|(film, stats, _)| (film, stats))
+}
+
+/// [`render_frame`], also returning the camera samples each pixel got (row-major). With
+/// `samples` (one count per pixel, at most `spp`), pixel `p` gets exactly its first
+/// `samples[p]` samples and adaptive sampling is not applied: the AOV passes of an adaptive
+/// frame see the beauty pass's camera samples.
+pub fn render_frame_counted(
+    scene: &RenderScene,
+    query: &dyn SceneQuery,
+    integrator: &dyn Integrator,
+    settings: &RenderSettings,
+    samples: Option<&[u32]>,
+) -> Result<(Film, RenderStats, Vec<u32>), RenderError> {
     settings.validate()?;
     let start = Instant::now();
     let (w, h) = (settings.width, settings.height);
+    debug_assert!(samples.is_none_or(|s| s.len() == (w * h) as usize));
     let renderer = TileRenderer {
         camera: PinholeCamera::new(&scene.camera, w, h),
         query,
         integrator: &*integrator.bind(FrameContext { scene, query }),
         settings,
+        stopping: if samples.is_some() { None } else { settings.adaptive.stopping(settings.spp) },
+        samples,
     };
     let tiles_x = w.div_ceil(TILE);
     let tiles: Vec<(u32, u32)> =
         (0..tiles_x * h.div_ceil(TILE)).map(|t| ((t % tiles_x) * TILE, (t / tiles_x) * TILE)).collect();
-    let rendered: Vec<(u32, u32, Vec<Vec3>, u64)> = tiles
-        .par_iter()
-        .map(|&(x0, y0)| {
-            let (pixels, rays) = renderer.render(x0, y0);
-            (x0, y0, pixels, rays)
-        })
-        .collect();
+    let rendered: Vec<(u32, u32, Tile)> =
+        tiles.par_iter().map(|&(x0, y0)| (x0, y0, renderer.render(x0, y0))).collect();
     let mut film = Film::new(w, h);
+    let mut counts = vec![0; (w * h) as usize];
     let mut rays = 0;
-    for (x0, y0, pixels, tile_rays) in rendered {
+    for (x0, y0, tile) in rendered {
         let tw = (x0 + TILE).min(w) - x0;
-        for (i, p) in pixels.into_iter().enumerate() {
-            let (x, y) = (x0 + i as u32 % tw, y0 + i as u32 / tw);
-            film.pixels[(y * w + x) as usize] = p;
+        for (i, (p, n)) in tile.pixels.into_iter().zip(tile.samples).enumerate() {
+            let at = ((y0 + i as u32 / tw) * w + x0 + i as u32 % tw) as usize;
+            film.pixels[at] = p;
+            counts[at] = n;
         }
-        rays += tile_rays;
+        rays += tile.rays;
     }
-    Ok((film, RenderStats { rays, seconds: start.elapsed().as_secs_f64() }))
+    let stats = RenderStats { rays, seconds: start.elapsed().as_secs_f64(), spp: SppStats::of(&counts) };
+    Ok((film, stats, counts))
+}
+
+/// A rendered tile: its pixels row by row, the samples each got, and the rays traced.
+struct Tile {
+    pixels: Vec<Vec3>,
+    samples: Vec<u32>,
+    rays: u64,
+}
+
+/// A pixel of a camera-ray block: its coordinates, sampler, and the most samples it may get.
+#[derive(Clone, Copy)]
+struct Cell {
+    x: u32,
+    y: u32,
+    sampler: PixelSampler,
+    budget: u32,
 }
 
 /// What every tile of a frame is rendered with.
@@ -134,46 +172,103 @@ struct TileRenderer<'a> {
     query: &'a dyn SceneQuery,
     integrator: &'a dyn FrameIntegrator,
     settings: &'a RenderSettings,
+    /// Adaptive sampling's rule, when on and no sample counts are fixed.
+    stopping: Option<Stopping>,
+    /// Fixed samples per pixel for the whole frame (row-major), instead of `spp`.
+    samples: Option<&'a [u32]>,
 }
 
 impl TileRenderer<'_> {
-    /// The pixels of the tile whose top-left pixel is `(x0, y0)`, row by row, and the rays
-    /// traced for them.
-    fn render(&self, x0: u32, y0: u32) -> (Vec<Vec3>, u64) {
-        let (w, h, spp) = (self.settings.width, self.settings.height, self.settings.spp);
+    /// The tile whose top-left pixel is `(x0, y0)`.
+    fn render(&self, x0: u32, y0: u32) -> Tile {
+        let (w, h) = (self.settings.width, self.settings.height);
         let (x1, y1) = ((x0 + TILE).min(w), (y0 + TILE).min(h));
-        let tw = x1 - x0;
-        let mut rays = 0u64;
-        // Per pixel, samples are summed in index order whatever the blocking, so the image is
-        // the same as tracing pixel by pixel.
-        let mut sums = vec![Vec3::ZERO; (tw * (y1 - y0)) as usize];
+        let n = ((x1 - x0) * (y1 - y0)) as usize;
+        let mut acc = Accumulator {
+            x0,
+            y0,
+            tw: x1 - x0,
+            sums: vec![Vec3::ZERO; n],
+            squares: if self.stopping.is_some() { vec![Vec3::ZERO; n] } else { Vec::new() },
+            samples: vec![0; n],
+            rays: 0,
+        };
         for by in (y0..y1).step_by(BLOCK.1 as usize) {
             for bx in (x0..x1).step_by(BLOCK.0 as usize) {
                 // A fixed array, not a Vec: one block per 8 pixels is on the hot path.
-                let mut cells = [(0, 0, PixelSampler::new(0, 0, 0)); BLOCK_PIXELS];
+                let mut cells =
+                    [Cell { x: 0, y: 0, sampler: PixelSampler::new(0, 0, 0), budget: 0 }; BLOCK_PIXELS];
                 let mut n = 0;
                 for y in by..(by + BLOCK.1).min(y1) {
                     for x in bx..(bx + BLOCK.0).min(x1) {
-                        cells[n] = (x, y, PixelSampler::new(x, y, self.settings.seed));
+                        let budget = self.samples.map_or(self.settings.spp, |s| s[(y * w + x) as usize]);
+                        cells[n] =
+                            Cell { x, y, sampler: PixelSampler::new(x, y, self.settings.seed), budget };
                         n += 1;
                     }
                 }
-                let block = &cells[..n];
-                let mut camera_rays = [Ray::new(Vec3::ZERO, Vec3::Z); BLOCK_PIXELS];
-                let mut hits = [None; BLOCK_PIXELS];
-                for i in 0..spp {
-                    for (ray, (x, y, sampler)) in camera_rays.iter_mut().zip(block) {
-                        *ray = camera_ray(&self.camera, spp, *x, *y, sampler, i);
-                    }
-                    self.query.intersect_packet(&camera_rays[..n], &mut hits[..n]);
-                    for ((ray, hit), (x, y, sampler)) in camera_rays.iter().zip(hits).zip(block) {
-                        sums[((y - y0) * tw + (x - x0)) as usize] +=
-                            self.integrator.li_from_hit(ray, hit, sampler, i, &mut rays);
-                    }
-                }
+                self.render_block(&cells[..n], &mut acc);
             }
         }
-        let pixels = sums.into_iter().map(|sum| sum / spp as f32).collect();
-        (pixels, rays)
+        let pixels = acc.sums.iter().zip(&acc.samples).map(|(&sum, &k)| sum / k.max(1) as f32).collect();
+        Tile { pixels, samples: acc.samples, rays: acc.rays }
+    }
+
+    /// Samples the pixels of one block in index order, the camera rays of those still
+    /// sampling traced as one packet per index, until each has its budget or has converged.
+    fn render_block(&self, block: &[Cell], acc: &mut Accumulator) {
+        let spp = self.settings.spp;
+        let mut camera_rays = [Ray::new(Vec3::ZERO, Vec3::Z); BLOCK_PIXELS];
+        let mut hits = [None; BLOCK_PIXELS];
+        // Which cell each packet slot samples, and which cells stopped early.
+        let mut slots = [0usize; BLOCK_PIXELS];
+        let mut done = [false; BLOCK_PIXELS];
+        let most = block.iter().map(|c| c.budget).max().unwrap_or(0);
+        for i in 0..most {
+            let mut m = 0;
+            for (c, cell) in block.iter().enumerate() {
+                if i < cell.budget && !done[c] {
+                    camera_rays[m] = camera_ray(&self.camera, spp, cell.x, cell.y, &cell.sampler, i);
+                    slots[m] = c;
+                    m += 1;
+                }
+            }
+            if m == 0 {
+                break;
+            }
+            self.query.intersect_packet(&camera_rays[..m], &mut hits[..m]);
+            for ((ray, hit), &c) in camera_rays.iter().zip(hits).zip(&slots[..m]) {
+                let cell = &block[c];
+                let li = self.integrator.li_from_hit(ray, hit, &cell.sampler, i, &mut acc.rays);
+                done[c] = acc.add(cell, li, self.stopping.as_ref());
+            }
+        }
+    }
+}
+
+/// A tile's running sums per pixel, row by row. Per pixel, samples are summed in index order
+/// whatever the blocking, so the image is the same as tracing pixel by pixel.
+struct Accumulator {
+    x0: u32,
+    y0: u32,
+    tw: u32,
+    sums: Vec<Vec3>,
+    /// Sums of squared samples; only with adaptive sampling.
+    squares: Vec<Vec3>,
+    samples: Vec<u32>,
+    rays: u64,
+}
+
+impl Accumulator {
+    /// Adds sample `li` to `cell`'s pixel; whether the pixel has converged.
+    fn add(&mut self, cell: &Cell, li: Vec3, stopping: Option<&Stopping>) -> bool {
+        let at = ((cell.y - self.y0) * self.tw + (cell.x - self.x0)) as usize;
+        self.sums[at] += li;
+        self.samples[at] += 1;
+        let Some(stopping) = stopping else {
+            return false;
+        };
+        self.squares[at] += li * li;
+        stopping.converged(self.samples[at], self.sums[at], self.squares[at])
     }
 }

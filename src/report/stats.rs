@@ -8,6 +8,7 @@ use serde::{Deserialize, Serialize};
 
 use super::ReportError;
 use crate::integrate::{CacheStats, CostModelState, Decision, FrameStats, StageTimes, FRACTION_BUCKETS};
+use crate::render::{RenderStats, SppStats};
 use crate::sequence::{KeptFrame, PhysicsSource};
 
 /// `format` field of stats.json.
@@ -27,6 +28,11 @@ pub struct FrameRecord {
     pub frame_ms: f64,
     pub rays: u64,
     pub mrays_per_second: f64,
+    /// Camera samples per pixel of the main image (`spp_mean`, `spp_min`, `spp_max`): with
+    /// adaptive sampling the effective spp, else `spp` each; 0 for a reused frame. Absent in
+    /// runs from before adaptive sampling (read as 0).
+    #[serde(flatten, default)]
+    pub samples: SppStats,
     pub committed: bool,
     pub instances: usize,
     pub integrated_islands: usize,
@@ -47,16 +53,17 @@ pub struct FrameRecord {
 }
 
 impl FrameRecord {
-    /// The record of a frame from the manager's statistics, the trace's ray rate and, when
-    /// the simulation ran in this process, its physics step time.
-    pub fn new(stats: &FrameStats, mrays_per_second: f64, physics_ms: Option<f64>) -> Self {
+    /// The record of a frame from the manager's statistics, the renderer's (ray rate and
+    /// samples per pixel) and, when the simulation ran in this process, its physics step time.
+    pub fn new(stats: &FrameStats, render: &RenderStats, physics_ms: Option<f64>) -> Self {
         FrameRecord {
             frame: stats.frame,
             physics_ms,
             stages: stats.stages,
             frame_ms: stats.frame_ms(),
             rays: stats.rays,
-            mrays_per_second,
+            mrays_per_second: render.mrays_per_second(),
+            samples: render.spp,
             committed: stats.committed,
             instances: stats.instances,
             integrated_islands: stats.integrated_islands,
@@ -119,6 +126,12 @@ pub struct RunInfo {
     pub width: u32,
     pub height: u32,
     pub spp: u32,
+    /// `--noise-threshold` (adaptive sampling; 0 off). Absent in runs from before it: 0.
+    #[serde(default)]
+    pub noise_threshold: f32,
+    /// Adaptive sampling's minimum samples per pixel; `None` when it is off.
+    #[serde(default)]
+    pub min_spp: Option<u32>,
     pub physics: PhysicsSource,
     /// The simulated scene (scene file and overrides): the trajectory's scene hash, 16 hex
     /// digits.
@@ -244,10 +257,13 @@ fn csv_columns() -> Vec<(&'static str, Cell)> {
         ("physics_ms", Cell::Text(|f| f.physics_ms.map(|v| format!("{v:.4}")).unwrap_or_default())),
     ];
     columns.extend(StageTimes::STAGES.map(|(name, get)| (name, Cell::Stage(get))));
-    let rest: [(&'static str, Cell); 21] = [
+    let rest: [(&'static str, Cell); 24] = [
         ("frame_ms", Cell::Text(|f| format!("{:.4}", f.frame_ms))),
         ("rays", Cell::Text(|f| f.rays.to_string())),
         ("mrays_per_second", Cell::Text(|f| format!("{:.3}", f.mrays_per_second))),
+        ("spp_mean", Cell::Text(|f| format!("{:.3}", f.samples.mean))),
+        ("spp_min", Cell::Text(|f| f.samples.min.to_string())),
+        ("spp_max", Cell::Text(|f| f.samples.max.to_string())),
         ("committed", Cell::Text(|f| f.committed.to_string())),
         ("instances", Cell::Text(|f| f.instances.to_string())),
         ("integrated_islands", Cell::Text(|f| f.integrated_islands.to_string())),
@@ -371,7 +387,7 @@ mod tests {
                         stages: StageTimes { trace_ms: 1.0, ..StageTimes::default() },
                         ..FrameStats::default()
                     },
-                    1.0,
+                    &RenderStats { rays: 1, seconds: 1e-6, spp: SppStats { mean: 1.0, min: 1, max: 1 } },
                     None,
                 )
             })
@@ -387,6 +403,8 @@ mod tests {
             width: 1,
             height: 1,
             spp: 1,
+            noise_threshold: 0.0,
+            min_spp: None,
             physics: PhysicsSource::Trajectory,
             scene_hash: format!("{:016x}", 1),
             trajectory_frames: 3,
@@ -409,7 +427,7 @@ mod tests {
         let lines: Vec<&str> = csv.lines().collect();
         assert_eq!(lines.len(), 4);
         let n = csv_columns().len();
-        assert_eq!(n, 29);
+        assert_eq!(n, 32);
         assert_eq!(lines[0].split(',').count(), n);
         assert!(lines[1..].iter().all(|l| l.split(',').count() == n));
         assert_eq!(stats.summary.totals.stages.trace_ms, 3.0);

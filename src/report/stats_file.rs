@@ -158,6 +158,8 @@ mod tests {
             width: 8,
             height: 8,
             spp: 4,
+            noise_threshold: 0.0,
+            min_spp: None,
             physics: crate::sequence::PhysicsSource::Simulated,
             scene_hash: "00000000000000ff".into(),
             trajectory_frames: 10,

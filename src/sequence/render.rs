@@ -6,8 +6,8 @@ use super::{FrameSelection, KeptFrame, Sequence, SequenceError};
 use crate::integrate::{FrameStats, SceneManager};
 use crate::physics::ReplayFrame;
 use crate::render::{
-    render_frame, Aov, AovIntegrator, Emitters, Film, Integrator, PinholeCamera, RenderError, RenderScene,
-    RenderSettings, RenderStats,
+    render_with_aovs, AdaptiveSampling, Aov, Emitters, Film, Integrator, PinholeCamera, RenderError,
+    RenderScene, RenderSettings, RenderStats,
 };
 
 /// Camera rays (one per pixel of this image) of the manager's trace-penalty probes: enough
@@ -35,7 +35,9 @@ pub struct FrameRenderer<'a> {
     pub aovs: &'a [Aov],
     pub width: u32,
     pub height: u32,
+    /// Samples per pixel; with adaptive sampling, the most a pixel gets.
     pub spp: u32,
+    pub adaptive: AdaptiveSampling,
     pub seed: SeedMode,
     /// With a fixed seed, hand on the previous image for frames where nothing visible changed
     /// instead of tracing them again.
@@ -48,7 +50,13 @@ impl FrameRenderer<'_> {
             SeedMode::Fixed => 0,
             SeedMode::PerFrame => frame,
         };
-        RenderSettings { width: self.width, height: self.height, spp: self.spp, seed }
+        RenderSettings {
+            width: self.width,
+            height: self.height,
+            spp: self.spp,
+            seed,
+            adaptive: self.adaptive,
+        }
     }
 }
 
@@ -112,12 +120,7 @@ impl Sequence {
             let mut scene = RenderScene::with_objects(&self.template, &*manager, &bodies)?;
             scene.camera = camera;
             let query = manager.query()?;
-            let (film, render) = render_frame(&scene, query, renderer.integrator, &settings)?;
-            let mut aovs = Vec::with_capacity(renderer.aovs.len());
-            for &aov in renderer.aovs {
-                aovs.push((aov, render_frame(&scene, query, &AovIntegrator(aov), &settings)?.0));
-            }
-            (film, render, aovs)
+            render_with_aovs(&scene, query, renderer.integrator, &settings, renderer.aovs)?
         };
         manager.record_trace(render.seconds * 1e3, render.rays);
         Ok(RenderedFrame { index: frame.index, film, render, aovs, reused_from: None })

@@ -12,6 +12,7 @@ use std::sync::Arc;
 
 use crate::integrate::{IntegrationSettings, Lookahead, ManagerOptions, SceneManager};
 use crate::physics::{self, SimulateOptions, SimulatedFrame, Trajectory, TrajectoryError};
+use crate::render::AdaptiveSampling;
 use crate::scene::file::SceneFile;
 use crate::scene::{SceneAssets, SceneDescription};
 
@@ -50,6 +51,9 @@ pub struct Sequence {
     pub template: SceneDescription,
     /// The scene file's `render.frame_step`: the step when a run names none.
     pub frame_step: u32,
+    /// The scene file's `render.noise_threshold` and `render.min_spp`: adaptive sampling when
+    /// a run names none.
+    pub adaptive: AdaptiveSampling,
     pub physics: PhysicsSource,
     /// Wall-clock ms of each simulated frame's physics step (empty when replayed).
     pub physics_ms: Vec<f64>,
@@ -105,6 +109,10 @@ impl Sequence {
             assets,
             template,
             frame_step: file.spec().render.frame_step.max(1),
+            adaptive: AdaptiveSampling {
+                noise_threshold: file.spec().render.noise_threshold,
+                min_spp: file.spec().render.min_spp,
+            },
             physics,
             physics_ms,
         })

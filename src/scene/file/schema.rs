@@ -266,11 +266,21 @@ pub(super) struct RenderToml {
     pub samples_per_pixel: u32,
     pub camera: Option<String>,
     pub frame_step: u32,
+    pub noise_threshold: f32,
+    pub min_spp: Option<u32>,
 }
 
 impl Default for RenderToml {
     fn default() -> Self {
-        Self { width: 640, height: 360, samples_per_pixel: 1, camera: None, frame_step: 1 }
+        Self {
+            width: 640,
+            height: 360,
+            samples_per_pixel: 1,
+            camera: None,
+            frame_step: 1,
+            noise_threshold: 0.0,
+            min_spp: None,
+        }
     }
 }
 

@@ -449,4 +449,10 @@ pub struct RenderDef {
     pub camera: Option<usize>,
     /// Render every n-th simulated frame.
     pub frame_step: u32,
+    /// Adaptive sampling's noise threshold (0: off), when `render --noise-threshold` gives
+    /// none; at least 0.
+    pub noise_threshold: f32,
+    /// Adaptive sampling's minimum samples per pixel, when `render --min-spp` gives none; at
+    /// least 1 (checked against `--spp` when rendering).
+    pub min_spp: Option<u32>,
 }

@@ -179,7 +179,8 @@ fn light_kind(light: &LightToml, at: &dyn Fn(&str) -> String) -> Checked<LightKi
     }
 }
 
-/// Sizes, samples and frame step at least 1; a camera that exists.
+/// Sizes, samples and frame step at least 1; a camera that exists; a noise threshold not
+/// negative.
 pub(super) fn render(r: &RenderToml, cameras: &[CameraDef]) -> Checked<RenderDef> {
     let width = at_least_one("render.width", r.width)?;
     let height = at_least_one("render.height", r.height)?;
@@ -199,5 +200,12 @@ pub(super) fn render(r: &RenderToml, cameras: &[CameraDef]) -> Checked<RenderDef
                 .ok_or_else(|| problem("render.camera", format!("no camera named {name:?}")))?,
         ),
     };
-    Ok(RenderDef { width, height, samples_per_pixel, camera, frame_step })
+    let noise_threshold = non_negative("render.noise_threshold", r.noise_threshold)?;
+    let min_spp = match r.min_spp {
+        None => None,
+        Some(m) => {
+            Some(at_most("render.min_spp", at_least_one("render.min_spp", m)?, MAX_SAMPLES_PER_PIXEL)?)
+        }
+    };
+    Ok(RenderDef { width, height, samples_per_pixel, camera, frame_step, noise_threshold, min_spp })
 }
