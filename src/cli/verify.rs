@@ -3,8 +3,9 @@ use std::path::PathBuf;
 use clap::Args;
 
 use super::{CliError, JsonOutput, SceneSource};
-use crate::accel::{self, Backend};
+use crate::accel::{self, AccelError, Accelerator, Backend};
 use crate::crosscheck::{self, Tolerance, VerifyReport};
+use crate::geometry::InstanceMotion;
 use crate::physics::SimulateOptions;
 use crate::scene::file::SceneFile;
 use crate::scene::SceneDescription;
@@ -30,6 +31,12 @@ pub struct VerifyArgs {
     /// Random rays leaving random points on the scene's surfaces.
     #[arg(long, value_name = "N", default_value_t = 100_000)]
     pub surface_rays: usize,
+    /// With SCENE: motion blur. Bodies moving within a shutter of this fraction of the frame
+    /// interval (0 to 1, centred on each checked frame) become motion instances on both
+    /// backends, and every ray gets a random time in the shutter (default: the scene's
+    /// render.shutter).
+    #[arg(long, value_name = "S", allow_negative_numbers = true)]
+    pub shutter: Option<f32>,
     /// Seed for the surface rays.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -48,36 +55,40 @@ pub(super) fn run(
             )));
         }
     }
-    let (descs, frames) = match &args.scene_file {
+    if let Some(problem) = args.shutter.and_then(crate::scene::limits::shutter_problem) {
+        return Err(CliError::Input(format!("--shutter {problem}")));
+    }
+    let (descs, frames, shutter) = match &args.scene_file {
         Some(path) => simulated_frames(path, args, quiet)?,
-        None => (vec![args.scene.load()?], Vec::new()),
+        None => (vec![(args.scene.load()?, Vec::new())], Vec::new(), 0.0),
     };
     let runtime = |e: &dyn std::fmt::Display| CliError::Runtime(e.to_string());
     let tolerance = Tolerance::default();
     let mut report = VerifyReport::default();
     let (mut camera_rays, mut surface_rays) = (0, 0);
-    for (i, desc) in descs.iter().enumerate() {
-        let mut reference = accel::create(Backend::Embree, threads).map_err(|e| runtime(&e))?;
-        let mut candidate = accel::create(Backend::Bvh, threads).map_err(|e| runtime(&e))?;
-        for a in [&mut reference, &mut candidate] {
-            accel::load_scene(desc, a.as_mut()).map_err(|e| runtime(&e))?;
-            a.commit().map_err(|e| runtime(&e))?;
-        }
+    for (i, (desc, motions)) in descs.iter().enumerate() {
+        let reference = load_frame(Backend::Embree, threads, desc, motions).map_err(|e| runtime(&e))?;
+        let candidate = load_frame(Backend::Bvh, threads, desc, motions).map_err(|e| runtime(&e))?;
         let (a, b) =
             (reference.query().map_err(|e| runtime(&e))?, candidate.query().map_err(|e| runtime(&e))?);
-        let camera = crosscheck::camera_rays(desc, args.size.width, args.size.height);
-        let surface = crosscheck::surface_rays(desc, args.surface_rays, args.seed + i as u64);
+        let mut camera = crosscheck::camera_rays(desc, args.size.width, args.size.height);
+        let mut surface = crosscheck::surface_rays(desc, args.surface_rays, args.seed + i as u64);
+        if shutter > 0.0 {
+            camera = crosscheck::with_random_times(camera, !(args.seed + i as u64));
+            surface = crosscheck::with_random_times(surface, (args.seed + i as u64).rotate_left(17));
+        }
         report.merge(crosscheck::compare(a, b, &camera, &tolerance));
         report.merge(crosscheck::compare(a, b, &surface, &tolerance));
         (camera_rays, surface_rays) = (camera_rays + camera.len(), surface_rays + surface.len());
     }
-    let desc = &descs[0];
+    let desc = &descs[0].0;
 
     let json = serde_json::json!({
         "scene": desc.name,
         "reference": Backend::Embree,
         "candidate": Backend::Bvh,
         "frames": frames,
+        "shutter": shutter,
         "camera_rays": camera_rays,
         "surface_rays": surface_rays,
         "tolerance": tolerance,
@@ -116,21 +127,50 @@ pub(super) fn run(
     Ok(())
 }
 
+/// A checked frame: its description, and the motion over the shutter of the bodies (by
+/// position in `bodies`) that move within it.
+type CheckedFrame = (SceneDescription, Vec<(usize, InstanceMotion)>);
+
+/// `desc` in a new accelerator of `backend`, its moving bodies motion instances, committed.
+fn load_frame(
+    backend: Backend,
+    threads: Option<usize>,
+    desc: &SceneDescription,
+    motions: &[(usize, InstanceMotion)],
+) -> Result<Box<dyn Accelerator>, AccelError> {
+    let mut accel = accel::create(backend, threads)?;
+    let loaded = accel::load_scene(desc, accel.as_mut())?;
+    for &(body, motion) in motions {
+        accel.set_instance_motion(loaded.instances[body], Some(motion))?;
+    }
+    accel.commit()?;
+    Ok(accel)
+}
+
 /// Simulates the scene file and describes `check_frames` frames of it, evenly spaced and
-/// ending with the last; returns them with their frame numbers.
+/// ending with the last, with their motion over the shutter; returns them with their frame
+/// numbers and the shutter.
 fn simulated_frames(
     path: &std::path::Path,
     args: &VerifyArgs,
     quiet: bool,
-) -> Result<(Vec<SceneDescription>, Vec<u32>), CliError> {
+) -> Result<(Vec<CheckedFrame>, Vec<u32>, f32), CliError> {
     let file = SceneFile::load(path).map_err(|e| CliError::Input(e.to_string()))?;
     let options = SimulateOptions { count: args.scene.count, frames: args.frame_count };
     let sequence = super::render::load_sequence(SequenceSource::scene(file, options, None), quiet)?;
+    let shutter = args.shutter.unwrap_or(sequence.shutter);
     let selection = sequence.evenly_spaced(args.check_frames);
     let mut descs = Vec::new();
     sequence.replay(&selection, &mut [], &mut |frame, _| {
-        descs.push(sequence.describe_frame(frame));
+        // `describe_frame` lists the present bodies in ascending order.
+        let present: Vec<usize> = frame.present_bodies().map(|b| b.0 as usize).collect();
+        let motions = frame
+            .shutter_motions(shutter)
+            .into_iter()
+            .filter_map(|(b, m)| Some((present.binary_search(&b).ok()?, m)))
+            .collect();
+        descs.push((sequence.describe_frame(frame), motions));
         Ok::<(), SequenceError>(())
     })?;
-    Ok((descs, selection.frames()))
+    Ok((descs, selection.frames(), shutter))
 }

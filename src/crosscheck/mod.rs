@@ -6,4 +6,4 @@ mod compare;
 mod rays;
 
 pub use compare::{compare, compare_mapped, MappedQuery, Mismatch, Tolerance, VerifyReport};
-pub use rays::{camera_rays, surface_rays};
+pub use rays::{camera_rays, surface_rays, with_random_times};

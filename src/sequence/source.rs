@@ -50,6 +50,8 @@ pub struct Sequence {
     pub template: SceneDescription,
     /// The scene file's `render.frame_step`: the step when a run names none.
     pub frame_step: u32,
+    /// The scene file's `render.shutter` (motion blur): the shutter when a run names none.
+    pub shutter: f32,
     pub physics: PhysicsSource,
     /// Wall-clock ms of each simulated frame's physics step (empty when replayed).
     pub physics_ms: Vec<f64>,
@@ -105,6 +107,7 @@ impl Sequence {
             assets,
             template,
             frame_step: file.spec().render.frame_step.max(1),
+            shutter: file.spec().render.shutter,
             physics,
             physics_ms,
         })

@@ -111,13 +111,15 @@ impl Path<'_> {
 }
 
 /// A path vertex being shaded: the surface, the unit direction back along the path, the BSDF
-/// there, the offset origin of rays leaving it, and its depth (0 at the camera ray's hit).
+/// there, the offset origin of rays leaving it, its depth (0 at the camera ray's hit) and the
+/// shutter time of the path, which every ray leaving it keeps.
 struct Vertex {
     s: SurfaceHit,
     wo: Vec3,
     bsdf: Bsdf,
     origin: Vec3,
     depth: u32,
+    time: f32,
 }
 
 impl Vertex {
@@ -125,7 +127,7 @@ impl Vertex {
         let wo = -ray.dir.normalize();
         let bsdf = Bsdf::new(&s.material, s.ns);
         let origin = offset_origin(s.p, s.ng);
-        Self { s, wo, bsdf, origin, depth }
+        Self { s, wo, bsdf, origin, depth, time: ray.time }
     }
 
     /// First sampler dimension pair of this vertex's BSDF, sun and sky samples.
@@ -219,7 +221,7 @@ impl PathTracerFrame<'_> {
             let f = v.bsdf.eval(v.wo, l);
             if f != Vec3::ZERO
                 && v.s.ng.dot(l) > 0.0
-                && self.frame.unoccluded(&shadow_ray(v.origin, l, distance), path.rays)
+                && self.frame.unoccluded(&shadow_ray(v.origin, l, distance).at_time(v.time), path.rays)
             {
                 path.add(path.beta * f * e, v.depth);
             }
@@ -236,7 +238,9 @@ impl PathTracerFrame<'_> {
         let sun = &self.sun;
         let l = sample_cone(sun.dir, sun.cos_max, path.sampler.get_2d(path.index, v.dim()));
         let f = v.bsdf.eval(v.wo, l);
-        if f != Vec3::ZERO && v.s.ng.dot(l) > 0.0 && self.frame.unoccluded(&Ray::new(v.origin, l), path.rays)
+        if f != Vec3::ZERO
+            && v.s.ng.dot(l) > 0.0
+            && self.frame.unoccluded(&Ray::new(v.origin, l).at_time(v.time), path.rays)
         {
             let w = power_heuristic(sun.pdf, v.bsdf.pdf(v.wo, l));
             path.add(path.beta * f * sun.radiance * (w / sun.pdf), v.depth);
@@ -252,7 +256,7 @@ impl PathTracerFrame<'_> {
         if f != Vec3::ZERO
             && pdf_sky > 0.0
             && v.s.ng.dot(d) > 0.0
-            && self.frame.unoccluded(&Ray::new(v.origin, d), path.rays)
+            && self.frame.unoccluded(&Ray::new(v.origin, d).at_time(v.time), path.rays)
         {
             let w = power_heuristic(pdf_sky, v.bsdf.pdf(v.wo, d));
             path.add(path.beta * f * self.frame.scene.sky.radiance(d) * (w / pdf_sky), v.depth);
@@ -277,7 +281,7 @@ impl PathTracerFrame<'_> {
         let f = v.bsdf.eval(v.wo, wi);
         if dist2 > 0.0 && cos_light > 0.0 && f != Vec3::ZERO && v.s.ng.dot(wi) > 0.0 {
             let pdf_light = e.pdf_area * dist2 / cos_light;
-            let shadow = Ray::segment(v.origin, wi, 0.0, dist2.sqrt() * (1.0 - 1e-3));
+            let shadow = Ray::segment(v.origin, wi, 0.0, dist2.sqrt() * (1.0 - 1e-3)).at_time(v.time);
             if self.frame.unoccluded(&shadow, path.rays) {
                 let w = power_heuristic(pdf_light, v.bsdf.pdf(v.wo, wi));
                 path.add(path.beta * f * le * (w / pdf_light), v.depth);
@@ -304,5 +308,5 @@ fn continue_path(v: &Vertex, path: &mut Path) -> Option<Ray> {
         path.beta /= q;
     }
     path.came_from = Some((sample.pdf, v.s.ns));
-    Some(Ray::new(v.origin, sample.wi))
+    Some(Ray::new(v.origin, sample.wi).at_time(v.time))
 }

@@ -257,7 +257,7 @@ pub(super) enum LightTag {
     Spot,
 }
 
-/// `[render]`: the camera by name.
+/// `[render]`: the camera by name, the image, the frame step and the shutter (motion blur).
 #[derive(Clone, Debug, Deserialize, PartialEq)]
 #[serde(rename = "RenderSettings", deny_unknown_fields, default)]
 pub(super) struct RenderToml {
@@ -266,11 +266,12 @@ pub(super) struct RenderToml {
     pub samples_per_pixel: u32,
     pub camera: Option<String>,
     pub frame_step: u32,
+    pub shutter: f32,
 }
 
 impl Default for RenderToml {
     fn default() -> Self {
-        Self { width: 640, height: 360, samples_per_pixel: 1, camera: None, frame_step: 1 }
+        Self { width: 640, height: 360, samples_per_pixel: 1, camera: None, frame_step: 1, shutter: 0.0 }
     }
 }
 

@@ -449,4 +449,7 @@ pub struct RenderDef {
     pub camera: Option<usize>,
     /// Render every n-th simulated frame.
     pub frame_step: u32,
+    /// Motion blur: the shutter as a fraction of the frame interval, centred on the frame
+    /// (0: off, the default).
+    pub shutter: f32,
 }
