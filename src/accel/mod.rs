@@ -69,6 +69,21 @@ pub enum AccelError {
     Embree(#[from] embree::EmbreeError),
 }
 
+/// Whether instance `id` (declared resting or not) may take `motion`
+/// ([`Accelerator::set_instance_motion`]): a resting instance cannot move, and the motion
+/// must be finite.
+pub(crate) fn check_motion(
+    id: InstanceId,
+    resting: bool,
+    motion: Option<&InstanceMotion>,
+) -> Result<(), AccelError> {
+    match motion {
+        Some(_) if resting => Err(AccelError::RestingMotion { instance: id.0 }),
+        Some(m) if !m.is_finite() => Err(AccelError::InvalidTransform { instance: id.0 }),
+        _ => Ok(()),
+    }
+}
+
 /// What a commit did, for the per-stage counters.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct CommitReport {

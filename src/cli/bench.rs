@@ -233,9 +233,7 @@ fn integration(
     json: &JsonOutput,
 ) -> Result<(), CliError> {
     let backend = super::render::choose_backend(args.backend)?;
-    if let Some(problem) = crate::scene::limits::shutter_problem(args.shutter) {
-        return Err(CliError::Input(format!("--shutter {problem}")));
-    }
+    super::render::check_shutter(Some(args.shutter))?;
     let (file, options) = args.scene.load()?;
     let source = SequenceSource::scene(file, options, args.trajectory.clone());
     let sequence = super::render::load_sequence(source, quiet)?;

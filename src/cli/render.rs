@@ -289,9 +289,7 @@ fn check_flags(args: &RenderArgs) -> Result<(), CliError> {
     if !args.exposure.is_finite() || args.exposure <= 0.0 {
         return Err(CliError::Input(format!("--exposure {}: must be a positive number", args.exposure)));
     }
-    if let Some(problem) = args.shutter.and_then(shutter_problem) {
-        return Err(CliError::Input(format!("--shutter {problem}")));
-    }
+    check_shutter(args.shutter)?;
     let sequence = args.scene_file.is_some() || args.trajectory.is_some();
     if !sequence {
         for (flag, given) in [
@@ -316,6 +314,14 @@ fn check_flags(args: &RenderArgs) -> Result<(), CliError> {
         }
     }
     Ok(())
+}
+
+/// `--shutter S` (render, verify, bench integration): from 0 to 1.
+pub(super) fn check_shutter(shutter: Option<f32>) -> Result<(), CliError> {
+    match shutter.and_then(shutter_problem) {
+        Some(problem) => Err(CliError::Input(format!("--shutter {problem}"))),
+        None => Ok(()),
+    }
 }
 
 /// A sequence: a scene file, maybe with a trajectory of it, or a trajectory alone with the

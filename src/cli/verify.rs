@@ -48,16 +48,7 @@ pub(super) fn run(
     quiet: bool,
     json_out: &JsonOutput,
 ) -> Result<(), CliError> {
-    for b in [Backend::Embree, Backend::Bvh] {
-        if !b.is_compiled() {
-            return Err(CliError::Input(format!(
-                "verify compares Embree with the BVH, but {b} is not compiled in"
-            )));
-        }
-    }
-    if let Some(problem) = args.shutter.and_then(crate::scene::limits::shutter_problem) {
-        return Err(CliError::Input(format!("--shutter {problem}")));
-    }
+    check_input(args)?;
     let (descs, frames, shutter) = match &args.scene_file {
         Some(path) => simulated_frames(path, args, quiet)?,
         None => (vec![(args.scene.load()?, Vec::new())], Vec::new(), 0.0),
@@ -71,12 +62,10 @@ pub(super) fn run(
         let candidate = load_frame(Backend::Bvh, threads, desc, motions).map_err(|e| runtime(&e))?;
         let (a, b) =
             (reference.query().map_err(|e| runtime(&e))?, candidate.query().map_err(|e| runtime(&e))?);
-        let mut camera = crosscheck::camera_rays(desc, args.size.width, args.size.height);
-        let mut surface = crosscheck::surface_rays(desc, args.surface_rays, args.seed + i as u64);
-        if shutter > 0.0 {
-            camera = crosscheck::with_random_times(camera, !(args.seed + i as u64));
-            surface = crosscheck::with_random_times(surface, (args.seed + i as u64).rotate_left(17));
-        }
+        let seed = args.seed + i as u64;
+        let timed = |rays, seed| if shutter > 0.0 { crosscheck::with_random_times(rays, seed) } else { rays };
+        let camera = timed(crosscheck::camera_rays(desc, args.size.width, args.size.height), !seed);
+        let surface = timed(crosscheck::surface_rays(desc, args.surface_rays, seed), seed.rotate_left(17));
         report.merge(crosscheck::compare(a, b, &camera, &tolerance));
         report.merge(crosscheck::compare(a, b, &surface, &tolerance));
         (camera_rays, surface_rays) = (camera_rays + camera.len(), surface_rays + surface.len());
@@ -125,6 +114,18 @@ pub(super) fn run(
         )));
     }
     Ok(())
+}
+
+/// Both backends compiled in, and a shutter from 0 to 1.
+fn check_input(args: &VerifyArgs) -> Result<(), CliError> {
+    for b in [Backend::Embree, Backend::Bvh] {
+        if !b.is_compiled() {
+            return Err(CliError::Input(format!(
+                "verify compares Embree with the BVH, but {b} is not compiled in"
+            )));
+        }
+    }
+    super::render::check_shutter(args.shutter)
 }
 
 /// A checked frame: its description, and the motion over the shutter of the bodies (by

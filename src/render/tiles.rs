@@ -99,7 +99,7 @@ fn camera_ray(camera: &FrameCamera, spp: u32, x: u32, y: u32, sampler: &PixelSam
     // Motion blur: the sample's time in the shutter; a moving camera's ray is the one between
     // its open and close rays (linear in origin, normalised linear in direction, as its key
     // frames are linear in position and target).
-    let time = sampler.get_2d(i, dims::TIME).x;
+    let time = sampler.get_1d(i, dims::TIME);
     if *close == camera.open {
         return open.at_time(time);
     }

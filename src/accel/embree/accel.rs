@@ -325,13 +325,11 @@ impl Accelerator for EmbreeAccel {
         if slot.motion == motion {
             return Ok(());
         }
-        if motion.is_some() && slot.resting {
-            return Err(AccelError::RestingMotion { instance: id.0 });
-        }
+        crate::accel::check_motion(id, slot.resting, motion.as_ref())?;
         let transform = slot.transform;
         let geometry = self.top.instance_mut(id.0 + 1)?;
         match &motion {
-            Some(m) => geometry.set_motion(m).map_err(|_| AccelError::InvalidTransform { instance: id.0 })?,
+            Some(m) => geometry.set_motion(m)?,
             None => geometry.set_transform(&transform)?,
         }
         if let Some(slot) = self.instances[id.0 as usize].as_mut() {
@@ -382,6 +380,10 @@ impl Accelerator for EmbreeAccel {
     fn commit(&mut self) -> Result<CommitReport, AccelError> {
         let resting = self.commit_resting(false)?;
         let top_changed = self.top.is_dirty();
+        // With moving instances the top level is a motion-blur BVH, about 4x the commit of a
+        // still one on the atrium (docs/performance.md, "Motion blur"). Building it at MEDIUM
+        // or LOW instead of HIGH did not help (196 and 214 ms a commit against 191 ms at
+        // HIGH, blur-off 48-51 ms, in the same lockstep): not kept.
         let t = Instant::now();
         self.top.commit()?;
         let instances = self.top_instances();

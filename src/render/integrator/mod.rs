@@ -67,7 +67,7 @@ pub(crate) mod dims {
     pub const EMITTER: u32 = BOUNCE + 4 * 64;
     /// The point on the camera's lens (depth of field).
     pub const LENS: u32 = EMITTER + 2 * 64;
-    /// The camera sample's time in the shutter (motion blur; the pair's first value).
+    /// The camera sample's time in the shutter (motion blur; one dimension, `get_1d`).
     pub const TIME: u32 = LENS + 1;
 }
 

@@ -328,12 +328,7 @@ impl Accelerator for BvhAccel {
         if inst.motion == motion {
             return Ok(());
         }
-        if motion.is_some() && inst.resting {
-            return Err(AccelError::RestingMotion { instance: id.0 });
-        }
-        if motion.is_some_and(|m| !m.is_finite()) {
-            return Err(AccelError::InvalidTransform { instance: id.0 });
-        }
+        crate::accel::check_motion(id, inst.resting, motion.as_ref())?;
         inst.motion = motion;
         self.awake_changed();
         Ok(())
