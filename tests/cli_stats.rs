@@ -68,6 +68,7 @@ const RUN: &[(&str, &str)] = &[
     ("exr", "boolean"),
     ("denoise", "string|null"),
     ("keep_noisy", "boolean"),
+    ("shutter", "number"),
 ];
 
 const FRAME: &[(&str, &str)] = &[

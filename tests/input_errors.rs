@@ -174,6 +174,15 @@ fn scene_image_size_beyond_the_machine_is_refused() {
 }
 
 #[test]
+fn scene_shutter_outside_zero_to_one_names_the_field() {
+    let last = "region = { min = [-1.0, 1.0, -1.0], max = [1.0, 1.0, 1.0] }";
+    for shutter in ["-0.5", "1.5"] {
+        let with = format!("{last}\n\n[render]\nshutter = {shutter}");
+        expect_scene_error(last, &with, 19, &["render.shutter", shutter, "from 0 (no motion blur) to 1"]);
+    }
+}
+
+#[test]
 fn scene_file_missing_or_unreadable_names_the_path() {
     let dir = TempDir::new().unwrap();
     let missing = dir.path().join("absent.toml");
@@ -407,6 +416,20 @@ fn cli_min_spp_above_spp_or_without_adaptive_sampling() {
 #[test]
 fn cli_aov_unknown() {
     expect_usage_error(&["render", "--aov", "albedo,glossy"], &["--aov", "glossy", "spp"]);
+}
+
+#[test]
+fn cli_shutter_outside_zero_to_one() {
+    let tiny = repo("scenes/tiny.toml");
+    let tiny = tiny.to_str().unwrap();
+    let range = "from 0 (no motion blur) to 1";
+    expect_usage_error(&["render", tiny, "--shutter", "-0.5"], &["--shutter -0.5", range]);
+    expect_usage_error(&["render", tiny, "--shutter", "1.5"], &["--shutter 1.5", range]);
+    expect_usage_error(&["render", "--shutter", "0.5"], &["--shutter needs a SCENE file or --trajectory"]);
+    // These write no files.
+    expect_exit(dormant().args(["verify", tiny, "--shutter", "2"]), 2, &["--shutter 2", range], None);
+    let bench = ["bench", "integration", tiny, "--shutter", "-1"];
+    expect_exit(dormant().args(bench), 2, &["--shutter -1", range], None);
 }
 
 #[test]

@@ -264,7 +264,14 @@ fn run_sleep_wake(
         let evs = world.step(&mut rng);
         seen += evs.len();
         manager.observe(&evs);
-        let replayed = ReplayFrame { index: frame, states: &world.states, poses: &world.poses, events: &evs };
+        let replayed = ReplayFrame {
+            index: frame,
+            states: &world.states,
+            poses: &world.poses,
+            events: &evs,
+            before: &[],
+            after: &[],
+        };
         let stats = manager.prepare(&replayed).unwrap().clone();
         manager.record_trace(0.0, 0);
         let from_cache = matches!(stats.reactivation_path, Some(ReactivationPath::Cache(_)));
@@ -326,6 +333,7 @@ fn never_always_and_auto_render_the_same_images() {
         adaptive: dormant::render::AdaptiveSampling::OFF,
         seed: SeedMode::PerFrame,
         reuse_static: false,
+        shutter: 0.0,
     };
     for backend in backends() {
         let mut films: Vec<Vec<Film>> = Vec::new();
@@ -383,6 +391,7 @@ fn baked_debug_view_shows_integrated_bodies_in_orange() {
         adaptive: dormant::render::AdaptiveSampling::OFF,
         seed: SeedMode::PerFrame,
         reuse_static: false,
+        shutter: 0.0,
     };
     let orange = |p: glam::Vec3| p.x > 1.5 * p.z && p.x > 0.1;
     for (policy, expect_baked) in [(IntegrationPolicy::Never, false), (IntegrationPolicy::Always, true)] {

@@ -29,7 +29,7 @@ pub use snapshot::StaticSceneSnapshot;
 
 use glam::Affine3A;
 
-use crate::geometry::{MeshError, Ray, TriangleMesh};
+use crate::geometry::{InstanceMotion, MeshError, Ray, TriangleMesh};
 pub(crate) use resting::{RestingCounts, RestingSchedule};
 
 /// Identifies a prototype mesh registered with [`Accelerator::add_prototype`].
@@ -54,6 +54,8 @@ pub enum AccelError {
     Mesh(#[from] MeshError),
     #[error("transform of instance {instance} is not finite or not invertible")]
     InvalidTransform { instance: u32 },
+    #[error("instance {instance} is resting: resting instances cannot be motion-blurred")]
+    RestingMotion { instance: u32 },
     #[error("backend '{0}' is not compiled into this build")]
     BackendUnavailable(&'static str),
     #[error("the {backend} backend cannot restore a static scene snapshot taken by the {from} backend")]
@@ -65,6 +67,21 @@ pub enum AccelError {
     #[cfg(feature = "embree")]
     #[error(transparent)]
     Embree(#[from] embree::EmbreeError),
+}
+
+/// Whether instance `id` (declared resting or not) may take `motion`
+/// ([`Accelerator::set_instance_motion`]): a resting instance cannot move, and the motion
+/// must be finite.
+pub(crate) fn check_motion(
+    id: InstanceId,
+    resting: bool,
+    motion: Option<&InstanceMotion>,
+) -> Result<(), AccelError> {
+    match motion {
+        Some(_) if resting => Err(AccelError::RestingMotion { instance: id.0 }),
+        Some(m) if !m.is_finite() => Err(AccelError::InvalidTransform { instance: id.0 }),
+        _ => Ok(()),
+    }
 }
 
 /// What a commit did, for the per-stage counters.
@@ -138,6 +155,17 @@ pub trait Accelerator: Send + Sync {
     fn set_instance_transform(&mut self, id: InstanceId, transform: Affine3A) -> Result<(), AccelError>;
 
     fn remove_instance(&mut self, id: InstanceId) -> Result<(), AccelError>;
+
+    /// Blurs instance `id` over the camera shutter (motion blur): a ray at time `s` sees it
+    /// at `motion.at(s)` instead of at its transform; `None` makes it still again, at its
+    /// transform. Only the per-frame top level holds moving instances: declaring an instance
+    /// resting ([`Accelerator::set_instance_resting`]) stills it, and a resting one cannot
+    /// move (rejected with [`AccelError::RestingMotion`]). A new transform keeps the motion.
+    fn set_instance_motion(
+        &mut self,
+        id: InstanceId,
+        motion: Option<InstanceMotion>,
+    ) -> Result<(), AccelError>;
 
     /// Declares instance `id` at rest (`resting`: it will not move until woken) or awake.
     /// Resting instances leave the per-frame top level for a resting level that the backend

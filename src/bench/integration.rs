@@ -45,6 +45,10 @@ pub struct IntegrationBenchOptions {
     pub forms: Vec<IntegrationForm>,
     /// Also run the baked form's `always` and `auto` with the geometry cache off.
     pub cache_variants: bool,
+    /// Motion blur's shutter for every configuration (0: off). With a shutter, `never` and
+    /// the first form's `auto` also run without blur, in the same lockstep, for the cost of
+    /// blur.
+    pub shutter: f32,
 }
 
 /// One configuration of the benchmark.
@@ -55,6 +59,8 @@ pub struct BenchConfig {
     pub cache: bool,
     /// `auto` knows each island's wake frame (else it estimates).
     pub lookahead: bool,
+    /// Runs without motion blur in a benchmark with a shutter (the blur-off reference).
+    pub unblurred: bool,
 }
 
 impl BenchConfig {
@@ -63,14 +69,16 @@ impl BenchConfig {
         form: IntegrationForm::Baked,
         cache: false,
         lookahead: false,
+        unblurred: false,
     };
 
     /// A short name for tables: `never`, `auto resting`, `auto baked, cache off`, `auto resting, online`.
     pub fn name(&self) -> String {
+        let unblurred = if self.unblurred { ", no blur" } else { "" };
         if self.policy == IntegrationPolicy::Never {
-            return self.policy.to_string();
+            return format!("{}{unblurred}", self.policy);
         }
-        let mut name = format!("{} {}", self.policy, self.form);
+        let mut name = format!("{} {}{unblurred}", self.policy, self.form);
         if self.form == IntegrationForm::Baked && !self.cache {
             name.push_str(", cache off");
         }
@@ -92,20 +100,27 @@ impl BenchConfig {
 
 /// The configurations run, in report order: `never`; per form `always` and `auto` (cache on,
 /// lookahead); `auto` without lookahead for the first form; with `cache_variants`, the baked
-/// form's `always` and `auto` with the cache off.
+/// form's `always` and `auto` with the cache off; with a shutter, `never` and the first form's
+/// `auto` without blur.
 fn configs(options: &IntegrationBenchOptions) -> Vec<BenchConfig> {
     let mut configs = vec![BenchConfig::NEVER];
+    let on = |policy, form| BenchConfig { policy, form, cache: true, lookahead: true, unblurred: false };
     for &form in &options.forms {
-        let on = BenchConfig { policy: IntegrationPolicy::Always, form, cache: true, lookahead: true };
-        configs.push(on);
-        configs.push(BenchConfig { policy: IntegrationPolicy::Auto, ..on });
+        configs.push(on(IntegrationPolicy::Always, form));
+        configs.push(on(IntegrationPolicy::Auto, form));
     }
     if let Some(&form) = options.forms.first() {
-        configs.push(BenchConfig { policy: IntegrationPolicy::Auto, form, cache: true, lookahead: false });
+        configs.push(BenchConfig { lookahead: false, ..on(IntegrationPolicy::Auto, form) });
     }
     if options.cache_variants && options.forms.contains(&IntegrationForm::Baked) {
         for policy in [IntegrationPolicy::Always, IntegrationPolicy::Auto] {
-            configs.push(BenchConfig { policy, form: IntegrationForm::Baked, cache: false, lookahead: true });
+            configs.push(BenchConfig { cache: false, ..on(policy, IntegrationForm::Baked) });
+        }
+    }
+    if options.shutter > 0.0 {
+        configs.push(BenchConfig { unblurred: true, ..BenchConfig::NEVER });
+        if let Some(&form) = options.forms.first() {
+            configs.push(BenchConfig { unblurred: true, ..on(IntegrationPolicy::Auto, form) });
         }
     }
     configs
@@ -227,7 +242,7 @@ impl IntegrationBenchReport {
 fn find_run(runs: &[PolicyRun], policy: IntegrationPolicy, form: IntegrationForm) -> Option<&PolicyRun> {
     let want = match policy {
         IntegrationPolicy::Never => BenchConfig::NEVER,
-        policy => BenchConfig { policy, form, cache: true, lookahead: true },
+        policy => BenchConfig { policy, form, cache: true, lookahead: true, unblurred: false },
     };
     runs.iter().find(|r| r.config == want)
 }
@@ -258,7 +273,9 @@ fn run_lockstep(
         let n = managers.len();
         for k in 0..n {
             let i = (k + rendered as usize) % n;
-            sequence.render_frame(&mut managers[i], frame, renderer)?;
+            // Each manager's own shutter (the blur-off references have none).
+            let renderer = FrameRenderer { shutter: managers[i].options().shutter, ..*renderer };
+            sequence.render_frame(&mut managers[i], frame, &renderer)?;
             frames[i].push(managers[i].last_frame().clone());
         }
         rendered += 1;
@@ -362,8 +379,13 @@ pub fn bench_integration(
     let asleep_fraction = asleep_fractions(sequence, &options.frames);
     let settled: Vec<bool> = asleep_fraction.iter().map(|&a| a >= 0.9).collect();
     let configs = configs(options);
-    let manager_options: Vec<ManagerOptions> =
-        configs.iter().map(|c| sequence.manager_options(&options.frames, c.settings())).collect();
+    let manager_options: Vec<ManagerOptions> = configs
+        .iter()
+        .map(|c| ManagerOptions {
+            shutter: if c.unblurred { 0.0 } else { options.shutter },
+            ..sequence.manager_options(&options.frames, c.settings())
+        })
+        .collect();
     let renderer = FrameRenderer {
         integrator,
         aovs: &[],
@@ -374,6 +396,7 @@ pub fn bench_integration(
         // Every frame traced, and noise decorrelated as in a per-frame-seeded render.
         seed: SeedMode::PerFrame,
         reuse_static: false,
+        shutter: options.shutter,
     };
     let results = run_lockstep(sequence, &renderer, options, &manager_options, progress)?;
     let mut runs = Vec::new();
@@ -387,6 +410,7 @@ pub fn bench_integration(
                 form: IntegrationForm::Baked,
                 cache: true,
                 lookahead: true,
+                unblurred: false,
             })
         {
             (variants, rebuild_triangles) = static_variants(&manager, &sequence.template, options)?;

@@ -382,6 +382,7 @@ fn run_backend(
         static_variants: false,
         forms: IntegrationForm::ALL.to_vec(),
         cache_variants: true,
+        shutter: 0.0,
     };
     let t = Instant::now();
     let mut progress = |done: u32, total: u32| {

@@ -208,6 +208,7 @@ fn run_cell(
         static_variants: false,
         forms: vec![options.form],
         cache_variants: false,
+        shutter: 0.0,
     };
     let report = bench_integration(sequence, budget.integrator().as_ref(), &bench, &mut |_, _| {})?;
     let mean = |p| report.cache_on(p).map_or(f64::NAN, |r| r.all.frame_ms);

@@ -162,6 +162,10 @@ pub struct IntegrationArgs {
     /// Also run the baked form's `always` and `auto` with the geometry cache off.
     #[arg(long)]
     pub cache_variants: bool,
+    /// Motion blur: every configuration renders with this shutter (a fraction of the frame
+    /// interval, 0 to 1), and `never` and `auto` also run without blur, in the same lockstep.
+    #[arg(long, value_name = "S", default_value_t = 0.0, allow_negative_numbers = true)]
+    pub shutter: f32,
 }
 
 #[derive(Debug, Args)]
@@ -272,6 +276,7 @@ fn integration(
     json: &JsonOutput,
 ) -> Result<(), CliError> {
     let backend = super::render::choose_backend(args.backend)?;
+    super::render::check_shutter(Some(args.shutter))?;
     let (file, options) = args.scene.load()?;
     let source = SequenceSource::scene(file, options, args.trajectory.clone());
     let sequence = super::render::load_sequence(source, quiet)?;
@@ -292,6 +297,7 @@ fn integration(
             crate::integrate::IntegrationForm::starting_with(args.integrate_as)
         },
         cache_variants: args.cache_variants,
+        shutter: args.shutter,
     };
     let integrator = super::render::integrator(args.mode, 6);
     let mut progress = |done: u32, total: u32| {

@@ -19,7 +19,7 @@ use crate::render::{
 };
 use crate::report::{self, FrameRecord, RunInfo, StatsFile};
 use crate::scene::file::SceneFile;
-use crate::scene::limits::{image_size_problem, MAX_IMAGE_SIDE, MAX_SAMPLES_PER_PIXEL};
+use crate::scene::limits::{image_size_problem, shutter_problem, MAX_IMAGE_SIDE, MAX_SAMPLES_PER_PIXEL};
 use crate::sequence::{
     FrameRange, FrameRenderer, FrameSelection, KeptFrame, RenderedFrame, SeedMode, Sequence, SequenceError,
     SequenceSource,
@@ -154,6 +154,11 @@ pub struct RenderArgs {
     /// With SCENE or --trajectory: also encode the frames as DIR/video.mp4 (needs ffmpeg on PATH).
     #[arg(long)]
     pub video: bool,
+    /// With SCENE or --trajectory: motion blur. The shutter as a fraction of the frame interval
+    /// (the trajectory's timestep), centred on each frame, from 0 (off) to 1; default: the
+    /// scene's render.shutter, else 0. Cycles' default when blur is on is 0.5.
+    #[arg(long, value_name = "S", allow_negative_numbers = true)]
+    pub shutter: Option<f32>,
     /// Exposure multiplier applied before tone mapping.
     #[arg(long, default_value_t = 1.0)]
     pub exposure: f32,
@@ -296,12 +301,14 @@ fn check_flags(args: &RenderArgs) -> Result<(), CliError> {
     if !args.exposure.is_finite() || args.exposure <= 0.0 {
         return Err(CliError::Input(format!("--exposure {}: must be a positive number", args.exposure)));
     }
+    check_shutter(args.shutter)?;
     let sequence = args.scene_file.is_some() || args.trajectory.is_some();
     if !sequence {
         for (flag, given) in [
             ("--frames", args.frames.is_some()),
             ("--frame-step", args.frame_step.is_some()),
             ("--resume", args.resume),
+            ("--shutter", args.shutter.is_some()),
         ] {
             if given {
                 return Err(CliError::Input(format!("{flag} needs a SCENE file or --trajectory")));
@@ -349,6 +356,14 @@ fn adaptive_sampling(args: &RenderArgs, sequence: Option<&Sequence>) -> Result<A
             Err(CliError::Input(format!("{from} {min}: must be from 1 to --spp ({})", args.spp)))
         }
         _ => Ok(adaptive),
+    }
+}
+
+/// `--shutter S` (render, verify, bench integration): from 0 to 1.
+pub(super) fn check_shutter(shutter: Option<f32>) -> Result<(), CliError> {
+    match shutter.and_then(shutter_problem) {
+        Some(problem) => Err(CliError::Input(format!("--shutter {problem}"))),
+        None => Ok(()),
     }
 }
 
@@ -420,6 +435,7 @@ fn render_sequence(
         adaptive: adaptive_sampling(args, Some(sequence))?,
         seed: args.seed,
         reuse_static: args.reuse == Switch::On,
+        shutter: shutter(args, sequence),
     };
     let info = run_info(args, sequence, backend, &frames, renderer.adaptive);
     let kept = if args.resume { super::resume::kept_frames(args, &info, &frames)? } else { Vec::new() };
@@ -492,6 +508,7 @@ fn scene_manager(
         CliError::Input(format!("--cache-mib {}: too large for this machine", args.cache_mib))
     })?;
     manager_options.cache_budget = CacheBudget { bytes: cache_bytes, entries: args.cache_entries };
+    manager_options.shutter = shutter(args, sequence);
     sequence.manager(backend, threads, manager_options).map_err(|e| sequence_error(e, "--frames"))
 }
 
@@ -563,7 +580,13 @@ fn run_info(
         exr: args.exr,
         denoise: args.denoise.then(|| if args.denoise_prefilter { "oidn-prefilter" } else { "oidn" }.into()),
         keep_noisy: args.keep_noisy,
+        shutter: shutter(args, sequence),
     }
+}
+
+/// The run's shutter: `--shutter`, else the scene's `render.shutter`.
+fn shutter(args: &RenderArgs, sequence: &Sequence) -> f32 {
+    args.shutter.unwrap_or(sequence.shutter)
 }
 
 /// `video.mp4` from the written frames.

@@ -3,8 +3,9 @@ use std::path::PathBuf;
 use clap::Args;
 
 use super::{CliError, JsonOutput, SceneSource};
-use crate::accel::{self, Backend};
+use crate::accel::{self, AccelError, Accelerator, Backend};
 use crate::crosscheck::{self, MappedQuery, VerifyReport, BOUND};
+use crate::geometry::InstanceMotion;
 use crate::integrate::LoadedObjectMap;
 use crate::physics::SimulateOptions;
 use crate::scene::file::SceneFile;
@@ -35,6 +36,12 @@ pub struct VerifyArgs {
     /// occlusion queries over a finite interval.
     #[arg(long, value_name = "N", default_value_t = 20_000)]
     pub shadow_rays: usize,
+    /// With SCENE: motion blur. Bodies moving within a shutter of this fraction of the frame
+    /// interval (0 to 1, centred on each checked frame) become motion instances on both
+    /// backends, and every ray gets a random time in the shutter (default: the scene's
+    /// render.shutter).
+    #[arg(long, value_name = "S", allow_negative_numbers = true)]
+    pub shutter: Option<f32>,
     /// Seed for the surface and shadow rays.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -46,32 +53,27 @@ pub(super) fn run(
     quiet: bool,
     json_out: &JsonOutput,
 ) -> Result<(), CliError> {
-    for b in [Backend::Embree, Backend::Bvh] {
-        if !b.is_compiled() {
-            return Err(CliError::Input(format!(
-                "verify compares Embree with the BVH, but {b} is not compiled in"
-            )));
-        }
-    }
-    let (descs, frames) = match &args.scene_file {
+    check_input(args)?;
+    let (descs, frames, shutter) = match &args.scene_file {
         Some(path) => simulated_frames(path, args, quiet)?,
-        None => (vec![args.scene.load()?], Vec::new()),
+        None => (vec![(args.scene.load()?, Vec::new())], Vec::new(), 0.0),
     };
     let mut report = VerifyReport::default();
     let mut counts = [0; 3];
-    for (i, desc) in descs.iter().enumerate() {
-        let (r, n) = check_description(desc, args, args.seed.wrapping_add(i as u64), threads)?;
+    for (i, frame) in descs.iter().enumerate() {
+        let (r, n) = check_frame(frame, args, shutter, args.seed.wrapping_add(i as u64), threads)?;
         report.merge(r);
         counts = [counts[0] + n[0], counts[1] + n[1], counts[2] + n[2]];
     }
     let [camera_rays, surface_rays, shadow_rays] = counts;
-    let desc = &descs[0];
+    let desc = &descs[0].0;
 
     let json = serde_json::json!({
         "scene": desc.name,
         "reference": Backend::Embree,
         "candidate": Backend::Bvh,
         "frames": frames,
+        "shutter": shutter,
         "camera_rays": camera_rays,
         "surface_rays": surface_rays,
         "shadow_rays": shadow_rays,
@@ -112,29 +114,28 @@ pub(super) fn run(
     Ok(())
 }
 
-/// Loads `desc` into Embree and the BVH and compares them on its camera, surface and shadow
-/// rays; returns the report and the three ray counts.
-fn check_description(
-    desc: &SceneDescription,
+/// Loads a checked frame into Embree and the BVH (its moving bodies as motion instances) and
+/// compares them on its camera, surface and shadow rays, each with a random time in the
+/// shutter when there is one; returns the report and the three ray counts.
+fn check_frame(
+    (desc, motions): &CheckedFrame,
     args: &VerifyArgs,
+    shutter: f32,
     seed: u64,
     threads: Option<usize>,
 ) -> Result<(VerifyReport, [usize; 3]), CliError> {
     let runtime = |e: &dyn std::fmt::Display| CliError::Runtime(e.to_string());
-    let mut reference = accel::create(Backend::Embree, threads).map_err(|e| runtime(&e))?;
-    let mut candidate = accel::create(Backend::Bvh, threads).map_err(|e| runtime(&e))?;
-    let mut maps = Vec::new();
-    for a in [&mut reference, &mut candidate] {
-        let loaded = accel::load_scene(desc, a.as_mut()).map_err(|e| runtime(&e))?;
-        maps.push(LoadedObjectMap::new(desc, &loaded));
-        a.commit().map_err(|e| runtime(&e))?;
-    }
-    let a = MappedQuery { query: reference.query().map_err(|e| runtime(&e))?, objects: &maps[0] };
-    let b = MappedQuery { query: candidate.query().map_err(|e| runtime(&e))?, objects: &maps[1] };
+    let (reference, reference_map) =
+        load_frame(Backend::Embree, threads, desc, motions).map_err(|e| runtime(&e))?;
+    let (candidate, candidate_map) =
+        load_frame(Backend::Bvh, threads, desc, motions).map_err(|e| runtime(&e))?;
+    let a = MappedQuery { query: reference.query().map_err(|e| runtime(&e))?, objects: &reference_map };
+    let b = MappedQuery { query: candidate.query().map_err(|e| runtime(&e))?, objects: &candidate_map };
+    let timed = |rays, seed| if shutter > 0.0 { crosscheck::with_random_times(rays, seed) } else { rays };
     let rays = [
-        crosscheck::camera_rays(desc, args.size.width, args.size.height),
-        crosscheck::surface_rays(desc, args.surface_rays, seed),
-        crosscheck::shadow_rays(desc, args.shadow_rays, !seed),
+        timed(crosscheck::camera_rays(desc, args.size.width, args.size.height), seed.rotate_left(29)),
+        timed(crosscheck::surface_rays(desc, args.surface_rays, seed), seed.rotate_left(17)),
+        timed(crosscheck::shadow_rays(desc, args.shadow_rays, !seed), seed.rotate_left(41)),
     ];
     let mut report = VerifyReport::default();
     for r in &rays {
@@ -143,21 +144,67 @@ fn check_description(
     Ok((report, rays.map(|r| r.len())))
 }
 
+/// Both backends compiled in, and a shutter from 0 to 1.
+fn check_input(args: &VerifyArgs) -> Result<(), CliError> {
+    for b in [Backend::Embree, Backend::Bvh] {
+        if !b.is_compiled() {
+            return Err(CliError::Input(format!(
+                "verify compares Embree with the BVH, but {b} is not compiled in"
+            )));
+        }
+    }
+    super::render::check_shutter(args.shutter)
+}
+
+/// A checked frame: its description, and the motion over the shutter of the bodies (by
+/// position in `bodies`) that move within it.
+type CheckedFrame = (SceneDescription, Vec<(usize, InstanceMotion)>);
+
+/// `desc` in a new accelerator of `backend`, its moving bodies motion instances, committed,
+/// with the map from its hit ids to the scene's objects.
+fn load_frame(
+    backend: Backend,
+    threads: Option<usize>,
+    desc: &SceneDescription,
+    motions: &[(usize, InstanceMotion)],
+) -> Result<(Box<dyn Accelerator>, LoadedObjectMap), AccelError> {
+    let mut accel = accel::create(backend, threads)?;
+    let loaded = accel::load_scene(desc, accel.as_mut())?;
+    for &(body, motion) in motions {
+        accel.set_instance_motion(loaded.instances[body], Some(motion))?;
+    }
+    accel.commit()?;
+    let mut map = LoadedObjectMap::new(desc, &loaded);
+    for &(body, motion) in motions {
+        map.set_motion(loaded.instances[body], Some(motion));
+    }
+    Ok((accel, map))
+}
+
 /// Simulates the scene file and describes `check_frames` frames of it, evenly spaced and
-/// ending with the last; returns them with their frame numbers.
+/// ending with the last, with their motion over the shutter; returns them with their frame
+/// numbers and the shutter.
 fn simulated_frames(
     path: &std::path::Path,
     args: &VerifyArgs,
     quiet: bool,
-) -> Result<(Vec<SceneDescription>, Vec<u32>), CliError> {
+) -> Result<(Vec<CheckedFrame>, Vec<u32>, f32), CliError> {
     let file = SceneFile::load(path).map_err(|e| CliError::Input(e.to_string()))?;
     let options = SimulateOptions { count: args.scene.count, frames: args.frame_count };
     let sequence = super::render::load_sequence(SequenceSource::scene(file, options, None), quiet)?;
+    let shutter = args.shutter.unwrap_or(sequence.shutter);
     let selection = sequence.evenly_spaced(args.check_frames);
     let mut descs = Vec::new();
     sequence.replay(&selection, &mut [], &mut |frame, _| {
-        descs.push(sequence.describe_frame(frame));
+        // `describe_frame` lists the present bodies in ascending order.
+        let present: Vec<usize> = frame.present_bodies().map(|b| b.0 as usize).collect();
+        let motions = frame
+            .shutter_motions(shutter)
+            .into_iter()
+            .filter_map(|(b, m)| Some((present.binary_search(&b).ok()?, m)))
+            .collect();
+        descs.push((sequence.describe_frame(frame), motions));
         Ok::<(), SequenceError>(())
     })?;
-    Ok((descs, selection.frames()))
+    Ok((descs, selection.frames(), shutter))
 }

@@ -24,7 +24,7 @@ impl MappedQuery<'_> {
         let hit = self.query.intersect(ray);
         let triangle = hit.and_then(|h| {
             let r = self.objects.resolve(h.object, h.prim)?;
-            let tri = self.objects.hit_triangle(desc, h.object, h.prim)?;
+            let tri = self.objects.hit_triangle(desc, h.object, h.prim, ray.time)?;
             Some((TriangleKey { mesh: r.mesh, prim: r.prim, body: r.body }, tri))
         });
         Answer { hit, triangle, occluded: self.query.intersect_p(ray) }

@@ -10,5 +10,5 @@ mod verdict;
 
 pub use compare::{compare, HitSummary, MappedQuery, Mismatch, VerdictCounts, VerifyReport};
 pub use exact::{reintersect, BoundConstants, Exact, BOUND, UNIT_ROUNDOFF};
-pub use rays::{camera_rays, shadow_rays, surface_rays};
+pub use rays::{camera_rays, shadow_rays, surface_rays, with_random_times};
 pub use verdict::{judge, AgreeReason, Answer, Fault, RayVerdict, TieReason, TriangleKey, Verdict};

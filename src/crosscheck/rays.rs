@@ -5,6 +5,12 @@ use crate::render::PinholeCamera;
 use crate::rng::SplitMix64;
 use crate::scene::SceneDescription;
 
+/// `rays` at random shutter times in `[0, 1)` (motion blur), drawn from `seed`.
+pub fn with_random_times(rays: Vec<Ray>, seed: u64) -> Vec<Ray> {
+    let mut rng = SplitMix64::new(seed);
+    rays.into_iter().map(|r| r.at_time(rng.unit())).collect()
+}
+
 /// One primary ray through each pixel centre of a `width x height` image.
 pub fn camera_rays(desc: &SceneDescription, width: u32, height: u32) -> Vec<Ray> {
     PinholeCamera::pixel_centre_rays(&desc.camera, width, height)

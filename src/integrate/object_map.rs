@@ -3,8 +3,8 @@
 
 use glam::{Affine3A, Mat3, Vec3};
 
-use crate::accel::{HitObject, LoadedScene};
-use crate::geometry::TriangleMesh;
+use crate::accel::{HitObject, InstanceId, LoadedScene};
+use crate::geometry::{InstanceMotion, TriangleMesh};
 use crate::physics::BodyId;
 use crate::scene::SceneDescription;
 
@@ -60,8 +60,15 @@ pub trait ObjectMap: Sync {
     fn resolve(&self, object: HitObject, prim: u32) -> Option<ResolvedHit>;
 
     /// The triangle a hit is on as the accelerator holds it, given `desc`, the description
-    /// the scene shows (meshes named by [`MeshRef`]). `None` as for [`ObjectMap::resolve`].
-    fn hit_triangle(&self, desc: &SceneDescription, object: HitObject, prim: u32) -> Option<HitTriangle>;
+    /// the scene shows (meshes named by [`MeshRef`]), for a ray of shutter time `time` (an
+    /// instance moving over the shutter is placed at it). `None` as for [`ObjectMap::resolve`].
+    fn hit_triangle(
+        &self,
+        desc: &SceneDescription,
+        object: HitObject,
+        prim: u32,
+        time: f32,
+    ) -> Option<HitTriangle>;
 }
 
 /// Triangle `prim` of `mesh`, if it has one.
@@ -87,6 +94,9 @@ struct LoadedInstance {
     body: BodyId,
     normal_matrix: Mat3,
     transform: Affine3A,
+    /// Its motion over the shutter, when the accelerator was given one
+    /// ([`LoadedObjectMap::set_motion`]).
+    motion: Option<InstanceMotion>,
 }
 
 fn place<T>(v: &mut Vec<Option<T>>, index: u32, value: T) {
@@ -117,10 +127,19 @@ impl LoadedObjectMap {
                 body: *b,
                 normal_matrix: normal_matrix(&body.transform),
                 transform: body.transform,
+                motion: None,
             };
             place(&mut map.instances, id.0, instance);
         }
         map
+    }
+
+    /// Records that `instance` moves with `motion` over the shutter (as the accelerator was
+    /// told by [`crate::accel::Accelerator::set_instance_motion`]).
+    pub fn set_motion(&mut self, instance: InstanceId, motion: Option<InstanceMotion>) {
+        if let Some(Some(i)) = self.instances.get_mut(instance.0 as usize) {
+            i.motion = motion;
+        }
     }
 }
 
@@ -148,10 +167,19 @@ impl ObjectMap for LoadedObjectMap {
         }
     }
 
-    fn hit_triangle(&self, desc: &SceneDescription, object: HitObject, prim: u32) -> Option<HitTriangle> {
+    fn hit_triangle(
+        &self,
+        desc: &SceneDescription,
+        object: HitObject,
+        prim: u32,
+        time: f32,
+    ) -> Option<HitTriangle> {
         let transform = match object {
             HitObject::Static(_) => None,
-            HitObject::Instance(id) => Some(self.instances.get(id.0 as usize).copied().flatten()?.transform),
+            HitObject::Instance(id) => {
+                let i = self.instances.get(id.0 as usize).copied().flatten()?;
+                Some(i.motion.map_or(i.transform, |m| m.at(time).to_affine()))
+            }
         };
         let resolved = self.resolve(object, prim)?;
         let vertices = mesh_triangle(resolved.mesh.mesh(desc)?, resolved.prim)?;

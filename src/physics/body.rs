@@ -1,6 +1,7 @@
 //! Identities and poses of simulated bodies, in glam types (the rest of dormant never sees
 //! Rapier's types).
 
+use crate::geometry::RigidTransform;
 use glam::{Affine3A, Quat, Vec3};
 
 /// A body's stable index in a simulation: kinematic bodies first, then spawned objects in
@@ -17,7 +18,12 @@ pub struct BodyPose {
 
 impl BodyPose {
     pub fn to_affine(&self) -> Affine3A {
-        Affine3A::from_rotation_translation(self.rotation, self.translation)
+        self.rigid().to_affine()
+    }
+
+    /// The pose as a rigid transform (for motion blur's interpolation).
+    pub fn rigid(&self) -> RigidTransform {
+        RigidTransform { rotation: self.rotation, translation: self.translation }
     }
 }
 

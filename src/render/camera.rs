@@ -10,7 +10,7 @@ use crate::scene::Camera;
 
 /// A camera generating primary rays for an image of `width x height` pixels: a pinhole, or a
 /// thin lens focused at a plane when the scene camera has an aperture.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PinholeCamera {
     eye: Vec3,
     /// World-space vector from the eye to the image plane's top-left corner at distance 1.

@@ -23,6 +23,10 @@ enum Objects<'a> {
 /// it with.
 pub struct RenderScene<'a> {
     pub(crate) camera: crate::scene::Camera,
+    /// Motion blur: the camera at shutter close, `camera` being the one at open. Each camera
+    /// sample then gets a time in the shutter, which its rays keep. `None`: no blur; every ray
+    /// is at the frame's instant.
+    pub(crate) camera_close: Option<crate::scene::Camera>,
     pub(crate) sun: Sun,
     pub(crate) sky: Sky,
     /// Punctual lights besides the sun.
@@ -81,6 +85,7 @@ impl<'a> RenderScene<'a> {
     fn new(desc: &'a SceneDescription, objects: Objects<'a>, emitters: Emitters) -> Self {
         Self {
             camera: desc.camera,
+            camera_close: None,
             sun: desc.sun,
             sky: desc.sky,
             lights: desc.lights.clone(),

@@ -32,6 +32,17 @@ impl PixelSampler {
         Self { seed: hash(x ^ hash(y ^ hash(frame.wrapping_add(0x9e37_79b9)))) }
     }
 
+    /// The `index`-th value of the 1D dimension `dim`, in `[0, 1)`: the base-2 radical inverse
+    /// (van der Corput) of `index`, rotated per pixel and dimension. For the shutter time: a
+    /// coordinate of [`Self::get_2d`] would be `offset + index * R2.x`, a fixed shift of the
+    /// pixel jitter's x (every dimension shares R2's generator), tying each sample's time to
+    /// where in the pixel it lands.
+    pub fn get_1d(&self, index: u32, dim: u32) -> f32 {
+        let h = hash(self.seed ^ hash(dim.wrapping_mul(0x68e3_1da4)));
+        let p = unit(h) + unit(index.reverse_bits());
+        p - p.floor()
+    }
+
     /// The `index`-th 2D point of dimension pair `dim`, in `[0, 1)^2`.
     pub fn get_2d(&self, index: u32, dim: u32) -> Vec2 {
         let h = hash(self.seed ^ hash(dim.wrapping_mul(0x68e3_1da4)));

@@ -76,8 +76,16 @@ impl RenderStats {
     }
 }
 
+/// The frame's camera: where it is at shutter open, and at close when the frame is motion
+/// blurred (`None`: no blur; `Some(open)` for a camera that stays put over the shutter).
+#[derive(Clone, Copy, Debug)]
+struct FrameCamera {
+    open: PinholeCamera,
+    close: Option<PinholeCamera>,
+}
+
 /// Sample `i` of pixel `(x, y)`'s camera ray.
-fn camera_ray(camera: &PinholeCamera, spp: u32, x: u32, y: u32, sampler: &PixelSampler, i: u32) -> Ray {
+fn camera_ray(camera: &FrameCamera, spp: u32, x: u32, y: u32, sampler: &PixelSampler, i: u32) -> Ray {
     // Tent reconstruction by filter importance sampling (see `tent_offset`); a single sample
     // goes through the pixel's centre.
     let jitter = if spp == 1 {
@@ -86,11 +94,25 @@ fn camera_ray(camera: &PinholeCamera, spp: u32, x: u32, y: u32, sampler: &PixelS
         Vec2::splat(0.5) + tent_offset(sampler.get_2d(i, dims::PIXEL))
     };
     let (px, py) = (x as f32 + jitter.x, y as f32 + jitter.y);
-    if camera.has_aperture() {
-        camera.ray_through_lens(px, py, sampler.get_2d(i, dims::LENS))
-    } else {
-        camera.ray(px, py)
+    let lens = |c: &PinholeCamera| {
+        if c.has_aperture() {
+            c.ray_through_lens(px, py, sampler.get_2d(i, dims::LENS))
+        } else {
+            c.ray(px, py)
+        }
+    };
+    let open = lens(&camera.open);
+    let Some(close) = &camera.close else { return open };
+    // Motion blur: the sample's time in the shutter; a moving camera's ray is the one between
+    // its open and close rays (linear in origin, normalised linear in direction, as its key
+    // frames are linear in position and target).
+    let time = sampler.get_1d(i, dims::TIME);
+    if *close == camera.open {
+        return open.at_time(time);
     }
+    let close = lens(close);
+    let dir = open.dir.lerp(close.dir, time).normalize_or(open.dir);
+    Ray::new(open.origin.lerp(close.origin, time), dir).at_time(time)
 }
 
 /// Renders one frame with `integrator`, tiles spread over the current rayon pool. Each
@@ -121,7 +143,10 @@ pub fn render_frame_counted(
     let (w, h) = (settings.width, settings.height);
     debug_assert!(samples.is_none_or(|s| s.len() == (w * h) as usize));
     let renderer = TileRenderer {
-        camera: PinholeCamera::new(&scene.camera, w, h),
+        camera: FrameCamera {
+            open: PinholeCamera::new(&scene.camera, w, h),
+            close: scene.camera_close.as_ref().map(|c| PinholeCamera::new(c, w, h)),
+        },
         query,
         integrator: &*integrator.bind(FrameContext { scene, query }),
         settings,
@@ -167,7 +192,7 @@ struct Cell {
 
 /// What every tile of a frame is rendered with.
 struct TileRenderer<'a> {
-    camera: PinholeCamera,
+    camera: FrameCamera,
     /// Traces the camera-ray packets; the integrator traces the rest.
     query: &'a dyn SceneQuery,
     integrator: &'a dyn FrameIntegrator,

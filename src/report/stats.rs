@@ -160,6 +160,10 @@ pub struct RunInfo {
     /// `--keep-noisy`.
     #[serde(default)]
     pub keep_noisy: bool,
+    /// Motion blur's shutter (`--shutter` or the scene's `render.shutter`); 0 in runs from
+    /// before motion blur, which had none.
+    #[serde(default)]
+    pub shutter: f32,
 }
 
 /// Sums over the run.
@@ -419,6 +423,7 @@ mod tests {
             exr: false,
             denoise: None,
             keep_noisy: false,
+            shutter: 0.0,
         };
         let stats = RunStats::new(run, frames, CacheStats::default(), CostModelState::default(), None);
         let mut csv = Vec::new();

@@ -174,6 +174,7 @@ mod tests {
             exr: false,
             denoise: None,
             keep_noisy: false,
+            shutter: 0.0,
         };
         let mut then = serde_json::to_value(&now).unwrap();
         assert_eq!(differences(&then, &now), "its run header does not read");

@@ -24,6 +24,13 @@ pub const MAX_PIXELS: u64 = 1 << 26;
 /// Samples per pixel.
 pub const MAX_SAMPLES_PER_PIXEL: u32 = 65_536;
 
+/// Why a shutter (motion blur, a fraction of the frame interval) is out of bounds, or `None`
+/// when it is from 0 (off) to 1.
+pub fn shutter_problem(shutter: f32) -> Option<String> {
+    (!(0.0..=1.0).contains(&shutter))
+        .then(|| format!("{shutter}: must be a fraction of the frame interval from 0 (no motion blur) to 1"))
+}
+
 /// Why an image size is out of bounds, or `None` when `width` x `height` is allowed.
 pub fn image_size_problem(width: u32, height: u32) -> Option<String> {
     if !(1..=MAX_IMAGE_SIDE).contains(&width) || !(1..=MAX_IMAGE_SIDE).contains(&height) {

@@ -9,6 +9,7 @@ use crate::render::{
     render_with_aovs, AdaptiveSampling, Aov, Emitters, Film, Integrator, PinholeCamera, RenderError,
     RenderScene, RenderSettings, RenderStats,
 };
+use crate::scene::Camera;
 
 /// Camera rays (one per pixel of this image) of the manager's trace-penalty probes: enough
 /// rays for a stable time, few enough to cost a few ms.
@@ -42,6 +43,10 @@ pub struct FrameRenderer<'a> {
     /// With a fixed seed, hand on the previous image for frames where nothing visible changed
     /// instead of tracing them again.
     pub reuse_static: bool,
+    /// Motion blur: the shutter in frame intervals, centred on each frame (0: off). The
+    /// manager must have been made with the same (`ManagerOptions::shutter`): it moves the
+    /// instances; the renderer moves the camera and gives each camera sample a time.
+    pub shutter: f32,
 }
 
 impl FrameRenderer<'_> {
@@ -111,7 +116,8 @@ impl Sequence {
     ) -> Result<RenderedFrame, RenderError> {
         self.aim_probes(manager, frame, renderer);
         manager.prepare(frame)?;
-        let camera = self.assets.camera_at(self.time_of(frame.index));
+        debug_assert_eq!(manager.options().shutter, renderer.shutter, "one shutter for instances and camera");
+        let (camera, camera_close) = self.shutter_cameras(frame.index, renderer.shutter);
         // Emissive prototypes are light-sampled where their bodies are this frame.
         let bodies =
             if Emitters::prototypes_emit(&self.template) { self.bodies_at(frame) } else { Vec::new() };
@@ -119,11 +125,23 @@ impl Sequence {
         let (film, render, aovs) = {
             let mut scene = RenderScene::with_objects(&self.template, &*manager, &bodies)?;
             scene.camera = camera;
+            scene.camera_close = camera_close;
             let query = manager.query()?;
             render_with_aovs(&scene, query, renderer.integrator, &settings, renderer.aovs)?
         };
         manager.record_trace(render.seconds * 1e3, render.rays);
         Ok(RenderedFrame { index: frame.index, film, render, aovs, reused_from: None })
+    }
+
+    /// The camera of frame `index`: without a shutter, at the frame's instant; with one, at
+    /// shutter open and close (`shutter / 2` frame intervals before and after it).
+    fn shutter_cameras(&self, index: u32, shutter: f32) -> (Camera, Option<Camera>) {
+        let t = self.time_of(index);
+        if shutter <= 0.0 {
+            return (self.assets.camera_at(t), None);
+        }
+        let half = 0.5 * shutter * self.trajectory.timestep;
+        (self.assets.camera_at(t - half), Some(self.assets.camera_at(t + half)))
     }
 
     /// Points the manager's trace-penalty probes along `frame`'s camera, with the samples of
@@ -174,9 +192,16 @@ impl Sequence {
         let mut last: Option<RenderedFrame> = None;
         let mut kept = kept.iter().peekable();
         let reusable = renderer.reuse_static && renderer.seed == SeedMode::Fixed;
+        // With motion blur a frame's image also shows the motion from the frame before it to
+        // the frame after it.
+        let last_frame = self.frame_count().saturating_sub(1);
+        let unchanged = |a: u32, b: u32| match renderer.shutter > 0.0 {
+            false => self.unchanged_between(a, b),
+            true => self.unchanged_between(a.saturating_sub(1), (b + 1).min(last_frame).max(b)),
+        };
         self.replay(selection, std::slice::from_mut(manager), &mut |frame, managers| {
             let manager = &mut managers[0];
-            let previous = last.as_mut().filter(|p| reusable && self.unchanged_between(p.index, frame.index));
+            let previous = last.as_mut().filter(|p| reusable && unchanged(p.index, frame.index));
             if let Some(k) = kept.next_if(|k| k.index == frame.index) {
                 self.replay_kept(manager, frame, renderer, k, previous.is_some())?;
                 match previous {

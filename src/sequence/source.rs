@@ -54,6 +54,8 @@ pub struct Sequence {
     /// The scene file's `render.noise_threshold` and `render.min_spp`: adaptive sampling when
     /// a run names none.
     pub adaptive: AdaptiveSampling,
+    /// The scene file's `render.shutter` (motion blur): the shutter when a run names none.
+    pub shutter: f32,
     pub physics: PhysicsSource,
     /// Wall-clock ms of each simulated frame's physics step (empty when replayed).
     pub physics_ms: Vec<f64>,
@@ -113,6 +115,7 @@ impl Sequence {
                 noise_threshold: file.spec().render.noise_threshold,
                 min_spp: file.spec().render.min_spp,
             },
+            shutter: file.spec().render.shutter,
             physics,
             physics_ms,
         })

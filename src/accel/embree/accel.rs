@@ -17,7 +17,7 @@ use crate::accel::{
     AccelError, Accelerator, Backend, CommitReport, InstanceId, PrototypeId, RestingCounts, RestingSchedule,
     SceneQuery, StaticId,
 };
-use crate::geometry::{Aabb, TriangleMesh};
+use crate::geometry::{Aabb, InstanceMotion, TriangleMesh};
 
 use awake_bounds::AwakeBounds;
 
@@ -34,6 +34,9 @@ struct InstanceSlot {
     resting: bool,
     /// In the resting scene (live, not a ghost) rather than the top level.
     in_level: bool,
+    /// Motion over the shutter ([`Accelerator::set_instance_motion`]): the instance geometry
+    /// has two time steps. Never while resting, so the resting scene keeps one time step.
+    motion: Option<InstanceMotion>,
 }
 
 /// Elapsed milliseconds since `t`.
@@ -286,6 +289,7 @@ impl Accelerator for EmbreeAccel {
             normal_matrix,
             resting: false,
             in_level: false,
+            motion: None,
         });
         Ok(InstanceId(id))
     }
@@ -298,10 +302,38 @@ impl Accelerator for EmbreeAccel {
             self.leave_ghost(id)?;
             self.level.waiting += 1;
         }
-        self.top.instance_mut(id.0 + 1)?.set_transform(&transform)?;
+        // A moving instance keeps its two time steps; the transform is what it stops at.
+        if self.slot(id)?.motion.is_none() {
+            self.top.instance_mut(id.0 + 1)?.set_transform(&transform)?;
+        }
         if let Some(slot) = self.instances[id.0 as usize].as_mut() {
             slot.normal_matrix = normal_matrix;
             slot.transform = transform;
+        }
+        Ok(())
+    }
+
+    /// The instance geometry in the top level gets two time steps (or one again); the top
+    /// level then builds a motion-blur BVH. Resting instances are never blurred, so the
+    /// resting scene and the static scene keep one time step and are not rebuilt for it.
+    fn set_instance_motion(
+        &mut self,
+        id: InstanceId,
+        motion: Option<InstanceMotion>,
+    ) -> Result<(), AccelError> {
+        let slot = self.slot(id)?;
+        if slot.motion == motion {
+            return Ok(());
+        }
+        crate::accel::check_motion(id, slot.resting, motion.as_ref())?;
+        let transform = slot.transform;
+        let geometry = self.top.instance_mut(id.0 + 1)?;
+        match &motion {
+            Some(m) => geometry.set_motion(m)?,
+            None => geometry.set_transform(&transform)?,
+        }
+        if let Some(slot) = self.instances[id.0 as usize].as_mut() {
+            slot.motion = motion;
         }
         Ok(())
     }
@@ -324,12 +356,17 @@ impl Accelerator for EmbreeAccel {
 
     fn set_instance_resting(&mut self, id: InstanceId, resting: bool) -> Result<(), AccelError> {
         let slot = self.slot(id)?;
-        if slot.resting == resting {
+        let (was_resting, moving, in_level) = (slot.resting, slot.motion.is_some(), slot.in_level);
+        if was_resting == resting {
             return Ok(());
+        }
+        if resting && moving {
+            // Only the top level blurs: a resting instance is still, at its transform.
+            self.set_instance_motion(id, None)?;
         }
         if resting {
             self.level.waiting += 1;
-        } else if slot.in_level {
+        } else if in_level {
             self.leave_ghost(id)?;
         } else {
             self.level.waiting -= 1;
@@ -343,6 +380,10 @@ impl Accelerator for EmbreeAccel {
     fn commit(&mut self) -> Result<CommitReport, AccelError> {
         let resting = self.commit_resting(false)?;
         let top_changed = self.top.is_dirty();
+        // With moving instances the top level is a motion-blur BVH, about 4x the commit of a
+        // still one on the atrium (docs/performance.md, "Motion blur"). Building it at MEDIUM
+        // or LOW instead of HIGH did not help (196 and 214 ms a commit against 191 ms at
+        // HIGH, blur-off 48-51 ms, in the same lockstep): not kept.
         let t = Instant::now();
         self.top.commit()?;
         let instances = self.top_instances();
@@ -354,7 +395,10 @@ impl Accelerator for EmbreeAccel {
                 .top
                 .geometry_ids()
                 .filter_map(|g| self.instances.get(g.checked_sub(1)? as usize)?.as_ref())
-                .map(|s| self.prototype_bounds[s.prototype as usize].transformed(&s.transform))
+                .map(|s| {
+                    let local = &self.prototype_bounds[s.prototype as usize];
+                    s.motion.as_ref().map_or_else(|| local.transformed(&s.transform), |m| m.bounds(local))
+                })
                 .collect();
             AwakeBounds::around(&boxes)
         } else {

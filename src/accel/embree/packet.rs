@@ -54,6 +54,7 @@ macro_rules! fill_rays {
             (p.org_x[i], p.org_y[i], p.org_z[i]) = (r.origin.x, r.origin.y, r.origin.z);
             (p.dir_x[i], p.dir_y[i], p.dir_z[i]) = (r.dir.x, r.dir.y, r.dir.z);
             (p.tnear[i], p.tfar[i]) = (r.t_min, r.t_max);
+            p.time[i] = r.time;
             p.mask[i] = u32::MAX;
         }
     };

@@ -11,6 +11,8 @@ use std::sync::Arc;
 use embree4_sys as sys;
 use glam::Affine3A;
 
+use crate::geometry::{InstanceMotion, RigidTransform, FRAME_TIME};
+
 use super::device::Device;
 use super::error::EmbreeError;
 use super::filter::{self, GeometrySet, SkipContext};
@@ -274,6 +276,8 @@ pub struct InstanceGeometry {
     raw: sys::RTCGeometry,
     device: Device,
     child: InstanceChild,
+    /// Two time steps (motion blur) rather than one.
+    moving: bool,
 }
 
 // SAFETY: mutation (`set_transform`, `child_mut`) needs `&mut self`; Embree objects are not
@@ -297,6 +301,25 @@ fn column_major_3x4(xf: &Affine3A) -> [f32; 12] {
         m.x_axis.x, m.x_axis.y, m.x_axis.z, m.y_axis.x, m.y_axis.y, m.y_axis.z, m.z_axis.x, m.z_axis.y,
         m.z_axis.z, t.x, t.y, t.z,
     ]
+}
+
+/// Embree's decomposition of a rigid transform: unit scale, no skew or shift, the rotation as
+/// a quaternion (`r` the real part) and the translation.
+fn quaternion_decomposition(t: &RigidTransform) -> sys::RTCQuaternionDecomposition {
+    let (q, p) = (t.rotation, t.translation);
+    sys::RTCQuaternionDecomposition {
+        scale_x: 1.0,
+        scale_y: 1.0,
+        scale_z: 1.0,
+        quaternion_r: q.w,
+        quaternion_i: q.x,
+        quaternion_j: q.y,
+        quaternion_k: q.z,
+        translation_x: p.x,
+        translation_y: p.y,
+        translation_z: p.z,
+        ..Default::default()
+    }
 }
 
 impl InstanceGeometry {
@@ -326,7 +349,7 @@ impl InstanceGeometry {
             InstanceChild::Shared(frozen) => frozen.scene.raw,
             InstanceChild::Owned(scene) => scene.raw,
         };
-        let mut instance = Self { raw, device: device.clone(), child };
+        let mut instance = Self { raw, device: device.clone(), child, moving: false };
         // SAFETY: both handles are valid; `instance.child` keeps the child scene alive as long
         // as the instance geometry.
         unsafe { sys::rtcSetGeometryInstancedScene(instance.raw, child_raw) };
@@ -335,8 +358,8 @@ impl InstanceGeometry {
         Ok(instance)
     }
 
-    /// Replaces the transform. Through a parent scene, use [`Scene::instance_mut`] so the
-    /// parent is marked for recommit.
+    /// Replaces the transform (one time step: a moving instance stops). Through a parent
+    /// scene, use [`Scene::instance_mut`] so the parent is marked for recommit.
     pub fn set_transform(&mut self, transform: &Affine3A) -> Result<(), EmbreeError> {
         if !transform.is_finite() {
             return Err(EmbreeError::NonFiniteTransform);
@@ -346,6 +369,9 @@ impl InstanceGeometry {
         // `&mut self` guarantees no ray traverses a scene holding this geometry meanwhile
         // (the parent's `SceneView` borrows the parent).
         unsafe {
+            if self.moving {
+                sys::rtcSetGeometryTimeStepCount(self.raw, 1);
+            }
             sys::rtcSetGeometryTransform(
                 self.raw,
                 0,
@@ -354,7 +380,37 @@ impl InstanceGeometry {
             );
             sys::rtcCommitGeometry(self.raw);
         }
+        self.moving = false;
         self.device.check()
+    }
+
+    /// Makes the instance move over the shutter: two time steps, at `motion.open` (ray time 0)
+    /// and `motion.close` (time 1), as quaternion decompositions, which Embree interpolates
+    /// by slerp like [`InstanceMotion::at`]. A scene holding a geometry with several time
+    /// steps builds a motion-blur BVH over it. Through a parent scene, use
+    /// [`Scene::instance_mut`].
+    pub fn set_motion(&mut self, motion: &InstanceMotion) -> Result<(), EmbreeError> {
+        if !motion.is_finite() {
+            return Err(EmbreeError::NonFiniteTransform);
+        }
+        let steps = [quaternion_decomposition(&motion.open), quaternion_decomposition(&motion.close)];
+        // SAFETY: `raw` is a valid instance geometry; each decomposition is a valid
+        // `RTCQuaternionDecomposition` that Embree copies; time steps 0 and 1 exist once the
+        // count is 2. `&mut self`: no ray traverses it meanwhile (see `set_transform`).
+        unsafe {
+            sys::rtcSetGeometryTimeStepCount(self.raw, 2);
+            for (step, qd) in steps.iter().enumerate() {
+                sys::rtcSetGeometryTransformQuaternion(self.raw, step as u32, qd);
+            }
+            sys::rtcCommitGeometry(self.raw);
+        }
+        self.moving = true;
+        self.device.check()
+    }
+
+    /// Whether the instance has two time steps ([`Self::set_motion`]).
+    pub fn is_moving(&self) -> bool {
+        self.moving
     }
 
     fn child_is_owned(&self) -> bool {
@@ -412,7 +468,7 @@ unsafe impl Send for SceneView<'_> {}
 // SAFETY: see `Send`.
 unsafe impl Sync for SceneView<'_> {}
 
-fn embree_ray(org: [f32; 3], dir: [f32; 3], tnear: f32, tfar: f32) -> sys::RTCRay {
+fn embree_ray(org: [f32; 3], dir: [f32; 3], tnear: f32, tfar: f32, time: f32) -> sys::RTCRay {
     sys::RTCRay {
         org_x: org[0],
         org_y: org[1],
@@ -421,7 +477,7 @@ fn embree_ray(org: [f32; 3], dir: [f32; 3], tnear: f32, tfar: f32) -> sys::RTCRa
         dir_x: dir[0],
         dir_y: dir[1],
         dir_z: dir[2],
-        time: 0.0,
+        time,
         tfar,
         mask: u32::MAX,
         id: 0,
@@ -441,10 +497,22 @@ impl<'a> SceneView<'a> {
         self.skip.map(SkipContext::new)
     }
 
-    /// Closest hit in `[tnear, tfar]` (rtcIntersect1).
+    /// Closest hit in `[tnear, tfar]` (rtcIntersect1), at shutter time 0.5.
     pub fn intersect1(&self, org: [f32; 3], dir: [f32; 3], tnear: f32, tfar: f32) -> Option<EmbreeHit> {
+        self.intersect1_at(org, dir, tnear, tfar, FRAME_TIME)
+    }
+
+    /// Closest hit in `[tnear, tfar]` of a ray at shutter time `time` (motion blur).
+    pub fn intersect1_at(
+        &self,
+        org: [f32; 3],
+        dir: [f32; 3],
+        tnear: f32,
+        tfar: f32,
+        time: f32,
+    ) -> Option<EmbreeHit> {
         let mut rayhit = sys::RTCRayHit {
-            ray: embree_ray(org, dir, tnear, tfar),
+            ray: embree_ray(org, dir, tnear, tfar, time),
             hit: sys::RTCHit {
                 geomID: sys::RTC_INVALID_GEOMETRY_ID,
                 instID: [sys::RTC_INVALID_GEOMETRY_ID; sys::RTC_MAX_INSTANCE_LEVEL_COUNT as usize],
@@ -473,9 +541,14 @@ impl<'a> SceneView<'a> {
         })
     }
 
-    /// Whether anything lies in `[tnear, tfar]` (rtcOccluded1).
+    /// Whether anything lies in `[tnear, tfar]` (rtcOccluded1), at shutter time 0.5.
     pub fn occluded1(&self, org: [f32; 3], dir: [f32; 3], tnear: f32, tfar: f32) -> bool {
-        let mut ray = embree_ray(org, dir, tnear, tfar);
+        self.occluded1_at(org, dir, tnear, tfar, FRAME_TIME)
+    }
+
+    /// Whether anything lies in `[tnear, tfar]` of a ray at shutter time `time`.
+    pub fn occluded1_at(&self, org: [f32; 3], dir: [f32; 3], tnear: f32, tfar: f32, time: f32) -> bool {
+        let mut ray = embree_ray(org, dir, tnear, tfar, time);
         let mut context = self.skip_context();
         let mut args = filter::occluded_args(sys::RTCRayQueryFlags::RTC_RAY_QUERY_FLAG_INCOHERENT);
         if let Some(c) = context.as_mut() {

@@ -1,4 +1,5 @@
-//! Stage 3, update: instances in the top level follow the awake bodies.
+//! Stage 3, update: instances in the top level follow the awake bodies, and with a shutter
+//! (motion blur) move over it.
 
 use super::slots::{InstanceOwner, Placement};
 use super::{FrameStats, SceneManager};
@@ -14,7 +15,13 @@ impl SceneManager {
         stats: &mut FrameStats,
     ) -> Result<bool, AccelError> {
         let mut changed = false;
+        let motions = frame.shutter_motions(self.options.shutter);
+        let mut motions = motions.iter().peekable();
+        let was_blurred = std::mem::take(&mut self.blurred);
+        let mut was_blurred = was_blurred.iter().peekable();
         for (b, slot) in self.bodies.iter_mut().enumerate() {
+            let motion = motions.next_if(|(m, _)| *m == b).map(|(_, m)| *m);
+            let blurred = was_blurred.next_if(|&&w| w as usize == b).is_some();
             let present = frame.is_present(b);
             let (pose, prototype) = (frame.poses[b], slot.prototype);
             let owner = |resting| {
@@ -43,6 +50,10 @@ impl SceneManager {
                         stats.instances_moved += 1;
                         changed = true;
                     }
+                    if motion.is_some() || blurred {
+                        self.accel.set_instance_motion(id, motion)?;
+                        changed = true;
+                    }
                 }
                 Placement::Instance { id, .. } | Placement::Resting { id, .. } => {
                     self.accel.remove_instance(id)?;
@@ -54,12 +65,18 @@ impl SceneManager {
                 Placement::Absent | Placement::Baked(_) if present => {
                     let id =
                         self.accel.add_instance(self.prototype_ids[prototype as usize], pose.to_affine())?;
+                    if motion.is_some() {
+                        self.accel.set_instance_motion(id, motion)?;
+                    }
                     self.instance_owner.set(id, Some(owner(false)));
                     slot.placement = Placement::Instance { id, pose };
                     stats.instances_added += 1;
                     changed = true;
                 }
                 Placement::Absent | Placement::Baked(_) => slot.placement = Placement::Absent,
+            }
+            if motion.is_some() && matches!(slot.placement, Placement::Instance { .. }) {
+                self.blurred.push(b as u32);
             }
         }
         Ok(changed)

@@ -4,6 +4,8 @@
 
 use glam::{Quat, Vec3};
 
+use crate::geometry::{InstanceMotion, RigidTransform};
+
 use super::TrajectoryFrame;
 use crate::physics::body::{BodyId, BodyPose, BodyState};
 use crate::physics::island::IslandEvent;
@@ -29,6 +31,19 @@ impl BodyTable {
         for &(body, pose) in &frame.pose_changes {
             self.poses[body.0 as usize] = pose;
         }
+    }
+
+    /// The poses `frame` replaces of bodies present before it (ascending), into `before`.
+    fn replaced(&self, frame: &TrajectoryFrame, before: &mut Vec<(BodyId, BodyPose)>) {
+        before.clear();
+        let present = |b: usize| self.states[b] != BodyState::Absent && self.poses[b].translation.is_finite();
+        before.extend(
+            frame
+                .pose_changes
+                .iter()
+                .filter(|(b, _)| present(b.0 as usize))
+                .map(|&(b, _)| (b, self.poses[b.0 as usize])),
+        );
     }
 }
 
@@ -82,15 +97,22 @@ pub struct Replay<'a> {
     frames: &'a [TrajectoryFrame],
     next: usize,
     table: BodyTable,
+    before: Vec<(BodyId, BodyPose)>,
 }
 
 /// One replayed frame: every body's state and pose at its end (`poses[i]` is meaningless
-/// while body `i` is absent) and the frame's island events.
+/// while body `i` is absent) and the frame's island events. For motion blur, the poses around
+/// it: `before`, the previous frame's poses of the bodies that moved during this one (present
+/// then too), and `after`, the next frame's poses of the bodies that move during it (the
+/// next frame's pose changes; empty at the last frame). A body in neither is still on both
+/// sides of the frame.
 pub struct ReplayFrame<'a> {
     pub index: u32,
     pub states: &'a [BodyState],
     pub poses: &'a [BodyPose],
     pub events: &'a [IslandEvent],
+    pub before: &'a [(BodyId, BodyPose)],
+    pub after: &'a [(BodyId, BodyPose)],
 }
 
 impl ReplayFrame<'_> {
@@ -104,15 +126,50 @@ impl ReplayFrame<'_> {
     pub fn present_bodies(&self) -> impl Iterator<Item = BodyId> + '_ {
         (0..self.states.len()).filter(|&b| self.is_present(b)).map(|b| BodyId(b as u32))
     }
+
+    /// The motion over a shutter of `shutter` frame intervals centred on this frame of each present
+    /// body that moves within it, ascending by body: its pose at shutter open interpolated
+    /// between the previous frame's pose and this one's, at close between this one's and the
+    /// next frame's ([`RigidTransform::interpolate`]). Empty without a shutter.
+    pub fn shutter_motions(&self, shutter: f32) -> Vec<(usize, InstanceMotion)> {
+        if shutter <= 0.0 {
+            return Vec::new();
+        }
+        let half = 0.5 * shutter;
+        let (mut before, mut after) = (self.before.iter().peekable(), self.after.iter().peekable());
+        let mut motions = Vec::new();
+        loop {
+            let b = match (before.peek(), after.peek()) {
+                (None, None) => break,
+                (Some(p), None) => p.0,
+                (None, Some(n)) => n.0,
+                (Some(p), Some(n)) => p.0.min(n.0),
+            };
+            let prev = before.next_if(|p| p.0 == b).map(|p| p.1);
+            let next = after.next_if(|n| n.0 == b).map(|n| n.1).filter(|n| n.translation.is_finite());
+            let b = b.0 as usize;
+            if !self.is_present(b) {
+                continue;
+            }
+            let now = self.poses[b].rigid();
+            let open = prev.map_or(now, |p| RigidTransform::interpolate(&p.rigid(), &now, 1.0 - half));
+            let close = next.map_or(now, |n| RigidTransform::interpolate(&now, &n.rigid(), half));
+            if open != now || close != now {
+                motions.push((b, InstanceMotion { open, close }));
+            }
+        }
+        motions
+    }
 }
 
 impl<'a> Replay<'a> {
     pub(super) fn new(frames: &'a [TrajectoryFrame], body_count: usize) -> Self {
-        Self { frames, next: 0, table: BodyTable::new(body_count) }
+        Self { frames, next: 0, table: BodyTable::new(body_count), before: Vec::new() }
     }
 
     pub fn next_frame(&mut self) -> Option<ReplayFrame<'_>> {
         let frame = self.frames.get(self.next)?;
+        self.table.replaced(frame, &mut self.before);
         self.table.apply(frame);
         self.next += 1;
         Some(ReplayFrame {
@@ -120,6 +177,8 @@ impl<'a> Replay<'a> {
             states: &self.table.states,
             poses: &self.table.poses,
             events: &frame.events,
+            before: &self.before,
+            after: self.frames.get(self.next).map_or(&[], |f| &f.pose_changes),
         })
     }
 }

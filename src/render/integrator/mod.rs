@@ -67,6 +67,8 @@ pub(crate) mod dims {
     pub const EMITTER: u32 = BOUNCE + 4 * 64;
     /// The point on the camera's lens (depth of field).
     pub const LENS: u32 = EMITTER + 2 * 64;
+    /// The camera sample's time in the shutter (motion blur; one dimension, `get_1d`).
+    pub const TIME: u32 = LENS + 1;
 }
 
 /// Light from a punctual light reaching point `p`: the unit direction towards the light, the

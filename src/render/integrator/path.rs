@@ -111,12 +111,14 @@ impl Path<'_> {
 }
 
 /// A path vertex being shaded: the surface, the BSDF there seen from the direction back along
-/// the path, the offset origin of rays leaving it, and its depth (0 at the camera ray's hit).
+/// the path, the offset origin of rays leaving it, its depth (0 at the camera ray's hit) and
+/// the shutter time of the path, which every ray leaving it keeps.
 struct Vertex {
     s: SurfaceHit,
     bsdf: Bsdf,
     origin: Vec3,
     depth: u32,
+    time: f32,
 }
 
 impl Vertex {
@@ -124,7 +126,7 @@ impl Vertex {
         let wo = -ray.dir.normalize();
         let bsdf = Bsdf::new(&s.material, s.ns, wo);
         let origin = offset_origin(s.p, s.ng);
-        Self { s, bsdf, origin, depth }
+        Self { s, bsdf, origin, depth, time: ray.time }
     }
 
     /// First sampler dimension pair of this vertex's BSDF, sun and sky samples.
@@ -218,7 +220,7 @@ impl PathTracerFrame<'_> {
             let f = v.bsdf.eval(l);
             if f != Vec3::ZERO
                 && v.s.ng.dot(l) > 0.0
-                && self.frame.unoccluded(&shadow_ray(v.origin, l, distance), path.rays)
+                && self.frame.unoccluded(&shadow_ray(v.origin, l, distance).at_time(v.time), path.rays)
             {
                 path.add(path.beta * f * e, v.depth);
             }
@@ -235,7 +237,9 @@ impl PathTracerFrame<'_> {
         let sun = &self.sun;
         let l = sample_cone(sun.dir, sun.cos_max, path.sampler.get_2d(path.index, v.dim()));
         let (f, pdf_bsdf) = v.bsdf.eval_pdf(l);
-        if f != Vec3::ZERO && v.s.ng.dot(l) > 0.0 && self.frame.unoccluded(&Ray::new(v.origin, l), path.rays)
+        if f != Vec3::ZERO
+            && v.s.ng.dot(l) > 0.0
+            && self.frame.unoccluded(&Ray::new(v.origin, l).at_time(v.time), path.rays)
         {
             let w = power_heuristic(sun.pdf, pdf_bsdf);
             path.add(path.beta * f * sun.radiance * (w / sun.pdf), v.depth);
@@ -251,7 +255,7 @@ impl PathTracerFrame<'_> {
         if f != Vec3::ZERO
             && pdf_sky > 0.0
             && v.s.ng.dot(d) > 0.0
-            && self.frame.unoccluded(&Ray::new(v.origin, d), path.rays)
+            && self.frame.unoccluded(&Ray::new(v.origin, d).at_time(v.time), path.rays)
         {
             let w = power_heuristic(pdf_sky, pdf_bsdf);
             path.add(path.beta * f * self.frame.scene.sky.radiance(d) * (w / pdf_sky), v.depth);
@@ -276,7 +280,7 @@ impl PathTracerFrame<'_> {
         let (f, pdf_bsdf) = v.bsdf.eval_pdf(wi);
         if dist2 > 0.0 && cos_light > 0.0 && f != Vec3::ZERO && v.s.ng.dot(wi) > 0.0 {
             let pdf_light = e.pdf_area * dist2 / cos_light;
-            let shadow = Ray::segment(v.origin, wi, 0.0, dist2.sqrt() * (1.0 - 1e-3));
+            let shadow = Ray::segment(v.origin, wi, 0.0, dist2.sqrt() * (1.0 - 1e-3)).at_time(v.time);
             if self.frame.unoccluded(&shadow, path.rays) {
                 let w = power_heuristic(pdf_light, pdf_bsdf);
                 path.add(path.beta * f * le * (w / pdf_light), v.depth);
@@ -303,5 +307,5 @@ fn continue_path(v: &Vertex, path: &mut Path) -> Option<Ray> {
         path.beta /= q;
     }
     path.came_from = Some((sample.pdf, v.s.ns));
-    Some(Ray::new(v.origin, sample.wi))
+    Some(Ray::new(v.origin, sample.wi).at_time(v.time))
 }

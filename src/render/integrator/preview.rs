@@ -53,7 +53,9 @@ impl FrameIntegrator for DirectLightingFrame<'_> {
         for light in &scene.lights {
             let Some((l, e, distance)) = punctual_light(light, s.p) else { continue };
             let cos = s.ns.dot(l);
-            if cos > 0.0 && s.ng.dot(l) > 0.0 && self.frame.unoccluded(&shadow_ray(origin, l, distance), rays)
+            if cos > 0.0
+                && s.ng.dot(l) > 0.0
+                && self.frame.unoccluded(&shadow_ray(origin, l, distance).at_time(ray.time), rays)
             {
                 radiance += albedo / PI * e * cos;
             }
@@ -62,12 +64,15 @@ impl FrameIntegrator for DirectLightingFrame<'_> {
         let sun = &scene.sun;
         let l = sample_cone(sun.direction, self.sun_cos_max, sampler.get_2d(index, dims::SUN));
         let cos = s.ns.dot(l);
-        if cos > 0.0 && s.ng.dot(l) > 0.0 && self.frame.unoccluded(&Ray::new(origin, l), rays) {
+        if cos > 0.0
+            && s.ng.dot(l) > 0.0
+            && self.frame.unoccluded(&Ray::new(origin, l).at_time(ray.time), rays)
+        {
             radiance += albedo / PI * sun.irradiance * cos;
         }
 
         let d = sample_cosine(s.ns, sampler.get_2d(index, dims::SKY));
-        if s.ng.dot(d) > 0.0 && self.frame.unoccluded(&Ray::new(origin, d), rays) {
+        if s.ng.dot(d) > 0.0 && self.frame.unoccluded(&Ray::new(origin, d).at_time(ray.time), rays) {
             // Lambert BRDF times cosine over the cosine-weighted pdf leaves the albedo.
             radiance += albedo * scene.sky.radiance(d);
         }
@@ -112,7 +117,8 @@ impl FrameIntegrator for AmbientOcclusionFrame<'_> {
         if s.ng.dot(d) <= 0.0 {
             return Vec3::ZERO;
         }
-        let open = self.frame.unoccluded(&Ray::segment(offset_origin(s.p, s.ng), d, 0.0, self.radius), rays);
+        let open = Ray::segment(offset_origin(s.p, s.ng), d, 0.0, self.radius).at_time(ray.time);
+        let open = self.frame.unoccluded(&open, rays);
         Vec3::splat(if open { 0.8 } else { 0.0 })
     }
 }

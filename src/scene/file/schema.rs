@@ -257,7 +257,7 @@ pub(super) enum LightTag {
     Spot,
 }
 
-/// `[render]`: the camera by name.
+/// `[render]`: the camera by name, the image, the frame step and the shutter (motion blur).
 #[derive(Clone, Debug, Deserialize, PartialEq)]
 #[serde(rename = "RenderSettings", deny_unknown_fields, default)]
 pub(super) struct RenderToml {
@@ -268,6 +268,7 @@ pub(super) struct RenderToml {
     pub frame_step: u32,
     pub noise_threshold: f32,
     pub min_spp: Option<u32>,
+    pub shutter: f32,
 }
 
 impl Default for RenderToml {
@@ -280,6 +281,7 @@ impl Default for RenderToml {
             frame_step: 1,
             noise_threshold: 0.0,
             min_spp: None,
+            shutter: 0.0,
         }
     }
 }

@@ -455,4 +455,7 @@ pub struct RenderDef {
     /// Adaptive sampling's minimum samples per pixel, when `render --min-spp` gives none; at
     /// least 1 (checked against `--spp` when rendering).
     pub min_spp: Option<u32>,
+    /// Motion blur: the shutter as a fraction of the frame interval, centred on the frame
+    /// (0: off, the default).
+    pub shutter: f32,
 }

@@ -24,7 +24,7 @@ use crate::accel::{
     AccelError, Accelerator, Backend, CommitReport, InstanceId, PrototypeId, RestingCounts, RestingSchedule,
     SceneQuery, StaticId, StaticSceneSnapshot,
 };
-use crate::geometry::TriangleMesh;
+use crate::geometry::{InstanceMotion, TriangleMesh};
 
 #[derive(Clone, Copy, Debug)]
 struct Instance {
@@ -35,6 +35,8 @@ struct Instance {
     resting: bool,
     /// In the resting level (live, not a ghost) rather than the top level.
     in_level: bool,
+    /// Motion over the shutter ([`Accelerator::set_instance_motion`]); never while resting.
+    motion: Option<InstanceMotion>,
 }
 
 /// The inverse of `xf` when `xf` and its inverse are finite, it is invertible, and it keeps
@@ -192,7 +194,7 @@ impl BvhAccel {
                 x.filter(|x| if resting { x.resting } else { !x.in_level }).map(|x| (i as u32, x))
             })
             .filter(|(_, x)| !self.prototypes[x.proto as usize].bvh.is_empty())
-            .map(|(id, x)| (id, self.prototypes[x.proto as usize].clone(), x.xf, x.inv))
+            .map(|(id, x)| (id, self.prototypes[x.proto as usize].clone(), x.xf, x.inv, x.motion))
             .collect();
         let params = self.top_params;
         self.run(|| query::build_top(&instances, params))
@@ -268,7 +270,14 @@ impl Accelerator for BvhAccel {
         let id = self.free_instances.last().copied().unwrap_or(self.instances.len() as u32);
         let proto = &self.prototypes[prototype.0 as usize];
         let inv = checked_inverse(&transform, proto).ok_or(AccelError::InvalidTransform { instance: id })?;
-        let instance = Instance { proto: prototype.0, xf: transform, inv, resting: false, in_level: false };
+        let instance = Instance {
+            proto: prototype.0,
+            xf: transform,
+            inv,
+            resting: false,
+            in_level: false,
+            motion: None,
+        };
         if id as usize == self.instances.len() {
             self.instances.push(Some(instance));
         } else {
@@ -310,10 +319,30 @@ impl Accelerator for BvhAccel {
         Ok(())
     }
 
+    fn set_instance_motion(
+        &mut self,
+        id: InstanceId,
+        motion: Option<InstanceMotion>,
+    ) -> Result<(), AccelError> {
+        let inst = self.instance_mut(id)?;
+        if inst.motion == motion {
+            return Ok(());
+        }
+        crate::accel::check_motion(id, inst.resting, motion.as_ref())?;
+        inst.motion = motion;
+        self.awake_changed();
+        Ok(())
+    }
+
     fn set_instance_resting(&mut self, id: InstanceId, resting: bool) -> Result<(), AccelError> {
         let inst = *self.instance_mut(id)?;
         if inst.resting == resting {
             return Ok(());
+        }
+        if resting && inst.motion.is_some() {
+            // Only the top level blurs: a resting instance is still, at its transform.
+            self.instance_mut(id)?.motion = None;
+            self.awake_changed();
         }
         if resting {
             self.level.waiting += 1;

@@ -46,13 +46,19 @@ impl EmbreeAccel {
         }
     }
 
-    fn to_hit(&self, h: EmbreeHit) -> Hit {
+    /// `h`, a hit of `ray`, with its normal in world space: Embree reports an instance hit's
+    /// normal in object space, turned by the instance's rotation at the ray's time when it
+    /// moves.
+    fn to_hit(&self, h: EmbreeHit, ray: &Ray) -> Hit {
         let ng = Vec3::from_array(h.ng);
         let (object, ng) = match h.inst_id {
             Some(STATIC_SLOT) | None => (HitObject::Static(StaticId(h.geom_id)), ng),
             Some(slot) => {
                 let id = slot - 1;
-                let m = self.instances[id as usize].as_ref().map_or(Mat3::IDENTITY, |s| s.normal_matrix);
+                let m = self.instances[id as usize].as_ref().map_or(Mat3::IDENTITY, |s| match &s.motion {
+                    Some(motion) => motion.normal_matrix_at(ray.time),
+                    None => s.normal_matrix,
+                });
                 (HitObject::Instance(InstanceId(id)), m * ng)
             }
         };
@@ -70,26 +76,26 @@ impl SceneQuery for EmbreeAccel {
     /// With a resting scene: its closest hit, then the top level's awake bodies up to it.
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
         let top = self.top.view()?;
-        let (o, d) = (ray.origin.to_array(), ray.dir.to_array());
+        let (o, d, time) = (ray.origin.to_array(), ray.dir.to_array(), ray.time);
         let Some(resting) = self.resting_view() else {
-            return top.intersect1(o, d, ray.t_min, ray.t_max).map(|h| self.to_hit(h));
+            return top.intersect1_at(o, d, ray.t_min, ray.t_max, time).map(|h| self.to_hit(h, ray));
         };
-        let first = resting.intersect1(o, d, ray.t_min, ray.t_max);
+        let first = resting.intersect1_at(o, d, ray.t_min, ray.t_max, time);
         let awake = self
             .awake_part(ray, first.map_or(ray.t_max, |h| h.t))
-            .and_then(|r| top.intersect1(o, d, r.t_min, r.t_max));
-        awake.or(first).map(|h| self.to_hit(h))
+            .and_then(|r| top.intersect1_at(o, d, r.t_min, r.t_max, time));
+        awake.or(first).map(|h| self.to_hit(h, ray))
     }
 
     fn intersect_p(&self, ray: &Ray) -> bool {
-        let (o, d) = (ray.origin.to_array(), ray.dir.to_array());
+        let (o, d, time) = (ray.origin.to_array(), ray.dir.to_array(), ray.time);
         let Some(top) = self.top.view() else { return false };
         match self.resting_view() {
-            None => top.occluded1(o, d, ray.t_min, ray.t_max),
+            None => top.occluded1_at(o, d, ray.t_min, ray.t_max, time),
             Some(resting) => {
-                resting.occluded1(o, d, ray.t_min, ray.t_max)
+                resting.occluded1_at(o, d, ray.t_min, ray.t_max, time)
                     || (self.awake_part(ray, ray.t_max).is_some()
-                        && top.occluded1(o, d, ray.t_min, ray.t_max))
+                        && top.occluded1_at(o, d, ray.t_min, ray.t_max, time))
             }
         }
     }
@@ -167,12 +173,12 @@ impl EmbreeAccel {
         }
         if any {
             let awake = packet(&top, &cut, CLOSEST);
-            for ((slot, a), f) in hits.iter_mut().zip(awake).zip(first) {
-                *slot = a.or(f).map(|h| self.to_hit(h));
+            for (((slot, a), f), r) in hits.iter_mut().zip(awake).zip(first).zip(rays) {
+                *slot = a.or(f).map(|h| self.to_hit(h, r));
             }
         } else {
-            for (slot, f) in hits.iter_mut().zip(first) {
-                *slot = f.map(|h| self.to_hit(h));
+            for ((slot, f), r) in hits.iter_mut().zip(first).zip(rays) {
+                *slot = f.map(|h| self.to_hit(h, r));
             }
         }
     }
@@ -182,8 +188,8 @@ impl EmbreeAccel {
         let c = CLOSEST;
         for (rays, hits) in rays.chunks(LANES).zip(hits.chunks_mut(LANES)) {
             let mut put = |found: &[Option<EmbreeHit>]| {
-                for (slot, h) in hits.iter_mut().zip(found) {
-                    *slot = h.map(|h| self.to_hit(h));
+                for ((slot, h), r) in hits.iter_mut().zip(found).zip(rays) {
+                    *slot = h.map(|h| self.to_hit(h, r));
                 }
             };
             match rays.len() {

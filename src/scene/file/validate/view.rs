@@ -7,7 +7,7 @@ use crate::scene::file::schema::{CameraToml, LightTag, LightToml, RenderToml, Sk
 use crate::scene::file::spec::{
     CameraDef, CameraKeyframeDef, CameraPlacement, LightDef, LightKind, RenderDef, SkyDef,
 };
-use crate::scene::limits::{image_size_problem, MAX_IMAGE_SIDE, MAX_SAMPLES_PER_PIXEL};
+use crate::scene::limits::{image_size_problem, shutter_problem, MAX_IMAGE_SIDE, MAX_SAMPLES_PER_PIXEL};
 
 /// Unique names, each camera fixed or key-framed.
 pub(super) fn cameras(raw: &[CameraToml]) -> Checked<Vec<CameraDef>> {
@@ -179,8 +179,8 @@ fn light_kind(light: &LightToml, at: &dyn Fn(&str) -> String) -> Checked<LightKi
     }
 }
 
-/// Sizes, samples and frame step at least 1; a camera that exists; a noise threshold not
-/// negative.
+/// Sizes, samples and frame step at least 1; a shutter from 0 to 1; a camera that exists; a
+/// noise threshold not negative.
 pub(super) fn render(r: &RenderToml, cameras: &[CameraDef]) -> Checked<RenderDef> {
     let width = at_least_one("render.width", r.width)?;
     let height = at_least_one("render.height", r.height)?;
@@ -191,6 +191,9 @@ pub(super) fn render(r: &RenderToml, cameras: &[CameraDef]) -> Checked<RenderDef
     let samples_per_pixel = at_least_one("render.samples_per_pixel", r.samples_per_pixel)?;
     let samples_per_pixel = at_most("render.samples_per_pixel", samples_per_pixel, MAX_SAMPLES_PER_PIXEL)?;
     let frame_step = at_least_one("render.frame_step", r.frame_step)?;
+    if let Some(message) = shutter_problem(r.shutter) {
+        return Err(problem("render.shutter", message));
+    }
     let camera = match &r.camera {
         None => None,
         Some(name) => Some(
@@ -207,5 +210,14 @@ pub(super) fn render(r: &RenderToml, cameras: &[CameraDef]) -> Checked<RenderDef
             Some(at_most("render.min_spp", at_least_one("render.min_spp", m)?, MAX_SAMPLES_PER_PIXEL)?)
         }
     };
-    Ok(RenderDef { width, height, samples_per_pixel, camera, frame_step, noise_threshold, min_spp })
+    Ok(RenderDef {
+        width,
+        height,
+        samples_per_pixel,
+        camera,
+        frame_step,
+        noise_threshold,
+        min_spp,
+        shutter: r.shutter,
+    })
 }
