@@ -2,6 +2,7 @@
 //! detection, overridden by the `DORMANT_SIMD` environment variable), and the per-path kernels
 //! ([`Kernel`]: the 8-wide box test of [`crate::accel::bvh`]'s wide nodes).
 //!
+//! The default is AVX2 where the CPU runs it ([`SimdPath::best`]: AVX-512 measured slower).
 //! A query picks its path once ([`SimdPath::current`]) and runs the whole traversal as one
 //! function compiled for it: [`dispatch!`] calls a `#[target_feature]` entry point whose body is
 //! the generic traversal (`#[inline(always)]` down to the kernel), so the intrinsics inline and
@@ -33,7 +34,8 @@ pub enum SimdPath {
     Portable,
     /// AVX2 + FMA: 8-wide box tests in one `__m256`.
     Avx2,
-    /// AVX-512 (F + VL): the AVX2 kernel with compares straight into mask registers.
+    /// AVX-512 (F + VL): the AVX2 kernel with compares straight into mask registers (only
+    /// when asked for: measured slower than AVX2).
     Avx512,
 }
 
@@ -79,9 +81,17 @@ impl SimdPath {
         Self::ALL.into_iter().filter(|p| p.is_supported()).collect()
     }
 
-    /// The fastest path this CPU runs (measured: docs/performance.md, Accelerators).
+    /// The default: AVX2 where the CPU runs it, else portable. AVX-512 is never the default:
+    /// measured slower than AVX2 on the AVX-512 machine (render time of an AO frame of the
+    /// monastery with 8,000 ducks, interleaved: avx2 0.84-0.88x main's, avx512 0.91-0.95x,
+    /// portable 0.91-0.94x; docs/performance.md, Accelerators), since its 8-wide kernel only
+    /// differs in the compare going to a mask register.
     pub fn best() -> SimdPath {
-        *Self::supported().last().expect("the portable path is always supported")
+        if SimdPath::Avx2.is_supported() {
+            SimdPath::Avx2
+        } else {
+            SimdPath::Portable
+        }
     }
 
     /// The path `DORMANT_SIMD` asks for (the best supported one when unset or empty).
