@@ -1,9 +1,11 @@
-//! Property tests of the pure-Rust BVH backend against an f64 brute-force reference.
+//! Property tests of the pure-Rust BVH backend against an f64 brute-force reference, on every
+//! SIMD path this CPU runs (each scene is checked once per path, and the paths must agree hit
+//! for hit).
 
 mod bvh_common;
 
 use bvh_common::*;
-use dormant::accel::bvh::{testing, BuildParams, BvhAccel, StaticBvh};
+use dormant::accel::bvh::{testing, BuildParams, BvhAccel, SimdPath, StaticBvh};
 use dormant::accel::{create, AccelError, Accelerator, Backend, HitObject, SceneQuery, StaticId};
 use dormant::geometry::{Ray, TriangleMesh};
 use glam::{Affine3A, Quat, Vec3};
@@ -13,10 +15,21 @@ fn config(cases: u32) -> ProptestConfig {
     ProptestConfig { cases, failure_persistence: None, ..ProptestConfig::default() }
 }
 
+/// Brute force on every SIMD path, and every path's hits equal the portable path's.
 fn check_scene(q: &dyn SceneQuery, rays: &[Ray], tris: &[RefTri], rel: f64) -> Result<(), TestCaseError> {
-    for ray in rays {
-        check_hit(ray, q.intersect(ray), tris, rel).map_err(TestCaseError::fail)?;
-        check_any(ray, q.intersect_p(ray), tris).map_err(TestCaseError::fail)?;
+    let portable: Vec<_> = SimdPath::with_override(SimdPath::Portable, || {
+        rays.iter().map(|r| (q.intersect(r), q.intersect_p(r))).collect()
+    });
+    for path in SimdPath::supported() {
+        SimdPath::with_override(path, || {
+            for (ray, expected) in rays.iter().zip(&portable) {
+                let (hit, any) = (q.intersect(ray), q.intersect_p(ray));
+                check_hit(ray, hit, tris, rel).map_err(|e| TestCaseError::fail(format!("{path:?}: {e}")))?;
+                check_any(ray, any, tris).map_err(|e| TestCaseError::fail(format!("{path:?}: {e}")))?;
+                prop_assert_eq!(&(hit, any), expected, "{:?} against portable, ray {:?}", path, ray);
+            }
+            Ok(())
+        })?;
     }
     Ok(())
 }
@@ -80,10 +93,15 @@ proptest! {
             let rays = rays_for(&all, seed, 48, 12.0);
             let (inc, fr) = (tree.snapshot(), fresh.snapshot());
             check_scene(&inc, &rays, &tris, 1e-5)?;
-            for ray in &rays {
-                let (a, b) = (inc.intersect(ray), fr.intersect(ray));
-                prop_assert_eq!(a.map(|h| h.t), b.map(|h| h.t), "ray {:?}", ray);
-                prop_assert_eq!(inc.intersect_p(ray), fr.intersect_p(ray));
+            for path in SimdPath::supported() {
+                SimdPath::with_override(path, || {
+                    for ray in &rays {
+                        let (a, b) = (inc.intersect(ray), fr.intersect(ray));
+                        prop_assert_eq!(a.map(|h| h.t), b.map(|h| h.t), "{:?} ray {:?}", path, ray);
+                        prop_assert_eq!(inc.intersect_p(ray), fr.intersect_p(ray));
+                    }
+                    Ok(())
+                })?;
             }
         }
     }
@@ -171,6 +189,36 @@ proptest! {
         prop_assert_eq!(tree.triangles(), old.triangles());
         let restored: Vec<_> = rays.iter().map(|r| tree.snapshot().intersect(r)).collect();
         prop_assert_eq!(before, restored);
+    }
+
+    #[test]
+    fn four_triangle_test_matches_one_triangle_test(
+        tris in prop::collection::vec((vec3(4.0), vec3(4.0), vec3(4.0)), 1..=4),
+        shared in any::<bool>(),
+        origin in vec3(8.0),
+        target in vec3(3.0),
+        t_max in prop_oneof![Just(f32::INFINITY), 0.1f32..2.0],
+    ) {
+        let mut tris: Vec<[Vec3; 3]> = tris.iter().map(|(a, b, c)| [*a, *b, *c]).collect();
+        if shared && tris.len() >= 2 {
+            // Two triangles sharing an edge, with the ray aimed at the edge's midpoint.
+            tris[1] = [tris[0][1], tris[0][0], tris[1][2]];
+        }
+        let aim = if shared { (tris[0][0] + tris[0][1]) * 0.5 } else { target };
+        let mut ray = Ray::new(origin, aim - origin);
+        ray.t_max = t_max;
+        let mut expected: Option<(usize, f32, f32, f32)> = None;
+        for (i, p) in tris.iter().enumerate() {
+            if let Some((t, u, v)) = testing::watertight_hit(&ray, p) {
+                if expected.is_none_or(|e| t < e.1) {
+                    expected = Some((i, t, u, v));
+                }
+            }
+        }
+        let got = testing::watertight_hit4(&ray, &tris);
+        // Bit for bit: the same lane, t and barycentrics.
+        prop_assert_eq!(got.map(|(i, t, u, v)| (i, t.to_bits(), u.to_bits(), v.to_bits())),
+            expected.map(|(i, t, u, v)| (i, t.to_bits(), u.to_bits(), v.to_bits())));
     }
 
     #[test]

@@ -115,6 +115,8 @@ fn bench_accel_reports_its_ratios() {
         .unwrap();
     assert!(status.success());
     let report = read_json(&json);
+    // The SIMD path that ran (DORMANT_SIMD, else the fastest this CPU runs).
+    assert!(["portable", "avx2", "avx512"].contains(&report["simd_path"].as_str().unwrap()), "{report:#}");
     for key in [
         "bvh_over_embree_trace",
         "bvh_over_embree_build",

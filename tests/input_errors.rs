@@ -448,6 +448,28 @@ fn cli_counts_beyond_the_machine() {
 }
 
 #[test]
+fn cli_simd_path_unknown_or_unsupported() {
+    let dir = TempDir::new().unwrap();
+    let out = dir.path().join("out");
+    let mut cmd = dormant();
+    cmd.env("DORMANT_SIMD", "sse9").args(["render", "--size", "8x8", "--spp", "1", "--out"]).arg(&out);
+    expect_exit(&mut cmd, 2, &["DORMANT_SIMD=sse9", "unknown SIMD path", "portable"], Some(&out));
+    let mut cmd = dormant();
+    cmd.env("DORMANT_SIMD", "sse9").arg("info");
+    expect_exit(&mut cmd, 2, &["DORMANT_SIMD=sse9"], None);
+    // Every supported path is accepted, and `info` names the one that runs.
+    let info = dormant().arg("info").output().unwrap();
+    let info: serde_json::Value = serde_json::from_slice(&info.stdout).unwrap();
+    for path in info["simd_paths_supported"].as_array().unwrap() {
+        let path = path.as_str().unwrap();
+        let out = dormant().env("DORMANT_SIMD", path).arg("info").output().unwrap();
+        assert!(out.status.success(), "{path}: {}", String::from_utf8_lossy(&out.stderr));
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert_eq!(v["simd_path"], path);
+    }
+}
+
+#[test]
 fn cli_output_path_not_writable_is_a_runtime_error() {
     let dir = TempDir::new().unwrap();
     let file = dir.path().join("not-a-dir");

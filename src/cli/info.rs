@@ -1,6 +1,7 @@
 use serde::Serialize;
 
 use super::CliError;
+use crate::accel::bvh::SimdPath;
 use crate::accel::Backend;
 
 /// What `dormant info` prints.
@@ -8,6 +9,10 @@ use crate::accel::Backend;
 pub struct InfoReport {
     pub dormant_version: &'static str,
     pub backends: Vec<Backend>,
+    /// The BVH backend's SIMD path (`DORMANT_SIMD`, else the fastest this CPU runs).
+    pub simd_path: SimdPath,
+    /// Every SIMD path this CPU runs.
+    pub simd_paths_supported: Vec<SimdPath>,
     pub embree: Option<EmbreeInfo>,
     /// Intel Open Image Denoise (`render --denoise`), when compiled in.
     pub oidn: Option<OidnInfo>,
@@ -37,6 +42,8 @@ impl InfoReport {
         Ok(Self {
             dormant_version: env!("CARGO_PKG_VERSION"),
             backends: Backend::compiled(),
+            simd_path: SimdPath::current(),
+            simd_paths_supported: SimdPath::supported(),
             embree: embree_info(threads)?,
             oidn: oidn_info(threads)?,
         })

@@ -129,6 +129,9 @@ pub(crate) fn run(cli: &Cli) -> Result<(), CliError> {
             .map_err(|e| CliError::Runtime(format!("cannot start {n} worker threads: {e}")))?;
     }
     let threads = cli.threads.map(|n| n as usize);
+    // A bad DORMANT_SIMD is a usage error before any work (the library would fall back).
+    let simd = crate::accel::bvh::SimdPath::from_env().map_err(|e| CliError::Input(e.to_string()))?;
+    crate::accel::bvh::SimdPath::set_active(simd).map_err(|e| CliError::Input(e.to_string()))?;
     match &cli.command {
         Command::Render(args) => render::run(args, threads, cli.quiet, &cli.json),
         Command::Simulate(args) => simulate::run(args, cli.quiet, &cli.json),

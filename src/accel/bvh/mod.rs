@@ -4,15 +4,22 @@
 //! the backend, its [`BuildParams`] and the persistent static tree, [`StaticBvh`]):
 //! - `params`: [`BuildParams`] and its presets;
 //! - `triangle`: stored triangles and the watertight ray-triangle test;
-//! - `flat`: the flattened binned-SAH BVH (prototypes, top level, static blocks), its 4-wide
-//!   traversal copy, and the traversal stack every ray query uses;
+//! - `flat`: the flattened binned-SAH BVH (prototypes, top level, static blocks), its 8-wide
+//!   traversal copy (boxes in structure-of-arrays layout, children nearest first; triangle
+//!   leaves in packets of four), and the traversal stack every ray query uses;
+//! - [`simd`]: the SIMD paths (portable, AVX2, AVX-512), chosen at run time
+//!   (`is_x86_feature_detected!`, or the `DORMANT_SIMD` environment variable) once per query,
+//!   and their 8-wide box kernels;
 //! - `persistent`: the static tree with incremental insertion/removal and O(1) snapshots;
 //! - `two_level`: instances, the top level, the resting level, and the
 //!   [`crate::accel::Accelerator`] impl;
 //! - [`testing`] (hidden): the internals the property tests check.
 //!
-//! SIMD: only through glam's `Vec3A`/`Vec4` (SSE2 on x86-64, NEON on aarch64, plain scalar
-//! code elsewhere: the same source is the scalar path). There are no intrinsics.
+//! SIMD: each query runs as one function compiled for its path (`simd::dispatch!`): the box test
+//! of the 8-wide nodes uses `std::arch` AVX2 or AVX-512 intrinsics, or glam's `Vec4` on the
+//! portable path; the 4-triangle leaf test is glam's `Vec4` on every path (SSE2 on x86-64,
+//! VEX-encoded inside the AVX paths, NEON on aarch64, scalar elsewhere), bit for bit the
+//! one-triangle watertight test.
 //!
 //! Hits follow Embree's conventions: `t` in units of the (unnormalised) direction, both sides
 //! of triangles, barycentrics `(1-u-v)*p0 + u*p1 + v*p2`, unit world-space `ng`.
@@ -20,10 +27,12 @@
 mod flat;
 mod params;
 mod persistent;
+pub mod simd;
 pub mod testing;
 mod triangle;
 mod two_level;
 
 pub use params::BuildParams;
 pub use persistent::{SnapshotMemory, StaticBvh, StaticSnapshot, StaticUpdate};
+pub use simd::{SimdError, SimdPath, SIMD_ENV};
 pub use two_level::BvhAccel;

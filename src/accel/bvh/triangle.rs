@@ -1,7 +1,10 @@
 //! Triangles as the BVH leaves store them, and the watertight ray-triangle test (Woop, Benthin
-//! and Wald 2013) that keeps rays from leaking through edges shared by two triangles.
+//! and Wald 2013) that keeps rays from leaking through edges shared by two triangles, on one
+//! triangle ([`RayTri::intersect`]) and on four at once ([`Tri4`], [`RayTri::intersect4`]: the
+//! same operations in the same order on glam's `Vec4` lanes, so each lane's hit is bit for bit
+//! the one-triangle test's; `tests/bvh_props.rs` pins that).
 
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 
 use crate::geometry::{Ray, TriangleMesh};
 
@@ -118,6 +121,106 @@ impl RayTri {
         }
         let rcp = 1.0 / det;
         Some(TriHit { t, u: v * rcp, v: w * rcp })
+    }
+}
+
+/// Four triangles in structure-of-arrays layout: `p[vertex][axis]` holds the four lanes.
+/// A leaf with fewer than four triangles repeats its last one (a duplicate never wins: ties
+/// keep the lowest lane).
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(16))]
+pub(crate) struct Tri4 {
+    p: [[Vec4; 3]; 3],
+    /// Unnormalised normals `(p1 - p0) x (p2 - p0)` ([`Tri::normal`], bit for bit).
+    n: [Vec4; 3],
+    /// Index of each lane's triangle in the owner's triangle array.
+    pub idx: [u32; 4],
+}
+
+impl Tri4 {
+    /// Packs `tris` (1 to 4 of them, indices `first..`) into one packet.
+    pub fn pack(tris: &[Tri], first: u32) -> Self {
+        debug_assert!(!tris.is_empty() && tris.len() <= 4);
+        let lane = |i: usize| i.min(tris.len() - 1);
+        let p = std::array::from_fn(|v| {
+            std::array::from_fn(|a| Vec4::from_array(std::array::from_fn(|i| tris[lane(i)].p[v][a])))
+        });
+        let normals: [Vec3; 4] = std::array::from_fn(|i| tris[lane(i)].normal());
+        let n = std::array::from_fn(|a| Vec4::from_array(std::array::from_fn(|i| normals[i][a])));
+        Self { p, n, idx: std::array::from_fn(|i| first + lane(i) as u32) }
+    }
+
+    /// Lane `i`'s vertices.
+    fn lane(&self, i: usize) -> [Vec3; 3] {
+        std::array::from_fn(|v| Vec3::new(self.p[v][0][i], self.p[v][1][i], self.p[v][2][i]))
+    }
+}
+
+impl RayTri {
+    /// The closest of the four lanes hit with `t_min <= t <= t_max` (the lowest lane on ties),
+    /// with its lane; each lane's hit equals [`Self::intersect`] on that triangle.
+    #[inline(always)]
+    pub fn intersect4(&self, q: &Tri4, t_max: f32) -> Option<(usize, TriHit)> {
+        let (kx, ky, kz) = (self.kx, self.ky, self.kz);
+        let org = [Vec4::splat(self.org.x), Vec4::splat(self.org.y), Vec4::splat(self.org.z)];
+        let rel = |v: usize| [q.p[v][0] - org[0], q.p[v][1] - org[1], q.p[v][2] - org[2]];
+        let (a, b, c) = (rel(0), rel(1), rel(2));
+        let (sx, sy) = (Vec4::splat(self.sx), Vec4::splat(self.sy));
+        let ax = a[kx] - sx * a[kz];
+        let ay = a[ky] - sy * a[kz];
+        let bx = b[kx] - sx * b[kz];
+        let by = b[ky] - sy * b[kz];
+        let cx = c[kx] - sx * c[kz];
+        let cy = c[ky] - sy * c[kz];
+        let u = cx * by - cy * bx;
+        let v = ax * cy - ay * cx;
+        let w = bx * ay - by * ax;
+        let zero = Vec4::ZERO;
+        if (u.cmpeq(zero) | v.cmpeq(zero) | w.cmpeq(zero)).any() {
+            // A lane exactly on an edge in f32: the one-triangle test decides it in f64.
+            return self.intersect4_scalar(q, t_max);
+        }
+        let neg = u.cmplt(zero) | v.cmplt(zero) | w.cmplt(zero);
+        let pos = u.cmpgt(zero) | v.cmpgt(zero) | w.cmpgt(zero);
+        let det = u + v + w;
+        let n = &q.n;
+        let dir = [Vec4::splat(self.dir.x), Vec4::splat(self.dir.y), Vec4::splat(self.dir.z)];
+        let t = (n[0] * a[0] + n[1] * a[1] + n[2] * a[2]) / (n[0] * dir[0] + n[1] * dir[1] + n[2] * dir[2]);
+        let ok = !(neg & pos)
+            & det.cmpne(zero)
+            & det.is_finite_mask()
+            & t.cmpge(Vec4::splat(self.t_min))
+            & t.cmple(Vec4::splat(t_max));
+        let mut mask = ok.bitmask();
+        if mask == 0 {
+            return None;
+        }
+        let ts = t.to_array();
+        let mut best = mask.trailing_zeros() as usize;
+        mask &= mask - 1;
+        while mask != 0 {
+            let i = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            if ts[i] < ts[best] {
+                best = i;
+            }
+        }
+        let rcp = 1.0 / det[best];
+        Some((best, TriHit { t: ts[best], u: v[best] * rcp, v: w[best] * rcp }))
+    }
+
+    /// [`Self::intersect4`] one lane at a time with [`Self::intersect`].
+    #[cold]
+    fn intersect4_scalar(&self, q: &Tri4, t_max: f32) -> Option<(usize, TriHit)> {
+        let mut best: Option<(usize, TriHit)> = None;
+        for i in 0..4 {
+            if let Some(h) = self.intersect(&q.lane(i), t_max) {
+                if best.is_none_or(|(_, b)| h.t < b.t) {
+                    best = Some((i, h));
+                }
+            }
+        }
+        best
     }
 }
 

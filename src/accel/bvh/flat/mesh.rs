@@ -1,8 +1,11 @@
 //! A flattened BVH over triangles: the bottom level of a prototype and each immutable block of
-//! the static tree. Triangles are stored in leaf order next to the nodes.
+//! the static tree. Triangles are stored in leaf order next to the nodes, and again in packets of
+//! four ([`Tri4`], a leaf's triangles in one or more packets) that the wide traversal's leaves
+//! test at once.
 
-use super::{build, BoxRay, FlatBvh, Wide};
-use crate::accel::bvh::triangle::{RayTri, Tri};
+use super::{build, BoxRay, FlatBvh, Node, Wide};
+use crate::accel::bvh::simd::Kernel;
+use crate::accel::bvh::triangle::{RayTri, Tri, Tri4};
 use crate::accel::bvh::BuildParams;
 use crate::geometry::Aabb;
 
@@ -20,9 +23,11 @@ pub(crate) struct PrimHit {
 #[derive(Clone, Debug, Default)]
 pub(crate) struct MeshBvh {
     pub bvh: FlatBvh,
-    /// The 4-wide copy rays traverse.
+    /// The 8-wide copy rays traverse; its leaves are ranges of `packets`.
     pub wide: Wide,
     pub tris: Vec<Tri>,
+    /// Each binary leaf's triangles in packets of four, in leaf order.
+    pub packets: Vec<Tri4>,
 }
 
 impl MeshBvh {
@@ -30,9 +35,9 @@ impl MeshBvh {
     pub fn build(tris: Vec<Tri>, params: BuildParams) -> Self {
         let bounds: Vec<Aabb> = tris.iter().map(Tri::bounds).collect();
         let (bvh, order) = build(&bounds, params);
-        let tris = order.iter().map(|&i| tris[i as usize]).collect();
-        let wide = Wide::new(&bvh);
-        Self { bvh, wide, tris }
+        let tris: Vec<Tri> = order.iter().map(|&i| tris[i as usize]).collect();
+        let (packets, wide) = packets_and_wide(&bvh, &tris);
+        Self { bvh, wide, tris, packets }
     }
 
     pub fn bounds(&self) -> Aabb {
@@ -40,14 +45,18 @@ impl MeshBvh {
     }
 
     pub fn memory_bytes(&self) -> usize {
-        self.bvh.memory_bytes() + self.wide.memory_bytes() + self.tris.len() * std::mem::size_of::<Tri>()
+        self.bvh.memory_bytes()
+            + self.wide.memory_bytes()
+            + self.tris.len() * std::mem::size_of::<Tri>()
+            + self.packets.len() * std::mem::size_of::<Tri4>()
     }
 
     /// Closest hit in the subtree at `root` with `t <= *t_max`; lowers `*t_max` and overwrites
     /// `best` when it finds one. Returns whether it found one.
-    #[inline]
-    pub fn intersect_from(
+    #[inline(always)]
+    pub fn intersect_from<K: Kernel>(
         &self,
+        k: K,
         root: u32,
         bray: &BoxRay,
         tray: &RayTri,
@@ -55,13 +64,14 @@ impl MeshBvh {
         best: &mut Option<PrimHit>,
     ) -> bool {
         let mut found = false;
-        self.wide.traverse(&self.bvh, root, bray, t_max, &mut |first, count, t_max| {
-            for tri in &self.tris[first as usize..(first + count) as usize] {
-                if let Some(h) = tray.intersect(&tri.p, *t_max) {
+        self.wide.traverse(k, &self.bvh, root, bray, t_max, &mut |first, count, t_max| {
+            for q in &self.packets[first as usize..(first + count) as usize] {
+                if let Some((lane, h)) = tray.intersect4(q, *t_max) {
                     // Strictly closer only: ties keep the first triangle found.
                     if best.is_none_or(|b| h.t < b.t) {
                         *t_max = h.t;
-                        *best = Some(PrimHit { t: h.t, u: h.u, v: h.v, tri: *tri });
+                        let tri = self.tris[q.idx[lane] as usize];
+                        *best = Some(PrimHit { t: h.t, u: h.u, v: h.v, tri });
                         found = true;
                     }
                 }
@@ -72,13 +82,35 @@ impl MeshBvh {
     }
 
     /// Whether any triangle of the subtree at `root` is hit within `[t_min, t_max]`.
-    #[inline]
-    pub fn occluded_from(&self, root: u32, bray: &BoxRay, tray: &RayTri, t_max: f32) -> bool {
+    #[inline(always)]
+    pub fn occluded_from<K: Kernel>(
+        &self,
+        k: K,
+        root: u32,
+        bray: &BoxRay,
+        tray: &RayTri,
+        t_max: f32,
+    ) -> bool {
         let mut t_max = t_max;
-        self.wide.traverse(&self.bvh, root, bray, &mut t_max, &mut |first, count, t_max| {
-            self.tris[first as usize..(first + count) as usize]
+        self.wide.traverse(k, &self.bvh, root, bray, &mut t_max, &mut |first, count, t_max| {
+            self.packets[first as usize..(first + count) as usize]
                 .iter()
-                .any(|tri| tray.intersect(&tri.p, *t_max).is_some())
+                .any(|q| tray.intersect4(q, *t_max).is_some())
         })
     }
+}
+
+/// The packets of every binary leaf (in node order) and the wide tree whose leaves name them.
+fn packets_and_wide(bvh: &FlatBvh, tris: &[Tri]) -> (Vec<Tri4>, Wide) {
+    let mut packets = Vec::with_capacity(tris.len().div_ceil(3));
+    let mut first_packet = vec![0u32; bvh.nodes.len()];
+    for (i, n) in bvh.nodes.iter().enumerate().filter(|(_, n)| n.is_leaf()) {
+        first_packet[i] = packets.len() as u32;
+        for start in (n.first..n.first + n.count).step_by(4) {
+            let end = (start + 4).min(n.first + n.count);
+            packets.push(Tri4::pack(&tris[start as usize..end as usize], start));
+        }
+    }
+    let wide = Wide::new(bvh, |i, n: &Node| (first_packet[i as usize], n.count.div_ceil(4)));
+    (packets, wide)
 }

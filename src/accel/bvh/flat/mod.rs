@@ -4,8 +4,9 @@
 //!
 //! A node is a leaf when `count > 0` (primitives `first..first + count` of the owner's
 //! reordered primitive array) and interior otherwise, with its children at `first` and
-//! `first + 1` so both sit in one cache line pair. Rays traverse the [`Wide`] copy (4 children
-//! per node, tested together); the binary tree stays the structure of record.
+//! `first + 1` so both sit in one cache line pair. Rays traverse the [`Wide`] copy (8 children
+//! per node, tested together by the SIMD path's kernel); the binary tree stays the structure of
+//! record.
 
 mod build;
 mod mesh;
@@ -17,7 +18,7 @@ mod wide;
 pub(crate) use build::build;
 pub(crate) use mesh::{MeshBvh, PrimHit};
 pub(crate) use sah::{sah_cost, subtree_cost};
-pub(crate) use traverse::{interval_is_valid, traverse, BoxRay, STACK_SIZE};
+pub(crate) use traverse::{interval_is_valid, traverse, BoxRay, FAR_SCALE, STACK_SIZE};
 pub(crate) use wide::Wide;
 
 use glam::Vec3;

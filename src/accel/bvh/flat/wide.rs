@@ -1,66 +1,92 @@
-//! A 4-wide copy of a flat BVH for traversal: every 4-wide node tests its (up to) four children
-//! in one go with glam's `Vec4` (SSE2 on x86-64, NEON on aarch64, scalar elsewhere; there is no
-//! hand-written SIMD). Built by collapsing the binary tree, which stays the structure of record
-//! (insertion, SAH, references into blocks); a binary node that was folded into its parent's
-//! wide node is entered through its children.
-
-use glam::Vec4;
+//! An 8-wide copy of a flat BVH for traversal: every wide node tests its (up to) eight children
+//! in one go with the SIMD path's box kernel ([`crate::accel::bvh::simd::Kernel`]: AVX2 or
+//! AVX-512 intrinsics, or glam's `Vec4` in two halves on the portable path), boxes in
+//! structure-of-arrays layout, children visited nearest first. Built by collapsing the binary
+//! tree, which stays the structure of record (insertion, SAH, references into blocks); a binary
+//! node that was folded into its parent's wide node is entered through its children.
+//!
+//! Leaves keep the owner's meaning with the range remapped at collapse: triangle meshes point
+//! leaves at their 4-triangle packets ([`crate::accel::bvh::triangle::Tri4`]), instance levels
+//! at their items.
+//!
+//! Width measured (docs/performance.md, Accelerators): 8 against the former 4-wide glam nodes.
 
 use super::stack::TraversalStack;
-use super::traverse::FAR_SCALE;
-use super::{BoxRay, FlatBvh, STACK_SIZE};
+use super::{BoxRay, FlatBvh, Node, STACK_SIZE};
+use crate::accel::bvh::simd::{BoxRay8, Boxes8, Kernel};
 
-/// Up to three entries are pushed per wide level, and a wide tree is no deeper than its binary
+/// Children per wide node.
+pub(crate) const WIDTH: usize = 8;
+
+/// Up to seven entries are pushed per wide level, and a wide tree is no deeper than its binary
 /// tree (shallower than [`STACK_SIZE`]).
-const WIDE_STACK: usize = 3 * STACK_SIZE;
+const WIDE_STACK: usize = (WIDTH - 1) * STACK_SIZE;
 
 /// Slot code of an unused child.
 const EMPTY: u32 = u32::MAX;
-/// `map` entry of a binary node that has no wide node of its own.
+/// `map` entry of a binary interior node that has no wide node of its own.
 const NONE: u32 = u32::MAX;
+/// Stack code of a leaf child: `LEAF | node << 3 | slot`.
+const LEAF: u32 = 1 << 31;
+/// Stack code of a binary leaf entered on its own (folded into its parent's wide node, reached
+/// by entering a folded subtree): `FOLDED | binary node`.
+const FOLDED: u32 = LEAF | 1 << 30;
 
-/// Four children's boxes in structure-of-arrays layout, plus what each child is.
+/// Eight children's boxes in structure-of-arrays layout, plus what each child is.
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(64))]
-pub(crate) struct Node4 {
-    min: [[f32; 4]; 3],
-    max: [[f32; 4]; 3],
-    /// Interior child: wide node index. Leaf child: first primitive. Unused: [`EMPTY`].
-    child: [u32; 4],
-    /// Leaf child: primitive count; 0 for interior children.
-    count: [u32; 4],
+pub(crate) struct Node8 {
+    boxes: Boxes8,
+    /// Interior child: wide node index. Leaf child: first leaf item. Unused: [`EMPTY`].
+    child: [u32; WIDTH],
+    /// Leaf child: item count; 0 for interior children.
+    count: [u16; WIDTH],
+    /// Bit `i` set when slot `i` is used (unused slots have inverted boxes, which an
+    /// axis-parallel ray may not reject).
+    used: u32,
 }
 
-const _: () = assert!(std::mem::size_of::<Node4>() == 128);
+const _: () = assert!(std::mem::size_of::<Node8>() == 256);
 
-/// The wide tree plus, for each binary node, the wide node rooted there (if any).
+/// The wide tree plus, for each binary node, where traversal enters it.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Wide {
-    nodes: Vec<Node4>,
-    map: Vec<u32>,
+    nodes: Vec<Node8>,
+    /// Per binary node: `(w, 0)` for the wide node `w` rooted there, `(first, count)` for a
+    /// leaf (remapped), `(NONE, 0)` for an interior node folded into its parent's wide node.
+    map: Vec<(u32, u32)>,
 }
 
 impl Wide {
     /// Collapses `bvh` (children of every node are gathered by repeatedly opening the largest
-    /// interior child until there are four).
-    pub fn new(bvh: &FlatBvh) -> Self {
-        let mut w =
-            Wide { nodes: Vec::with_capacity(bvh.nodes.len() / 3 + 1), map: vec![NONE; bvh.nodes.len()] };
-        if !bvh.nodes.is_empty() {
+    /// interior child until there are eight). `leaf` maps a binary leaf to the item range the
+    /// traversal hands out for it.
+    pub fn new(bvh: &FlatBvh, leaf: impl Fn(u32, &Node) -> (u32, u32)) -> Self {
+        let mut w = Wide {
+            nodes: Vec::with_capacity(bvh.nodes.len() / 6 + 1),
+            map: bvh
+                .nodes
+                .iter()
+                .enumerate()
+                .map(|(i, n)| if n.is_leaf() { leaf(i as u32, n) } else { (NONE, 0) })
+                .collect(),
+        };
+        debug_assert!(w.map.iter().all(|&(x, c)| c < u32::from(u16::MAX) && (c > 0 || x == NONE)));
+        if bvh.nodes.first().is_some_and(|n| !n.is_leaf()) {
             w.collapse(bvh, 0);
         }
         w
     }
 
     pub fn memory_bytes(&self) -> usize {
-        self.nodes.len() * std::mem::size_of::<Node4>() + self.map.len() * 4
+        self.nodes.len() * std::mem::size_of::<Node8>() + self.map.len() * 8
     }
 
     fn collapse(&mut self, bvh: &FlatBvh, n2: u32) -> u32 {
         let nodes = &bvh.nodes;
         let root = &nodes[n2 as usize];
-        let mut kids: Vec<u32> = if root.is_leaf() { vec![n2] } else { vec![root.first, root.first + 1] };
-        while kids.len() < 4 {
+        let mut kids: Vec<u32> = vec![root.first, root.first + 1];
+        while kids.len() < WIDTH {
             let open = kids
                 .iter()
                 .enumerate()
@@ -76,111 +102,141 @@ impl Wide {
             kids.extend([nodes[k as usize].first, nodes[k as usize].first + 1]);
         }
         let at = self.nodes.len();
-        self.nodes.push(Node4 {
-            min: [[f32::INFINITY; 4]; 3],
-            max: [[f32::NEG_INFINITY; 4]; 3],
-            child: [EMPTY; 4],
-            count: [0; 4],
+        // Stack codes hold `at << 3` below the `LEAF` and `FOLDED` bits.
+        debug_assert!(at < 1 << 27, "wide tree too large for its stack codes");
+        self.nodes.push(Node8 {
+            boxes: Boxes8 { min: [[f32::INFINITY; WIDTH]; 3], max: [[f32::NEG_INFINITY; WIDTH]; 3] },
+            child: [EMPTY; WIDTH],
+            count: [0; WIDTH],
+            used: 0,
         });
-        self.map[n2 as usize] = at as u32;
+        self.map[n2 as usize] = (at as u32, 0);
         for (slot, &k) in kids.iter().enumerate() {
             let n = &nodes[k as usize];
-            let (child, count) = if n.is_leaf() { (n.first, n.count) } else { (self.collapse(bvh, k), 0) };
+            let (child, count) = if n.is_leaf() { self.map[k as usize] } else { (self.collapse(bvh, k), 0) };
             let w = &mut self.nodes[at];
             for axis in 0..3 {
-                w.min[axis][slot] = n.min[axis];
-                w.max[axis][slot] = n.max[axis];
+                w.boxes.min[axis][slot] = n.min[axis];
+                w.boxes.max[axis][slot] = n.max[axis];
             }
             w.child[slot] = child;
-            w.count[slot] = count;
+            w.count[slot] = count as u16;
+            w.used |= 1 << slot;
         }
         at as u32
     }
 
-    /// Like [`super::traverse`], for the subtree of binary node `root` of `bvh` (the tree this
-    /// was collapsed from). Leaves are visited roughly nearer first.
-    #[inline]
-    pub fn traverse<F>(&self, bvh: &FlatBvh, root: u32, ray: &BoxRay, t_max: &mut f32, leaf: &mut F) -> bool
+    /// Visits the leaves of the subtree of binary node `root` of `bvh` (the tree this was
+    /// collapsed from) that the ray may hit, nearer first. `leaf` gets each leaf's item range
+    /// and the current `t_max`, which it lowers on hits; it returns `true` to stop (any-hit).
+    /// Returns whether `leaf` stopped the traversal.
+    ///
+    /// `leaf` is called from one place only: a closure called once is inlined into the query's
+    /// `#[target_feature]` entry (`simd::dispatch!`), and with it the kernel of nested
+    /// traversals (instances, blocks); called from two places it stayed out of line and every
+    /// intrinsic in it became a call (seen in the first build of this file).
+    #[inline(always)]
+    pub fn traverse<K: Kernel, F>(
+        &self,
+        k: K,
+        bvh: &FlatBvh,
+        root: u32,
+        ray: &BoxRay,
+        t_max: &mut f32,
+        leaf: &mut F,
+    ) -> bool
     where
         F: FnMut(u32, u32, &mut f32) -> bool,
     {
-        let Some(&w) = self.map.get(root as usize) else {
-            return false;
-        };
-        if w != NONE {
-            return self.traverse4(w, ray, t_max, leaf);
+        let mut stack = TraversalStack::<WIDE_STACK>::new();
+        // Binary nodes folded into a wide node are entered through their children: at most
+        // `WIDTH` of them are pending at once (the folded part of one wide node). Wide nodes
+        // and leaves found there go on the stack.
+        let mut pending = [0u32; 2 * WIDTH];
+        let mut np = 1;
+        pending[0] = root;
+        while np > 0 {
+            np -= 1;
+            let r = pending[np];
+            let Some(&(x, count)) = self.map.get(r as usize) else {
+                continue;
+            };
+            let n = &bvh.nodes[r as usize];
+            let t = ray.hit(n, *t_max);
+            if t == f32::INFINITY {
+                continue;
+            }
+            if count > 0 {
+                stack.push(FOLDED | r, t);
+            } else if x != NONE {
+                stack.push(x, t);
+            } else {
+                debug_assert!(np + 2 <= pending.len());
+                pending[np] = n.first + 1;
+                pending[np + 1] = n.first;
+                np += 2;
+            }
         }
-        // A binary node folded into its parent's wide node: enter through its children.
-        let n = &bvh.nodes[root as usize];
-        if ray.hit(n, *t_max) == f32::INFINITY {
-            return false;
-        }
-        if n.is_leaf() {
-            return leaf(n.first, n.count, t_max);
-        }
-        self.traverse(bvh, n.first, ray, t_max, leaf) || self.traverse(bvh, n.first + 1, ray, t_max, leaf)
+        self.traverse8(k, &mut stack, ray, t_max, leaf)
     }
 
-    #[inline]
-    fn traverse4<F>(&self, root: u32, ray: &BoxRay, t_max: &mut f32, leaf: &mut F) -> bool
+    #[inline(always)]
+    fn traverse8<K: Kernel, F>(
+        &self,
+        k: K,
+        // By reference: moving the 7 KiB stack would copy it.
+        stack: &mut TraversalStack<WIDE_STACK>,
+        ray: &BoxRay,
+        t_max: &mut f32,
+        leaf: &mut F,
+    ) -> bool
     where
         F: FnMut(u32, u32, &mut f32) -> bool,
     {
-        let (ox, oy, oz) = (Vec4::splat(ray.org.x), Vec4::splat(ray.org.y), Vec4::splat(ray.org.z));
-        let (ix, iy, iz) = (Vec4::splat(ray.inv.x), Vec4::splat(ray.inv.y), Vec4::splat(ray.inv.z));
-        let t_min = Vec4::splat(ray.t_min);
-        // Entries: wide node index, or `LEAF | (node << 2 | slot)` for a leaf child.
-        const LEAF: u32 = 1 << 31;
-        let mut stack = TraversalStack::<WIDE_STACK>::new();
-        let mut cur = root;
+        let kr = k.prepare(&BoxRay8 { org: ray.org.into(), inv: ray.inv.into(), t_min: ray.t_min });
+        let Some(mut cur) = stack.pop_within(*t_max) else {
+            return false;
+        };
         loop {
             if cur & LEAF == 0 {
                 let n = &self.nodes[cur as usize];
-                let tx0 = (Vec4::from_array(n.min[0]) - ox) * ix;
-                let tx1 = (Vec4::from_array(n.max[0]) - ox) * ix;
-                let ty0 = (Vec4::from_array(n.min[1]) - oy) * iy;
-                let ty1 = (Vec4::from_array(n.max[1]) - oy) * iy;
-                let tz0 = (Vec4::from_array(n.min[2]) - oz) * iz;
-                let tz1 = (Vec4::from_array(n.max[2]) - oz) * iz;
-                let near = tx0.min(tx1).max(ty0.min(ty1)).max(tz0.min(tz1)).max(t_min);
-                let far =
-                    (tx0.max(tx1).min(ty0.max(ty1)).min(tz0.max(tz1)) * FAR_SCALE).min(Vec4::splat(*t_max));
-                let mut mask = near.cmple(far).bitmask();
-                // Unused slots have inverted boxes, which an axis-parallel ray may not reject.
-                for (slot, &c) in n.child.iter().enumerate() {
-                    if c == EMPTY {
-                        mask &= !(1 << slot);
+                let (mask, near) = k.box8(&kr, &n.boxes, *t_max);
+                let mut mask = mask & n.used;
+                if mask != 0 {
+                    // Hit children sorted farthest first: all but the last are pushed, the
+                    // last (nearest) is taken next.
+                    let mut hits = [(0u32, 0f32); WIDTH];
+                    let mut m = 0;
+                    while mask != 0 {
+                        let slot = mask.trailing_zeros() as usize;
+                        mask &= mask - 1;
+                        let code =
+                            if n.count[slot] > 0 { LEAF | (cur << 3) | slot as u32 } else { n.child[slot] };
+                        // Insertion sort, descending by entry distance.
+                        let mut j = m;
+                        while j > 0 && hits[j - 1].1 < near[slot] {
+                            hits[j] = hits[j - 1];
+                            j -= 1;
+                        }
+                        hits[j] = (code, near[slot]);
+                        m += 1;
                     }
-                }
-                // Push hit children farthest first so the nearest is taken next.
-                let near = near.to_array();
-                let mut hits = [(0u32, 0f32); 4];
-                let mut k = 0;
-                while mask != 0 {
-                    let slot = mask.trailing_zeros() as usize;
-                    mask &= mask - 1;
-                    let code =
-                        if n.count[slot] > 0 { LEAF | (cur << 2) | slot as u32 } else { n.child[slot] };
-                    // Insertion sort, descending by entry distance.
-                    let mut j = k;
-                    while j > 0 && hits[j - 1].1 < near[slot] {
-                        hits[j] = hits[j - 1];
-                        j -= 1;
-                    }
-                    hits[j] = (code, near[slot]);
-                    k += 1;
-                }
-                if k > 0 {
-                    for &(code, t) in &hits[..k - 1] {
+                    for &(code, t) in &hits[..m - 1] {
                         stack.push(code, t);
                     }
-                    cur = hits[k - 1].0;
+                    cur = hits[m - 1].0;
                     continue;
                 }
             } else {
-                let (node, slot) = ((cur & !LEAF) >> 2, (cur & 3) as usize);
-                let n = &self.nodes[node as usize];
-                if leaf(n.child[slot], n.count[slot], t_max) {
+                let (first, count) = if cur & FOLDED == FOLDED {
+                    self.map[(cur & !FOLDED) as usize]
+                } else {
+                    let (node, slot) = ((cur & !LEAF) >> 3, (cur & 7) as usize);
+                    let n = &self.nodes[node as usize];
+                    (n.child[slot], u32::from(n.count[slot]))
+                };
+                // The only call of `leaf` (see `traverse`).
+                if leaf(first, count, t_max) {
                     return true;
                 }
             }
@@ -198,6 +254,7 @@ mod tests {
     use glam::Vec3;
 
     use super::super::{traverse, MeshBvh};
+    use crate::accel::bvh::simd::{dispatch, SimdPath};
     use crate::accel::bvh::triangle::{RayTri, Tri};
     use crate::accel::bvh::BuildParams;
     use crate::geometry::Ray;
@@ -219,7 +276,7 @@ mod tests {
     }
 
     #[test]
-    fn wide_matches_binary_from_every_node() {
+    fn wide_matches_binary_from_every_node_on_every_path() {
         let mut s = 7u32;
         let mut r = || {
             s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
@@ -231,7 +288,6 @@ mod tests {
                 Tri { p: [c, c + Vec3::new(r(), r(), r()), c + Vec3::new(r(), r(), r())], geom: 0, prim: i }
             })
             .collect();
-        let m = MeshBvh::build(tris, BuildParams::BALANCED);
         let rays: Vec<Ray> = (0..200)
             .map(|i| {
                 let o = Vec3::new(r(), r(), r()) * 15.0;
@@ -242,14 +298,26 @@ mod tests {
                 Ray::new(o, d)
             })
             .collect();
-        for root in (0..m.bvh.nodes.len() as u32).step_by(97).chain([0]) {
-            for ray in &rays {
-                let mut best = None;
-                let mut t_max = ray.t_max;
-                let (b, rt) = (super::BoxRay::new(ray), RayTri::new(ray));
-                m.intersect_from(root, &b, &rt, &mut t_max, &mut best);
-                assert_eq!(best.map(|h| h.t), closest_binary(&m, root, ray), "root {root}");
-                assert_eq!(m.occluded_from(root, &b, &rt, ray.t_max), best.is_some());
+        for params in [BuildParams::BALANCED, BuildParams::FAST] {
+            let m = MeshBvh::build(tris.clone(), params);
+            for path in SimdPath::supported() {
+                SimdPath::with_override(path, || {
+                    for root in (0..m.bvh.nodes.len() as u32).step_by(97).chain([0, 1, 2, 3, 4, 5]) {
+                        for ray in &rays {
+                            let mut best = None;
+                            let mut t_max = ray.t_max;
+                            let (b, rt) = (super::BoxRay::new(ray), RayTri::new(ray));
+                            dispatch!(|k| m.intersect_from(k, root, &b, &rt, &mut t_max, &mut best));
+                            assert_eq!(
+                                best.map(|h| h.t),
+                                closest_binary(&m, root, ray),
+                                "root {root} {path:?}"
+                            );
+                            let occluded = dispatch!(|k| m.occluded_from(k, root, &b, &rt, ray.t_max));
+                            assert_eq!(occluded, best.is_some());
+                        }
+                    }
+                });
             }
         }
     }

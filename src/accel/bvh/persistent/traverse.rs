@@ -5,43 +5,44 @@ use std::sync::Arc;
 
 use super::{Block, Link, StaticSnapshot};
 use crate::accel::bvh::flat::{interval_is_valid, traverse, BoxRay, Node, PrimHit};
+use crate::accel::bvh::simd::{dispatch, Kernel};
 use crate::accel::bvh::triangle::RayTri;
 use crate::accel::{Hit, HitObject, SceneQuery, StaticId};
 use crate::geometry::{Aabb, Ray};
 
 impl StaticSnapshot {
     /// Closest hit with `t <= *t_max`; lowers `*t_max` and overwrites `best` on a hit.
-    pub(crate) fn intersect_with(
+    #[inline(always)]
+    pub(crate) fn intersect_with<K: Kernel>(
         &self,
+        k: K,
         bray: &BoxRay,
         tray: &RayTri,
         t_max: &mut f32,
         best: &mut Option<PrimHit>,
     ) {
         self.walk(bray, t_max, |b, i, t_max| {
-            b.mesh.intersect_from(i, bray, tray, t_max, best);
+            b.mesh.intersect_from(k, i, bray, tray, t_max, best);
             false
         });
     }
 
     /// Whether anything is hit within `[t_min, t_max]`.
-    pub(crate) fn occluded_with(&self, bray: &BoxRay, tray: &RayTri, t_max: f32) -> bool {
+    #[inline(always)]
+    pub(crate) fn occluded_with<K: Kernel>(&self, k: K, bray: &BoxRay, tray: &RayTri, t_max: f32) -> bool {
         let mut t_max = t_max;
-        self.walk(bray, &mut t_max, |b, i, t_max| b.mesh.occluded_from(i, bray, tray, *t_max))
+        self.walk(bray, &mut t_max, |b, i, t_max| b.mesh.occluded_from(k, i, bray, tray, *t_max))
     }
 
     /// Visits the block subtrees the ray may hit, nearer first; `f` returns `true` to stop.
-    #[inline]
+    #[inline(always)]
     fn walk<F>(&self, bray: &BoxRay, t_max: &mut f32, mut f: F) -> bool
     where
         F: FnMut(&Block, u32, &mut f32) -> bool,
     {
         let v = &*self.view;
-        if v.nodes.len() == 1 {
-            // No overlay: straight into the block.
-            let (b, i) = &v.refs[0];
-            return f(b, *i, t_max);
-        }
+        // `f` is called from one place only, so that it is inlined (see `flat::Wide::traverse`);
+        // without an overlay the view is one leaf, and this tests its box first.
         traverse(&v.nodes, 0, bray, t_max, |first, count, t_max| {
             v.refs[first as usize..(first + count) as usize].iter().any(|(b, i)| f(b, *i, t_max))
         })
@@ -97,7 +98,8 @@ impl SceneQuery for StaticSnapshot {
         }
         let mut t_max = ray.t_max;
         let mut best = None;
-        self.intersect_with(&BoxRay::new(ray), &RayTri::new(ray), &mut t_max, &mut best);
+        let (bray, tray) = (BoxRay::new(ray), RayTri::new(ray));
+        dispatch!(|k| self.intersect_with(k, &bray, &tray, &mut t_max, &mut best));
         best.map(|h| Hit {
             t: h.t,
             u: h.u,
@@ -109,6 +111,7 @@ impl SceneQuery for StaticSnapshot {
     }
 
     fn intersect_p(&self, ray: &Ray) -> bool {
-        interval_is_valid(ray) && self.occluded_with(&BoxRay::new(ray), &RayTri::new(ray), ray.t_max)
+        let (bray, tray) = (BoxRay::new(ray), RayTri::new(ray));
+        interval_is_valid(ray) && dispatch!(|k| self.occluded_with(k, &bray, &tray, ray.t_max))
     }
 }

@@ -30,6 +30,7 @@ use rayon::prelude::*;
 
 use crate::accel::bvh::flat::{build, interval_is_valid, BoxRay, FlatBvh, MeshBvh, PrimHit, Wide};
 use crate::accel::bvh::persistent::StaticSnapshot;
+use crate::accel::bvh::simd::{dispatch, Kernel};
 use crate::accel::bvh::triangle::RayTri;
 use crate::accel::bvh::BuildParams;
 use crate::accel::{Hit, HitObject, InstanceId, SceneQuery, StaticId};
@@ -99,7 +100,7 @@ pub(crate) fn build_top(instances: &[TopInstance], params: BuildParams) -> Top {
             }
         })
         .collect::<Vec<_>>();
-    let wide = Wide::new(&bvh);
+    let wide = Wide::new(&bvh, |_, n| (n.first, n.count));
     let mut leaf_of = vec![u32::MAX; items.iter().map(|x| x.id as usize + 1).max().unwrap_or(0)];
     for (i, item) in items.iter().enumerate() {
         leaf_of[item.id as usize] = i as u32;
@@ -121,23 +122,25 @@ impl Top {
 
     /// Closest instance hit with `t <= *t_max`; lowers `*t_max` and overwrites `hit` when it
     /// finds one.
-    #[inline]
-    fn intersect_with<'a>(
+    #[inline(always)]
+    fn intersect_with<'a, K: Kernel>(
         &'a self,
+        k: K,
         ray: &Ray,
         bray: &BoxRay,
         t_max: &mut f32,
         hit: &mut Option<(PrimHit, &'a TopItem)>,
     ) {
         let items = &self.items;
-        self.wide.traverse(&self.bvh, 0, bray, t_max, &mut |first, count, t_max| {
+        self.wide.traverse(k, &self.bvh, 0, bray, t_max, &mut |first, count, t_max| {
             for item in &items[first as usize..(first + count) as usize] {
                 if item.ghost {
                     continue;
                 }
                 let oray = object_ray(ray, item);
                 let mut best = None;
-                if item.blas.intersect_from(0, &BoxRay::new(&oray), &RayTri::new(&oray), t_max, &mut best) {
+                if item.blas.intersect_from(k, 0, &BoxRay::new(&oray), &RayTri::new(&oray), t_max, &mut best)
+                {
                     if let Some(h) = best {
                         *hit = Some((h, item));
                     }
@@ -148,14 +151,14 @@ impl Top {
     }
 
     /// Whether any instance is hit within `[t_min, t_max]`.
-    #[inline]
-    fn occluded_with(&self, ray: &Ray, bray: &BoxRay, t_max: f32) -> bool {
+    #[inline(always)]
+    fn occluded_with<K: Kernel>(&self, k: K, ray: &Ray, bray: &BoxRay, t_max: f32) -> bool {
         let items = &self.items;
         let mut t_max = t_max;
-        self.wide.traverse(&self.bvh, 0, bray, &mut t_max, &mut |first, count, t_max| {
+        self.wide.traverse(k, &self.bvh, 0, bray, &mut t_max, &mut |first, count, t_max| {
             items[first as usize..(first + count) as usize].iter().filter(|item| !item.ghost).any(|item| {
                 let oray = object_ray(ray, item);
-                item.blas.occluded_from(0, &BoxRay::new(&oray), &RayTri::new(&oray), *t_max)
+                item.blas.occluded_from(k, 0, &BoxRay::new(&oray), &RayTri::new(&oray), *t_max)
             })
         })
     }
@@ -215,15 +218,33 @@ impl SceneQuery for BvhScene {
         if !interval_is_valid(ray) {
             return None;
         }
+        dispatch!(|k| self.intersect_k(k, ray))
+    }
+
+    fn intersect_p(&self, ray: &Ray) -> bool {
+        if !interval_is_valid(ray) {
+            return false;
+        }
+        dispatch!(|k| self.occluded_k(k, ray))
+    }
+}
+
+impl BvhScene {
+    /// [`SceneQuery::intersect`] on SIMD path `K`.
+    #[inline(always)]
+    fn intersect_k<K: Kernel>(&self, k: K, ray: &Ray) -> Option<Hit> {
         let bray = BoxRay::new(ray);
         let tray = RayTri::new(ray);
         let mut t_max = ray.t_max;
         let mut static_hit: Option<PrimHit> = None;
-        self.statics.intersect_with(&bray, &tray, &mut t_max, &mut static_hit);
+        self.statics.intersect_with(k, &bray, &tray, &mut t_max, &mut static_hit);
         // Instances record only hits up to the nearest so far: one found is nearer.
         let mut inst_hit: Option<(PrimHit, &TopItem)> = None;
-        self.resting.intersect_with(ray, &bray, &mut t_max, &mut inst_hit);
-        self.top.intersect_with(ray, &bray, &mut t_max, &mut inst_hit);
+        // One call site for both levels, so that its leaf closure is inlined into the SIMD
+        // path's entry (see `flat::Wide::traverse`).
+        for level in [&self.resting, &self.top] {
+            level.intersect_with(k, ray, &bray, &mut t_max, &mut inst_hit);
+        }
         if let Some((h, item)) = inst_hit {
             return Some(Hit {
                 t: h.t,
@@ -244,14 +265,14 @@ impl SceneQuery for BvhScene {
         })
     }
 
-    fn intersect_p(&self, ray: &Ray) -> bool {
-        if !interval_is_valid(ray) {
-            return false;
-        }
+    /// [`SceneQuery::intersect_p`] on SIMD path `K`.
+    #[inline(always)]
+    fn occluded_k<K: Kernel>(&self, k: K, ray: &Ray) -> bool {
         let bray = BoxRay::new(ray);
         let tray = RayTri::new(ray);
-        self.statics.occluded_with(&bray, &tray, ray.t_max)
-            || self.resting.occluded_with(ray, &bray, ray.t_max)
-            || self.top.occluded_with(ray, &bray, ray.t_max)
+        self.statics.occluded_with(k, &bray, &tray, ray.t_max)
+            || [&self.resting, &self.top]
+                .into_iter()
+                .any(|level| level.occluded_with(k, ray, &bray, ray.t_max))
     }
 }

@@ -1,0 +1,133 @@
+//! The x86-64 kernels: AVX2 (8 boxes in one `__m256`) and AVX-512 (the same with the compare
+//! going straight to a mask register). Their tokens are made only by [`super::dispatch!`] once
+//! the path is known to run here; every intrinsic below relies on that.
+
+use std::arch::x86_64::*;
+
+use super::{BoxRay8, Boxes8, Kernel, FAR_SCALE};
+
+/// Token of the AVX2 + FMA path.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Avx2(());
+
+/// Token of the AVX-512 (F + VL) path.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Avx512(());
+
+impl Avx2 {
+    /// # Safety
+    /// The CPU must support AVX2 and FMA.
+    pub unsafe fn new_unchecked() -> Self {
+        Avx2(())
+    }
+}
+
+impl Avx512 {
+    /// # Safety
+    /// The CPU must support AVX2, FMA, AVX-512F and AVX-512VL.
+    pub unsafe fn new_unchecked() -> Self {
+        Avx512(())
+    }
+}
+
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct RayM256 {
+    org: [__m256; 3],
+    inv: [__m256; 3],
+    t_min: __m256,
+}
+
+#[inline(always)]
+fn prepare(r: &BoxRay8) -> RayM256 {
+    // SAFETY: only called through a token (`Avx2`/`Avx512`), which exists only on a CPU with
+    // AVX2; `_mm256_set1_ps` needs AVX.
+    unsafe {
+        RayM256 {
+            org: r.org.map(|x| _mm256_set1_ps(x)),
+            inv: r.inv.map(|x| _mm256_set1_ps(x)),
+            t_min: _mm256_set1_ps(r.t_min),
+        }
+    }
+}
+
+/// Near and far distances of the eight boxes (the same operations, in the same order, as
+/// [`super::Portable`], so every path enters the same children).
+#[inline(always)]
+fn near_far(r: &RayM256, b: &Boxes8, t_max: f32) -> (__m256, __m256) {
+    // SAFETY: as in `prepare` (AVX only). `Boxes8` is `repr(C, align(32))` and each row is
+    // 8 floats at a multiple of 32 bytes, so the aligned loads read exactly one row.
+    unsafe {
+        let slab = |k: usize| {
+            let t0 = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(b.min[k].as_ptr()), r.org[k]), r.inv[k]);
+            let t1 = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(b.max[k].as_ptr()), r.org[k]), r.inv[k]);
+            (_mm256_min_ps(t0, t1), _mm256_max_ps(t0, t1))
+        };
+        let (nx, fx) = slab(0);
+        let (ny, fy) = slab(1);
+        let (nz, fz) = slab(2);
+        let near = _mm256_max_ps(_mm256_max_ps(_mm256_max_ps(nx, ny), nz), r.t_min);
+        let far = _mm256_min_ps(
+            _mm256_mul_ps(_mm256_min_ps(_mm256_min_ps(fx, fy), fz), _mm256_set1_ps(FAR_SCALE)),
+            _mm256_set1_ps(t_max),
+        );
+        (near, far)
+    }
+}
+
+#[inline(always)]
+fn to_array(v: __m256) -> [f32; 8] {
+    let mut out = [0.0f32; 8];
+    // SAFETY: AVX (token), and `out` holds 8 floats (unaligned store).
+    unsafe { _mm256_storeu_ps(out.as_mut_ptr(), v) };
+    out
+}
+
+impl Kernel for Avx2 {
+    type Ray = RayM256;
+
+    #[inline(always)]
+    fn prepare(self, r: &BoxRay8) -> RayM256 {
+        prepare(r)
+    }
+
+    #[inline(always)]
+    fn box8(self, r: &RayM256, b: &Boxes8, t_max: f32) -> (u32, [f32; 8]) {
+        // SAFETY: the token exists only on a CPU with AVX2 and FMA.
+        unsafe { box8_avx2(r, b, t_max) }
+    }
+}
+
+impl Kernel for Avx512 {
+    type Ray = RayM256;
+
+    #[inline(always)]
+    fn prepare(self, r: &BoxRay8) -> RayM256 {
+        prepare(r)
+    }
+
+    #[inline(always)]
+    fn box8(self, r: &RayM256, b: &Boxes8, t_max: f32) -> (u32, [f32; 8]) {
+        // SAFETY: the token exists only on a CPU with AVX2, FMA, AVX-512F and AVX-512VL.
+        unsafe { box8_avx512(r, b, t_max) }
+    }
+}
+
+// The kernels as `#[target_feature]` functions: inlined into the query's entry point (which
+// enables the same features), and a single call per node, not one per intrinsic, in code the
+// compiler keeps out of line.
+
+#[target_feature(enable = "avx,avx2,fma")]
+#[inline]
+unsafe fn box8_avx2(r: &RayM256, b: &Boxes8, t_max: f32) -> (u32, [f32; 8]) {
+    let (near, far) = near_far(r, b, t_max);
+    let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(near, far)) as u32;
+    (mask, to_array(near))
+}
+
+#[target_feature(enable = "avx,avx2,fma,avx512f,avx512vl")]
+#[inline]
+unsafe fn box8_avx512(r: &RayM256, b: &Boxes8, t_max: f32) -> (u32, [f32; 8]) {
+    let (near, far) = near_far(r, b, t_max);
+    let mask = _mm256_cmp_ps_mask::<_CMP_LE_OQ>(near, far) as u32;
+    (mask, to_array(near))
+}
