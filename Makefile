@@ -4,7 +4,7 @@
 CARGO ?= cargo
 RELEASE_BIN := target/release/dormant
 
-.PHONY: setup build demo test test-no-embree lint fmt bench soak slurm-check fuzz clean
+.PHONY: setup build demo test test-no-embree lint fmt bench soak slurm-check fuzz compare-cycles clean
 
 setup:
 	bash scripts/setup.sh
@@ -37,6 +37,20 @@ slurm-check: build
 # cache exceeds its budget. See scripts/soak.sh and docs/performance.md#soak-make-soak.
 soak: build
 	bash scripts/soak.sh
+
+# dormant against Blender Cycles (not in CI: `pip install bpy` fetches Blender 5.0 as a Python
+# module, a wheel of some 400 MB, into the git-ignored venv .deps/bpy-venv; bpy 5.0 needs
+# Python 3.11). Correctness at 1,024 spp and the monastery-rain sequence's speed, both on
+# COMPARE_THREADS threads; results in out/compare-cycles/report.json. See
+# scripts/compare-cycles.py and docs/performance.md#against-blender-cycles.
+BPY_VENV := .deps/bpy-venv
+BPY_VERSION ?= 5.0.1
+COMPARE_THREADS ?= 2
+COMPARE_ARGS ?=
+compare-cycles: build
+	test -x $(BPY_VENV)/bin/python || python3.11 -m venv $(BPY_VENV)
+	$(BPY_VENV)/bin/python -c "import bpy" 2>/dev/null || $(BPY_VENV)/bin/pip install -q bpy==$(BPY_VERSION)
+	$(BPY_VENV)/bin/python scripts/compare-cycles.py --threads $(COMPARE_THREADS) $(COMPARE_ARGS)
 
 lint:
 	$(CARGO) fmt --all --check

@@ -433,6 +433,18 @@ fn cli_shutter_outside_zero_to_one() {
 }
 
 #[test]
+fn cli_export_without_a_sequence() {
+    let dir = TempDir::new().unwrap();
+    let out = dir.path().join("e.json");
+    expect_exit(
+        dormant().args(["export", "--out"]).arg(&out),
+        2,
+        &["export needs a SCENE file or --trajectory"],
+        Some(dir.path()),
+    );
+}
+
+#[test]
 fn cli_threads_out_of_range() {
     expect_usage_error(&["--threads", "0", "render"], &["--threads"]);
     expect_usage_error(&["--threads", "many", "render"], &["--threads"]);

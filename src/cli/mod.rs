@@ -2,6 +2,7 @@
 //! domains together. No rendering or geometry logic lives here.
 
 mod bench;
+mod export;
 mod info;
 mod progress;
 mod render;
@@ -96,6 +97,12 @@ pub(crate) enum Command {
     Verify(verify::VerifyArgs),
     /// Benchmarks, run side by side in one process; results as JSON.
     Bench(bench::BenchArgs),
+    /// Write a sequence's frames (mesh sources, sun, sky, lights, camera and every body's
+    /// pose) as JSON for another renderer (scripts/compare-cycles.py builds it in Blender).
+    #[command(
+        after_help = "Examples:\n  dormant export --trajectory out/rain.traj --frames 0..120 --out out/rain.json"
+    )]
+    Export(export::ExportArgs),
     /// Print dormant's version, the Embree library and header versions, the Open Image
     /// Denoise library version, and the compiled backends, as JSON.
     Info,
@@ -137,6 +144,7 @@ pub(crate) fn run(cli: &Cli) -> Result<(), CliError> {
         Command::Simulate(args) => simulate::run(args, cli.quiet, &cli.json),
         Command::Verify(args) => verify::run(args, threads, cli.quiet, &cli.json),
         Command::Bench(args) => bench::run(args, threads, cli.quiet, &cli.json),
+        Command::Export(args) => export::run(args, cli.quiet, &cli.json),
         Command::Info => info::run(threads, &cli.json),
     }
 }

@@ -370,15 +370,23 @@ pub(super) fn check_shutter(shutter: Option<f32>) -> Result<(), CliError> {
 /// A sequence: a scene file, maybe with a trajectory of it, or a trajectory alone with the
 /// scene recorded in it; `None` for a still.
 fn sequence_source(args: &RenderArgs) -> Result<Option<SequenceSource>, CliError> {
-    Ok(match (&args.scene_file, &args.trajectory) {
+    sequence_source_of(args.scene_file.as_deref(), args.trajectory.as_ref(), args.scene.count)
+}
+
+/// The sequence a SCENE file (with `count` objects), a trajectory, or both give; `None` for
+/// neither.
+pub(super) fn sequence_source_of(
+    scene_file: Option<&Path>,
+    trajectory: Option<&PathBuf>,
+    count: Option<u32>,
+) -> Result<Option<SequenceSource>, CliError> {
+    Ok(match (scene_file, trajectory) {
         (Some(path), trajectory) => {
             let file = SceneFile::load(path).map_err(|e| CliError::Input(e.to_string()))?;
-            let options = SimulateOptions { count: args.scene.count, frames: None };
-            Some(SequenceSource::scene(file, options, trajectory.clone()))
+            let options = SimulateOptions { count, frames: None };
+            Some(SequenceSource::scene(file, options, trajectory.cloned()))
         }
-        (None, Some(path)) => {
-            Some(SequenceSource::Recorded { trajectory: path.clone(), count: args.scene.count })
-        }
+        (None, Some(path)) => Some(SequenceSource::Recorded { trajectory: path.clone(), count }),
         (None, None) => None,
     })
 }

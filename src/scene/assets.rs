@@ -7,8 +7,8 @@ use std::sync::Arc;
 use glam::Vec3;
 
 use super::file::{
-    environment_asset, prototype_asset, CameraDef, CameraPlacement, LightDef, LightKind, SceneError,
-    SceneFile, SkyDef,
+    environment_asset, prototype_asset, CameraDef, CameraPlacement, EnvironmentSource, LightDef, LightKind,
+    SceneError, SceneFile, Shape, SkyDef,
 };
 use super::{Camera, Light, Material, Prototype, SceneDescription, Sky, StaticMesh, Sun, Texture};
 use crate::geometry::TriangleMesh;
@@ -32,6 +32,46 @@ pub struct SceneAssets {
     camera: Option<CameraDef>,
     sun: Sun,
     sky: Sky,
+    /// Where the environment's mesh came from (first), then every prototype's.
+    pub sources: Vec<MeshSource>,
+}
+
+/// Where a scene mesh came from and how it was placed: another renderer can load the same
+/// file and get the same geometry (`dormant export`).
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct MeshSource {
+    /// The glTF file (resolved against the scene's asset directory), or `None` for a built-in
+    /// shape or generator.
+    pub gltf: Option<std::path::PathBuf>,
+    /// The built-in shape or generator (e.g. `box`, `atrium`) when there is no glTF.
+    pub builtin: Option<String>,
+    /// Uniform scale applied to the file's coordinates (its default scene, node transforms
+    /// baked in), then `offset` added.
+    pub scale: f32,
+    pub offset: [f32; 3],
+}
+
+impl MeshSource {
+    fn environment(file: &SceneFile) -> Self {
+        let env = &file.spec().environment;
+        let (gltf, builtin) = match &env.source {
+            EnvironmentSource::Gltf(path) => (Some(file.resolve(path)), None),
+            EnvironmentSource::Generator(kind) => (None, Some(format!("{kind:?}").to_lowercase())),
+        };
+        Self { gltf, builtin, scale: env.scale, offset: env.offset }
+    }
+
+    fn prototype(file: &SceneFile, index: usize) -> Self {
+        let shape = &file.spec().prototypes[index].shape;
+        let (gltf, builtin, scale) = match shape {
+            Shape::Gltf { path, scale, .. } => (Some(file.resolve(path)), None, *scale),
+            Shape::Box { .. } => (None, Some("box".into()), 1.0),
+            Shape::Sphere { .. } => (None, Some("sphere".into()), 1.0),
+            Shape::Capsule { .. } => (None, Some("capsule".into()), 1.0),
+            Shape::Cylinder { .. } => (None, Some("cylinder".into()), 1.0),
+        };
+        Self { gltf, builtin, scale, offset: [0.0; 3] }
+    }
 }
 
 /// Distinct, muted colours for prototypes, by index.
@@ -82,6 +122,9 @@ impl SceneAssets {
             colors: doc.prototypes.iter().map(|p| p.color).collect(),
             textures,
             lights,
+            sources: std::iter::once(MeshSource::environment(file))
+                .chain((0..doc.prototypes.len()).map(|i| MeshSource::prototype(file, i)))
+                .collect(),
         })
     }
 }
@@ -210,8 +253,7 @@ impl SceneAssets {
     /// textures, camera and lights (the scene manager's template).
     pub fn describe(&self, time: f32) -> SceneDescription {
         let mut materials = Vec::new();
-        let env_material =
-            push_materials(&mut materials, &self.materials[0], Material::diffuse(Vec3::splat(0.6)));
+        let env_material = push_materials(&mut materials, &self.materials[0], self.fallback_material(0));
         let prototypes = self
             .prototypes
             .iter()
@@ -222,7 +264,7 @@ impl SceneAssets {
                 material: push_materials(
                     &mut materials,
                     &self.materials[i + 1],
-                    Material::diffuse(self.colors[i].map_or(PALETTE[i % PALETTE.len()], Vec3::from)),
+                    self.fallback_material(i + 1),
                 ),
             })
             .collect();
@@ -238,6 +280,21 @@ impl SceneAssets {
             sky: self.sky,
             lights: self.lights.clone(),
         }
+    }
+
+    /// The material of mesh `slot` (0 the environment, `i + 1` prototype `i`) when its file
+    /// has none: grey for the environment, the file's or a palette colour for a prototype.
+    fn fallback_material(&self, slot: usize) -> Material {
+        match slot.checked_sub(1) {
+            None => Material::diffuse(Vec3::splat(0.6)),
+            Some(i) => Material::diffuse(self.colors[i].map_or(PALETTE[i % PALETTE.len()], Vec3::from)),
+        }
+    }
+
+    /// The material every triangle of mesh `slot` (as [`Self::fallback_material`]) gets
+    /// because its file has no materials; `None` when it has its own.
+    pub fn material_without_file_materials(&self, slot: usize) -> Option<Material> {
+        self.materials.get(slot).filter(|m| m.is_empty()).map(|_| self.fallback_material(slot))
     }
 
     /// The camera at `time` seconds.

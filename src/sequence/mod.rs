@@ -12,12 +12,15 @@
 //! - [`KeptFrame`]: a frame an earlier run finished (`render --resume`), which the driver
 //!   brings the manager through as that run did instead of rendering it;
 //! - [`Sequence::describe_frame`]: a frame with every present body an instance, the
-//!   reference integrated scenes are checked against.
+//!   reference integrated scenes are checked against;
+//! - [`Sequence::export`]: the selected frames' poses, camera, lights and mesh sources as
+//!   plain data for another renderer (`dormant export`, `scripts/compare-cycles.py`).
 //!
 //! The CLI, `dormant verify` and the integration benchmarks all replay through here.
 
 mod describe;
 mod error;
+mod export;
 mod kept;
 mod render;
 mod replay;
@@ -25,6 +28,10 @@ mod selection;
 mod source;
 
 pub use error::SequenceError;
+pub use export::{
+    CameraExport, FrameExport, LightExport, MaterialExport, PrototypeExport, SequenceExport, SkyExport,
+    SunExport, EXPORT_FORMAT,
+};
 pub use kept::KeptFrame;
 pub use render::{FrameHandler, FrameRenderer, RenderedFrame, SeedMode};
 pub use replay::FrameVisitor;
