@@ -36,6 +36,7 @@ fn render(sequence: &Sequence, backend: Backend, shutter: f32, first: u32, count
         width: SIZE.0,
         height: SIZE.1,
         spp: SPP,
+        adaptive: dormant::render::AdaptiveSampling::OFF,
         seed: SeedMode::Fixed,
         reuse_static: false,
         shutter,
