@@ -10,6 +10,7 @@ use crate::bench::{
     self, AccelBenchOptions, AdaptiveBenchOptions, IntegrationBenchOptions, PaperBenchOptions, PaperPreset,
     RainAssets, RenderBenchOptions,
 };
+use crate::report::bench_json;
 use crate::scene::limits::MAX_SAMPLES_PER_PIXEL;
 use crate::sequence::{FrameRange, SequenceSource};
 
@@ -264,7 +265,7 @@ fn paper(args: &PaperArgs, threads: Option<usize>, quiet: bool, json: &JsonOutpu
     })?;
     let written =
         crate::report::write_paper(&report, &args.out).map_err(|e| CliError::Runtime(e.to_string()))?;
-    json.emit(&stamped(&report))?;
+    json.emit(&bench_json(&report))?;
     print_written(&written, json, quiet);
     Ok(())
 }
@@ -306,7 +307,7 @@ fn integration(
         }
     };
     let report = bench::bench_integration(&sequence, integrator.as_ref(), &options, &mut progress)?;
-    emit(&stamped(&report), json, quiet)
+    emit(&bench_json(&report), json, quiet)
 }
 
 fn regimes(
@@ -346,7 +347,7 @@ fn regimes(
     let report = bench::bench_regimes(&options, &mut log)?;
     let written =
         crate::report::write_regimes(&report, &args.out).map_err(|e| CliError::Runtime(e.to_string()))?;
-    json.emit(&stamped(&report))?;
+    json.emit(&bench_json(&report))?;
     print_written(&written, json, quiet);
     Ok(())
 }
@@ -388,7 +389,7 @@ fn physics(args: &PhysicsArgs, quiet: bool, json: &JsonOutput) -> Result<(), Cli
     let (file, simulate) = args.scene.load()?;
     let options = crate::physics::PhysicsBenchOptions { simulate, measure_frames: args.measure_frames };
     let report = crate::physics::bench(&file, &options).map_err(super::simulate::physics_error)?;
-    emit(&stamped(&report), json, quiet)
+    emit(&bench_json(&report), json, quiet)
 }
 
 fn emit(json: &serde_json::Value, out: &JsonOutput, quiet: bool) -> Result<(), CliError> {
@@ -409,7 +410,7 @@ fn accel(args: &AccelArgs, threads: Option<usize>, quiet: bool, json: &JsonOutpu
         ..AccelBenchOptions::default()
     };
     let report = bench::bench_accel(&desc, &opts).map_err(|e| CliError::Runtime(e.to_string()))?;
-    emit(&stamped(&report), json, quiet)
+    emit(&bench_json(&report), json, quiet)
 }
 
 fn render(
@@ -427,16 +428,7 @@ fn render(
         threads,
     };
     let report = bench::bench_render(&desc, &opts).map_err(|e| CliError::Runtime(e.to_string()))?;
-    emit(&stamped(&report), json, quiet)
-}
-
-/// The report as JSON with `simd_path`: the BVH SIMD path that ran (`DORMANT_SIMD`).
-fn stamped(report: &impl serde::Serialize) -> serde_json::Value {
-    let mut value = serde_json::to_value(report).expect("bench reports serialise");
-    if let Some(map) = value.as_object_mut() {
-        map.insert("simd_path".into(), serde_json::json!(crate::accel::bvh::SimdPath::current()));
-    }
-    value
+    emit(&bench_json(&report), json, quiet)
 }
 
 fn adaptive(

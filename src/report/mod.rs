@@ -19,6 +19,16 @@ pub(crate) use regimes::write_regimes;
 pub(crate) use stats::{FrameRecord, RunInfo};
 pub(crate) use stats_file::{read_kept_frames, StatsFile};
 
+/// `report` as JSON with `simd_path`, the BVH SIMD path that ran (`DORMANT_SIMD`): every
+/// benchmark report carries it, whether printed by `--json` or written as a file.
+pub(crate) fn bench_json(report: &impl serde::Serialize) -> serde_json::Value {
+    let mut value = serde_json::to_value(report).expect("bench reports serialise");
+    if let Some(map) = value.as_object_mut() {
+        map.insert("simd_path".into(), serde_json::json!(crate::accel::bvh::SimdPath::current()));
+    }
+    value
+}
+
 /// Failures writing a report file.
 #[derive(Debug, thiserror::Error)]
 pub enum ReportError {

@@ -23,7 +23,7 @@ pub fn write_paper(report: &PaperReport, dir: &Path) -> Result<Vec<PathBuf>, Rep
         written.push(path);
     }
     // Through a Value, as `--json` writes it, so both print f32 fields alike.
-    let value = serde_json::to_value(report).expect("the paper report serialises");
+    let value = super::bench_json(report);
     let json = serde_json::to_string_pretty(&value).expect("JSON values serialise");
     let mut md = paper_markdown(report);
     md.push_str(&regime_section(dir)?);

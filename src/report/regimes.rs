@@ -19,7 +19,7 @@ pub fn write_regimes(report: &RegimesReport, dir: &Path) -> Result<Vec<PathBuf>,
     std::fs::create_dir_all(dir).map_err(|source| ReportError::Write { path: dir.to_path_buf(), source })?;
     let png = dir.join("regimes.png");
     write_png(&png, WIDTH, HEIGHT, |buffer| draw(report, buffer))?;
-    let value = serde_json::to_value(report).expect("the regimes report serialises");
+    let value = super::bench_json(report);
     let json = serde_json::to_string_pretty(&value).expect("JSON values serialise");
     let mut written = vec![png];
     for (name, text) in [("regimes.json", json), ("regimes.md", regimes_markdown(report))] {
