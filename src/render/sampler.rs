@@ -116,21 +116,24 @@ impl PixelSampler {
         Self { seed: hash(x ^ hash(y ^ hash(frame.wrapping_add(0x9e37_79b9)))) }
     }
 
-    /// The `index`-th value of the 1D dimension `dim`, in `[0, 1)`: the base-2 radical inverse
-    /// (van der Corput) of `index`, rotated per pixel and dimension. For the shutter time: a
-    /// coordinate of [`Self::get_2d`] would be `offset + index * R2.x`, a fixed shift of the
-    /// pixel jitter's x (every dimension shares R2's generator), tying each sample's time to
-    /// where in the pixel it lands.
-    pub fn get_1d(&self, index: u32, dim: u32) -> f32 {
+    /// The seeds of dimension `dim`'s index shuffle and of its two coordinates' scrambles.
+    fn seeds(&self, dim: u32) -> (u32, u32, u32) {
         let h = hash(self.seed ^ hash(dim.wrapping_mul(0x68e3_1da4)));
-        let p = unit(h) + unit(index.reverse_bits());
-        p - p.floor()
+        (hash(h ^ 0x5bd1_e995), hash(h ^ 0x1b87_3593), hash(h ^ 0xcc9e_2d51))
+    }
+
+    /// The `index`-th value of the 1D dimension `dim`, in `[0, 1)`: the first coordinate of
+    /// [`Self::get_2d`]'s construction (shuffled, Owen-scrambled van der Corput), so independent
+    /// of every pair and stratified in `2^k` intervals for any prefix of `2^k`. For the shutter
+    /// time; `dim` must not also be a pair's.
+    pub fn get_1d(&self, index: u32, dim: u32) -> f32 {
+        let (shuffle, sx, _) = self.seeds(dim);
+        unit(low_to_high_permutation(owen_scramble(index, shuffle), sx).reverse_bits())
     }
 
     /// The `index`-th 2D point of dimension pair `dim`, in `[0, 1)^2`.
     pub fn get_2d(&self, index: u32, dim: u32) -> Vec2 {
-        let h = hash(self.seed ^ hash(dim.wrapping_mul(0x68e3_1da4)));
-        let (shuffle, sx, sy) = (hash(h ^ 0x5bd1_e995), hash(h ^ 0x1b87_3593), hash(h ^ 0xcc9e_2d51));
+        let (shuffle, sx, sy) = self.seeds(dim);
         let i = owen_scramble(index, shuffle);
         // Dimension 0 is the van der Corput sequence, reverse_bits(i); scrambling it is
         // reverse_bits(low_to_high_permutation(i)).
@@ -194,6 +197,19 @@ mod tests {
                     );
                 }
             }
+        }
+    }
+
+    #[test]
+    fn one_dimensional_prefixes_are_stratified() {
+        let s = PixelSampler::new(17, 4, 2);
+        for k in 0..=10u32 {
+            let n = 1u32 << k;
+            let mut cells = vec![0u8; n as usize];
+            for i in 0..n {
+                cells[(s.get_1d(i, 600) * n as f32) as usize] += 1;
+            }
+            assert!(cells.iter().all(|&c| c == 1), "{n} values");
         }
     }
 
