@@ -144,8 +144,10 @@ fn check_frame(
     Ok((report, rays.map(|r| r.len())))
 }
 
-/// Both backends compiled in, and a shutter from 0 to 1.
+/// A shutter from 0 to 1 (checked first: a bad flag is reported in every build), and both
+/// backends compiled in.
 fn check_input(args: &VerifyArgs) -> Result<(), CliError> {
+    super::render::check_shutter(args.shutter)?;
     for b in [Backend::Embree, Backend::Bvh] {
         if !b.is_compiled() {
             return Err(CliError::Input(format!(
@@ -153,7 +155,7 @@ fn check_input(args: &VerifyArgs) -> Result<(), CliError> {
             )));
         }
     }
-    super::render::check_shutter(args.shutter)
+    Ok(())
 }
 
 /// A checked frame: its description, and the motion over the shutter of the bodies (by
