@@ -19,7 +19,7 @@ use glam::Vec2;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::frame_rays::{trace_bare, BareFrameRays, RecordingQuery};
+use super::frame_rays::{trace_bare, BareFrameRays, FrameRays, RecordingQuery};
 use super::timed;
 use crate::accel::{self, Backend, SceneQuery};
 use crate::crosscheck::camera_rays;
@@ -319,6 +319,41 @@ fn bench_packets(query: &dyn SceneQuery, sets: &RaySets, runs: u32) -> PacketTim
     }
 }
 
+/// Best times of one path-traced frame: as the renderer traces it (camera rays in packets),
+/// through single rays only, and its own rays traced bare.
+struct FrameTimes {
+    rays: u64,
+    frame_ms: f64,
+    single_ms: f64,
+    bare_ms: f64,
+    frame_rays: FrameRays,
+}
+
+/// Records the frame's rays once (untimed), then times the three forms, runs interleaved so
+/// load changes hit all of them.
+fn time_frames(
+    scene: &RenderScene,
+    query: &dyn SceneQuery,
+    settings: &RenderSettings,
+    runs: u32,
+) -> Result<FrameTimes, RenderError> {
+    let integrator = PathTracer::default();
+    let recorder = RecordingQuery::new(query);
+    render_frame(scene, &recorder, &integrator, settings)?;
+    let frame_rays = recorder.into_rays();
+    let (mut rays, mut frame_ms, mut single_ms, mut bare_ms) =
+        (0, f64::INFINITY, f64::INFINITY, f64::INFINITY);
+    for _ in 0..runs.max(1) {
+        let (_, stats) = render_frame(scene, query, &integrator, settings)?;
+        (rays, frame_ms) = (stats.rays, frame_ms.min(stats.seconds * 1e3));
+        let (_, stats) = render_frame(scene, &SingleRays(query), &integrator, settings)?;
+        single_ms = single_ms.min(stats.seconds * 1e3);
+        bare_ms = bare_ms.min(trace_bare(query, &frame_rays));
+    }
+    debug_assert_eq!(frame_rays.len() as u64, rays, "the recorder saw every ray the frame counted");
+    Ok(FrameTimes { rays, frame_ms, single_ms, bare_ms, frame_rays })
+}
+
 pub fn bench_render(
     desc: &SceneDescription,
     opts: &RenderBenchOptions,
@@ -331,7 +366,6 @@ pub fn bench_render(
         adaptive: AdaptiveSampling::OFF,
     };
     settings.validate()?;
-    let integrator = PathTracer::default();
     let mut sets: Option<RaySets> = None;
     let mut backends = Vec::new();
     for backend in Backend::compiled() {
@@ -345,22 +379,10 @@ pub fn bench_render(
         let shadow = best_of(opts.runs, || trace_any(query, &sets.shadow));
         let bounce = best_of(opts.runs, || trace_closest(query, &sets.bounce));
         let packets = bench_packets(query, sets, opts.runs);
-        // The frame's own rays, recorded once (untimed) for the bare trace.
-        let recorder = RecordingQuery::new(query);
-        render_frame(&scene, &recorder, &integrator, &settings)?;
-        let frame_rays = recorder.into_rays();
-        // The renderer as it is (camera rays in packets), through single rays only, and its
-        // rays traced bare, runs interleaved.
-        let (mut rays, mut frame_ms, mut single_ms, mut bare_ms) =
-            (0, f64::INFINITY, f64::INFINITY, f64::INFINITY);
-        for _ in 0..opts.runs.max(1) {
-            let (_, stats) = render_frame(&scene, query, &integrator, &settings)?;
-            (rays, frame_ms) = (stats.rays, frame_ms.min(stats.seconds * 1e3));
-            let (_, stats) = render_frame(&scene, &SingleRays(query), &integrator, &settings)?;
-            single_ms = single_ms.min(stats.seconds * 1e3);
-            bare_ms = bare_ms.min(trace_bare(query, &frame_rays));
-        }
-        debug_assert_eq!(frame_rays.len() as u64, rays, "the recorder saw every ray the frame counted");
+        let frames = time_frames(&scene, query, &settings, opts.runs)?;
+        let (rays, frame_ms, single_ms, bare_ms) =
+            (frames.rays, frames.frame_ms, frames.single_ms, frames.bare_ms);
+        let frame_rays = &frames.frame_rays;
         let samples = opts.width as f64 * opts.height as f64 * opts.spp as f64;
         tracing::info!(
             "bench render: {backend} frame in {frame_ms:.1} ms ({single_ms:.1} ms in single rays)"
@@ -374,7 +396,7 @@ pub fn bench_render(
             packets,
             frame: FrameTiming::new(frame_ms, samples, rays),
             frame_single_rays: FrameTiming::new(single_ms, samples, rays),
-            bare_frame_rays: BareFrameRays::new(&frame_rays, bare_ms),
+            bare_frame_rays: BareFrameRays::new(frame_rays, bare_ms),
             frame_over_bare_rays: bare_ms / frame_ms.max(1e-9),
         });
     }
