@@ -166,7 +166,7 @@ fn best_trace(query: &dyn SceneQuery, rays: &[Ray], runs: u32) -> f64 {
 }
 
 /// Cosine-distributed bounce rays from the primary hits.
-fn bounce_rays(query: &dyn SceneQuery, primary: &[Ray]) -> Vec<Ray> {
+pub(crate) fn bounce_rays(query: &dyn SceneQuery, primary: &[Ray]) -> Vec<Ray> {
     let mut rng = SplitMix64::new(7);
     let hits: Vec<_> =
         primary.par_iter().map(|r| query.intersect(r).map(|h| (r.at(h.t), h.ng, r.dir))).collect();

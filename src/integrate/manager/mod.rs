@@ -37,7 +37,7 @@ use super::lookahead::Lookahead;
 use super::object_map::{mesh_triangle, HitTriangle, MeshRef, ObjectMap, ResolvedHit};
 use super::policy::IntegrationPolicy;
 use super::stage_times::StageTimes;
-use crate::accel::{AccelError, Accelerator, HitObject, PrototypeId, SceneQuery};
+use crate::accel::{AccelError, Accelerator, HitObject, PrototypeId, SceneQuery, StaticSceneSnapshot};
 use crate::geometry::{Ray, TriangleMesh};
 use crate::physics::{BodyId, BodyInfo, IslandEvent, IslandId, ReplayFrame};
 use crate::scene::SceneDescription;
@@ -284,6 +284,12 @@ impl SceneManager {
     /// (pixels times samples per pixel), to estimate a frame's trace before one is measured.
     pub fn set_probe_rays(&mut self, rays: Vec<Ray>, frame_samples: u64) {
         self.probe.set_rays(rays, frame_samples);
+    }
+
+    /// The static scene as it stands (environment and baked islands), as the accelerator
+    /// snapshots it; `None` where the backend has no snapshots.
+    pub fn static_snapshot(&self) -> Option<StaticSceneSnapshot> {
+        self.accel.snapshot_static_scene()
     }
 
     /// The world-space meshes of the baked islands in the static scene now.

@@ -18,7 +18,9 @@ mod wide;
 pub(crate) use build::build;
 pub(crate) use mesh::{MeshBvh, PrimHit};
 pub(crate) use sah::{sah_cost, subtree_cost};
-pub(crate) use traverse::{interval_is_valid, traverse, BoxRay, FAR_SCALE, STACK_SIZE};
+#[cfg(test)]
+pub(crate) use traverse::traverse;
+pub(crate) use traverse::{interval_is_valid, BoxRay, FAR_SCALE, STACK_SIZE};
 pub(crate) use wide::Wide;
 
 use glam::Vec3;

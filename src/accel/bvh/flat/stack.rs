@@ -1,6 +1,7 @@
 //! [`TraversalStack`]: the fixed-capacity stack of subtrees still to visit that every BVH ray
-//! traversal uses (binary and 4-wide flat trees; the persistent static tree and the two-level
-//! scene trace through those two). It owns the traversal's only `unsafe`.
+//! traversal uses (the 8-wide trees of meshes, blocks, the persistent tree's overlay and the
+//! instance levels, and the binary reference walk of the tests). It owns the traversal's only
+//! `unsafe`.
 //!
 //! Performance notes (measured, so nobody retries them blind). Setup: CPU time (`perf stat -e
 //! task-clock`) of `dormant --threads 1 render --backend bvh --mode ao --env monastery.glb

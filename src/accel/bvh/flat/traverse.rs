@@ -5,7 +5,6 @@
 
 use glam::{Vec3, Vec3A};
 
-use super::stack::TraversalStack;
 use super::Node;
 use crate::geometry::Ray;
 
@@ -64,7 +63,11 @@ impl BoxRay {
 /// Visits the leaves of the subtree at `root` that the ray may hit, nearer first. `leaf` gets
 /// each leaf's primitive range and the current `t_max`, which it lowers on hits; it returns
 /// `true` to stop (any-hit). Returns whether `leaf` stopped the traversal.
-#[inline(always)]
+///
+/// Rays traverse the [`super::Wide`] copies; this binary walk is the reference the wide
+/// traversal is tested against (the persistent tree's overlay used it until 2026-12: walking
+/// its 22 binary levels cost that tree a measurable share of its trace).
+#[cfg(test)]
 pub(crate) fn traverse<F>(nodes: &[Node], root: u32, ray: &BoxRay, t_max: &mut f32, mut leaf: F) -> bool
 where
     F: FnMut(u32, u32, &mut f32) -> bool,
@@ -75,7 +78,7 @@ where
     if ray.hit(root_node, *t_max) == f32::INFINITY {
         return false;
     }
-    let mut stack = TraversalStack::<STACK_SIZE>::new();
+    let mut stack = super::stack::TraversalStack::<STACK_SIZE>::new();
     let mut node = root_node;
     loop {
         if node.is_leaf() {

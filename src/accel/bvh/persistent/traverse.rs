@@ -1,10 +1,10 @@
-//! Ray queries on a static snapshot: the flat traversal over the snapshot's overlay view, whose
-//! leaves hand each block subtree to the flat traversal of that block.
+//! Ray queries on a static snapshot: the wide traversal over the snapshot's overlay view, whose
+//! leaves hand each block subtree to the wide traversal of that block.
 
 use std::sync::Arc;
 
 use super::{Block, Link, StaticSnapshot};
-use crate::accel::bvh::flat::{interval_is_valid, traverse, BoxRay, Node, PrimHit};
+use crate::accel::bvh::flat::{interval_is_valid, BoxRay, FlatBvh, Node, PrimHit, Wide};
 use crate::accel::bvh::simd::{dispatch, Kernel};
 use crate::accel::bvh::triangle::RayTri;
 use crate::accel::{Hit, HitObject, SceneQuery, StaticId};
@@ -21,7 +21,7 @@ impl StaticSnapshot {
         t_max: &mut f32,
         best: &mut Option<PrimHit>,
     ) {
-        self.walk(bray, t_max, |b, i, t_max| {
+        self.walk(k, bray, t_max, |b, i, t_max| {
             b.mesh.intersect_from(k, i, bray, tray, t_max, best);
             false
         });
@@ -31,29 +31,36 @@ impl StaticSnapshot {
     #[inline(always)]
     pub(crate) fn occluded_with<K: Kernel>(&self, k: K, bray: &BoxRay, tray: &RayTri, t_max: f32) -> bool {
         let mut t_max = t_max;
-        self.walk(bray, &mut t_max, |b, i, t_max| b.mesh.occluded_from(k, i, bray, tray, *t_max))
+        self.walk(k, bray, &mut t_max, |b, i, t_max| b.mesh.occluded_from(k, i, bray, tray, *t_max))
     }
 
     /// Visits the block subtrees the ray may hit, nearer first; `f` returns `true` to stop.
     #[inline(always)]
-    fn walk<F>(&self, bray: &BoxRay, t_max: &mut f32, mut f: F) -> bool
+    fn walk<K: Kernel, F>(&self, k: K, bray: &BoxRay, t_max: &mut f32, mut f: F) -> bool
     where
         F: FnMut(&Block, u32, &mut f32) -> bool,
     {
         let v = &*self.view;
+        if v.bvh.is_empty() {
+            return false;
+        }
         // `f` is called from one place only, so that it is inlined (see `flat::Wide::traverse`);
         // without an overlay the view is one leaf, and this tests its box first.
-        traverse(&v.nodes, 0, bray, t_max, |first, count, t_max| {
+        v.wide.traverse(k, &v.bvh, 0, bray, t_max, &mut |first, count, t_max| {
             v.refs[first as usize..(first + count) as usize].iter().any(|(b, i)| f(b, *i, t_max))
         })
     }
 }
 
 /// The overlay of one version as a flat tree: interior nodes are overlay nodes, each leaf
-/// names one block subtree (`refs[first]`).
+/// names one block subtree (`refs[first]`). Rays traverse its 8-wide copy, as they do the
+/// blocks: after an atrium run the overlay has about 2,600 nodes over 1,300 block subtrees,
+/// 22 levels deep, and walking it one binary node at a time cost the persistent tree a
+/// measurable share of its trace against a fresh build (docs/performance.md).
 #[derive(Debug, Default)]
 pub(crate) struct View {
-    pub nodes: Vec<Node>,
+    pub bvh: FlatBvh,
+    pub wide: Wide,
     pub refs: Vec<(Arc<Block>, u32)>,
 }
 
@@ -61,23 +68,25 @@ impl View {
     pub fn new(root: Option<&Link>) -> Self {
         let mut v = View::default();
         if let Some(root) = root {
-            v.nodes.push(Node::interior(Aabb::EMPTY, 0));
+            v.bvh.nodes.push(Node::interior(Aabb::EMPTY, 0));
             v.add(root, 0);
         }
+        v.wide = Wide::new(&v.bvh, |_, n| (n.first, n.count));
         v
     }
 
     fn add(&mut self, link: &Link, at: usize) {
+        let nodes = &mut self.bvh.nodes;
         match link {
             Link::Ref(b, i) => {
-                self.nodes[at] = Node::leaf(link.aabb(), self.refs.len() as u32, 1);
+                nodes[at] = Node::leaf(link.aabb(), self.refs.len() as u32, 1);
                 self.refs.push((b.clone(), *i));
             }
             Link::Node(n) => {
-                let first = self.nodes.len();
-                self.nodes.push(Node::interior(Aabb::EMPTY, 0));
-                self.nodes.push(Node::interior(Aabb::EMPTY, 0));
-                self.nodes[at] = Node::interior(n.aabb, first as u32);
+                let first = nodes.len();
+                nodes.push(Node::interior(Aabb::EMPTY, 0));
+                nodes.push(Node::interior(Aabb::EMPTY, 0));
+                nodes[at] = Node::interior(n.aabb, first as u32);
                 self.add(&n.kids[0], first);
                 self.add(&n.kids[1], first + 1);
             }
@@ -85,7 +94,8 @@ impl View {
     }
 
     pub fn memory_bytes(&self) -> usize {
-        self.nodes.len() * std::mem::size_of::<Node>()
+        self.bvh.memory_bytes()
+            + self.wide.memory_bytes()
             + self.refs.len() * std::mem::size_of::<(Arc<Block>, u32)>()
     }
 }
