@@ -156,6 +156,52 @@ proptest! {
         }
     }
 
+    /// Meshes declared permanent (an island that never wakes) are merged with the base into
+    /// one block when the tree relinks; the others keep their own blocks and stay removable
+    /// without a rebuild; hits stay those of brute force throughout, removals included.
+    #[test]
+    fn permanent_meshes_merge_at_relink_and_the_rest_stay_removable(
+        base in soup(Vec3::ZERO, 10.0, 2.0, 50..200),
+        islands in prop::collection::vec((vec3(10.0), 1usize..40, any::<bool>()), 2..8),
+        seed in any::<u64>(),
+    ) {
+        let meshes: Vec<TriangleMesh> = islands
+            .iter()
+            .enumerate()
+            .map(|(k, (c, n, _))| cluster(*c, *n, seed.wrapping_add(k as u64)))
+            .collect();
+        let mut tree = StaticBvh::new(BuildParams::QUALITY);
+        // Every insert past the first build relinks.
+        tree.rebuild_fraction = 0.0;
+        tree.apply(&[], &[(StaticId(100), &base)]).unwrap();
+        let mut live: Vec<(StaticId, &TriangleMesh)> = vec![(StaticId(100), &base)];
+        for (k, m) in meshes.iter().enumerate() {
+            let id = StaticId(k as u32);
+            if islands[k].2 {
+                tree.set_permanent(id);
+            }
+            let update = tree.apply(&[], &[(id, m)]).unwrap();
+            prop_assert!(update.relinked);
+            testing::check_static_tree(&tree).map_err(TestCaseError::fail)?;
+            live.push((id, m));
+        }
+        for (k, (_, n, permanent)) in islands.iter().enumerate() {
+            // A merged mesh shares the rebuilt block (removing it rebuilds); the rest do not.
+            prop_assert_eq!(tree.removal_rebuilds(StaticId(k as u32)), *permanent && *n > 0, "island {}", k);
+        }
+        let all: Vec<&TriangleMesh> = std::iter::once(&base).chain(meshes.iter()).collect();
+        let rays = rays_for(&all, seed, 48, 12.0);
+        for remove in [0u32, 1] {
+            let tris: Vec<RefTri> = live.iter().flat_map(|(id, m)| ref_tris(HitObject::Static(*id), m)).collect();
+            check_scene(&tree.snapshot(), &rays, &tris, 1e-5)?;
+            prop_assert!(tree.remove(StaticId(remove)));
+            live.retain(|(id, _)| *id != StaticId(remove));
+            testing::check_static_tree(&tree).map_err(TestCaseError::fail)?;
+        }
+        let tris: Vec<RefTri> = live.iter().flat_map(|(id, m)| ref_tris(HitObject::Static(*id), m)).collect();
+        check_scene(&tree.snapshot(), &rays, &tris, 1e-5)?;
+    }
+
     #[test]
     fn old_snapshot_is_unchanged(
         base in soup(Vec3::ZERO, 8.0, 2.0, 20..200),

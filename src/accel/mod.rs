@@ -167,6 +167,14 @@ pub trait Accelerator: Send + Sync {
         motion: Option<InstanceMotion>,
     ) -> Result<(), AccelError>;
 
+    /// Declares that static mesh `id` will never be removed (an offline render's lookahead
+    /// knows its island never wakes). A backend may then merge it with other such meshes into
+    /// one structure when it reorganises its static scene; removing it anyway stays correct but
+    /// may cost a rebuild. The default ignores the hint.
+    fn set_static_permanent(&mut self, id: StaticId) {
+        let _ = id;
+    }
+
     /// Declares instance `id` at rest (`resting`: it will not move until woken) or awake.
     /// Resting instances leave the per-frame top level for a resting level that the backend
     /// rebuilds on a schedule shared by all backends (`RestingSchedule`): a new resting

@@ -218,6 +218,9 @@ impl SceneManager {
                 }
             }
             let id = self.accel.add_static(&baked.mesh)?;
+            if self.options.lookahead.as_ref().is_some_and(|l| l.wake_frame(*island).is_none()) {
+                self.accel.set_static_permanent(id);
+            }
             for part in &baked.parts {
                 let slot = &mut self.bodies[part.body.0 as usize];
                 if let Placement::Instance { id, .. } = slot.placement {
@@ -232,14 +235,15 @@ impl SceneManager {
             self.integrated.insert(*island, Integrated { id, baked });
             stats.islands_integrated += 1;
             if per_island {
-                self.accel.commit_static()?;
-                self.cost.record_build(batch, ms(t));
+                // A commit may also merge blocks (the BVH's relink): count what it built.
+                let built = self.accel.commit_static()?.built_triangles;
+                self.cost.record_build(built.max(batch), ms(t));
                 batch = 0;
             }
         }
         if !per_island {
-            self.accel.commit_static()?;
-            self.cost.record_build(batch, ms(t));
+            let built = self.accel.commit_static()?.built_triangles;
+            self.cost.record_build(built.max(batch), ms(t));
         }
         Ok(())
     }

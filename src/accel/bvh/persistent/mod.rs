@@ -41,7 +41,7 @@ mod traverse;
 
 pub use stats::SnapshotMemory;
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::sync::Arc;
 
 use super::flat::MeshBvh;
@@ -195,6 +195,8 @@ pub struct StaticBvh {
     /// Relink ([`Self::relink`]) once the triangles inserted since the last rebuild or relink
     /// exceed this fraction of the triangles the tree then held. Default 0.5.
     pub rebuild_fraction: f32,
+    /// Meshes the caller says will never be removed ([`Self::set_permanent`]).
+    permanent: HashSet<StaticId>,
 }
 
 impl Default for StaticBvh {
@@ -205,7 +207,13 @@ impl Default for StaticBvh {
 
 impl StaticBvh {
     pub fn new(params: BuildParams) -> Self {
-        Self { state: StaticSnapshot::default(), params, next_block: 0, rebuild_fraction: 0.5 }
+        Self {
+            state: StaticSnapshot::default(),
+            params,
+            next_block: 0,
+            rebuild_fraction: 0.5,
+            permanent: HashSet::new(),
+        }
     }
 
     pub fn params(&self) -> &BuildParams {
@@ -228,6 +236,15 @@ impl StaticBvh {
 
     pub fn contains(&self, id: StaticId) -> bool {
         self.state.contains(id)
+    }
+
+    /// Declares that mesh `id` (present or about to be inserted) will never be removed, so the
+    /// next [`Self::relink`] may merge its block into one rebuilt block with the other
+    /// permanent meshes and the rebuilt base. The caller knows the future (an offline render's
+    /// lookahead: the island never wakes). If it is removed after all, that costs a rebuild, as
+    /// removing a mesh of the base does.
+    pub fn set_permanent(&mut self, id: StaticId) {
+        self.permanent.insert(id);
     }
 
     /// Whether removing `id` needs a rebuild (it shares a block with other meshes) rather
@@ -290,6 +307,7 @@ impl StaticBvh {
     /// Removes a mesh; returns whether it was present. A mesh with its own block is unlinked
     /// and the path refitted; one sharing a rebuilt block triggers a rebuild.
     pub fn remove(&mut self, id: StaticId) -> bool {
+        self.permanent.remove(&id);
         let Some(entry) = Arc::make_mut(&mut self.state.meshes).remove(&id) else {
             return false;
         };
@@ -328,22 +346,50 @@ impl StaticBvh {
         tris
     }
 
-    /// Rebuilds the overlay over the existing blocks, re-inserting each whole, largest first:
-    /// no triangle is touched and every mesh keeps its own block, so it stays removable
-    /// without a rebuild. What growth past [`Self::rebuild_fraction`] triggers: the
-    /// overlay's shape then depends less on insertion order. Returns whether it fell back to a
-    /// full rebuild (the overlay came out deeper than [`MAX_OVERLAY_HEIGHT`]).
+    /// Rebuilds the overlay over the existing blocks, re-inserting each whole, largest first,
+    /// after merging the blocks that will never be removed (the rebuilt base and the blocks of
+    /// meshes declared with [`Self::set_permanent`]) into one rebuilt block. Every other mesh
+    /// keeps its own block and stays removable without a rebuild. What growth past
+    /// [`Self::rebuild_fraction`] triggers: the overlay's shape then depends less on insertion
+    /// order. Returns the triangles built into the merged block (0 when there was nothing to
+    /// merge), or `None` when it fell back to a full rebuild (the overlay came out deeper than
+    /// [`MAX_OVERLAY_HEIGHT`]).
     ///
-    /// (Merging everything into one block instead, as a full rebuild does, traces a little
-    /// faster but makes every later removal a full rebuild: on the 8,000-body atrium, where
-    /// islands keep waking, the BVH backend then spent most of its frame time rebuilding.)
-    pub fn relink(&mut self) -> bool {
-        let Some(root) = self.state.root.take() else {
-            return false;
-        };
-        let mut blocks: Vec<Arc<Block>> = Vec::new();
-        let mut seen = std::collections::HashSet::new();
-        let mut stack = vec![&root];
+    /// (Merging everything into one block, as a full rebuild does, traces a little faster but
+    /// makes every later removal a full rebuild: on the 8,000-body atrium, where islands keep
+    /// waking, the BVH backend then spent most of its frame time rebuilding. Keeping every
+    /// island's block instead left the tree after the atrium's run tracing bounce rays about
+    /// 1.55x slower than a fresh build of the same triangles: each of some 500 small,
+    /// overlapping blocks is entered separately. Merging only what never wakes keeps both.)
+    pub fn relink(&mut self) -> Option<usize> {
+        let root = self.state.root.take()?;
+        let blocks = self.blocks_of(&root);
+        let (merge, keep) = self.mergeable(&blocks);
+        let merged = if merge.len() > 1 { self.merge_blocks(&merge) } else { None };
+        let built = merged.as_ref().map_or(0, |b| b.mesh.tris.len());
+        let mut order: Vec<Arc<Block>> =
+            merged.into_iter().chain(if built > 0 { keep } else { blocks }).collect();
+        order.sort_by_key(|b| (std::cmp::Reverse(b.mesh.tris.len()), b.id));
+        let mut fresh = Link::Ref(order[0].clone(), 0);
+        for b in &order[1..] {
+            fresh = insert::insert_block(fresh, b);
+        }
+        self.state.rebuilt_triangles = self.state.triangles;
+        self.state.inserted_since_rebuild = 0;
+        if fresh.height() > MAX_OVERLAY_HEIGHT {
+            self.state.set_root(Some(root));
+            self.rebuild();
+            return None;
+        }
+        self.state.set_root(Some(fresh));
+        Some(built)
+    }
+
+    /// Every distinct block referenced from `root`.
+    fn blocks_of(&self, root: &Link) -> Vec<Arc<Block>> {
+        let mut blocks = Vec::new();
+        let mut seen = HashSet::new();
+        let mut stack = vec![root];
         while let Some(l) = stack.pop() {
             match l {
                 Link::Ref(b, _) => {
@@ -354,20 +400,43 @@ impl StaticBvh {
                 Link::Node(n) => stack.extend(n.kids.iter()),
             }
         }
-        blocks.sort_by_key(|b| (std::cmp::Reverse(b.mesh.tris.len()), b.id));
-        let mut fresh = Link::Ref(blocks[0].clone(), 0);
-        for b in &blocks[1..] {
-            fresh = insert::insert_block(fresh, b);
+        blocks
+    }
+
+    /// Splits `blocks` into those that will never be removed on their own (every live mesh in
+    /// them is shared or permanent) and the rest.
+    fn mergeable(&self, blocks: &[Arc<Block>]) -> (Vec<Arc<Block>>, Vec<Arc<Block>>) {
+        let mut removable = HashSet::new();
+        for (id, e) in self.state.meshes.iter() {
+            if e.triangles > 0 && !e.shared && !self.permanent.contains(id) {
+                removable.insert(e.block);
+            }
         }
-        self.state.rebuilt_triangles = self.state.triangles;
-        self.state.inserted_since_rebuild = 0;
-        if fresh.height() > MAX_OVERLAY_HEIGHT {
-            self.state.set_root(Some(root));
-            self.rebuild();
-            return true;
+        blocks.iter().cloned().partition(|b| !removable.contains(&b.id))
+    }
+
+    /// Builds one block from the live triangles of `blocks` and marks their meshes as sharing it.
+    fn merge_blocks(&mut self, blocks: &[Arc<Block>]) -> Option<Arc<Block>> {
+        let ids: HashSet<u32> = blocks.iter().map(|b| b.id).collect();
+        let meshes = &self.state.meshes;
+        let tris: Vec<Tri> = blocks
+            .iter()
+            .flat_map(|b| {
+                b.mesh.tris.iter().filter(|t| meshes.get(&StaticId(t.geom)).is_some_and(|e| e.block == b.id))
+            })
+            .copied()
+            .collect();
+        if tris.is_empty() {
+            return None;
         }
-        self.state.set_root(Some(fresh));
-        false
+        let block = self.new_block(tris);
+        for e in Arc::make_mut(&mut self.state.meshes).values_mut() {
+            if e.triangles > 0 && ids.contains(&e.block) {
+                e.block = block.id;
+                e.shared = true;
+            }
+        }
+        Some(block)
     }
 
     fn rebuild_from(&mut self, tris: Vec<Tri>) {
@@ -457,9 +526,12 @@ impl StaticBvh {
                 update.built_triangles = self.state.triangles;
             } else if over_budget {
                 update.relinked = true;
-                if self.relink() {
-                    update.rebuilt = true;
-                    update.built_triangles = self.state.triangles;
+                match self.relink() {
+                    Some(merged) => update.built_triangles += merged,
+                    None => {
+                        update.rebuilt = true;
+                        update.built_triangles = self.state.triangles;
+                    }
                 }
             }
         }

@@ -246,6 +246,10 @@ impl Accelerator for BvhAccel {
         Ok(id)
     }
 
+    fn set_static_permanent(&mut self, id: StaticId) {
+        self.statics.set_permanent(id);
+    }
+
     fn remove_static(&mut self, id: StaticId) -> Result<(), AccelError> {
         if let Some(i) = self.staged_adds.iter().position(|(s, _)| *s == id) {
             self.staged_adds.swap_remove(i);
