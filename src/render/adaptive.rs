@@ -72,8 +72,7 @@ pub(crate) struct Stopping {
     threshold: f32,
     pub(crate) min: u32,
     /// EXPERIMENT knobs (env, removed before the final commit).
-    exponent: f32,
-    pool: u8,
+    mode: u8,
     pub(crate) check: u32,
 }
 
@@ -83,47 +82,88 @@ impl Stopping {
         Self {
             threshold,
             min,
-            exponent: var("DORMANT_ADAPT_A").and_then(|v| v.parse().ok()).unwrap_or(0.0),
-            pool: match var("DORMANT_ADAPT_POOL").as_deref() {
-                Some("mean") => 1,
-                Some("max") => 2,
-                _ => 0,
+            mode: match var("DORMANT_ADAPT_MODE").as_deref() {
+                Some("pixel0") => 0,
+                Some("pixel1") => 1,
+                Some("every") => 3,
+                _ => 2,
             },
             check: var("DORMANT_ADAPT_CHECK").and_then(|v| v.parse().ok()).unwrap_or(CHECK_EVERY),
         }
     }
 
-    /// Whether a pixel with `n` samples whose (pooled) per-sample relative variance is
-    /// `variance` is done.
-    pub(crate) fn done(&self, n: u32, variance: f32) -> bool {
+    /// After a round: clears `active` for the pixels that are done, given every pixel's
+    /// per-sample relative variance and sample count (row-major); whether any still samples.
+    pub(crate) fn judge(
+        &self,
+        variances: &[f32],
+        counts: &[u32],
+        active: &mut [bool],
+        spp: u32,
+        once: &mut Option<f32>,
+    ) -> bool {
         let t2 = self.threshold * self.threshold;
-        // stderr^2 = variance / n <= t^2 * sigma^a
-        n >= self.min && variance / (n as f32) < t2 * variance.max(0.0).sqrt().powf(self.exponent)
-    }
-
-    /// The variance a pixel is judged by: its own, or pooled over its 3x3 neighbourhood.
-    pub(crate) fn pooled(&self, variances: &[f32], w: usize, h: usize, x: usize, y: usize) -> f32 {
-        if self.pool == 0 {
-            return variances[y * w + x];
-        }
-        let (mut sum, mut most, mut k) = (0.0f32, 0.0f32, 0);
-        for yy in y.saturating_sub(1)..(y + 2).min(h) {
-            for xx in x.saturating_sub(1)..(x + 2).min(w) {
-                let v = variances[yy * w + xx];
-                sum += v;
-                most = most.max(v);
-                k += 1;
-                if v.is_nan() {
-                    return f32::NAN;
-                }
+        let lambda = match self.mode {
+            0 | 1 => t2,
+            2 => *once.get_or_insert_with(|| calibrate(variances, counts, active, spp, f64::from(t2)) as f32),
+            _ => calibrate(variances, counts, active, spp, f64::from(t2)) as f32,
+        };
+        let mut any = false;
+        for ((a, &v), &n) in active.iter_mut().zip(variances).zip(counts) {
+            if *a && n >= self.min {
+                let done = match self.mode {
+                    0 => v / (n as f32) < lambda,
+                    _ => v.sqrt() / (n as f32) <= lambda,
+                };
+                *a = !done;
             }
+            any |= *a;
         }
-        if self.pool == 1 {
-            sum / k as f32
+        any
+    }
+}
+
+/// The `lambda` for which sampling every pixel still active to `sqrt(v) / lambda` samples
+/// (between its count and `spp`) predicts a relative MSE of `target`.
+fn calibrate(variances: &[f32], counts: &[u32], active: &[bool], spp: u32, target: f64) -> f64 {
+    use rayon::prelude::*;
+    const CHUNK: usize = 4096;
+    let error = |lambda: f64| -> f64 {
+        let chunks: Vec<f64> = (0..variances.len().div_ceil(CHUNK))
+            .into_par_iter()
+            .map(|c| {
+                let range = c * CHUNK..((c + 1) * CHUNK).min(variances.len());
+                let mut sum = 0.0;
+                for i in range {
+                    let v = f64::from(variances[i]);
+                    if !v.is_finite() {
+                        continue;
+                    }
+                    let n = f64::from(counts[i]);
+                    let n = if active[i] { (v.sqrt() / lambda).clamp(n, f64::from(spp)) } else { n };
+                    sum += v / n;
+                }
+                sum
+            })
+            .collect();
+        chunks.iter().sum::<f64>() / variances.len().max(1) as f64
+    };
+    if error(f64::INFINITY) <= target {
+        return f64::INFINITY;
+    }
+    if error(0.0) > target {
+        return 0.0;
+    }
+    let (mut lo, mut hi) = ((1e-9f64).ln(), (1e4f64).ln());
+    for _ in 0..40 {
+        let mid = 0.5 * (lo + hi);
+        if error(mid.exp()) > target {
+            hi = mid;
         } else {
-            most
+            lo = mid;
         }
     }
+    lo.exp()
 }
 
 /// Per-sample relative variance of a pixel after `n >= 2` samples summing to `sum`, their
@@ -186,15 +226,6 @@ mod tests {
         let expected = ((8.0 * 0.25 / 7.0) / 8.0 / (0.25 + 0.01f32)).sqrt();
         assert!((relative_error(8, sum, squares) - expected).abs() < 1e-6);
         assert!(relative_error(8, Vec3::splat(f32::NAN), squares).is_nan());
-    }
-
-    #[test]
-    fn stops_only_after_the_minimum() {
-        let s = AdaptiveSampling { noise_threshold: 0.1, min_spp: Some(8) }.stopping(64).unwrap();
-        assert!(!s.done(4, 0.0));
-        assert!(s.done(8, 0.0));
-        assert!(!s.done(8, 1.0));
-        assert!(!s.done(12, f32::NAN));
     }
 
     #[test]

@@ -240,6 +240,8 @@ impl TileRenderer<'_> {
         let mut accs: Vec<Accumulator> = tiles.iter().map(|&(x0, y0)| self.accumulator(x0, y0)).collect();
         let mut active = vec![true; w * h];
         let mut variances = vec![0.0f32; w * h];
+        let mut counts = vec![0u32; w * h];
+        let mut lambda = None;
         let (mut from, mut to) = (0, stopping.min.min(spp));
         loop {
             accs.par_iter_mut().for_each(|acc| {
@@ -249,19 +251,9 @@ impl TileRenderer<'_> {
                 break;
             }
             for acc in &accs {
-                acc.variances(w, &mut variances);
+                acc.variances(w, &mut variances, &mut counts);
             }
-            let mut any = false;
-            for y in 0..h {
-                for x in 0..w {
-                    let p = y * w + x;
-                    if active[p] && stopping.done(to, stopping.pooled(&variances, w, h, x, y)) {
-                        active[p] = false;
-                    }
-                    any |= active[p];
-                }
-            }
-            if !any {
+            if !stopping.judge(&variances, &counts, &mut active, spp, &mut lambda) {
                 break;
             }
             (from, to) = (to, (to + stopping.check).min(spp));
@@ -347,10 +339,11 @@ impl Accumulator {
     }
 
     /// Writes each pixel's per-sample relative variance into the frame's row-major `out`.
-    fn variances(&self, w: usize, out: &mut [f32]) {
+    fn variances(&self, w: usize, out: &mut [f32], counts: &mut [u32]) {
         for (i, ((&n, &sum), &squares)) in self.samples.iter().zip(&self.sums).zip(&self.squares).enumerate() {
             let (x, y) = (self.x0 as usize + i % self.tw as usize, self.y0 as usize + i / self.tw as usize);
             out[y * w + x] = relative_variance(n, sum, squares);
+            counts[y * w + x] = n;
         }
     }
 
