@@ -7,7 +7,7 @@ use std::time::Instant;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
-use super::adaptive::{relative_variance, AdaptiveSampling, SppStats, Stopping};
+use super::adaptive::{AdaptiveSampling, SppStats, Stopping};
 use super::integrator::dims;
 use super::{
     Film, FrameContext, FrameIntegrator, Integrator, PinholeCamera, PixelSampler, RenderError, RenderScene,
@@ -156,10 +156,8 @@ pub fn render_frame_counted(
     let tiles_x = w.div_ceil(TILE);
     let tiles: Vec<(u32, u32)> =
         (0..tiles_x * h.div_ceil(TILE)).map(|t| ((t % tiles_x) * TILE, (t / tiles_x) * TILE)).collect();
-    let rendered: Vec<(u32, u32, Tile)> = match renderer.stopping {
-        Some(stopping) => renderer.render_adaptive(&tiles, &stopping),
-        None => tiles.par_iter().map(|&(x0, y0)| (x0, y0, renderer.render(x0, y0))).collect(),
-    };
+    let rendered: Vec<(u32, u32, Tile)> =
+        tiles.par_iter().map(|&(x0, y0)| (x0, y0, renderer.render(x0, y0))).collect();
     let mut film = Film::new(w, h);
     let mut counts = vec![0; (w * h) as usize];
     let mut rays = 0;
@@ -206,65 +204,20 @@ struct TileRenderer<'a> {
 }
 
 impl TileRenderer<'_> {
-    /// A tile's empty sums.
-    fn accumulator(&self, x0: u32, y0: u32) -> Accumulator {
+    /// The tile whose top-left pixel is `(x0, y0)`.
+    fn render(&self, x0: u32, y0: u32) -> Tile {
         let (w, h) = (self.settings.width, self.settings.height);
         let (x1, y1) = ((x0 + TILE).min(w), (y0 + TILE).min(h));
         let n = ((x1 - x0) * (y1 - y0)) as usize;
-        Accumulator {
+        let mut acc = Accumulator {
             x0,
             y0,
             tw: x1 - x0,
-            th: y1 - y0,
             sums: vec![Vec3::ZERO; n],
             squares: if self.stopping.is_some() { vec![Vec3::ZERO; n] } else { Vec::new() },
             samples: vec![0; n],
             rays: 0,
-        }
-    }
-
-    /// The tile whose top-left pixel is `(x0, y0)`, every pixel with its fixed budget.
-    fn render(&self, x0: u32, y0: u32) -> Tile {
-        let w = self.settings.width;
-        let mut acc = self.accumulator(x0, y0);
-        self.sample_tile(&mut acc, 0, |x, y| self.samples.map_or(self.settings.spp, |s| s[(y * w + x) as usize]));
-        acc.into_tile()
-    }
-
-    /// Adaptive sampling in rounds over the whole frame: every pixel gets the minimum, then
-    /// after each round of `check` samples the pixels still sampling are judged from the
-    /// frame's sums (the same at any thread count or tile order).
-    fn render_adaptive(&self, tiles: &[(u32, u32)], stopping: &Stopping) -> Vec<(u32, u32, Tile)> {
-        let (w, h) = (self.settings.width as usize, self.settings.height as usize);
-        let spp = self.settings.spp;
-        let mut accs: Vec<Accumulator> = tiles.iter().map(|&(x0, y0)| self.accumulator(x0, y0)).collect();
-        let mut active = vec![true; w * h];
-        let mut variances = vec![0.0f32; w * h];
-        let mut counts = vec![0u32; w * h];
-        let mut lambda = None;
-        let (mut from, mut to) = (0, stopping.min.min(spp));
-        loop {
-            accs.par_iter_mut().for_each(|acc| {
-                self.sample_tile(acc, from, |x, y| if active[y as usize * w + x as usize] { to } else { 0 })
-            });
-            if to >= spp {
-                break;
-            }
-            for acc in &accs {
-                acc.variances(w, &mut variances, &mut counts);
-            }
-            if !stopping.judge(&variances, &counts, &mut active, spp, &mut lambda) {
-                break;
-            }
-            (from, to) = (to, (to + stopping.check).min(spp));
-        }
-        tiles.iter().zip(accs).map(|(&(x0, y0), acc)| (x0, y0, acc.into_tile())).collect()
-    }
-
-    /// Samples `from..budget(x, y)` of every pixel of `acc`'s tile, block by block.
-    fn sample_tile(&self, acc: &mut Accumulator, from: u32, budget: impl Fn(u32, u32) -> u32) {
-        let (x0, y0) = (acc.x0, acc.y0);
-        let (x1, y1) = (x0 + acc.tw, y0 + acc.th);
+        };
         for by in (y0..y1).step_by(BLOCK.1 as usize) {
             for bx in (x0..x1).step_by(BLOCK.0 as usize) {
                 // A fixed array, not a Vec: one block per 8 pixels is on the hot path.
@@ -273,41 +226,46 @@ impl TileRenderer<'_> {
                 let mut n = 0;
                 for y in by..(by + BLOCK.1).min(y1) {
                     for x in bx..(bx + BLOCK.0).min(x1) {
-                        let budget = budget(x, y);
-                        if budget > from {
-                            cells[n] = Cell { x, y, sampler: PixelSampler::new(x, y, self.settings.seed), budget };
-                            n += 1;
-                        }
+                        let budget = self.samples.map_or(self.settings.spp, |s| s[(y * w + x) as usize]);
+                        cells[n] =
+                            Cell { x, y, sampler: PixelSampler::new(x, y, self.settings.seed), budget };
+                        n += 1;
                     }
                 }
-                self.render_block(&cells[..n], from, acc);
+                self.render_block(&cells[..n], &mut acc);
             }
         }
+        let pixels = acc.sums.iter().zip(&acc.samples).map(|(&sum, &k)| sum / k.max(1) as f32).collect();
+        Tile { pixels, samples: acc.samples, rays: acc.rays }
     }
 
-    /// Samples `from..` of the pixels of one block in index order, the camera rays of those
-    /// still sampling traced as one packet per index, until each has its budget.
-    fn render_block(&self, block: &[Cell], from: u32, acc: &mut Accumulator) {
+    /// Samples the pixels of one block in index order, the camera rays of those still
+    /// sampling traced as one packet per index, until each has its budget or has converged.
+    fn render_block(&self, block: &[Cell], acc: &mut Accumulator) {
         let spp = self.settings.spp;
         let mut camera_rays = [Ray::new(Vec3::ZERO, Vec3::Z); BLOCK_PIXELS];
         let mut hits = [None; BLOCK_PIXELS];
-        // Which cell each packet slot samples.
+        // Which cell each packet slot samples, and which cells stopped early.
         let mut slots = [0usize; BLOCK_PIXELS];
+        let mut done = [false; BLOCK_PIXELS];
         let most = block.iter().map(|c| c.budget).max().unwrap_or(0);
-        for i in from..most {
+        for i in 0..most {
             let mut m = 0;
             for (c, cell) in block.iter().enumerate() {
-                if i < cell.budget {
+                if i < cell.budget && !done[c] {
                     camera_rays[m] = camera_ray(&self.camera, spp, cell.x, cell.y, &cell.sampler, i);
                     slots[m] = c;
                     m += 1;
                 }
             }
+            if m == 0 {
+                break;
+            }
             self.query.intersect_packet(&camera_rays[..m], &mut hits[..m]);
             for ((ray, hit), &c) in camera_rays.iter().zip(hits).zip(&slots[..m]) {
                 let cell = &block[c];
                 let li = self.integrator.li_from_hit(ray, hit, &cell.sampler, i, &mut acc.rays);
-                acc.add(cell, li);
+                done[c] = acc.add(cell, li, self.stopping.as_ref());
             }
         }
     }
@@ -319,7 +277,6 @@ struct Accumulator {
     x0: u32,
     y0: u32,
     tw: u32,
-    th: u32,
     sums: Vec<Vec3>,
     /// Sums of squared samples; only with adaptive sampling.
     squares: Vec<Vec3>,
@@ -328,27 +285,15 @@ struct Accumulator {
 }
 
 impl Accumulator {
-    /// Adds sample `li` to `cell`'s pixel.
-    fn add(&mut self, cell: &Cell, li: Vec3) {
+    /// Adds sample `li` to `cell`'s pixel; whether the pixel has converged.
+    fn add(&mut self, cell: &Cell, li: Vec3, stopping: Option<&Stopping>) -> bool {
         let at = ((cell.y - self.y0) * self.tw + (cell.x - self.x0)) as usize;
         self.sums[at] += li;
         self.samples[at] += 1;
-        if !self.squares.is_empty() {
-            self.squares[at] += li * li;
-        }
-    }
-
-    /// Writes each pixel's per-sample relative variance into the frame's row-major `out`.
-    fn variances(&self, w: usize, out: &mut [f32], counts: &mut [u32]) {
-        for (i, ((&n, &sum), &squares)) in self.samples.iter().zip(&self.sums).zip(&self.squares).enumerate() {
-            let (x, y) = (self.x0 as usize + i % self.tw as usize, self.y0 as usize + i / self.tw as usize);
-            out[y * w + x] = relative_variance(n, sum, squares);
-            counts[y * w + x] = n;
-        }
-    }
-
-    fn into_tile(self) -> Tile {
-        let pixels = self.sums.iter().zip(&self.samples).map(|(&sum, &k)| sum / k.max(1) as f32).collect();
-        Tile { pixels, samples: self.samples, rays: self.rays }
+        let Some(stopping) = stopping else {
+            return false;
+        };
+        self.squares[at] += li * li;
+        stopping.converged(self.samples[at], self.sums[at], self.squares[at])
     }
 }
