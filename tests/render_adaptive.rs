@@ -92,7 +92,7 @@ fn adaptive_sampling_matches_uniform_sampling_against_a_reference() {
     let [reference, uniform, adaptive] = ["reference", "uniform", "adaptive"].map(|d| dir.path().join(d));
     render(&reference, &["--spp", "256"]);
     render(&uniform, &["--spp", "64"]);
-    let report = render(&adaptive, &["--spp", "64", "--noise-threshold", "0.055"]);
+    let report = render(&adaptive, &["--spp", "64", "--noise-threshold", "0.065"]);
     let reference = pixels(&frame(&reference, ""));
     let (u, a) = (pixels(&frame(&uniform, "")), pixels(&frame(&adaptive, "")));
     let (u_error, a_error) = (relative_mse(&u, &reference), relative_mse(&a, &reference));

@@ -87,9 +87,11 @@ pub struct RenderArgs {
     /// Samples per pixel; with --noise-threshold, the most a pixel gets.
     #[arg(long, value_name = "N", default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=MAX_SAMPLES_PER_PIXEL as i64))]
     pub spp: u32,
-    /// Adaptive sampling: a pixel stops once its estimated relative error (the standard error
-    /// of its mean over its value, the value at least 0.1) is below T, e.g. 0.02; 0 = off,
-    /// every pixel gets --spp (default: the scene's render.noise_threshold, else 0).
+    /// Adaptive sampling: the noise level left in the image. A pixel stops once its estimated
+    /// relative error (the standard error of its mean over its value, the value at least 0.1)
+    /// is at most T x sqrt(σ), σ the relative spread of its samples: T is the noise left in a
+    /// pixel with σ = 1, e.g. 0.07; 0 = off, every pixel gets --spp (default: the scene's
+    /// render.noise_threshold, else 0).
     #[arg(long, value_name = "T", allow_negative_numbers = true)]
     pub noise_threshold: Option<f32>,
     /// With --noise-threshold: samples every pixel gets before its error is first checked
