@@ -274,8 +274,15 @@ proptest! {
         ground in soup(Vec3::new(0.0, -8.0, 0.0), 8.0, 2.0, 0..40),
         moved in prop::collection::vec((0usize..16, vec3(10.0)), 0..4),
         seed in any::<u64>(),
+        shared_leaves in any::<bool>(),
     ) {
-        let mut accel = BvhAccel::new(Some(1));
+        // Top-level leaves of up to eight instances (`BuildParams::FAST`) as well as the
+        // default one: the two-level traversal enters a leaf's instances one after the other.
+        let mut accel = if shared_leaves {
+            BvhAccel::with_params(BuildParams::QUALITY, BuildParams::FAST, Some(1))
+        } else {
+            BvhAccel::new(Some(1))
+        };
         let pids: Vec<_> = protos.iter().map(|p| accel.add_prototype(p).unwrap()).collect();
         let gid = accel.add_static(&ground).unwrap();
         let xf = |axis: Vec3, angle: f32, scale: Vec3, t: Vec3| {
