@@ -5,9 +5,10 @@
 use std::sync::Arc;
 
 use dormant::accel::embree::{
-    BuildQuality, Device, EmbreeError, Geometry, InstanceGeometry, Scene, SceneFlags, TriangleGeometry,
-    Version,
+    BuildQuality, Device, EmbreeError, Geometry, InstanceArrayGeometry, InstanceGeometry, Scene, SceneFlags,
+    TriangleGeometry, Version,
 };
+use dormant::geometry::{InstanceMotion, RigidTransform};
 use glam::{Affine3A, Quat, Vec3};
 
 fn device() -> Device {
@@ -193,4 +194,98 @@ fn instance_transform_updates_and_rejects_nan() {
     let nan = Affine3A::from_translation(Vec3::new(f32::NAN, 0.0, 0.0));
     assert_eq!(top.instance_mut(0).unwrap().set_transform(&nan), Err(EmbreeError::NonFiniteTransform));
     assert!(matches!(top.geometry(0), Some(Geometry::Instance(_))));
+}
+
+/// A square at z = 1 in object space, so a wrong scale of the instance moves it.
+fn raised_square(device: &Device) -> Arc<dormant::accel::embree::FrozenScene> {
+    let p = [
+        Vec3::new(-2.0, -2.0, 1.0),
+        Vec3::new(2.0, -2.0, 1.0),
+        Vec3::new(2.0, 2.0, 1.0),
+        Vec3::new(-2.0, 2.0, 1.0),
+    ];
+    let mut proto = scene(device);
+    proto.attach(TriangleGeometry::new(device, &p, &[[0, 1, 2], [0, 2, 3]]).unwrap()).unwrap();
+    proto.freeze().unwrap()
+}
+
+/// Where a ray from `org` straight down (-z) meets the raised square placed by `motion` at
+/// `time`, from dormant's own interpolation ([`InstanceMotion::at`]).
+fn expected_t(motion: &InstanceMotion, time: f32, org: Vec3) -> f32 {
+    let xf = motion.at(time).to_affine();
+    let (n, p) = (xf.transform_vector3(Vec3::Z), xf.transform_point3(Vec3::Z));
+    n.dot(p - org) / n.dot(Vec3::NEG_Z)
+}
+
+#[test]
+fn moving_instance_is_where_its_motion_puts_it_at_every_shutter_time() {
+    let d = device();
+    let proto = raised_square(&d);
+    let open =
+        RigidTransform { rotation: Quat::from_rotation_x(0.1), translation: Vec3::new(0.0, 0.0, -2.0) };
+    // A pure translation and a turn of 2e-4 rad are lerped as matrices, a turn of 0.4 rad is
+    // slerped as quaternions: lerping it would put the square 0.02 off halfway.
+    for angle in [0.0, 2e-4, 0.4] {
+        let close = RigidTransform {
+            rotation: Quat::from_rotation_x(0.1 + angle),
+            translation: Vec3::new(0.5, 0.0, -4.0),
+        };
+        let motion = InstanceMotion { open, close };
+        let mut top = scene(&d);
+        top.attach_by_id(InstanceGeometry::new(&d, &proto, &Affine3A::IDENTITY).unwrap(), 0).unwrap();
+        top.instance_mut(0).unwrap().set_motion(&motion).unwrap();
+        top.commit().unwrap();
+        let view = top.view().unwrap();
+        let org = Vec3::new(0.3, 0.2, 5.0);
+        for time in [0.0, 0.25, 0.5, 0.75, 1.0] {
+            let hit = view.intersect1_at(org.to_array(), [0.0, 0.0, -1.0], 0.0, f32::INFINITY, time).unwrap();
+            let want = expected_t(&motion, time, org);
+            assert!((hit.t - want).abs() < 1e-4, "angle {angle}, time {time}: t {} against {want}", hit.t);
+        }
+    }
+}
+
+#[test]
+fn instance_array_places_each_entry_and_skips_holes() {
+    let d = device();
+    let proto = raised_square(&d);
+    let at = |x: f32| RigidTransform { rotation: Quat::IDENTITY, translation: Vec3::new(x, 0.0, -2.0) };
+    let xs = [0.0, 10.0, 20.0];
+    let down = |view: &dormant::accel::embree::SceneView, x: f32, time: f32| {
+        view.intersect1_at([x, 0.5, 5.0], [0.0, 0.0, -1.0], 0.0, f32::INFINITY, time)
+    };
+    let mut still = scene(&d);
+    let mut array = InstanceArrayGeometry::new(&d, std::slice::from_ref(&proto), false).unwrap();
+    let entries: Vec<_> =
+        xs.iter().enumerate().map(|(i, &x)| ((i != 1).then_some(0), at(x).to_affine())).collect();
+    array.set_still(&entries).unwrap();
+    still.attach_by_id(array, 4).unwrap();
+    still.commit().unwrap();
+    let view = still.view().unwrap();
+    for (i, &x) in xs.iter().enumerate() {
+        let hit = down(&view, x, 0.5);
+        assert_eq!(hit.map(|h| h.inst_id), (i != 1).then_some(Some(4)), "entry {i}");
+        assert!(hit.is_none_or(|h| (h.t - 6.0).abs() < 1e-5));
+    }
+    for angle in [0.0, 0.4] {
+        let mut moving = scene(&d);
+        let mut array = InstanceArrayGeometry::new(&d, std::slice::from_ref(&proto), true).unwrap();
+        let motion = |x: f32| InstanceMotion {
+            open: at(x),
+            close: RigidTransform {
+                rotation: Quat::from_rotation_x(angle),
+                translation: Vec3::new(x, 0.0, -4.0),
+            },
+        };
+        let entries: Vec<_> = xs.iter().map(|&x| (Some(0), motion(x))).collect();
+        array.set_moving(&entries).unwrap();
+        moving.attach_by_id(array, 0).unwrap();
+        moving.commit().unwrap();
+        let view = moving.view().unwrap();
+        for time in [0.0, 0.5, 1.0] {
+            let hit = down(&view, 10.0, time).unwrap();
+            let want = expected_t(&motion(10.0), time, Vec3::new(10.0, 0.5, 5.0));
+            assert!((hit.t - want).abs() < 1e-4, "angle {angle}, time {time}: t {} against {want}", hit.t);
+        }
+    }
 }

@@ -5,6 +5,8 @@
 pub mod accel;
 pub mod adaptive;
 mod frame_rays;
+#[cfg(feature = "embree")]
+pub mod instances;
 pub mod integration;
 pub mod paper;
 pub mod regimes;
@@ -12,6 +14,8 @@ pub mod render;
 
 pub(crate) use accel::{bench_accel, AccelBenchOptions};
 pub(crate) use adaptive::{bench_adaptive, AdaptiveBenchOptions};
+#[cfg(feature = "embree")]
+pub(crate) use instances::{bench_instances, InstancesBenchOptions};
 pub(crate) use integration::{bench_integration, IntegrationBenchOptions};
 pub(crate) use paper::{bench_paper, PaperBenchOptions, PaperPreset, RainAssets};
 pub(crate) use regimes::{bench_regimes, Budget, RegimeSizes, RegimesOptions};

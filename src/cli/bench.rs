@@ -59,6 +59,11 @@ pub enum BenchCommand {
         after_help = "Examples:\n  dormant bench regimes scenes/demolition.toml --out out/regimes\n  dormant bench regimes scenes/demolition.toml --quick --out out/regimes-quick"
     )]
     Regimes(RegimesArgs),
+    /// Embree's top level of N instances as one instance geometry each against one instance
+    /// array, still and moving over the shutter: update, commit and trace (issue 15).
+    #[cfg(feature = "embree")]
+    #[command(after_help = "Examples:\n  dormant bench instances --count 8000 --json out/instances.json")]
+    Instances(InstancesArgs),
     /// Physics step time with every body awake against most asleep.
     #[command(after_help = "Examples:\n  dormant bench physics scenes/atrium.toml --json out/physics.json")]
     Physics(PhysicsArgs),
@@ -116,6 +121,20 @@ pub struct RegimesArgs {
     /// production frame at 160x90.
     #[arg(long)]
     pub quick: bool,
+}
+
+#[cfg(feature = "embree")]
+#[derive(Debug, Args)]
+pub struct InstancesArgs {
+    /// Instances in the top level.
+    #[arg(long, value_name = "N", default_value_t = 8000, value_parser = clap::value_parser!(u32).range(1..))]
+    pub count: u32,
+    /// Rays traced per measurement.
+    #[arg(long, value_name = "N", default_value_t = 200_000)]
+    pub rays: usize,
+    /// Updates, commits and traces per row (median commit, best trace).
+    #[arg(long, value_name = "N", default_value_t = 7, value_parser = clap::value_parser!(u32).range(1..))]
+    pub runs: u32,
 }
 
 #[derive(Debug, Args)]
@@ -245,6 +264,8 @@ pub(super) fn run(
         BenchCommand::Integration(i) => integration(i, threads, quiet, json),
         BenchCommand::Paper(p) => paper(p, threads, quiet, json),
         BenchCommand::Regimes(r) => regimes(r, threads, quiet, json),
+        #[cfg(feature = "embree")]
+        BenchCommand::Instances(i) => instances(i, threads, quiet, json),
     }
 }
 
@@ -398,6 +419,23 @@ fn emit(json: &serde_json::Value, out: &JsonOutput, quiet: bool) -> Result<(), C
         println!("{json:#}");
     }
     Ok(())
+}
+
+#[cfg(feature = "embree")]
+fn instances(
+    args: &InstancesArgs,
+    threads: Option<usize>,
+    quiet: bool,
+    json: &JsonOutput,
+) -> Result<(), CliError> {
+    let opts = bench::InstancesBenchOptions {
+        count: args.count as usize,
+        rays: args.rays,
+        runs: args.runs,
+        threads,
+    };
+    let report = bench::bench_instances(&opts).map_err(|e| CliError::Runtime(e.to_string()))?;
+    emit(&bench_json(&report), json, quiet)
 }
 
 fn accel(args: &AccelArgs, threads: Option<usize>, quiet: bool, json: &JsonOutput) -> Result<(), CliError> {

@@ -380,10 +380,15 @@ impl Accelerator for EmbreeAccel {
     fn commit(&mut self) -> Result<CommitReport, AccelError> {
         let resting = self.commit_resting(false)?;
         let top_changed = self.top.is_dirty();
-        // With moving instances the top level is a motion-blur BVH, about 4x the commit of a
-        // still one on the atrium (docs/performance.md, "Motion blur"). Building it at MEDIUM
-        // or LOW instead of HIGH did not help (196 and 214 ms a commit against 191 ms at
-        // HIGH, blur-off 48-51 ms, in the same lockstep): not kept.
+        // With moving instances the top level is a motion-blur BVH (docs/performance.md,
+        // "Motion blur"). Most of its cost is Embree bounding each quaternion (slerped)
+        // instance by a root search, so barely turning instances get matrices instead
+        // (`InstanceGeometry::set_motion`). Tried and not kept: building it at MEDIUM or LOW
+        // instead of HIGH (196 and 214 ms a commit against 191 ms at HIGH, blur-off 48-51 ms,
+        // in the same lockstep); one instance array (RTC_GEOMETRY_TYPE_INSTANCE_ARRAY) for all
+        // instances instead of a geometry each, measured by `dormant bench instances`: the
+        // blurred commit is the same (the same root search per instance), only the still one
+        // and the update are a few ms cheaper at 8,000 instances.
         let t = Instant::now();
         self.top.commit()?;
         let instances = self.top_instances();

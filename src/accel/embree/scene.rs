@@ -17,6 +17,8 @@ use super::device::Device;
 use super::error::EmbreeError;
 use super::filter::{self, GeometrySet, SkipContext};
 use super::geometry::TriangleGeometry;
+use super::instance_array::InstanceArrayGeometry;
+
 use super::quality::BuildQuality;
 
 /// Embree's scene flags (rtcSetSceneFlags(3)).
@@ -51,6 +53,7 @@ impl SceneFlags {
 pub enum Geometry {
     Triangles(TriangleGeometry),
     Instance(InstanceGeometry),
+    InstanceArray(InstanceArrayGeometry),
 }
 
 impl Geometry {
@@ -58,6 +61,7 @@ impl Geometry {
         match self {
             Geometry::Triangles(g) => g.raw,
             Geometry::Instance(g) => g.raw,
+            Geometry::InstanceArray(g) => g.raw,
         }
     }
 }
@@ -65,6 +69,12 @@ impl Geometry {
 impl From<TriangleGeometry> for Geometry {
     fn from(g: TriangleGeometry) -> Self {
         Geometry::Triangles(g)
+    }
+}
+
+impl From<InstanceArrayGeometry> for Geometry {
+    fn from(g: InstanceArrayGeometry) -> Self {
+        Geometry::InstanceArray(g)
     }
 }
 
@@ -200,7 +210,19 @@ impl Scene {
                 self.dirty = true;
                 Ok(inst)
             }
-            Some(Geometry::Triangles(_)) => Err(EmbreeError::NotAnInstance { id }),
+            Some(_) => Err(EmbreeError::NotAnInstance { id }),
+            None => Err(EmbreeError::NotAttached(id)),
+        }
+    }
+
+    /// The attached instance array `id`, for new entries. Marks the scene for recommit.
+    pub fn instance_array_mut(&mut self, id: u32) -> Result<&mut InstanceArrayGeometry, EmbreeError> {
+        match self.geometries.get_mut(&id) {
+            Some(Geometry::InstanceArray(array)) => {
+                self.dirty = true;
+                Ok(array)
+            }
+            Some(_) => Err(EmbreeError::NotAnInstance { id }),
             None => Err(EmbreeError::NotAttached(id)),
         }
     }
@@ -214,7 +236,7 @@ impl Scene {
                 self.dirty |= changed;
                 Ok(changed)
             }
-            Some(Geometry::Triangles(_)) => Err(EmbreeError::NotAnInstance { id }),
+            Some(_) => Err(EmbreeError::NotAnInstance { id }),
             None => Err(EmbreeError::NotAttached(id)),
         }
     }
@@ -294,7 +316,7 @@ impl Drop for InstanceGeometry {
 }
 
 /// Embree's FLOAT3X4_COLUMN_MAJOR layout of an affine transform.
-fn column_major_3x4(xf: &Affine3A) -> [f32; 12] {
+pub(super) fn column_major_3x4(xf: &Affine3A) -> [f32; 12] {
     let m = xf.matrix3;
     let t = xf.translation;
     [
@@ -303,9 +325,18 @@ fn column_major_3x4(xf: &Affine3A) -> [f32; 12] {
     ]
 }
 
+/// The largest rotation over the shutter (radians) for which a moving instance is given to
+/// Embree as two matrices, which it lerps, rather than two quaternion decompositions, which it
+/// slerps like [`InstanceMotion::at`]. Lerping the matrices of a turn by `a` scales the object
+/// by `cos(a/2)` halfway through (the worst time), `1 - a^2/8`, and turns it to within `a^3/24`
+/// of the slerp: at 3e-4 the object's points move by 1.1e-8 of their distance from its origin,
+/// a fifth of f32's unit roundoff, below what Embree's own f32 transform already rounds (the
+/// crosscheck allows 16 roundoffs for it). A pure translation (`a = 0`) lerps exactly.
+pub(super) const LERP_MAX_ANGLE: f32 = 3e-4;
+
 /// Embree's decomposition of a rigid transform: unit scale, no skew or shift, the rotation as
 /// a quaternion (`r` the real part) and the translation.
-fn quaternion_decomposition(t: &RigidTransform) -> sys::RTCQuaternionDecomposition {
+pub(super) fn quaternion_decomposition(t: &RigidTransform) -> sys::RTCQuaternionDecomposition {
     let (q, p) = (t.rotation, t.translation);
     sys::RTCQuaternionDecomposition {
         scale_x: 1.0,
@@ -385,22 +416,40 @@ impl InstanceGeometry {
     }
 
     /// Makes the instance move over the shutter: two time steps, at `motion.open` (ray time 0)
-    /// and `motion.close` (time 1), as quaternion decompositions, which Embree interpolates
-    /// by slerp like [`InstanceMotion::at`]. A scene holding a geometry with several time
-    /// steps builds a motion-blur BVH over it. Through a parent scene, use
-    /// [`Scene::instance_mut`].
+    /// and `motion.close` (time 1), which Embree interpolates like [`InstanceMotion::at`]. A
+    /// scene holding a geometry with several time steps builds a motion-blur BVH over it.
+    /// Through a parent scene, use [`Scene::instance_mut`].
+    ///
+    /// A rotating instance gets quaternion decompositions, which Embree slerps; bounding that
+    /// motion costs Embree a root search per box corner and axis at every commit (13 us an
+    /// instance for a pure translation, 65 us rotating, under load; `dormant bench
+    /// instances`). An instance that turns by at most [`LERP_MAX_ANGLE`] gets two matrices
+    /// instead, which Embree lerps and bounds in closed form: on the atrium most moving bodies
+    /// barely turn within the shutter (docs/performance.md, "Motion blur").
     pub fn set_motion(&mut self, motion: &InstanceMotion) -> Result<(), EmbreeError> {
         if !motion.is_finite() {
             return Err(EmbreeError::NonFiniteTransform);
         }
-        let steps = [quaternion_decomposition(&motion.open), quaternion_decomposition(&motion.close)];
-        // SAFETY: `raw` is a valid instance geometry; each decomposition is a valid
-        // `RTCQuaternionDecomposition` that Embree copies; time steps 0 and 1 exist once the
-        // count is 2. `&mut self`: no ray traverses it meanwhile (see `set_transform`).
+        // SAFETY: `raw` is a valid instance geometry; time steps 0 and 1 exist once the count
+        // is 2; each transform is a valid `RTCQuaternionDecomposition` or the 12 floats
+        // FLOAT3X4_COLUMN_MAJOR reads, which Embree copies. `&mut self`: no ray traverses it
+        // meanwhile (see `set_transform`).
         unsafe {
             sys::rtcSetGeometryTimeStepCount(self.raw, 2);
-            for (step, qd) in steps.iter().enumerate() {
-                sys::rtcSetGeometryTransformQuaternion(self.raw, step as u32, qd);
+            if motion.rotation_angle() <= LERP_MAX_ANGLE {
+                for (step, t) in [&motion.open, &motion.close].into_iter().enumerate() {
+                    let m = column_major_3x4(&t.to_affine());
+                    let format = sys::RTCFormat::RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR;
+                    sys::rtcSetGeometryTransform(self.raw, step as u32, format, m.as_ptr().cast());
+                }
+            } else {
+                for (step, t) in [&motion.open, &motion.close].into_iter().enumerate() {
+                    sys::rtcSetGeometryTransformQuaternion(
+                        self.raw,
+                        step as u32,
+                        &quaternion_decomposition(t),
+                    );
+                }
             }
             sys::rtcCommitGeometry(self.raw);
         }
@@ -448,6 +497,10 @@ pub struct FrozenScene {
 }
 
 impl FrozenScene {
+    pub(super) fn raw(&self) -> sys::RTCScene {
+        self.scene.raw
+    }
+
     pub fn view(&self) -> SceneView<'_> {
         self.scene.view().expect("a frozen scene is committed")
     }
