@@ -442,6 +442,22 @@ fn variant_factories(options: &IntegrationBenchOptions) -> Vec<(String, Factory)
     }
 }
 
+/// How every configuration renders its frames.
+fn renderer<'a>(integrator: &'a dyn Integrator, options: &IntegrationBenchOptions) -> FrameRenderer<'a> {
+    FrameRenderer {
+        integrator,
+        aovs: &[],
+        width: options.width,
+        height: options.height,
+        spp: options.spp,
+        adaptive: AdaptiveSampling::OFF,
+        // Every frame traced, and noise decorrelated as in a per-frame-seeded render.
+        seed: SeedMode::PerFrame,
+        reuse_static: false,
+        shutter: options.shutter,
+    }
+}
+
 /// See the module docs. `progress` gets (frames rendered, frames planned) after each frame.
 pub fn bench_integration(
     sequence: &Sequence,
@@ -459,19 +475,8 @@ pub fn bench_integration(
             ..sequence.manager_options(&options.frames, c.settings())
         })
         .collect();
-    let renderer = FrameRenderer {
-        integrator,
-        aovs: &[],
-        width: options.width,
-        height: options.height,
-        spp: options.spp,
-        adaptive: AdaptiveSampling::OFF,
-        // Every frame traced, and noise decorrelated as in a per-frame-seeded render.
-        seed: SeedMode::PerFrame,
-        reuse_static: false,
-        shutter: options.shutter,
-    };
-    let results = run_lockstep(sequence, &renderer, options, &manager_options, progress)?;
+    let results =
+        run_lockstep(sequence, &renderer(integrator, options), options, &manager_options, progress)?;
     let mut runs = Vec::new();
     let (mut rebuild_ms, mut rebuild_triangles, mut mean_insert_ms) = (0.0, 0, 0.0);
     let mut variants = Vec::new();
