@@ -20,13 +20,7 @@ fn in_pool<R: Send>(threads: usize, f: impl FnOnce() -> R + Send) -> R {
 /// `n` boxes: scattered small ones, a dense cluster, and some that coincide exactly (ranges
 /// whose centroids all coincide are split by count, not by SAH).
 fn boxes(n: usize, seed: u64) -> Vec<Aabb> {
-    let mut s = seed | 1;
-    let mut next = || {
-        s ^= s << 13;
-        s ^= s >> 7;
-        s ^= s << 17;
-        (s >> 40) as f32 / (1u64 << 24) as f32
-    };
+    let mut next = unit_rng(seed);
     (0..n)
         .map(|i| {
             let c = match i % 10 {
