@@ -183,15 +183,20 @@ pub fn soup(
     })
 }
 
-/// Rays aimed at triangle centroids (so most hit) plus fully random ones.
-pub fn rays_for(meshes: &[&TriangleMesh], seed: u64, count: usize, range: f32) -> Vec<Ray> {
+/// A xorshift generator of numbers in `[0, 1)`, deterministic from `seed`.
+pub fn unit_rng(seed: u64) -> impl FnMut() -> f32 {
     let mut s = seed | 1;
-    let mut next = || {
+    move || {
         s ^= s << 13;
         s ^= s >> 7;
         s ^= s << 17;
         (s >> 40) as f32 / (1u64 << 24) as f32
-    };
+    }
+}
+
+/// Rays aimed at triangle centroids (so most hit) plus fully random ones.
+pub fn rays_for(meshes: &[&TriangleMesh], seed: u64, count: usize, range: f32) -> Vec<Ray> {
+    let mut next = unit_rng(seed);
     let targets: Vec<Vec3> = meshes
         .iter()
         .flat_map(|m| (0..m.triangle_count()).map(|i| m.triangle(i)))

@@ -7,8 +7,8 @@
 use glam::Vec3;
 
 use super::triangle::{RayTri, Tri, Tri4};
-use super::{BvhAccel, StaticBvh};
-use crate::geometry::Ray;
+use super::{BuildParams, BvhAccel, StaticBvh};
+use crate::geometry::{Aabb, Ray};
 
 /// `(t, u, v)` of `ray` hitting triangle `p` by the backend's own watertight test, within the
 /// ray's interval: the exact reference for static geometry.
@@ -36,4 +36,56 @@ pub fn check_static_tree(tree: &StaticBvh) -> Result<(), String> {
 /// [`check_static_tree`] on the committed static tree of `accel`.
 pub fn check_static_tree_of(accel: &BvhAccel) -> Result<(), String> {
     accel.static_tree().check_invariants()
+}
+
+/// A binned-SAH tree over boxes as [`build_tree`] returns it: each node's bounds, its first
+/// child (interior) or first primitive (leaf), and its primitive count (0 for interior nodes),
+/// plus the primitive order the leaves index.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BuiltTree {
+    pub nodes: Vec<(Aabb, u32, u32)>,
+    pub order: Vec<u32>,
+}
+
+/// The flat BVH builder on `bounds` (each finite and non-empty), in the current rayon pool.
+pub fn build_tree(bounds: &[Aabb], params: BuildParams) -> BuiltTree {
+    let (bvh, order) = super::flat::build(bounds, params);
+    BuiltTree { nodes: bvh.nodes.iter().map(|n| (n.aabb(), n.first, n.count)).collect(), order }
+}
+
+/// Checks a [`BuiltTree`] over `bounds`: interior nodes are the union of their adjacent
+/// children, leaves contain their primitives' boxes, and every primitive is in one leaf.
+pub fn check_built_tree(tree: &BuiltTree, bounds: &[Aabb]) -> Result<(), String> {
+    let mut seen = vec![false; bounds.len()];
+    let mut order_seen = vec![false; bounds.len()];
+    for &o in &tree.order {
+        match order_seen.get_mut(o as usize) {
+            Some(s) if !*s => *s = true,
+            _ => return Err(format!("order names primitive {o} twice or out of range")),
+        }
+    }
+    for (i, &(b, first, count)) in tree.nodes.iter().enumerate() {
+        if count > 0 {
+            for k in first..first + count {
+                let o = *tree.order.get(k as usize).ok_or(format!("leaf {i} past the order"))?;
+                if std::mem::replace(&mut seen[o as usize], true) {
+                    return Err(format!("primitive {o} in two leaves"));
+                }
+                let pb = bounds[o as usize];
+                if !(b.min.cmple(pb.min).all() && b.max.cmpge(pb.max).all()) {
+                    return Err(format!("leaf {i} does not contain primitive {o}"));
+                }
+            }
+        } else {
+            let kids =
+                tree.nodes.get(first as usize..first as usize + 2).ok_or(format!("node {i}: bad child"))?;
+            if first as usize <= i || kids[0].0.union(kids[1].0) != b {
+                return Err(format!("node {i} is not the union of its children"));
+            }
+        }
+    }
+    match seen.iter().position(|s| !s) {
+        Some(o) => Err(format!("primitive {o} in no leaf")),
+        None => Ok(()),
+    }
 }

@@ -1,8 +1,9 @@
 //! Binned SAH construction (Wald 2007), top-down, with the two halves of large ranges built in
-//! parallel by rayon. Builds an intermediate pointer tree, then flattens it so siblings are
-//! adjacent.
+//! parallel by rayon. Primitive boxes are partitioned in place (so passes read memory in
+//! order), and nodes are written into one preallocated array, then copied out depth-first so
+//! siblings are adjacent.
 
-use glam::Vec3A;
+use glam::{Vec3A, Vec4};
 
 use super::{FlatBvh, Node};
 use crate::accel::bvh::BuildParams;
@@ -11,11 +12,6 @@ use crate::geometry::Aabb;
 /// Below this depth splits are chosen by SAH; deeper ranges are split at the object median,
 /// which keeps every tree shallower than [`super::traverse::STACK_SIZE`].
 const MAX_SAH_DEPTH: u32 = 48;
-
-enum BuildNode {
-    Leaf { b: Aabb, start: u32, count: u32 },
-    Inner { b: Aabb, kids: Box<[BuildNode; 2]> },
-}
 
 /// Box with SIMD-friendly corners; the builder's working type.
 #[derive(Clone, Copy)]
@@ -48,8 +44,57 @@ impl Box3 {
     }
 }
 
+/// A primitive as the builder moves it: its box, with its index in the `w` lane of `min`.
+/// Ranges are partitioned in place, so every pass over a range reads memory in order.
+#[derive(Clone, Copy)]
+#[repr(C)]
+struct PrimRef {
+    min: Vec4,
+    max: Vec4,
+}
+
+impl PrimRef {
+    fn new(b: &Aabb, index: u32) -> Self {
+        Self { min: b.min.extend(f32::from_bits(index)), max: b.max.extend(0.0) }
+    }
+
+    #[inline(always)]
+    fn bounds(&self) -> Box3 {
+        Box3 { min: Vec3A::from_vec4(self.min), max: Vec3A::from_vec4(self.max) }
+    }
+
+    fn index(&self) -> u32 {
+        self.min.w.to_bits()
+    }
+}
+
+/// Bounds of a range: of the boxes, and of their (doubled) centroids.
+#[derive(Clone, Copy)]
+struct RangeBounds {
+    b: Box3,
+    cb: Box3,
+}
+
+impl RangeBounds {
+    const EMPTY: RangeBounds = RangeBounds { b: Box3::EMPTY, cb: Box3::EMPTY };
+
+    #[inline(always)]
+    fn add(&mut self, pb: Box3) {
+        self.b = self.b.union(pb);
+        let c = pb.center2();
+        self.cb = Box3 { min: self.cb.min.min(c), max: self.cb.max.max(c) };
+    }
+
+    fn of(prims: &[PrimRef]) -> Self {
+        let mut r = Self::EMPTY;
+        for p in prims {
+            r.add(p.bounds());
+        }
+        r
+    }
+}
+
 struct Ctx {
-    prims: Vec<Box3>,
     p: BuildParams,
 }
 
@@ -58,33 +103,51 @@ struct Ctx {
 /// `order[first..first + count]`.
 pub(crate) fn build(bounds: &[Aabb], params: BuildParams) -> (FlatBvh, Vec<u32>) {
     debug_assert!(bounds.iter().all(|b| !b.is_empty() && b.min.is_finite() && b.max.is_finite()));
-    let mut order: Vec<u32> = (0..bounds.len() as u32).collect();
     if bounds.is_empty() {
-        return (FlatBvh::default(), order);
+        return (FlatBvh::default(), Vec::new());
     }
-    let ctx = Ctx {
-        prims: bounds.iter().map(|b| Box3 { min: b.min.into(), max: b.max.into() }).collect(),
-        p: params.sanitized(),
-    };
-    let root = build_range(&ctx, &mut order, 0, 0);
-    let mut nodes = Vec::with_capacity(2 * bounds.len().div_ceil(2));
-    nodes.push(Node::interior(Aabb::EMPTY, 0));
-    flatten(&root, 0, &mut nodes);
-    (FlatBvh { nodes }, order)
+    let ctx = Ctx { p: params.sanitized() };
+    let mut prims: Vec<PrimRef> = bounds.iter().enumerate().map(|(i, b)| PrimRef::new(b, i as u32)).collect();
+    let rb = RangeBounds::of(&prims);
+    // Nodes are written straight into `slots` (see `build_range`), then copied out in
+    // depth-first order, which drops the holes that leaves leave in their reserved regions.
+    let mut slots = vec![Node::interior(Aabb::EMPTY, 0); 2 * prims.len() - 1];
+    let (root, rest) = slots.split_at_mut(1);
+    build_range(&ctx, &mut prims, rb, 0, 0, Slots { out: &mut root[0], rest, base: 1 });
+    let order = prims.iter().map(PrimRef::index).collect();
+    (FlatBvh { nodes: compact(&slots) }, order)
 }
 
-fn flatten(n: &BuildNode, at: usize, nodes: &mut Vec<Node>) {
-    match n {
-        BuildNode::Leaf { b, start, count } => nodes[at] = Node::leaf(*b, *start, *count),
-        BuildNode::Inner { b, kids } => {
-            let first = nodes.len();
-            nodes.push(Node::interior(Aabb::EMPTY, 0));
-            nodes.push(Node::interior(Aabb::EMPTY, 0));
-            nodes[at] = Node::interior(*b, first as u32);
-            flatten(&kids[0], first, nodes);
-            flatten(&kids[1], first + 1, nodes);
+/// The tree in `slots` (root at 0) with its nodes in depth-first order, each node's children
+/// pair allocated when the node is visited (left subtree before right).
+fn compact(slots: &[Node]) -> Vec<Node> {
+    let mut nodes = Vec::with_capacity(slots.len());
+    nodes.push(slots[0]);
+    let mut stack = vec![(0u32, 0u32)];
+    while let Some((old, new)) = stack.pop() {
+        let n = slots[old as usize];
+        if n.is_leaf() {
+            continue;
         }
+        let first = nodes.len() as u32;
+        nodes.push(slots[n.first as usize]);
+        nodes.push(slots[n.first as usize + 1]);
+        nodes[new as usize].first = first;
+        stack.push((n.first + 1, first + 1));
+        stack.push((n.first, first));
     }
+    nodes
+}
+
+/// Where a subtree over `n` primitives goes: its root node `out`, and `rest`, at least
+/// `2n - 2` slots (starting at index `base`) for its descendants. An interior node puts its
+/// children pair first, then the left child's `2 * left - 2` slots, then the right child's;
+/// leaves leave their slots unused. Disjoint regions let both children be built at once and
+/// keep the layout independent of the thread count.
+struct Slots<'a> {
+    out: &'a mut Node,
+    rest: &'a mut [Node],
+    base: u32,
 }
 
 /// Binning of one range: centroid bounds (doubled centroids, `min + max`) and the bin mapping.
@@ -95,6 +158,23 @@ struct Binning {
 }
 
 impl Binning {
+    /// `nb` bins over the centroid bounds `cb`; axes where the centroids coincide get scale 0.
+    fn new(cb: &Box3, nb: usize) -> Self {
+        let ext = cb.max - cb.min;
+        let scale = Vec3A::select(
+            ext.cmpgt(Vec3A::ZERO) & ext.is_finite_mask(),
+            Vec3A::splat(nb as f32 * (1.0 - 1e-6)) / ext,
+            Vec3A::ZERO,
+        );
+        Binning { cmin: cb.min, scale, bins: nb }
+    }
+
+    /// `bins_of(b)[axis]`, computed for that axis only.
+    #[inline(always)]
+    fn bin_on(&self, b: &Box3, axis: usize) -> usize {
+        (((b.center2()[axis] - self.cmin[axis]) * self.scale[axis]) as usize).min(self.bins - 1)
+    }
+
     #[inline(always)]
     fn bins_of(&self, b: &Box3) -> [usize; 3] {
         let k = (b.center2() - self.cmin) * self.scale;
@@ -103,147 +183,223 @@ impl Binning {
     }
 }
 
-fn build_range(ctx: &Ctx, idx: &mut [u32], start: u32, depth: u32) -> BuildNode {
-    let mut b = Box3::EMPTY;
-    let mut cb = Box3::EMPTY;
-    for &i in idx.iter() {
-        let pb = ctx.prims[i as usize];
-        b = b.union(pb);
-        let c = pb.center2();
-        cb = Box3 { min: cb.min.min(c), max: cb.max.max(c) };
-    }
-    let n = idx.len();
-    let leaf = || BuildNode::Leaf { b: b.aabb(), start, count: n as u32 };
+/// Builds the subtree over `prims` (whose bounds are `rb`), which start at `start` in the
+/// final order. The children's bounds come from the partition, so every level reads its
+/// range twice (binning, partition) rather than three times.
+fn build_range(ctx: &Ctx, prims: &mut [PrimRef], rb: RangeBounds, start: u32, depth: u32, at: Slots) {
+    let n = prims.len();
+    debug_assert!(at.rest.len() + 2 >= 2 * n);
     if n <= 1 {
-        return leaf();
+        *at.out = Node::leaf(rb.b.aabb(), start, n as u32);
+        return;
     }
     let p = &ctx.p;
-    let mid = if depth >= MAX_SAH_DEPTH {
-        median_split(ctx, idx, &cb)
+    let (mid, lb, rbb) = if depth >= MAX_SAH_DEPTH {
+        let mid = median_split(prims, &rb.cb);
+        split_at(prims, mid)
     } else {
-        match best_split(ctx, idx, &b, &cb) {
+        match best_split(ctx, prims, &rb.b, &rb.cb) {
             Some((cost, axis, bin, binning)) => {
                 let leaf_cost = p.intersection_cost * n as f32;
                 if n <= p.max_leaf_size && leaf_cost <= cost {
-                    return leaf();
+                    *at.out = Node::leaf(rb.b.aabb(), start, n as u32);
+                    return;
                 }
-                partition(idx, |i| binning.bins_of(&ctx.prims[i as usize])[axis] < bin)
+                partition(prims, |b| binning.bin_on(b, axis) < bin)
             }
-            None if n <= p.max_leaf_size => return leaf(),
-            None => n / 2,
+            None if n <= p.max_leaf_size => {
+                *at.out = Node::leaf(rb.b.aabb(), start, n as u32);
+                return;
+            }
+            None => split_at(prims, n / 2),
         }
     };
     debug_assert!(mid > 0 && mid < n);
-    let (l, r) = idx.split_at_mut(mid);
+    *at.out = Node::interior(rb.b.aabb(), at.base);
+    let (pair, rest) = at.rest.split_at_mut(2);
+    let (lout, rout) = pair.split_at_mut(1);
+    let (lrest, rrest) = rest.split_at_mut(2 * mid - 2);
+    let left = Slots { out: &mut lout[0], rest: lrest, base: at.base + 2 };
+    let right = Slots { out: &mut rout[0], rest: rrest, base: at.base + 2 * mid as u32 };
+    let (l, r) = prims.split_at_mut(mid);
     let rstart = start + mid as u32;
-    let (a, c) = if n >= p.parallel_threshold {
-        rayon::join(|| build_range(ctx, l, start, depth + 1), || build_range(ctx, r, rstart, depth + 1))
+    if n >= p.parallel_threshold {
+        rayon::join(
+            || build_range(ctx, l, lb, start, depth + 1, left),
+            || build_range(ctx, r, rbb, rstart, depth + 1, right),
+        );
     } else {
-        (build_range(ctx, l, start, depth + 1), build_range(ctx, r, rstart, depth + 1))
-    };
-    BuildNode::Inner { b: b.aabb(), kids: Box::new([a, c]) }
+        build_range(ctx, l, lb, start, depth + 1, left);
+        build_range(ctx, r, rbb, rstart, depth + 1, right);
+    }
+}
+
+/// `mid` and the bounds of the two sides of `prims` split there (the rare splits that do not
+/// come from [`partition`]).
+fn split_at(prims: &[PrimRef], mid: usize) -> (usize, RangeBounds, RangeBounds) {
+    (mid, RangeBounds::of(&prims[..mid]), RangeBounds::of(&prims[mid..]))
 }
 
 /// Best (cost, axis, first bin of the right side, binning) over all axes, or `None` when
 /// every centroid coincides. All three axes are binned in one pass over the range.
-fn best_split(ctx: &Ctx, idx: &[u32], b: &Box3, cb: &Box3) -> Option<(f32, usize, usize, Binning)> {
+fn best_split(ctx: &Ctx, prims: &[PrimRef], b: &Box3, cb: &Box3) -> Option<(f32, usize, usize, Binning)> {
     // Small ranges need few bins: clearing and sweeping them would cost more than binning.
-    let nb = ctx.p.bins.min(2 * idx.len()).max(4);
-    match nb {
-        0..=8 => best_split_n::<8>(ctx, idx, b, cb, nb),
-        9..=16 => best_split_n::<16>(ctx, idx, b, cb, nb),
-        17..=32 => best_split_n::<32>(ctx, idx, b, cb, nb),
-        _ => best_split_n::<64>(ctx, idx, b, cb, nb),
+    // Tried: one bin per primitive (`min(prims.len())`): 5-8% less build CPU under load, but
+    // the monastery's SAH went from 36.487 to 36.510; not kept.
+    let nb = ctx.p.bins.min(2 * prims.len()).max(4);
+    if prims.len() == 2 {
+        return best_split_pair(ctx, prims, b, cb);
     }
+    match nb {
+        0..=8 => best_split_n::<8>(ctx, prims, b, cb, nb),
+        9..=16 => best_split_n::<16>(ctx, prims, b, cb, nb),
+        17..=32 => best_split_n::<32>(ctx, prims, b, cb, nb),
+        _ => best_split_n::<64>(ctx, prims, b, cb, nb),
+    }
+}
+
+/// [`best_split`] of two primitives (a third of all calls), without the bins and sweeps it
+/// would cost: the same answer. With four bins the two centroids fall in the first and last
+/// bin of every axis where they differ, every plane costs the same, and the first axis and
+/// plane win.
+fn best_split_pair(
+    ctx: &Ctx,
+    prims: &[PrimRef],
+    b: &Box3,
+    cb: &Box3,
+) -> Option<(f32, usize, usize, Binning)> {
+    let binning = Binning::new(cb, 4);
+    let axis = (0..3).find(|&a| binning.scale[a] != 0.0)?;
+    let (p0, p1) = (prims[0].bounds(), prims[1].bounds());
+    let (lo, hi) = if binning.bin_on(&p0, axis) == 0 { (p0, p1) } else { (p1, p0) };
+    debug_assert!(binning.bin_on(&lo, axis) == 0 && binning.bin_on(&hi, axis) > 0);
+    // The sweep's `area * count` with counts of 1, exactly.
+    let x = lo.area() + hi.area();
+    let area = b.area().max(f32::MIN_POSITIVE);
+    Some((ctx.p.traversal_cost + ctx.p.intersection_cost * x / area, axis, 1, binning))
 }
 
 /// [`best_split`] with `nb <= N` bins in arrays of `N`.
 fn best_split_n<const N: usize>(
     ctx: &Ctx,
-    idx: &[u32],
+    prims: &[PrimRef],
     b: &Box3,
     cb: &Box3,
     nb: usize,
 ) -> Option<(f32, usize, usize, Binning)> {
     debug_assert!(nb <= N);
     let p = &ctx.p;
-    let ext = cb.max - cb.min;
-    let scale = Vec3A::select(
-        ext.cmpgt(Vec3A::ZERO) & ext.is_finite_mask(),
-        Vec3A::splat(nb as f32 * (1.0 - 1e-6)) / ext,
-        Vec3A::ZERO,
-    );
-    let binning = Binning { cmin: cb.min, scale, bins: nb };
+    let binning = Binning::new(cb, nb);
     let area = b.area().max(f32::MIN_POSITIVE);
-    let mut boxes = [[Box3::EMPTY; N]; 3];
-    let mut counts = [[0u32; N]; 3];
-    for &i in idx {
-        let pb = &ctx.prims[i as usize];
-        let k = binning.bins_of(pb);
-        for axis in 0..3 {
-            boxes[axis][k[axis]] = boxes[axis][k[axis]].union(*pb);
-            counts[axis][k[axis]] += 1;
-        }
-    }
+    let mut bins = Bins { boxes: [[Box3::EMPTY; N]; 3], counts: [[0u32; N]; 3] };
+    bins.add(prims, &binning);
+    // Planes are compared by their unnormalised cost (left area * count + right area * count);
+    // only the best is normalised, which saves a division per plane.
     let mut best: Option<(f32, usize, usize)> = None;
     for axis in 0..3 {
-        if scale[axis] == 0.0 {
+        if binning.scale[axis] == 0.0 {
             continue;
         }
-        let (boxes, counts) = (&boxes[axis], &counts[axis]);
+        let (boxes, counts) = (&bins.boxes[axis], &bins.counts[axis]);
         // Sweep from the right, then from the left evaluating each plane.
         let mut right_cost = [0.0f32; N];
         let (mut acc, mut acc_n) = (Box3::EMPTY, 0u32);
+        // A plane just right of an empty bin splits the range as the plane before it does, at
+        // the same cost, and cannot win (ties keep the first): it is skipped (half the planes
+        // of small ranges, whose bins are twice their primitives).
         for k in (1..nb).rev() {
             acc = acc.union(boxes[k]);
             acc_n += counts[k];
-            right_cost[k] = acc.area() * acc_n as f32;
+            if counts[k - 1] > 0 {
+                right_cost[k] = acc.area() * acc_n as f32;
+            }
         }
         let (mut left, mut left_n) = (Box3::EMPTY, 0u32);
         for k in 1..nb {
             left = left.union(boxes[k - 1]);
             left_n += counts[k - 1];
-            if left_n == 0 || left_n as usize == idx.len() {
+            if counts[k - 1] == 0 || left_n as usize == prims.len() {
                 continue;
             }
-            let cost =
-                p.traversal_cost + p.intersection_cost * (left.area() * left_n as f32 + right_cost[k]) / area;
+            let cost = left.area() * left_n as f32 + right_cost[k];
             if best.is_none_or(|(c, _, _)| cost < c) {
                 best = Some((cost, axis, k));
             }
         }
     }
-    best.map(|(c, a, k)| (c, a, k, binning))
+    best.map(|(c, a, k)| (p.traversal_cost + p.intersection_cost * c / area, a, k, binning))
+}
+
+/// Ranges at least twice this long are binned in two halves at once (exact: bins merge by
+/// min/max and sums, so the result does not depend on the split).
+const PAR_BIN_CHUNK: usize = 16 * 1024;
+
+/// Per axis, the box and count of every bin.
+struct Bins<const N: usize> {
+    boxes: [[Box3; N]; 3],
+    counts: [[u32; N]; 3],
+}
+
+impl<const N: usize> Bins<N> {
+    /// Adds `prims` to the bins. In place: returning the bins by value copied them (a
+    /// `memcpy` of up to 7 KiB per node, 5% of a build).
+    fn add(&mut self, prims: &[PrimRef], binning: &Binning) {
+        if prims.len() >= 2 * PAR_BIN_CHUNK {
+            let (l, r) = prims.split_at(prims.len() / 2);
+            let mut b = Bins { boxes: [[Box3::EMPTY; N]; 3], counts: [[0u32; N]; 3] };
+            rayon::join(|| self.add(l, binning), || b.add(r, binning));
+            for axis in 0..3 {
+                for k in 0..N {
+                    self.boxes[axis][k] = self.boxes[axis][k].union(b.boxes[axis][k]);
+                    self.counts[axis][k] += b.counts[axis][k];
+                }
+            }
+            return;
+        }
+        for pr in prims {
+            let pb = pr.bounds();
+            for (axis, k) in binning.bins_of(&pb).into_iter().enumerate() {
+                self.boxes[axis][k] = self.boxes[axis][k].union(pb);
+                self.counts[axis][k] += 1;
+            }
+        }
+    }
 }
 
 /// Splits at the object median along the longest centroid axis.
-fn median_split(ctx: &Ctx, idx: &mut [u32], cb: &Box3) -> usize {
+fn median_split(prims: &mut [PrimRef], cb: &Box3) -> usize {
     let axis = (cb.max - cb.min).max_position();
-    let mid = idx.len() / 2;
-    idx.select_nth_unstable_by(mid, |&a, &b| {
-        ctx.prims[a as usize].center2()[axis].total_cmp(&ctx.prims[b as usize].center2()[axis])
+    let mid = prims.len() / 2;
+    prims.select_nth_unstable_by(mid, |a, b| {
+        a.bounds().center2()[axis].total_cmp(&b.bounds().center2()[axis])
     });
     mid
 }
 
-/// In-place partition; returns how many elements satisfy `left`.
-fn partition(idx: &mut [u32], left: impl Fn(u32) -> bool) -> usize {
+/// In-place partition; returns how many elements satisfy `left` and the bounds of both sides
+/// (every element is tested once, and counted on its side then).
+fn partition(prims: &mut [PrimRef], left: impl Fn(&Box3) -> bool) -> (usize, RangeBounds, RangeBounds) {
+    let (mut lb, mut rb) = (RangeBounds::EMPTY, RangeBounds::EMPTY);
     let mut i = 0;
-    let mut j = idx.len();
+    let mut j = prims.len();
     while i < j {
-        if left(idx[i]) {
+        let b = prims[i].bounds();
+        if left(&b) {
+            lb.add(b);
             i += 1;
         } else {
+            rb.add(b);
             j -= 1;
-            idx.swap(i, j);
+            prims.swap(i, j);
         }
     }
-    i
+    (i, lb, rb)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::accel::bvh::testing;
     use glam::Vec3;
 
     /// Greatest root-to-leaf depth (root = 0), which the traversal stack must exceed.
@@ -254,24 +410,6 @@ mod tests {
         } else {
             1 + depth(bvh, n.first).max(depth(bvh, n.first + 1))
         }
-    }
-
-    fn check(bvh: &FlatBvh, order: &[u32], bounds: &[Aabb]) {
-        let mut seen = vec![false; bounds.len()];
-        for n in &bvh.nodes {
-            if n.is_leaf() {
-                for &o in &order[n.first as usize..(n.first + n.count) as usize] {
-                    assert!(!seen[o as usize]);
-                    seen[o as usize] = true;
-                    let b = bounds[o as usize];
-                    assert!(n.min.cmple(b.min).all() && n.max.cmpge(b.max).all());
-                }
-            } else {
-                let b = bvh.nodes[n.first as usize].aabb().union(bvh.nodes[n.first as usize + 1].aabb());
-                assert_eq!(b, n.aabb());
-            }
-        }
-        assert!(seen.iter().all(|&s| s));
     }
 
     #[test]
@@ -287,7 +425,11 @@ mod tests {
         bounds.extend(std::iter::repeat_n(Aabb::from_points([Vec3::ZERO, Vec3::ONE]), 500));
         for p in [BuildParams::FAST, BuildParams::BALANCED, BuildParams::QUALITY] {
             let (bvh, order) = build(&bounds, p);
-            check(&bvh, &order, &bounds);
+            let tree = testing::BuiltTree {
+                nodes: bvh.nodes.iter().map(|n| (n.aabb(), n.first, n.count)).collect(),
+                order,
+            };
+            testing::check_built_tree(&tree, &bounds).unwrap();
             assert!(depth(&bvh, 0) < super::super::traverse::STACK_SIZE as u32);
         }
     }

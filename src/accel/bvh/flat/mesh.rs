@@ -3,11 +3,16 @@
 //! four ([`Tri4`], a leaf's triangles in one or more packets) that the wide traversal's leaves
 //! test at once.
 
+use rayon::prelude::*;
+
 use super::{build, BoxRay, FlatBvh, Node, Wide};
 use crate::accel::bvh::simd::Kernel;
 use crate::accel::bvh::triangle::{RayTri, Tri, Tri4};
 use crate::accel::bvh::BuildParams;
 use crate::geometry::Aabb;
+
+/// Items per rayon task when copying triangles and their bounds.
+const PAR_CHUNK: usize = 16 * 1024;
 
 /// Closest triangle found so far, in the space it was tested in.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -33,9 +38,9 @@ pub(crate) struct MeshBvh {
 impl MeshBvh {
     /// Builds over `tris`, which must all be valid (see [`crate::accel::bvh::triangle::extract`]).
     pub fn build(tris: Vec<Tri>, params: BuildParams) -> Self {
-        let bounds: Vec<Aabb> = tris.iter().map(Tri::bounds).collect();
+        let bounds: Vec<Aabb> = tris.par_iter().with_min_len(PAR_CHUNK).map(Tri::bounds).collect();
         let (bvh, order) = build(&bounds, params);
-        let tris: Vec<Tri> = order.iter().map(|&i| tris[i as usize]).collect();
+        let tris: Vec<Tri> = order.par_iter().with_min_len(PAR_CHUNK).map(|&i| tris[i as usize]).collect();
         let (packets, wide) = packets_and_wide(&bvh, &tris);
         Self { bvh, wide, tris, packets }
     }
@@ -100,17 +105,24 @@ impl MeshBvh {
     }
 }
 
-/// The packets of every binary leaf (in node order) and the wide tree whose leaves name them.
+/// The packets of every binary leaf (in node order) and the wide tree whose leaves name them,
+/// made at the same time (both only read the tree).
 fn packets_and_wide(bvh: &FlatBvh, tris: &[Tri]) -> (Vec<Tri4>, Wide) {
-    let mut packets = Vec::with_capacity(tris.len().div_ceil(3));
     let mut first_packet = vec![0u32; bvh.nodes.len()];
+    let mut total = 0;
     for (i, n) in bvh.nodes.iter().enumerate().filter(|(_, n)| n.is_leaf()) {
-        first_packet[i] = packets.len() as u32;
-        for start in (n.first..n.first + n.count).step_by(4) {
-            let end = (start + 4).min(n.first + n.count);
-            packets.push(Tri4::pack(&tris[start as usize..end as usize], start));
-        }
+        first_packet[i] = total;
+        total += n.count.div_ceil(4);
     }
-    let wide = Wide::new(bvh, |i, n: &Node| (first_packet[i as usize], n.count.div_ceil(4)));
-    (packets, wide)
+    let packets = || {
+        let mut packets = Vec::with_capacity(total as usize);
+        for n in bvh.nodes.iter().filter(|n| n.is_leaf()) {
+            for start in (n.first..n.first + n.count).step_by(4) {
+                let end = (start + 4).min(n.first + n.count);
+                packets.push(Tri4::pack(&tris[start as usize..end as usize], start));
+            }
+        }
+        packets
+    };
+    rayon::join(packets, || Wide::new(bvh, |i, n: &Node| (first_packet[i as usize], n.count.div_ceil(4))))
 }

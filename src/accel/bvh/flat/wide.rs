@@ -85,9 +85,12 @@ impl Wide {
     fn collapse(&mut self, bvh: &FlatBvh, n2: u32) -> u32 {
         let nodes = &bvh.nodes;
         let root = &nodes[n2 as usize];
-        let mut kids: Vec<u32> = vec![root.first, root.first + 1];
-        while kids.len() < WIDTH {
-            let open = kids
+        // A fixed array, not a `Vec`: one allocation per wide node showed in build profiles.
+        let mut kids = [0u32; WIDTH];
+        (kids[0], kids[1]) = (root.first, root.first + 1);
+        let mut len = 2;
+        while len < WIDTH {
+            let open = kids[..len]
                 .iter()
                 .enumerate()
                 .filter(|(_, &k)| !nodes[k as usize].is_leaf())
@@ -98,9 +101,13 @@ impl Wide {
                 })
                 .map(|(i, _)| i);
             let Some(i) = open else { break };
-            let k = kids.swap_remove(i);
-            kids.extend([nodes[k as usize].first, nodes[k as usize].first + 1]);
+            // `swap_remove` then push both children, as the `Vec` did (same slot order).
+            let k = kids[i];
+            kids[i] = kids[len - 1];
+            (kids[len - 1], kids[len]) = (nodes[k as usize].first, nodes[k as usize].first + 1);
+            len += 1;
         }
+        let kids = &kids[..len];
         let at = self.nodes.len();
         // Stack codes hold `at << 3` below the `LEAF` and `FOLDED` bits.
         debug_assert!(at < 1 << 27, "wide tree too large for its stack codes");
