@@ -109,13 +109,6 @@ impl LineFit {
 
 /// Build samples before the fitted line replaces the prior.
 const MIN_BUILD_SAMPLES: usize = 6;
-/// The share of a frame's trace that merging the BVH's permanent static blocks saves, a
-/// prior from one measurement: after the atrium's run (907k static triangles in 507 blocks),
-/// its bounce rays traced 1.31-1.56x and its primary rays 0.96-1.03x a fresh build's time,
-/// and with the blocks merged 1.03-1.10x and 0.89-1.21x (docs/performance.md, "The persistent
-/// static tree"); a frame's trace is not all static-scene bounces, hence a tenth.
-pub const MERGE_TRACE_GAIN: f64 = 0.1;
-
 /// Weight of the newest trace time in the running mean of a frame's trace.
 const TRACE_EMA: f64 = 0.2;
 
@@ -234,15 +227,6 @@ pub struct Outlook {
 }
 
 impl Outlook {
-    /// Whether merging the static scene's islands that never wake into one rebuilt structure
-    /// (the BVH's relink, `Accelerator::set_static_permanent`) pays before the run ends: it
-    /// saves about [`MERGE_TRACE_GAIN`] of a frame's trace on every frame left, and costs a
-    /// build of the whole static scene, `static_triangles`.
-    pub fn merge_pays(&self, static_triangles: usize) -> bool {
-        let gain = MERGE_TRACE_GAIN * self.trace_ms * self.situation.frames_left;
-        gain >= self.build_line.0 + self.build_line.1 * static_triangles as f64
-    }
-
     /// The estimate for one candidate.
     pub fn estimate(&self, c: &Candidate) -> CostEstimate {
         let sit = &self.situation;
@@ -536,21 +520,6 @@ mod tests {
 
     fn situation(form: IntegrationForm, frames_left: f64) -> Situation {
         Situation { form, present_bodies: 1000, resting_instances: 0, frames_left }
-    }
-
-    #[test]
-    fn merging_permanent_islands_pays_only_with_enough_trace_left() {
-        let mut m = CostModel::new();
-        m.record_frame(0, None, 100.0);
-        for n in [10_000usize, 20_000, 40_000, 80_000, 160_000, 320_000] {
-            m.record_build(n, n as f64 * 1e-3);
-        }
-        let none = || std::iter::empty();
-        // A million triangles rebuild in about a second: 1,000 frames of 100 ms save 10 s.
-        assert!(m.outlook(situation(IntegrationForm::Baked, 1000.0), none()).merge_pays(1_000_000));
-        // 50 frames save 0.5 s: not worth it.
-        assert!(!m.outlook(situation(IntegrationForm::Baked, 50.0), none()).merge_pays(1_000_000));
-        assert!(!m.outlook(situation(IntegrationForm::Baked, 0.0), none()).merge_pays(1));
     }
 
     #[test]

@@ -77,11 +77,7 @@ impl SceneManager {
         let present = frame.present_bodies().count();
         self.probe.start(self.options.form, moved, present, self.resting.is_empty(), self.accel.query().ok());
         match self.options.form {
-            IntegrationForm::Baked => {
-                let merge = self.options.lookahead.is_some()
-                    && self.outlook(frame).merge_pays(self.static_triangles());
-                self.bake_islands(&chosen, merge, stats)?
-            }
+            IntegrationForm::Baked => self.bake_islands(&chosen, stats)?,
             IntegrationForm::Resting => self.rest_islands(&chosen, stats)?,
         }
         Ok(true)
@@ -199,20 +195,8 @@ impl SceneManager {
         self.commit_static_timed(stats)
     }
 
-    /// Triangles in the static scene: the environment and the baked islands.
-    fn static_triangles(&self) -> usize {
-        self.environment_triangles + self.integrated.values().map(|i| i.baked.triangle_count()).sum::<usize>()
-    }
-
-    /// Bakes `chosen` into the static scene and takes their bodies out of the top level. With
-    /// `merge` (the cost model expects merging to pay), islands that never wake are declared
-    /// permanent, so that the backend may merge them into one structure.
-    fn bake_islands(
-        &mut self,
-        chosen: &[IslandId],
-        merge: bool,
-        stats: &mut FrameStats,
-    ) -> Result<(), AccelError> {
+    /// Bakes `chosen` into the static scene and takes their bodies out of the top level.
+    fn bake_islands(&mut self, chosen: &[IslandId], stats: &mut FrameStats) -> Result<(), AccelError> {
         // With snapshots, each island goes in with its own static build, so the cache can
         // record the scene before it; without (Embree), one build takes them all and the cache
         // records key-only entries: it answers lookups but never restores (docs/design.md).
@@ -234,7 +218,7 @@ impl SceneManager {
                 }
             }
             let id = self.accel.add_static(&baked.mesh)?;
-            if merge && self.options.lookahead.as_ref().is_some_and(|l| l.wake_frame(*island).is_none()) {
+            if self.options.lookahead.as_ref().is_some_and(|l| l.wake_frame(*island).is_none()) {
                 self.accel.set_static_permanent(id);
             }
             for part in &baked.parts {

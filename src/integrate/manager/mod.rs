@@ -207,8 +207,6 @@ pub struct SceneManager {
     last_commit_ms: Option<f64>,
     /// Bodies whose instances moved over the last prepared frame's shutter, ascending.
     blurred: Vec<u32>,
-    /// Triangles of the environment's static meshes.
-    environment_triangles: usize,
 }
 
 impl SceneManager {
@@ -261,7 +259,6 @@ impl SceneManager {
             pending_events: (0, 0),
             last_commit_ms: None,
             blurred: Vec::new(),
-            environment_triangles: template.statics.iter().map(|s| s.mesh.triangle_count()).sum(),
         })
     }
 
