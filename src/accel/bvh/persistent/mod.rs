@@ -358,9 +358,11 @@ impl StaticBvh {
     /// (Merging everything into one block, as a full rebuild does, traces a little faster but
     /// makes every later removal a full rebuild: on the 8,000-body atrium, where islands keep
     /// waking, the BVH backend then spent most of its frame time rebuilding. Keeping every
-    /// island's block instead left the tree after the atrium's run tracing bounce rays about
-    /// 1.55x slower than a fresh build of the same triangles: each of some 500 small,
-    /// overlapping blocks is entered separately. Merging only what never wakes keeps both.)
+    /// island's block instead left the tree after the atrium's run tracing bounce rays up to
+    /// 1.2x slower than a fresh build of the same triangles: each of some 500 small,
+    /// overlapping blocks is entered separately. Merging only what never wakes keeps both: 1.01-
+    /// 1.03x. Merging only when a cost estimate said it pays merged early, then stopped, and
+    /// left a tree slower than either (docs/performance.md).)
     pub fn relink(&mut self) -> Option<usize> {
         let root = self.state.root.take()?;
         let blocks = self.blocks_of(&root);
