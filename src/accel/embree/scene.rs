@@ -329,10 +329,13 @@ pub(super) fn column_major_3x4(xf: &Affine3A) -> [f32; 12] {
 /// Embree as two matrices, which it lerps, rather than two quaternion decompositions, which it
 /// slerps like [`InstanceMotion::at`]. Lerping the matrices of a turn by `a` scales the object
 /// by `cos(a/2)` halfway through (the worst time), `1 - a^2/8`, and turns it to within `a^3/24`
-/// of the slerp: at 3e-4 the object's points move by 1.1e-8 of their distance from its origin,
-/// a fifth of f32's unit roundoff, below what Embree's own f32 transform already rounds (the
-/// crosscheck allows 16 roundoffs for it). A pure translation (`a = 0`) lerps exactly.
-pub(super) const LERP_MAX_ANGLE: f32 = 3e-4;
+/// of the slerp: at 1e-3 the object's points move by 1.25e-7 of their distance from its
+/// origin, about two of f32's unit roundoffs, within what Embree's own f32 transform already
+/// rounds (the crosscheck allows 16 roundoffs for it). A pure translation (`a = 0`) lerps
+/// exactly. (3e-4, a fifth of a roundoff, sent 69% of the atrium's moving instances as matrices;
+/// 1e-3 about 6% more, which took the blurred atrium frame from 1.55x to 1.52x the unblurred
+/// one on a quiet machine: docs/performance.md.)
+pub(super) const LERP_MAX_ANGLE: f32 = 1e-3;
 
 /// Embree's decomposition of a rigid transform: unit scale, no skew or shift, the rotation as
 /// a quaternion (`r` the real part) and the translation.
