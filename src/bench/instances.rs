@@ -17,6 +17,7 @@ use crate::accel::embree::{
     SceneFlags, TriangleGeometry,
 };
 use crate::geometry::{primitives, InstanceMotion, RigidTransform, TriangleMesh};
+use crate::report::median;
 use crate::rng::SplitMix64;
 
 pub struct InstancesBenchOptions {
@@ -168,11 +169,6 @@ fn rays(count: usize) -> Vec<([f32; 3], [f32; 3], f32)> {
             (from.to_array(), (to - from).normalize().to_array(), rng.unit())
         })
         .collect()
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
 }
 
 fn measure(

@@ -14,7 +14,6 @@
 use std::collections::BTreeMap;
 use std::time::Instant;
 
-use rayon::prelude::*;
 use serde::Serialize;
 
 use super::accel as accel_bench;
@@ -356,8 +355,8 @@ fn static_variants(
     for _ in 0..9 {
         for (i, variant) in built.iter().enumerate() {
             let query = variant.accel.query()?;
-            best[i].0 = best[i].0.min(trace_ms(query, &primary));
-            best[i].1 = best[i].1.min(trace_ms(query, &bounce));
+            best[i].0 = best[i].0.min(accel_bench::trace(query, &primary).0);
+            best[i].1 = best[i].1.min(accel_bench::trace(query, &bounce).0);
         }
     }
     let variants = built
@@ -378,14 +377,6 @@ struct BuiltVariant {
     name: String,
     build_ms: f64,
     accel: Box<dyn accel::Accelerator>,
-}
-
-/// Closest-hit time of `rays` through `query`, over rayon, in ms.
-fn trace_ms(query: &dyn accel::SceneQuery, rays: &[crate::geometry::Ray]) -> f64 {
-    let t = Instant::now();
-    let sum: f64 = rays.par_iter().map(|r| query.intersect(r).map_or(0.0, |h| f64::from(h.t))).sum();
-    std::hint::black_box(sum);
-    t.elapsed().as_secs_f64() * 1e3
 }
 
 /// The BVH's persistent static tree as the run left it, after every insert, removal and

@@ -16,7 +16,7 @@ mod stats_file;
 pub(crate) use paper::write_paper;
 pub(crate) use plot::write_report_png;
 pub(crate) use regimes::write_regimes;
-pub(crate) use stats::{FrameRecord, RunInfo};
+pub(crate) use stats::{median, FrameRecord, RunInfo};
 pub(crate) use stats_file::{read_kept_frames, StatsFile};
 
 /// `report` as JSON with `simd_path`, the BVH SIMD path that ran (`DORMANT_SIMD`): every

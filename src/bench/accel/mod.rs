@@ -155,7 +155,7 @@ fn embree_at(
 }
 
 /// Traces `rays` (closest hit) over rayon; returns ms and a checksum that keeps the work alive.
-fn trace(query: &dyn SceneQuery, rays: &[Ray]) -> (f64, f64) {
+pub(crate) fn trace(query: &dyn SceneQuery, rays: &[Ray]) -> (f64, f64) {
     let (sum, ms) =
         timed(|| rays.par_iter().map(|r| query.intersect(r).map_or(0.0, |h| h.t as f64)).sum::<f64>());
     (ms, sum)
@@ -243,14 +243,12 @@ fn insert_timing(
         insert_runs_ms.push(ms);
         sah_after_insert = sah_after_insert.or_else(|| grown.static_sah_cost());
     }
-    let mut sorted = insert_runs_ms.clone();
-    sorted.sort_by(f64::total_cmp);
     let timing = InsertTiming {
         backend,
         triangles: env.iter().copied().chain(islands).map(TriangleMesh::triangle_count).sum(),
         island_triangles: last.triangle_count(),
         rebuild_ms,
-        insert_ms: sorted[sorted.len() / 2],
+        insert_ms: crate::report::median(insert_runs_ms.clone()),
         insert_runs_ms,
         sah_after_insert,
         sah_rebuild,

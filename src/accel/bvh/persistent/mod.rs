@@ -333,17 +333,20 @@ impl StaticBvh {
     fn live_tris(&self) -> Vec<Tri> {
         let mut tris = Vec::with_capacity(self.state.triangles);
         if let Some(root) = &self.state.root {
-            let meshes = &self.state.meshes;
-            stats::for_each_block(root, &mut |b| {
-                tris.extend(
-                    b.mesh
-                        .tris
-                        .iter()
-                        .filter(|t| meshes.get(&StaticId(t.geom)).is_some_and(|e| e.block == b.id)),
-                );
-            });
+            stats::for_each_block(root, &mut |b| tris.extend(self.live_tris_of(b)));
         }
         tris
+    }
+
+    /// The triangles of `block` whose mesh is live and still kept in that block.
+    fn live_tris_of<'a>(&'a self, block: &'a Block) -> impl Iterator<Item = Tri> + 'a {
+        let meshes = &self.state.meshes;
+        block
+            .mesh
+            .tris
+            .iter()
+            .filter(move |t| meshes.get(&StaticId(t.geom)).is_some_and(|e| e.block == block.id))
+            .copied()
     }
 
     /// Rebuilds the overlay over the existing blocks, re-inserting each whole, largest first,
@@ -365,12 +368,16 @@ impl StaticBvh {
     /// left a tree slower than either (docs/performance.md).)
     pub fn relink(&mut self) -> Option<usize> {
         let root = self.state.root.take()?;
-        let blocks = self.blocks_of(&root);
+        let mut blocks = Vec::new();
+        stats::for_each_block(&root, &mut |b| blocks.push(b.clone()));
         let (merge, keep) = self.mergeable(&blocks);
-        let merged = if merge.len() > 1 { self.merge_blocks(&merge) } else { None };
-        let built = merged.as_ref().map_or(0, |b| b.mesh.tris.len());
-        let mut order: Vec<Arc<Block>> =
-            merged.into_iter().chain(if built > 0 { keep } else { blocks }).collect();
+        let (mut order, built) = match (merge.len() > 1).then(|| self.merge_blocks(&merge)).flatten() {
+            Some(merged) => {
+                let built = merged.mesh.tris.len();
+                (std::iter::once(merged).chain(keep).collect(), built)
+            }
+            None => (blocks, 0),
+        };
         order.sort_by_key(|b| (std::cmp::Reverse(b.mesh.tris.len()), b.id));
         let mut fresh = Link::Ref(order[0].clone(), 0);
         for b in &order[1..] {
@@ -385,24 +392,6 @@ impl StaticBvh {
         }
         self.state.set_root(Some(fresh));
         Some(built)
-    }
-
-    /// Every distinct block referenced from `root`.
-    fn blocks_of(&self, root: &Link) -> Vec<Arc<Block>> {
-        let mut blocks = Vec::new();
-        let mut seen = HashSet::new();
-        let mut stack = vec![root];
-        while let Some(l) = stack.pop() {
-            match l {
-                Link::Ref(b, _) => {
-                    if seen.insert(b.id) {
-                        blocks.push(b.clone());
-                    }
-                }
-                Link::Node(n) => stack.extend(n.kids.iter()),
-            }
-        }
-        blocks
     }
 
     /// Splits `blocks` into those that will never be removed on their own (every live mesh in
@@ -420,14 +409,7 @@ impl StaticBvh {
     /// Builds one block from the live triangles of `blocks` and marks their meshes as sharing it.
     fn merge_blocks(&mut self, blocks: &[Arc<Block>]) -> Option<Arc<Block>> {
         let ids: HashSet<u32> = blocks.iter().map(|b| b.id).collect();
-        let meshes = &self.state.meshes;
-        let tris: Vec<Tri> = blocks
-            .iter()
-            .flat_map(|b| {
-                b.mesh.tris.iter().filter(|t| meshes.get(&StaticId(t.geom)).is_some_and(|e| e.block == b.id))
-            })
-            .copied()
-            .collect();
+        let tris: Vec<Tri> = blocks.iter().flat_map(|b| self.live_tris_of(b)).collect();
         if tris.is_empty() {
             return None;
         }

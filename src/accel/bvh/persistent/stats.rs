@@ -8,7 +8,7 @@ use crate::accel::bvh::flat::{sah_cost, subtree_cost, MeshBvh};
 use crate::accel::bvh::BuildParams;
 
 /// Visits every distinct block referenced from `root` once.
-pub(crate) fn for_each_block(root: &Link, f: &mut impl FnMut(&Block)) {
+pub(crate) fn for_each_block(root: &Link, f: &mut impl FnMut(&Arc<Block>)) {
     let mut seen = HashSet::new();
     let mut stack = vec![root];
     while let Some(l) = stack.pop() {
