@@ -104,3 +104,29 @@ fn denoise_without_the_cpu_device_module_exits_2_naming_it() {
     assert_eq!(output.status.code(), Some(2), "{stderr}");
     assert!(stderr.contains("libOpenImageDenoise_device_cpu"), "{stderr}");
 }
+
+/// `bench adaptive --denoise --denoise-prefilter` denoises every frame with prefiltered guides,
+/// says so in its report, and the denoised 4 spp frame is closer to the reference.
+#[cfg(feature = "oidn")]
+#[test]
+fn bench_adaptive_with_prefiltered_guides_denoises_every_frame_and_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let output = dormant()
+        .args(["bench", "adaptive", "--size", "64x36", "--reference-spp", "64", "--uniform-spp", "4"])
+        .args(["--thresholds", "0.2", "--adaptive-spp", "16", "--min-spp", "2", "--denoise"])
+        .args(["--denoise-prefilter", "--quiet", "--reference"])
+        .arg(dir.path().join("reference.exr"))
+        .args(["--json", "-"])
+        .output()
+        .unwrap();
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let report: serde_json::Value = serde_json::from_slice(&output.stdout).unwrap();
+    assert_eq!(report["denoise"], "oidn-prefilter");
+    let rows = report["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 2);
+    for row in rows {
+        let (noisy, denoised) =
+            (row["relative_mse"].as_f64().unwrap(), row["denoised_relative_mse"].as_f64());
+        assert!(denoised.is_some_and(|d| d.is_finite() && d < noisy), "{row}");
+    }
+}

@@ -81,6 +81,8 @@ pub struct AdaptiveBenchReport {
     pub min_spp: u32,
     /// The relative MSE's dark floor: `(x - ref)^2 / (ref^2 + floor^2)`.
     pub floor: f32,
+    /// `--denoise`: `oidn`, or `oidn-prefilter` with `--denoise-prefilter`; `null` without.
+    pub denoise: Option<&'static str>,
     pub rows: Vec<AdaptiveRow>,
     pub equal_error: Vec<EqualError>,
 }
@@ -186,6 +188,7 @@ pub fn bench_adaptive(
         reference_seconds,
         min_spp: AdaptiveSampling { noise_threshold: 1.0, min_spp: opts.min_spp }.min_spp(opts.adaptive_spp),
         floor: crate::render::DARK_FLOOR,
+        denoise: opts.denoiser.as_ref().map(Denoiser::label),
         rows,
         equal_error,
     })

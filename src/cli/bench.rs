@@ -248,6 +248,10 @@ pub struct AdaptiveBenchArgs {
     /// Also denoise every frame (OIDN) and report its error.
     #[arg(long)]
     pub denoise: bool,
+    /// With --denoise: denoise the albedo and normal guides first, as `render
+    /// --denoise-prefilter` does.
+    #[arg(long, requires = "denoise")]
+    pub denoise_prefilter: bool,
 }
 
 pub(super) fn run(
@@ -488,7 +492,11 @@ fn adaptive(
         return input("--min-spp", "must be from 1 to --adaptive-spp");
     }
     let denoiser = match args.denoise {
-        true => Some(crate::render::Denoiser::new(threads).map_err(|e| CliError::Input(e.to_string()))?),
+        true => Some(
+            crate::render::Denoiser::new(threads)
+                .map_err(|e| CliError::Input(e.to_string()))?
+                .prefilter(args.denoise_prefilter),
+        ),
         false => None,
     };
     let opts = AdaptiveBenchOptions {

@@ -447,7 +447,8 @@ fn render_sequence(
         reuse_static: args.reuse == Switch::On,
         shutter: shutter(args, sequence),
     };
-    let info = run_info(args, sequence, backend, &frames, renderer.adaptive);
+    let denoise = writer.denoiser.map(Denoiser::label);
+    let info = run_info(args, sequence, backend, &frames, renderer.adaptive, denoise);
     let kept = if args.resume { super::resume::kept_frames(args, &info, &frames)? } else { Vec::new() };
     if args.resume && !writer.quiet {
         println!("{}", super::resume::summary(&kept, &frames));
@@ -562,6 +563,7 @@ fn run_info(
     backend: Backend,
     frames: &FrameSelection,
     adaptive: AdaptiveSampling,
+    denoise: Option<&str>,
 ) -> RunInfo {
     RunInfo {
         scene: sequence.template.name.clone(),
@@ -588,7 +590,7 @@ fn run_info(
         exposure: args.exposure,
         aovs: args.aov.iter().map(|a| a.name().to_string()).collect(),
         exr: args.exr,
-        denoise: args.denoise.then(|| if args.denoise_prefilter { "oidn-prefilter" } else { "oidn" }.into()),
+        denoise: denoise.map(str::to_string),
         keep_noisy: args.keep_noisy,
         shutter: shutter(args, sequence),
     }

@@ -102,6 +102,16 @@ impl Denoiser {
         self
     }
 
+    /// How frames are denoised, as stats and bench reports name it: `oidn`, or `oidn-prefilter`
+    /// with [`Denoiser::prefilter`].
+    pub fn label(&self) -> &'static str {
+        if self.prefilter {
+            "oidn-prefilter"
+        } else {
+            "oidn"
+        }
+    }
+
     /// The linked library's version, `major.minor.patch`.
     pub fn version(&self) -> String {
         #[cfg(feature = "oidn")]
