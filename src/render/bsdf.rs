@@ -16,21 +16,48 @@ pub(crate) fn basis(n: Vec3) -> (Vec3, Vec3) {
     (Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x), Vec3::new(b, sign + n.y * n.y * a, -n.y))
 }
 
+/// A unit axis with its [`basis`], built once where several directions are sampled around the
+/// same axis (a vertex's shading normal for the sky and the next bounce, the sun's direction
+/// for a whole frame).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Frame {
+    t: Vec3,
+    b: Vec3,
+    pub n: Vec3,
+}
+
+impl Frame {
+    pub fn new(n: Vec3) -> Self {
+        let (t, b) = basis(n);
+        Self { t, b, n }
+    }
+
+    /// The direction at angle `phi` around the axis, with sine `sin` and cosine `cos` to it.
+    fn around(&self, sin: f32, cos: f32, phi: f32) -> Vec3 {
+        self.t * (sin * phi.cos()) + self.b * (sin * phi.sin()) + self.n * cos
+    }
+
+    /// Cosine-weighted direction in the hemisphere around the axis; pdf `cos / pi`.
+    pub fn cosine(&self, u: Vec2) -> Vec3 {
+        self.around(u.x.sqrt(), (1.0 - u.x).max(0.0).sqrt(), 2.0 * PI * u.y).normalize()
+    }
+
+    /// Uniform direction within the cone of half-angle `acos(cos_max)` around the axis.
+    pub fn cone(&self, cos_max: f32, u: Vec2) -> Vec3 {
+        let cos = 1.0 - u.x * (1.0 - cos_max);
+        let sin = (1.0 - cos * cos).max(0.0).sqrt();
+        self.around(sin, cos, 2.0 * PI * u.y).normalize()
+    }
+}
+
 /// Cosine-weighted direction in the hemisphere around `n`; pdf `cos / pi`.
 pub(crate) fn sample_cosine(n: Vec3, u: Vec2) -> Vec3 {
-    let r = u.x.sqrt();
-    let phi = 2.0 * PI * u.y;
-    let (t, b) = basis(n);
-    (t * (r * phi.cos()) + b * (r * phi.sin()) + n * (1.0 - u.x).max(0.0).sqrt()).normalize()
+    Frame::new(n).cosine(u)
 }
 
 /// Uniform direction within the cone of half-angle `acos(cos_max)` around `axis`.
 pub(crate) fn sample_cone(axis: Vec3, cos_max: f32, u: Vec2) -> Vec3 {
-    let cos = 1.0 - u.x * (1.0 - cos_max);
-    let sin = (1.0 - cos * cos).max(0.0).sqrt();
-    let phi = 2.0 * PI * u.y;
-    let (t, b) = basis(axis);
-    (t * (sin * phi.cos()) + b * (sin * phi.sin()) + axis * cos).normalize()
+    Frame::new(axis).cone(cos_max, u)
 }
 
 /// A sampled incident direction.
@@ -46,7 +73,8 @@ pub(crate) struct BsdfSample {
 /// evaluates it for several incident directions: sun, sky, emitter and the next bounce).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Bsdf {
-    n: Vec3,
+    /// The shading normal and its basis.
+    frame: Frame,
     wo: Vec3,
     /// `n . wo`, and Smith's `lambda` of it: the same for every incident direction.
     cos_o: f32,
@@ -93,7 +121,7 @@ impl Bsdf {
         };
         let alpha = roughness * roughness;
         let cos_o = n.dot(wo);
-        Self { n, wo, cos_o, lambda_o: lambda(alpha, cos_o), diffuse, f0, alpha, p_spec }
+        Self { frame: Frame::new(n), wo, cos_o, lambda_o: lambda(alpha, cos_o), diffuse, f0, alpha, p_spec }
     }
 
     fn d(&self, cos_h: f32) -> f32 {
@@ -111,12 +139,12 @@ impl Bsdf {
     /// microfacet distribution, and every light sample needs both (the pdf for its MIS
     /// weight). Computed as the two would be apart, so the results are bit-identical.
     pub fn eval_pdf(&self, wi: Vec3) -> (Vec3, f32) {
-        let (wo, co, ci) = (self.wo, self.cos_o, self.n.dot(wi));
+        let (wo, co, ci) = (self.wo, self.cos_o, self.frame.n.dot(wi));
         if co <= 0.0 || ci <= 0.0 {
             return (Vec3::ZERO, 0.0);
         }
         let h = (wo + wi).normalize();
-        let (cos_h, wo_h) = (self.n.dot(h), wo.dot(h));
+        let (cos_h, wo_h) = (self.frame.n.dot(h), wo.dot(h));
         let d = self.d(cos_h);
         let f = fresnel(self.f0, wo_h);
         let g = 1.0 / (1.0 + self.lambda_o + lambda(self.alpha, ci));
@@ -124,6 +152,11 @@ impl Bsdf {
         let diff = self.diffuse * (Vec3::ONE - f) / PI;
         let pdf_spec = d * cos_h / (4.0 * wo_h.max(1e-8));
         ((spec + diff) * ci, self.p_spec * pdf_spec + (1.0 - self.p_spec) * ci / PI)
+    }
+
+    /// The shading normal and its basis, for sampling light around it.
+    pub fn frame(&self) -> &Frame {
+        &self.frame
     }
 
     /// Picks a lobe with `u_lobe`, then a direction with `u`.
@@ -137,12 +170,10 @@ impl Bsdf {
             let a2 = self.alpha * self.alpha;
             let cos_h = ((1.0 - u.x) / (1.0 + (a2 - 1.0) * u.x)).max(0.0).sqrt();
             let sin_h = (1.0 - cos_h * cos_h).max(0.0).sqrt();
-            let phi = 2.0 * PI * u.y;
-            let (t, b) = basis(self.n);
-            let h = t * (sin_h * phi.cos()) + b * (sin_h * phi.sin()) + self.n * cos_h;
+            let h = self.frame.around(sin_h, cos_h, 2.0 * PI * u.y);
             2.0 * wo.dot(h) * h - wo
         } else {
-            sample_cosine(self.n, u)
+            self.frame.cosine(u)
         };
         let (f, pdf) = self.eval_pdf(wi);
         if pdf <= 0.0 || !pdf.is_finite() {

@@ -8,7 +8,7 @@ use glam::Vec3;
 use super::{dims, punctual_light, shadow_ray, FrameContext, FrameIntegrator, Integrator};
 use crate::accel::Hit;
 use crate::geometry::{offset_origin, Ray};
-use crate::render::bsdf::{sample_cone, sample_cosine, Bsdf};
+use crate::render::bsdf::{Bsdf, Frame};
 use crate::render::{PixelSampler, RenderScene, SurfaceHit};
 
 /// Unidirectional path tracing with next-event estimation of the sun, the sky and emissive
@@ -58,7 +58,8 @@ fn power_heuristic(a: f32, b: f32) -> f32 {
 /// The sun as an area light on the sky: a disc of `cos_max` around its direction with uniform
 /// radiance `radiance`, sampled uniformly over its solid angle `1 / pdf`.
 struct SunLight {
-    dir: Vec3,
+    /// Its direction, with a basis around it built once per frame.
+    frame: Frame,
     cos_max: f32,
     radiance: Vec3,
     pdf: f32,
@@ -69,7 +70,7 @@ impl SunLight {
         let cos_max = scene.sun.angular_radius_deg.max(0.01).to_radians().cos();
         let solid_angle = 2.0 * PI * (1.0 - cos_max);
         Self {
-            dir: scene.sun.direction,
+            frame: Frame::new(scene.sun.direction),
             cos_max,
             radiance: scene.sun.irradiance / solid_angle,
             pdf: 1.0 / solid_angle,
@@ -77,7 +78,7 @@ impl SunLight {
     }
 
     fn contains(&self, d: Vec3) -> bool {
-        d.dot(self.dir) >= self.cos_max
+        d.dot(self.frame.n) >= self.cos_max
     }
 }
 
@@ -235,7 +236,7 @@ impl PathTracerFrame<'_> {
     /// packets").
     fn sun(&self, v: &Vertex, path: &mut Path) {
         let sun = &self.sun;
-        let l = sample_cone(sun.dir, sun.cos_max, path.sampler.get_2d(path.index, v.dim()));
+        let l = sun.frame.cone(sun.cos_max, path.sampler.get_2d(path.index, v.dim()));
         let (f, pdf_bsdf) = v.bsdf.eval_pdf(l);
         if f != Vec3::ZERO
             && v.s.ng.dot(l) > 0.0
@@ -249,7 +250,7 @@ impl PathTracerFrame<'_> {
     /// The sky: a direction cosine-weighted around the shading normal, MIS against BSDF
     /// sampling.
     fn sky(&self, v: &Vertex, path: &mut Path) {
-        let d = sample_cosine(v.s.ns, path.sampler.get_2d(path.index, v.dim() + 1));
+        let d = v.bsdf.frame().cosine(path.sampler.get_2d(path.index, v.dim() + 1));
         let pdf_sky = v.s.ns.dot(d).max(0.0) / PI;
         let (f, pdf_bsdf) = v.bsdf.eval_pdf(d);
         if f != Vec3::ZERO
