@@ -72,7 +72,7 @@ fn owen_scramble(x: u32, seed: u32) -> u32 {
 /// the scramble works in: entry `b` of table `t` is `reverse_bits(sobol_1(reverse_bits(r)))`
 /// for the word `r` whose byte `t` is `b` (the others zero). The map is linear over GF(2), so a
 /// scrambled index straight out of [`low_to_high_permutation`] gives its point's second
-/// coordinate, bit-reversed, in four lookups: two bit reversals fewer than reversing the
+/// coordinate, bit-reversed, in four lookups: one bit reversal fewer than reversing the
 /// index, looking its point up and reversing the point (same bits).
 const SOBOL_1_REVERSED: [[u32; 256]; 4] = sobol_1_reversed_tables();
 
