@@ -195,6 +195,13 @@ impl Bsdf {
         ((spec + diff) * ci, self.p_spec * pdf_spec + self.p_diffuse_over_pi * ci)
     }
 
+    /// Whether `wi` and `wo` are both above the shading surface: where [`Self::eval_pdf`] can
+    /// be non-zero (zero elsewhere). Light samples test it before their shadow ray and
+    /// evaluate the BSDF only when the ray arrives.
+    pub fn reflects(&self, wi: Vec3) -> bool {
+        self.cos_o > 0.0 && self.frame.n.dot(wi) > 0.0
+    }
+
     /// The shading normal and its basis, for sampling light around it.
     pub fn frame(&self) -> &Frame {
         &self.frame
@@ -220,7 +227,7 @@ impl Bsdf {
         if pdf <= 0.0 || !pdf.is_finite() {
             return None;
         }
-        Some(BsdfSample { wi, weight: f / pdf, pdf })
+        Some(BsdfSample { wi, weight: f * (1.0 / pdf), pdf })
     }
 }
 

@@ -1,7 +1,7 @@
 //! The path tracer (`--mode path`, the default): unidirectional paths on the
 //! metallic-roughness BSDF with next-event estimation at every vertex.
 
-use std::f32::consts::PI;
+use std::f32::consts::{FRAC_1_PI, PI};
 
 use glam::Vec3;
 
@@ -63,6 +63,8 @@ struct SunLight {
     cos_max: f32,
     radiance: Vec3,
     pdf: f32,
+    /// `1 / pdf`.
+    solid_angle: f32,
 }
 
 impl SunLight {
@@ -74,6 +76,7 @@ impl SunLight {
             cos_max,
             radiance: scene.sun.irradiance / solid_angle,
             pdf: 1.0 / solid_angle,
+            solid_angle,
         }
     }
 
@@ -192,7 +195,7 @@ impl PathTracerFrame<'_> {
         match came_from {
             None => sky + sun_l,
             Some((p, n)) => {
-                let w_sky = power_heuristic(p, n.dot(d).max(0.0) / PI);
+                let w_sky = power_heuristic(p, n.dot(d).max(0.0) * FRAC_1_PI);
                 sky * w_sky + sun_l * power_heuristic(p, self.sun.pdf)
             }
         }
@@ -218,12 +221,11 @@ impl PathTracerFrame<'_> {
     fn punctual_lights(&self, v: &Vertex, path: &mut Path) {
         for light in &self.frame.scene.lights {
             let Some((l, e, distance)) = punctual_light(light, v.s.p) else { continue };
-            let f = v.bsdf.eval(l);
-            if f != Vec3::ZERO
+            if v.bsdf.reflects(l)
                 && v.s.ng.dot(l) > 0.0
                 && self.frame.unoccluded(&shadow_ray(v.origin, l, distance).at_time(v.time), path.rays)
             {
-                path.add(path.beta * f * e, v.depth);
+                path.add(path.beta * v.bsdf.eval(l) * e, v.depth);
             }
         }
     }
@@ -234,16 +236,20 @@ impl PathTracerFrame<'_> {
     /// 4x4; 1.6-3.8x on the small default scene), and packing them would mean shading a whole
     /// pixel block's first vertex before any of its shadow rays (docs/performance.md, "Ray
     /// packets").
+    ///
+    /// Like every light sample here, the shadow ray goes first and the BSDF is evaluated only
+    /// when it arrives (a blocked sample needs no BSDF value); [`Bsdf::reflects`] keeps the
+    /// rays the BSDF would reject untraced, as testing its value for zero did.
     fn sun(&self, v: &Vertex, path: &mut Path) {
         let sun = &self.sun;
         let l = sun.frame.cone(sun.cos_max, path.sampler.get_2d(path.index, v.dim()));
-        let (f, pdf_bsdf) = v.bsdf.eval_pdf(l);
-        if f != Vec3::ZERO
+        if v.bsdf.reflects(l)
             && v.s.ng.dot(l) > 0.0
             && self.frame.unoccluded(&Ray::new(v.origin, l).at_time(v.time), path.rays)
         {
+            let (f, pdf_bsdf) = v.bsdf.eval_pdf(l);
             let w = power_heuristic(sun.pdf, pdf_bsdf);
-            path.add(path.beta * f * sun.radiance * (w / sun.pdf), v.depth);
+            path.add(path.beta * f * sun.radiance * (w * sun.solid_angle), v.depth);
         }
     }
 
@@ -251,13 +257,13 @@ impl PathTracerFrame<'_> {
     /// sampling.
     fn sky(&self, v: &Vertex, path: &mut Path) {
         let d = v.bsdf.frame().cosine(path.sampler.get_2d(path.index, v.dim() + 1));
-        let pdf_sky = v.s.ns.dot(d).max(0.0) / PI;
-        let (f, pdf_bsdf) = v.bsdf.eval_pdf(d);
-        if f != Vec3::ZERO
-            && pdf_sky > 0.0
+        let pdf_sky = v.s.ns.dot(d).max(0.0) * FRAC_1_PI;
+        if pdf_sky > 0.0
+            && v.bsdf.reflects(d)
             && v.s.ng.dot(d) > 0.0
             && self.frame.unoccluded(&Ray::new(v.origin, d).at_time(v.time), path.rays)
         {
+            let (f, pdf_bsdf) = v.bsdf.eval_pdf(d);
             let w = power_heuristic(pdf_sky, pdf_bsdf);
             path.add(path.beta * f * self.frame.scene.sky.radiance(d) * (w / pdf_sky), v.depth);
         }
@@ -278,11 +284,11 @@ impl PathTracerFrame<'_> {
         let dist2 = d.length_squared();
         let wi = d / dist2.sqrt();
         let cos_light = e.n.dot(wi).abs();
-        let (f, pdf_bsdf) = v.bsdf.eval_pdf(wi);
-        if dist2 > 0.0 && cos_light > 0.0 && f != Vec3::ZERO && v.s.ng.dot(wi) > 0.0 {
+        if dist2 > 0.0 && cos_light > 0.0 && v.bsdf.reflects(wi) && v.s.ng.dot(wi) > 0.0 {
             let pdf_light = e.pdf_area * dist2 / cos_light;
             let shadow = Ray::segment(v.origin, wi, 0.0, dist2.sqrt() * (1.0 - 1e-3)).at_time(v.time);
             if self.frame.unoccluded(&shadow, path.rays) {
+                let (f, pdf_bsdf) = v.bsdf.eval_pdf(wi);
                 let w = power_heuristic(pdf_light, pdf_bsdf);
                 path.add(path.beta * f * le * (w / pdf_light), v.depth);
             }
@@ -305,7 +311,7 @@ fn continue_path(v: &Vertex, path: &mut Path) -> Option<Ray> {
         if u_lobe.y >= q {
             return None;
         }
-        path.beta /= q;
+        path.beta *= 1.0 / q;
     }
     path.came_from = Some((sample.pdf, v.s.ns));
     Some(Ray::new(v.origin, sample.wi).at_time(v.time))
