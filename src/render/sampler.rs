@@ -33,7 +33,15 @@ use glam::Vec2;
 #[derive(Clone, Copy, Debug)]
 pub struct PixelSampler {
     seed: u32,
+    /// [`Self::hash_seeds`] of the pairs below [`CACHED_PAIRS`], hashed once per pixel: every
+    /// camera sample draws from them (the pixel jitter and the first path vertex's sun, sky
+    /// and bounce pairs). Same bits as hashing at each call.
+    cached: [(u32, u32, u32); CACHED_PAIRS],
 }
+
+/// Dimension pairs whose seeds a [`PixelSampler`] hashes when made: `dims::PIXEL` (0), the
+/// preview's `SUN` and `SKY` (1, 2) and the path tracer's first vertex (`BOUNCE` + 0..4).
+const CACHED_PAIRS: usize = 7;
 
 const fn hash(mut x: u32) -> u32 {
     // A well-mixed 32-bit integer hash (lowbias32).
@@ -153,12 +161,21 @@ fn dim_hash(dim: u32) -> u32 {
 
 impl PixelSampler {
     pub(crate) fn new(x: u32, y: u32, frame: u32) -> Self {
-        Self { seed: hash(x ^ hash(y ^ hash(frame.wrapping_add(0x9e37_79b9)))) }
+        let seed = hash(x ^ hash(y ^ hash(frame.wrapping_add(0x9e37_79b9))));
+        Self { seed, cached: std::array::from_fn(|dim| Self::hash_seeds(seed, dim as u32)) }
     }
 
     /// The seeds of dimension `dim`'s index shuffle and of its two coordinates' scrambles.
     fn seeds(&self, dim: u32) -> (u32, u32, u32) {
-        let h = hash(self.seed ^ dim_hash(dim));
+        match self.cached.get(dim as usize) {
+            Some(&seeds) => seeds,
+            None => Self::hash_seeds(self.seed, dim),
+        }
+    }
+
+    /// [`Self::seeds`] of the pixel seeded `seed`, hashed.
+    fn hash_seeds(seed: u32, dim: u32) -> (u32, u32, u32) {
+        let h = hash(seed ^ dim_hash(dim));
         (hash(h ^ 0x5bd1_e995), hash(h ^ 0x1b87_3593), hash(h ^ 0xcc9e_2d51))
     }
 
@@ -214,7 +231,7 @@ mod tests {
     #[test]
     fn reversed_tables_match_the_scramble_they_replace() {
         let s = PixelSampler::new(9, 4, 5);
-        for dim in [0, 7, 300, 511, 512, 9000] {
+        for dim in [0, 3, 6, 7, 300, 511, 512, 9000] {
             let (shuffle, sx, sy) = s.seeds(dim);
             for index in (0..300).chain([1 << 20, u32::MAX]) {
                 let i = owen_scramble(index, shuffle);
@@ -223,6 +240,7 @@ mod tests {
                 assert_eq!(s.get_2d(index, dim), Vec2::new(unit(x), unit(y)), "dim {dim} index {index}");
             }
             assert_eq!(dim_hash(dim), hash(dim.wrapping_mul(0x68e3_1da4)));
+            assert_eq!(s.seeds(dim), PixelSampler::hash_seeds(s.seed, dim));
         }
     }
 
