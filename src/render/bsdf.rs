@@ -60,16 +60,19 @@ impl Frame {
         self.t * (sin * cos_phi) + self.b * (sin * sin_phi) + self.n * cos
     }
 
-    /// Cosine-weighted direction in the hemisphere around the axis; pdf `cos / pi`.
+    /// Cosine-weighted direction in the hemisphere around the axis; pdf `cos / pi`. Unit to
+    /// within 1e-6 without normalising (an orthonormal basis and `sin^2 + cos^2 = 1` to within
+    /// [`sincos_turn`]'s error; `sampled_directions_are_unit` checks it).
     pub fn cosine(&self, u: Vec2) -> Vec3 {
-        self.around(u.x.sqrt(), (1.0 - u.x).max(0.0).sqrt(), u.y).normalize()
+        self.around(u.x.sqrt(), (1.0 - u.x).max(0.0).sqrt(), u.y)
     }
 
-    /// Uniform direction within the cone of half-angle `acos(cos_max)` around the axis.
+    /// Uniform direction within the cone of half-angle `acos(cos_max)` around the axis; unit
+    /// to within 1e-6, as [`Self::cosine`].
     pub fn cone(&self, cos_max: f32, u: Vec2) -> Vec3 {
         let cos = 1.0 - u.x * (1.0 - cos_max);
         let sin = (1.0 - cos * cos).max(0.0).sqrt();
-        self.around(sin, cos, u.y).normalize()
+        self.around(sin, cos, u.y)
     }
 }
 
@@ -252,6 +255,23 @@ mod tests {
             }
         }
         sum / (k * k) as f32
+    }
+
+    #[test]
+    fn sampled_directions_are_unit() {
+        let mut worst: f32 = 0.0;
+        for (i, n) in
+            [Vec3::Z, -Vec3::Z, Vec3::new(0.3, -0.8, 0.52), Vec3::new(-0.99, 0.1, -0.05)].iter().enumerate()
+        {
+            let frame = Frame::new(n.normalize());
+            for k in 0..4096 {
+                let u = Vec2::new((k % 64) as f32 / 64.0 + 0.007, (k / 64) as f32 / 64.0 + 0.003 * i as f32);
+                for d in [frame.cosine(u), frame.cone(0.9998, u)] {
+                    worst = worst.max((d.length() - 1.0).abs());
+                }
+            }
+        }
+        assert!(worst < 1e-6, "worst |length - 1| {worst:e}");
     }
 
     #[test]

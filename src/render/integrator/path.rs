@@ -55,6 +55,13 @@ fn power_heuristic(a: f32, b: f32) -> f32 {
     }
 }
 
+/// A light sample's MIS weight over its pdf, `power_heuristic(a, b) / a`, as one quotient
+/// `a / (a^2 + b^2)` (`a > 0`, the light sample's pdf; `b` the BSDF's).
+fn power_heuristic_over_pdf(a: f32, b: f32) -> f32 {
+    debug_assert!(a > 0.0, "light pdf {a}");
+    a / (a * a + b * b)
+}
+
 /// The sun as an area light on the sky: a disc of `cos_max` around its direction with uniform
 /// radiance `radiance`, sampled uniformly over its solid angle `1 / pdf`.
 struct SunLight {
@@ -63,8 +70,6 @@ struct SunLight {
     cos_max: f32,
     radiance: Vec3,
     pdf: f32,
-    /// `1 / pdf`.
-    solid_angle: f32,
 }
 
 impl SunLight {
@@ -76,7 +81,6 @@ impl SunLight {
             cos_max,
             radiance: scene.sun.irradiance / solid_angle,
             pdf: 1.0 / solid_angle,
-            solid_angle,
         }
     }
 
@@ -248,8 +252,8 @@ impl PathTracerFrame<'_> {
             && self.frame.unoccluded(&Ray::new(v.origin, l).at_time(v.time), path.rays)
         {
             let (f, pdf_bsdf) = v.bsdf.eval_pdf(l);
-            let w = power_heuristic(sun.pdf, pdf_bsdf);
-            path.add(path.beta * f * sun.radiance * (w * sun.solid_angle), v.depth);
+            let w_over_pdf = power_heuristic_over_pdf(sun.pdf, pdf_bsdf);
+            path.add(path.beta * f * sun.radiance * w_over_pdf, v.depth);
         }
     }
 
@@ -264,8 +268,8 @@ impl PathTracerFrame<'_> {
             && self.frame.unoccluded(&Ray::new(v.origin, d).at_time(v.time), path.rays)
         {
             let (f, pdf_bsdf) = v.bsdf.eval_pdf(d);
-            let w = power_heuristic(pdf_sky, pdf_bsdf);
-            path.add(path.beta * f * self.frame.scene.sky.radiance(d) * (w / pdf_sky), v.depth);
+            let w_over_pdf = power_heuristic_over_pdf(pdf_sky, pdf_bsdf);
+            path.add(path.beta * f * self.frame.scene.sky.radiance(d) * w_over_pdf, v.depth);
         }
     }
 
@@ -289,8 +293,8 @@ impl PathTracerFrame<'_> {
             let shadow = Ray::segment(v.origin, wi, 0.0, dist2.sqrt() * (1.0 - 1e-3)).at_time(v.time);
             if self.frame.unoccluded(&shadow, path.rays) {
                 let (f, pdf_bsdf) = v.bsdf.eval_pdf(wi);
-                let w = power_heuristic(pdf_light, pdf_bsdf);
-                path.add(path.beta * f * le * (w / pdf_light), v.depth);
+                let w_over_pdf = power_heuristic_over_pdf(pdf_light, pdf_bsdf);
+                path.add(path.beta * f * le * w_over_pdf, v.depth);
             }
         }
     }
