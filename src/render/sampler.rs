@@ -23,9 +23,11 @@
 //! pbrt-v4's padded Sobol sampler shuffles with a random permutation of `[0, spp)` instead,
 //! which needs the pixel's budget and leaves an early-stopped prefix unstratified.
 //!
-//! Cost: a frame takes about 14% longer than with the R2 sampler (docs/performance.md,
-//! "Adaptive sampling"). Untried savings: cheap hash-combined seeds for the three scrambles
-//! instead of full hashes (changes every image), bit-reversed Sobol tables (one reversal less).
+//! Cost: a frame took about 14% longer than with the R2 sampler (docs/performance.md,
+//! "Adaptive sampling"); the dimension-hash table, the pre-reversed Sobol tables and the
+//! per-pixel seeds of the first pairs then halved the sampler's share of a frame (12% -> 6%,
+//! "Shading overhead"). Untried: cheap hash-combined seeds for the three scrambles instead
+//! of full hashes (changes every image; at most about 2% of a frame now).
 
 use glam::Vec2;
 
@@ -33,9 +35,17 @@ use glam::Vec2;
 #[derive(Clone, Copy, Debug)]
 pub struct PixelSampler {
     seed: u32,
+    /// [`Self::hash_seeds`] of the pairs below [`CACHED_PAIRS`], hashed once per pixel: every
+    /// camera sample draws from them (the pixel jitter and the first path vertex's sun, sky
+    /// and bounce pairs). Same bits as hashing at each call.
+    cached: [(u32, u32, u32); CACHED_PAIRS],
 }
 
-fn hash(mut x: u32) -> u32 {
+/// Dimension pairs whose seeds a [`PixelSampler`] hashes when made: `dims::PIXEL` (0), the
+/// preview's `SUN` and `SKY` (1, 2) and the path tracer's first vertex (`BOUNCE` + 0..4).
+const CACHED_PAIRS: usize = 7;
+
+const fn hash(mut x: u32) -> u32 {
     // A well-mixed 32-bit integer hash (lowbias32).
     x ^= x >> 16;
     x = x.wrapping_mul(0x7feb_352d);
@@ -68,12 +78,16 @@ fn owen_scramble(x: u32, seed: u32) -> u32 {
     low_to_high_permutation(x.reverse_bits(), seed).reverse_bits()
 }
 
-/// Sobol's second generator matrix (the Pascal matrix mod 2) as byte tables: entry `b` of
-/// table `t` is the matrix times index byte `b` in position `t`, so a point is four lookups.
-const SOBOL_1: [[u32; 256]; 4] = sobol_1_tables();
+/// Sobol's second generator matrix (the Pascal matrix mod 2) as byte tables, in the bit order
+/// the scramble works in: entry `b` of table `t` is `reverse_bits(sobol_1(reverse_bits(r)))`
+/// for the word `r` whose byte `t` is `b` (the others zero). The map is linear over GF(2), so a
+/// scrambled index straight out of [`low_to_high_permutation`] gives its point's second
+/// coordinate, bit-reversed, in four lookups: one bit reversal fewer than reversing the
+/// index, looking its point up and reversing the point (same bits).
+const SOBOL_1_REVERSED: [[u32; 256]; 4] = sobol_1_reversed_tables();
 
-const fn sobol_1_tables() -> [[u32; 256]; 4] {
-    // Column `j`: v_0 = 1/2, v_j = v_{j-1} ^ (v_{j-1} >> 1).
+/// Column `j` of Sobol's second generator matrix: `v_0 = 1/2`, `v_j = v_{j-1} ^ (v_{j-1} >> 1)`.
+const fn sobol_1_columns() -> [u32; 32] {
     let mut columns = [0u32; 32];
     columns[0] = 1 << 31;
     let mut j = 1;
@@ -81,6 +95,11 @@ const fn sobol_1_tables() -> [[u32; 256]; 4] {
         columns[j] = columns[j - 1] ^ (columns[j - 1] >> 1);
         j += 1;
     }
+    columns
+}
+
+const fn sobol_1_reversed_tables() -> [[u32; 256]; 4] {
+    let columns = sobol_1_columns();
     let mut tables = [[0u32; 256]; 4];
     let mut t = 0;
     while t < 4 {
@@ -89,8 +108,9 @@ const fn sobol_1_tables() -> [[u32; 256]; 4] {
             let mut v = 0;
             let mut bit = 0;
             while bit < 8 {
+                // Bit `8t + bit` of `r` is bit `31 - 8t - bit` of the index.
                 if b >> bit & 1 == 1 {
-                    v ^= columns[8 * t + bit];
+                    v ^= columns[31 - (8 * t + bit)].reverse_bits();
                 }
                 bit += 1;
             }
@@ -102,23 +122,62 @@ const fn sobol_1_tables() -> [[u32; 256]; 4] {
     tables
 }
 
+/// `reverse_bits(sobol_1(reverse_bits(r)))`: the second coordinate of the Sobol point whose
+/// index is `r` bit-reversed, itself bit-reversed.
+fn sobol_1_reversed(r: u32) -> u32 {
+    let b = r.to_le_bytes();
+    SOBOL_1_REVERSED[0][b[0] as usize]
+        ^ SOBOL_1_REVERSED[1][b[1] as usize]
+        ^ SOBOL_1_REVERSED[2][b[2] as usize]
+        ^ SOBOL_1_REVERSED[3][b[3] as usize]
+}
+
 /// The second coordinate of Sobol point `index`, as a 32-bit binary fraction.
+#[cfg(test)]
 fn sobol_1(index: u32) -> u32 {
-    let b = index.to_le_bytes();
-    SOBOL_1[0][b[0] as usize]
-        ^ SOBOL_1[1][b[1] as usize]
-        ^ SOBOL_1[2][b[2] as usize]
-        ^ SOBOL_1[3][b[3] as usize]
+    let columns = sobol_1_columns();
+    (0..32).filter(|&j| index >> j & 1 == 1).fold(0, |v, j| v ^ columns[j])
+}
+
+/// Dimension pairs below this get their seed hash from [`DIM_HASHES`].
+const DIM_TABLE: usize = 512;
+
+/// `hash(dim * 0x68e3_1da4)` of every dimension below [`DIM_TABLE`] (every one the integrators
+/// use), computed at compile time: one hash fewer per sample point, same bits.
+const DIM_HASHES: [u32; DIM_TABLE] = {
+    let mut table = [0u32; DIM_TABLE];
+    let mut d = 0;
+    while d < DIM_TABLE {
+        table[d] = hash((d as u32).wrapping_mul(0x68e3_1da4));
+        d += 1;
+    }
+    table
+};
+
+fn dim_hash(dim: u32) -> u32 {
+    match DIM_HASHES.get(dim as usize) {
+        Some(&h) => h,
+        None => hash(dim.wrapping_mul(0x68e3_1da4)),
+    }
 }
 
 impl PixelSampler {
     pub(crate) fn new(x: u32, y: u32, frame: u32) -> Self {
-        Self { seed: hash(x ^ hash(y ^ hash(frame.wrapping_add(0x9e37_79b9)))) }
+        let seed = hash(x ^ hash(y ^ hash(frame.wrapping_add(0x9e37_79b9))));
+        Self { seed, cached: std::array::from_fn(|dim| Self::hash_seeds(seed, dim as u32)) }
     }
 
     /// The seeds of dimension `dim`'s index shuffle and of its two coordinates' scrambles.
     fn seeds(&self, dim: u32) -> (u32, u32, u32) {
-        let h = hash(self.seed ^ hash(dim.wrapping_mul(0x68e3_1da4)));
+        match self.cached.get(dim as usize) {
+            Some(&seeds) => seeds,
+            None => Self::hash_seeds(self.seed, dim),
+        }
+    }
+
+    /// [`Self::seeds`] of the pixel seeded `seed`, hashed.
+    fn hash_seeds(seed: u32, dim: u32) -> (u32, u32, u32) {
+        let h = hash(seed ^ dim_hash(dim));
         (hash(h ^ 0x5bd1_e995), hash(h ^ 0x1b87_3593), hash(h ^ 0xcc9e_2d51))
     }
 
@@ -134,11 +193,14 @@ impl PixelSampler {
     /// The `index`-th 2D point of dimension pair `dim`, in `[0, 1)^2`.
     pub fn get_2d(&self, index: u32, dim: u32) -> Vec2 {
         let (shuffle, sx, sy) = self.seeds(dim);
-        let i = owen_scramble(index, shuffle);
+        // The shuffled index, bit-reversed: `i = owen_scramble(index, shuffle)` is
+        // `r.reverse_bits()`.
+        let r = low_to_high_permutation(index.reverse_bits(), shuffle);
         // Dimension 0 is the van der Corput sequence, reverse_bits(i); scrambling it is
         // reverse_bits(low_to_high_permutation(i)).
-        let x = low_to_high_permutation(i, sx).reverse_bits();
-        let y = owen_scramble(sobol_1(i), sy);
+        let x = low_to_high_permutation(r.reverse_bits(), sx).reverse_bits();
+        // owen_scramble(sobol_1(i), sy), with the reversals folded into the tables.
+        let y = low_to_high_permutation(sobol_1_reversed(r), sy).reverse_bits();
         Vec2::new(unit(x), unit(y))
     }
 }
@@ -166,6 +228,22 @@ mod tests {
             quadrants[(p.x >= 0.5) as usize + 2 * (p.y >= 0.5) as usize] += 1;
         }
         assert_eq!(quadrants, [4; 4]);
+    }
+
+    #[test]
+    fn reversed_tables_match_the_scramble_they_replace() {
+        let s = PixelSampler::new(9, 4, 5);
+        for dim in [0, 3, 6, 7, 300, 511, 512, 9000] {
+            let (shuffle, sx, sy) = s.seeds(dim);
+            for index in (0..300).chain([1 << 20, u32::MAX]) {
+                let i = owen_scramble(index, shuffle);
+                let x = low_to_high_permutation(i, sx).reverse_bits();
+                let y = owen_scramble(sobol_1(i), sy);
+                assert_eq!(s.get_2d(index, dim), Vec2::new(unit(x), unit(y)), "dim {dim} index {index}");
+            }
+            assert_eq!(dim_hash(dim), hash(dim.wrapping_mul(0x68e3_1da4)));
+            assert_eq!(s.seeds(dim), PixelSampler::hash_seeds(s.seed, dim));
+        }
     }
 
     #[test]

@@ -25,6 +25,11 @@ fn srgb_table() -> &'static [f32; 256] {
 /// Texel index along one axis of `size` texels for integer coordinate `i`.
 fn wrap(i: i64, size: u32, mode: Wrap) -> usize {
     let n = size as i64;
+    if (0..n).contains(&i) {
+        // Inside the image, every mode agrees; skips `rem_euclid`'s 64-bit division, which
+        // most look-ups would otherwise pay twice per texel (same texels).
+        return i as usize;
+    }
     let i = match mode {
         Wrap::Repeat => i.rem_euclid(n),
         Wrap::ClampToEdge => i.clamp(0, n - 1),
@@ -53,9 +58,14 @@ pub(crate) fn sample(texture: &Texture, uv: Vec2, srgb: bool) -> Vec4 {
     // precise enough for the fraction: wrapping is periodic, and clamping saturates anyway.
     let x = (uv.x as f64 * texture.width as f64 - 0.5).clamp(-1e12, 1e12);
     let y = (uv.y as f64 * texture.height as f64 - 0.5).clamp(-1e12, 1e12);
-    let (x0, y0) = (x.floor(), y.floor());
-    let (fx, fy) = ((x - x0) as f32, (y - y0) as f32);
-    let (x0, y0) = (x0 as i64, y0 as i64);
+    // floor() as an integer conversion (x86-64's baseline has no rounding instruction, so
+    // f64::floor is a libm call); exact, since |x| <= 1e12.
+    let floor = |v: f64| {
+        let i = v as i64;
+        i - ((i as f64) > v) as i64
+    };
+    let (x0, y0) = (floor(x), floor(y));
+    let (fx, fy) = ((x - x0 as f64) as f32, (y - y0 as f64) as f32);
     let table = srgb_table();
     let texel = |xi: i64, yi: i64| {
         let tx = wrap(xi, texture.width, texture.wrap_s);

@@ -1,14 +1,14 @@
 //! The path tracer (`--mode path`, the default): unidirectional paths on the
 //! metallic-roughness BSDF with next-event estimation at every vertex.
 
-use std::f32::consts::PI;
+use std::f32::consts::{FRAC_1_PI, PI};
 
 use glam::Vec3;
 
 use super::{dims, punctual_light, shadow_ray, FrameContext, FrameIntegrator, Integrator};
 use crate::accel::Hit;
 use crate::geometry::{offset_origin, Ray};
-use crate::render::bsdf::{sample_cone, sample_cosine, Bsdf};
+use crate::render::bsdf::{Bsdf, Frame};
 use crate::render::{PixelSampler, RenderScene, SurfaceHit};
 
 /// Unidirectional path tracing with next-event estimation of the sun, the sky and emissive
@@ -55,10 +55,18 @@ fn power_heuristic(a: f32, b: f32) -> f32 {
     }
 }
 
+/// A light sample's MIS weight over its pdf, `power_heuristic(a, b) / a`, as one quotient
+/// `a / (a^2 + b^2)` (`a > 0`, the light sample's pdf; `b` the BSDF's).
+fn power_heuristic_over_pdf(a: f32, b: f32) -> f32 {
+    debug_assert!(a > 0.0, "light pdf {a}");
+    a / (a * a + b * b)
+}
+
 /// The sun as an area light on the sky: a disc of `cos_max` around its direction with uniform
 /// radiance `radiance`, sampled uniformly over its solid angle `1 / pdf`.
 struct SunLight {
-    dir: Vec3,
+    /// Its direction, with a basis around it built once per frame.
+    frame: Frame,
     cos_max: f32,
     radiance: Vec3,
     pdf: f32,
@@ -69,7 +77,7 @@ impl SunLight {
         let cos_max = scene.sun.angular_radius_deg.max(0.01).to_radians().cos();
         let solid_angle = 2.0 * PI * (1.0 - cos_max);
         Self {
-            dir: scene.sun.direction,
+            frame: Frame::new(scene.sun.direction),
             cos_max,
             radiance: scene.sun.irradiance / solid_angle,
             pdf: 1.0 / solid_angle,
@@ -77,7 +85,7 @@ impl SunLight {
     }
 
     fn contains(&self, d: Vec3) -> bool {
-        d.dot(self.dir) >= self.cos_max
+        d.dot(self.frame.n) >= self.cos_max
     }
 }
 
@@ -191,7 +199,7 @@ impl PathTracerFrame<'_> {
         match came_from {
             None => sky + sun_l,
             Some((p, n)) => {
-                let w_sky = power_heuristic(p, n.dot(d).max(0.0) / PI);
+                let w_sky = power_heuristic(p, n.dot(d).max(0.0) * FRAC_1_PI);
                 sky * w_sky + sun_l * power_heuristic(p, self.sun.pdf)
             }
         }
@@ -217,12 +225,11 @@ impl PathTracerFrame<'_> {
     fn punctual_lights(&self, v: &Vertex, path: &mut Path) {
         for light in &self.frame.scene.lights {
             let Some((l, e, distance)) = punctual_light(light, v.s.p) else { continue };
-            let f = v.bsdf.eval(l);
-            if f != Vec3::ZERO
+            if v.bsdf.reflects(l)
                 && v.s.ng.dot(l) > 0.0
                 && self.frame.unoccluded(&shadow_ray(v.origin, l, distance).at_time(v.time), path.rays)
             {
-                path.add(path.beta * f * e, v.depth);
+                path.add(path.beta * v.bsdf.eval(l) * e, v.depth);
             }
         }
     }
@@ -233,32 +240,36 @@ impl PathTracerFrame<'_> {
     /// 4x4; 1.6-3.8x on the small default scene), and packing them would mean shading a whole
     /// pixel block's first vertex before any of its shadow rays (docs/performance.md, "Ray
     /// packets").
+    ///
+    /// Like every light sample here, the shadow ray goes first and the BSDF is evaluated only
+    /// when it arrives (a blocked sample needs no BSDF value); [`Bsdf::reflects`] keeps the
+    /// rays the BSDF would reject untraced, as testing its value for zero did.
     fn sun(&self, v: &Vertex, path: &mut Path) {
         let sun = &self.sun;
-        let l = sample_cone(sun.dir, sun.cos_max, path.sampler.get_2d(path.index, v.dim()));
-        let (f, pdf_bsdf) = v.bsdf.eval_pdf(l);
-        if f != Vec3::ZERO
+        let l = sun.frame.cone(sun.cos_max, path.sampler.get_2d(path.index, v.dim()));
+        if v.bsdf.reflects(l)
             && v.s.ng.dot(l) > 0.0
             && self.frame.unoccluded(&Ray::new(v.origin, l).at_time(v.time), path.rays)
         {
-            let w = power_heuristic(sun.pdf, pdf_bsdf);
-            path.add(path.beta * f * sun.radiance * (w / sun.pdf), v.depth);
+            let (f, pdf_bsdf) = v.bsdf.eval_pdf(l);
+            let w_over_pdf = power_heuristic_over_pdf(sun.pdf, pdf_bsdf);
+            path.add(path.beta * f * sun.radiance * w_over_pdf, v.depth);
         }
     }
 
     /// The sky: a direction cosine-weighted around the shading normal, MIS against BSDF
     /// sampling.
     fn sky(&self, v: &Vertex, path: &mut Path) {
-        let d = sample_cosine(v.s.ns, path.sampler.get_2d(path.index, v.dim() + 1));
-        let pdf_sky = v.s.ns.dot(d).max(0.0) / PI;
-        let (f, pdf_bsdf) = v.bsdf.eval_pdf(d);
-        if f != Vec3::ZERO
-            && pdf_sky > 0.0
+        let d = v.bsdf.frame().cosine(path.sampler.get_2d(path.index, v.dim() + 1));
+        let pdf_sky = v.s.ns.dot(d).max(0.0) * FRAC_1_PI;
+        if pdf_sky > 0.0
+            && v.bsdf.reflects(d)
             && v.s.ng.dot(d) > 0.0
             && self.frame.unoccluded(&Ray::new(v.origin, d).at_time(v.time), path.rays)
         {
-            let w = power_heuristic(pdf_sky, pdf_bsdf);
-            path.add(path.beta * f * self.frame.scene.sky.radiance(d) * (w / pdf_sky), v.depth);
+            let (f, pdf_bsdf) = v.bsdf.eval_pdf(d);
+            let w_over_pdf = power_heuristic_over_pdf(pdf_sky, pdf_bsdf);
+            path.add(path.beta * f * self.frame.scene.sky.radiance(d) * w_over_pdf, v.depth);
         }
     }
 
@@ -277,13 +288,13 @@ impl PathTracerFrame<'_> {
         let dist2 = d.length_squared();
         let wi = d / dist2.sqrt();
         let cos_light = e.n.dot(wi).abs();
-        let (f, pdf_bsdf) = v.bsdf.eval_pdf(wi);
-        if dist2 > 0.0 && cos_light > 0.0 && f != Vec3::ZERO && v.s.ng.dot(wi) > 0.0 {
+        if dist2 > 0.0 && cos_light > 0.0 && v.bsdf.reflects(wi) && v.s.ng.dot(wi) > 0.0 {
             let pdf_light = e.pdf_area * dist2 / cos_light;
             let shadow = Ray::segment(v.origin, wi, 0.0, dist2.sqrt() * (1.0 - 1e-3)).at_time(v.time);
             if self.frame.unoccluded(&shadow, path.rays) {
-                let w = power_heuristic(pdf_light, pdf_bsdf);
-                path.add(path.beta * f * le * (w / pdf_light), v.depth);
+                let (f, pdf_bsdf) = v.bsdf.eval_pdf(wi);
+                let w_over_pdf = power_heuristic_over_pdf(pdf_light, pdf_bsdf);
+                path.add(path.beta * f * le * w_over_pdf, v.depth);
             }
         }
     }
@@ -304,7 +315,7 @@ fn continue_path(v: &Vertex, path: &mut Path) -> Option<Ray> {
         if u_lobe.y >= q {
             return None;
         }
-        path.beta /= q;
+        path.beta *= 1.0 / q;
     }
     path.came_from = Some((sample.pdf, v.s.ns));
     Some(Ray::new(v.origin, sample.wi).at_time(v.time))
