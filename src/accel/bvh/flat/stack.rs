@@ -17,33 +17,19 @@
 
 use std::mem::MaybeUninit;
 
-/// Storage of a [`TraversalStack`]: a local of the traversal, borrowed by the stack.
-pub(crate) type StackStorage<const N: usize> = [MaybeUninit<(u32, f32)>; N];
-
 /// Subtrees to visit later, each with its entry distance along the ray, last in first out.
 /// Holds at most `N` entries; pushing more panics (the builders bound tree depth so that the
 /// traversals never do).
-///
-/// The entries live in a separate local ([`StackStorage`]): with the length in the same
-/// object as the array, the compiler could not tell a write to an entry from a write to the
-/// length, and stored and reloaded the length around every push (seen in the wide
-/// traversal's assembly); borrowed, the length stays in a register.
-pub(crate) struct TraversalStack<'a, const N: usize> {
+pub(crate) struct TraversalStack<const N: usize> {
     /// `entries[..len]` are initialised; the rest may not be.
-    entries: &'a mut StackStorage<N>,
+    entries: [MaybeUninit<(u32, f32)>; N],
     len: usize,
 }
 
-impl<'a, const N: usize> TraversalStack<'a, N> {
-    /// Uninitialised storage for [`Self::new`].
+impl<const N: usize> TraversalStack<N> {
     #[inline(always)]
-    pub fn storage() -> StackStorage<N> {
-        [const { MaybeUninit::uninit() }; N]
-    }
-
-    #[inline(always)]
-    pub fn new(entries: &'a mut StackStorage<N>) -> Self {
-        Self { entries, len: 0 }
+    pub fn new() -> Self {
+        Self { entries: [const { MaybeUninit::uninit() }; N], len: 0 }
     }
 
     /// Saves subtree `node`, entered at distance `t`.
@@ -53,30 +39,6 @@ impl<'a, const N: usize> TraversalStack<'a, N> {
         // Indexing is bounds-checked: an overflow panics instead of writing past the array.
         self.entries[self.len].write((node, t));
         self.len += 1;
-    }
-
-    /// Sorts the top `m` entries (`2 <= m <= len`) by entry distance, nearest on top (ties:
-    /// the later pushed on top), then pops the nearest and returns its node: the wide
-    /// traversal's child order when three or more children are hit.
-    #[inline(always)]
-    pub fn sort_top_and_pop(&mut self, m: usize) -> u32 {
-        debug_assert!(m >= 2 && m <= self.len);
-        let top = &mut self.entries[self.len - m..self.len];
-        // SAFETY: `entries[..len]` are initialised (see `pop_within`) and `top` lies within
-        // them; `MaybeUninit<T>` has the layout of `T`.
-        let top = unsafe { &mut *(top as *mut [MaybeUninit<(u32, f32)>] as *mut [(u32, f32)]) };
-        // Insertion sort, descending by distance (stable: equal entries keep push order).
-        for i in 1..top.len() {
-            let x = top[i];
-            let mut j = i;
-            while j > 0 && top[j - 1].1 < x.1 {
-                top[j] = top[j - 1];
-                j -= 1;
-            }
-            top[j] = x;
-        }
-        self.len -= 1;
-        top[m - 1].0
     }
 
     /// Pops entries until one was entered at `t <= t_max` (a subtree still in front of the

@@ -78,8 +78,7 @@ where
     if ray.hit(root_node, *t_max) == f32::INFINITY {
         return false;
     }
-    let mut storage = super::stack::TraversalStack::<STACK_SIZE>::storage();
-    let mut stack = super::stack::TraversalStack::new(&mut storage);
+    let mut stack = super::stack::TraversalStack::<STACK_SIZE>::new();
     let mut node = root_node;
     loop {
         if node.is_leaf() {

@@ -37,10 +37,10 @@ const FOLDED: u32 = LEAF | 1 << 30;
 #[repr(C, align(64))]
 pub(crate) struct Node8 {
     boxes: Boxes8,
-    /// The child's stack code: interior, its wide node index; leaf, `LEAF | node << 3 | slot`
-    /// (its range is `Wide::leaves[node << 3 | slot]`); unused, [`EMPTY`]. Stored ready, so
-    /// that pushing a child is one load, no branch on its kind.
+    /// Interior child: wide node index. Leaf child: first leaf item. Unused: [`EMPTY`].
     child: [u32; WIDTH],
+    /// Leaf child: item count; 0 for interior children.
+    count: [u16; WIDTH],
     /// Bit `i` set when slot `i` is used (unused slots have inverted boxes, which an
     /// axis-parallel ray may not reject).
     used: u32,
@@ -55,8 +55,6 @@ pub(crate) struct Wide {
     /// Per binary node: `(w, 0)` for the wide node `w` rooted there, `(first, count)` for a
     /// leaf (remapped), `(NONE, 0)` for an interior node folded into its parent's wide node.
     map: Vec<(u32, u32)>,
-    /// `(first, count)` of every leaf child, at `node << 3 | slot` (`(0, 0)` elsewhere).
-    leaves: Vec<(u32, u32)>,
 }
 
 impl Wide {
@@ -66,7 +64,6 @@ impl Wide {
     pub fn new(bvh: &FlatBvh, leaf: impl Fn(u32, &Node) -> (u32, u32)) -> Self {
         let mut w = Wide {
             nodes: Vec::with_capacity(bvh.nodes.len() / 6 + 1),
-            leaves: Vec::with_capacity((bvh.nodes.len() / 6 + 1) * WIDTH),
             map: bvh
                 .nodes
                 .iter()
@@ -82,7 +79,7 @@ impl Wide {
     }
 
     pub fn memory_bytes(&self) -> usize {
-        self.nodes.len() * std::mem::size_of::<Node8>() + self.map.len() * 8 + self.leaves.len() * 8
+        self.nodes.len() * std::mem::size_of::<Node8>() + self.map.len() * 8
     }
 
     fn collapse(&mut self, bvh: &FlatBvh, n2: u32) -> u32 {
@@ -117,25 +114,20 @@ impl Wide {
         self.nodes.push(Node8 {
             boxes: Boxes8 { min: [[f32::INFINITY; WIDTH]; 3], max: [[f32::NEG_INFINITY; WIDTH]; 3] },
             child: [EMPTY; WIDTH],
+            count: [0; WIDTH],
             used: 0,
         });
-        self.leaves.extend([(0, 0); WIDTH]);
         self.map[n2 as usize] = (at as u32, 0);
         for (slot, &k) in kids.iter().enumerate() {
             let n = &nodes[k as usize];
-            let child = if n.is_leaf() {
-                let i = at * WIDTH + slot;
-                self.leaves[i] = self.map[k as usize];
-                LEAF | i as u32
-            } else {
-                self.collapse(bvh, k)
-            };
+            let (child, count) = if n.is_leaf() { self.map[k as usize] } else { (self.collapse(bvh, k), 0) };
             let w = &mut self.nodes[at];
             for axis in 0..3 {
                 w.boxes.min[axis][slot] = n.min[axis];
                 w.boxes.max[axis][slot] = n.max[axis];
             }
             w.child[slot] = child;
+            w.count[slot] = count as u16;
             w.used |= 1 << slot;
         }
         at as u32
@@ -163,8 +155,7 @@ impl Wide {
     where
         F: FnMut(u32, u32, &mut f32) -> bool,
     {
-        let mut storage = TraversalStack::<WIDE_STACK>::storage();
-        let mut stack = TraversalStack::new(&mut storage);
+        let mut stack = TraversalStack::<WIDE_STACK>::new();
         // Binary nodes folded into a wide node are entered through their children: at most
         // `WIDTH` of them are pending at once (the folded part of one wide node). Wide nodes
         // and leaves found there go on the stack.
@@ -200,7 +191,8 @@ impl Wide {
     fn traverse8<K: Kernel, F>(
         &self,
         k: K,
-        stack: &mut TraversalStack<'_, WIDE_STACK>,
+        // By reference: moving the 7 KiB stack would copy it.
+        stack: &mut TraversalStack<WIDE_STACK>,
         ray: &BoxRay,
         t_max: &mut f32,
         leaf: &mut F,
@@ -208,7 +200,7 @@ impl Wide {
     where
         F: FnMut(u32, u32, &mut f32) -> bool,
     {
-        let kr = k.prepare(&BoxRay8::new(ray.org.into(), ray.inv.into(), ray.t_min));
+        let kr = k.prepare(&BoxRay8 { org: ray.org.into(), inv: ray.inv.into(), t_min: ray.t_min });
         let Some(mut cur) = stack.pop_within(*t_max) else {
             return false;
         };
@@ -218,41 +210,37 @@ impl Wide {
                 let (mask, near) = k.box8(&kr, &n.boxes, *t_max);
                 let mut mask = mask & n.used;
                 if mask != 0 {
-                    let code = |slot: usize| n.child[slot];
-                    // Nearest child next, the others pushed farthest first. One hit: taken, no
-                    // push; two: one compare; more: pushed, then sorted on the stack. Ties go
-                    // to the higher slot, as the insertion sort over all hits did before.
-                    let s0 = mask.trailing_zeros() as usize;
-                    mask &= mask - 1;
-                    if mask == 0 {
-                        cur = code(s0);
-                        continue;
-                    }
-                    let s1 = mask.trailing_zeros() as usize;
-                    mask &= mask - 1;
-                    if mask == 0 {
-                        let (take, push) = if near[s1] <= near[s0] { (s1, s0) } else { (s0, s1) };
-                        stack.push(code(push), near[push]);
-                        cur = code(take);
-                        continue;
-                    }
-                    stack.push(code(s0), near[s0]);
-                    stack.push(code(s1), near[s1]);
-                    let mut m = 2;
+                    // Hit children sorted farthest first: all but the last are pushed, the
+                    // last (nearest) is taken next.
+                    let mut hits = [(0u32, 0f32); WIDTH];
+                    let mut m = 0;
                     while mask != 0 {
                         let slot = mask.trailing_zeros() as usize;
                         mask &= mask - 1;
-                        stack.push(code(slot), near[slot]);
+                        let code =
+                            if n.count[slot] > 0 { LEAF | (cur << 3) | slot as u32 } else { n.child[slot] };
+                        // Insertion sort, descending by entry distance.
+                        let mut j = m;
+                        while j > 0 && hits[j - 1].1 < near[slot] {
+                            hits[j] = hits[j - 1];
+                            j -= 1;
+                        }
+                        hits[j] = (code, near[slot]);
                         m += 1;
                     }
-                    cur = stack.sort_top_and_pop(m);
+                    for &(code, t) in &hits[..m - 1] {
+                        stack.push(code, t);
+                    }
+                    cur = hits[m - 1].0;
                     continue;
                 }
             } else {
                 let (first, count) = if cur & FOLDED == FOLDED {
                     self.map[(cur & !FOLDED) as usize]
                 } else {
-                    self.leaves[(cur & !LEAF) as usize]
+                    let (node, slot) = ((cur & !LEAF) >> 3, (cur & 7) as usize);
+                    let n = &self.nodes[node as usize];
+                    (n.child[slot], u32::from(n.count[slot]))
                 };
                 // The only call of `leaf` (see `traverse`).
                 if leaf(first, count, t_max) {

@@ -18,6 +18,7 @@ use std::sync::atomic::{AtomicU8, Ordering};
 use glam::Vec4;
 use serde::Serialize;
 
+use super::flat::FAR_SCALE;
 
 #[cfg(target_arch = "x86_64")]
 pub(crate) use x86::{Avx2, Avx512};
@@ -163,56 +164,12 @@ thread_local! {
     static OVERRIDE: Cell<Option<SimdPath>> = const { Cell::new(None) };
 }
 
-/// A ray prepared for 8-wide box tests: a slab distance is `b * inv - oi` (one FMA on the
-/// intrinsic paths, a multiply and a subtraction on the portable one) instead of
-/// `(b - org) * inv`, and `err` bounds what that costs in accuracy (see [`BoxRay8::new`]).
+/// A ray prepared for 8-wide box tests (origin, safe inverse direction, `t_min`).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct BoxRay8 {
+    pub org: [f32; 3],
     pub inv: [f32; 3],
-    /// `org * inv`, rounded.
-    pub oi: [f32; 3],
     pub t_min: f32,
-    /// Absolute error bound of every slab distance: subtracted from the entry distance and
-    /// added to the exit distance.
-    pub err: f32,
-}
-
-/// Relative error bound of a slab distance and of the two corrections (`1 + 2 * gamma(5)`, the
-/// [`super::flat::FAR_SCALE`] argument with two more roundings: `near - err` and `far * scale + err`).
-pub(crate) const FMA_FAR_SCALE: f32 = 1.0 + 2.0 * (5.0 * f32::EPSILON * 0.5) / (1.0 - 5.0 * f32::EPSILON * 0.5);
-
-impl BoxRay8 {
-    /// From the origin and the safe inverse direction ([`super::flat::BoxRay`]).
-    ///
-    /// Why the box test stays conservative. With `u = 2^-24`, `inv = (1/d)(1 + e0)` and the
-    /// exact slab distance `s = (b - o) / d`, the FMA gives
-    /// `fl(b * inv - fl(o * inv)) = ((b - o) inv - o inv e1)(1 + e2) = s (1 + th) + h` with
-    /// `|th| <= gamma(2)` and `|h| <= u (1 + u) |o inv|`; the portable path's separate multiply
-    /// adds one relative `u` and one `u |o inv|` (`b inv = (b - o) inv + o inv`): `|th| <=
-    /// gamma(3)`, `|h| <= 2u (1 + u) |o inv|`. So `err = 4u max |oi|` bounds `h` on every path
-    /// with room for `oi`'s own rounding, and testing `near - err <= far * FMA_FAR_SCALE + err`
-    /// accepts every box the exact ray enters within `[t_min, t_max]` (the relative part as in
-    /// [`super::flat::FAR_SCALE`], pbrt 4 section 6.8, plus the two roundings of the corrections). `h` is
-    /// absolute, not relative to the distance, which is why it needs `err`: for a slab plane
-    /// near the origin (`b ~ o`) `b * inv - o * inv` cancels.
-    ///
-    /// Rays whose `o * inv` overflows (a direction component near zero and an origin far from
-    /// 0 on that axis) get `inv = oi = 0` and `err = f32::MAX`: every box is entered at `t_min`
-    /// (a brute-force walk, still exact). Non-finite origins or NaN directions miss every box,
-    /// as they did with `(b - org) * inv`.
-    #[inline(always)]
-    pub fn new(org: [f32; 3], inv: [f32; 3], t_min: f32) -> Self {
-        let oi = [org[0] * inv[0], org[1] * inv[1], org[2] * inv[2]];
-        let big = oi[0].abs().max(oi[1].abs()).max(oi[2].abs());
-        let err = 4.0 * (f32::EPSILON * 0.5) * big;
-        if !(org.iter().all(|o| o.is_finite()) && inv.iter().all(|i| !i.is_nan())) {
-            return Self { inv: [0.0; 3], oi: [0.0; 3], t_min: f32::INFINITY, err: 0.0 };
-        }
-        if !(err < f32::MAX * 0.25) {
-            return Self { inv: [0.0; 3], oi: [0.0; 3], t_min, err: f32::MAX };
-        }
-        Self { inv, oi, t_min, err }
-    }
 }
 
 /// Eight children's boxes, structure of arrays: `min[axis][child]`.
@@ -230,7 +187,7 @@ pub(crate) trait Kernel: Copy {
     type Ray: Copy;
     fn prepare(self, ray: &BoxRay8) -> Self::Ray;
     /// Slab test of eight boxes: bit `i` set when child `i` is entered within `[t_min, t_max]`
-    /// (conservative: [`BoxRay8::new`]), and each child's entry distance (a lower bound).
+    /// (a conservative far bound, `FAR_SCALE`), and each child's entry distance.
     fn box8(self, ray: &Self::Ray, b: &Boxes8, t_max: f32) -> (u32, [f32; 8]);
 }
 
@@ -240,10 +197,9 @@ pub(crate) struct Portable;
 
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct PortableRay {
+    org: [Vec4; 3],
     inv: [Vec4; 3],
-    oi: [Vec4; 3],
     t_min: Vec4,
-    err: Vec4,
 }
 
 impl Kernel for Portable {
@@ -251,24 +207,17 @@ impl Kernel for Portable {
 
     #[inline(always)]
     fn prepare(self, r: &BoxRay8) -> PortableRay {
-        PortableRay {
-            inv: r.inv.map(Vec4::splat),
-            oi: r.oi.map(Vec4::splat),
-            t_min: Vec4::splat(r.t_min),
-            err: Vec4::splat(r.err),
-        }
+        PortableRay { org: r.org.map(Vec4::splat), inv: r.inv.map(Vec4::splat), t_min: Vec4::splat(r.t_min) }
     }
 
     #[inline(always)]
     fn box8(self, r: &PortableRay, b: &Boxes8, t_max: f32) -> (u32, [f32; 8]) {
         let half = |h: usize| {
             let lane = |a: &[f32; 8]| Vec4::from_slice(&a[4 * h..4 * h + 4]);
-            // A multiply and a subtraction, not `mul_add`: glam's is a software FMA per lane
-            // without the `fma` target feature (the error bound covers both, `BoxRay8::new`).
-            let t0: [Vec4; 3] = std::array::from_fn(|k| lane(&b.min[k]) * r.inv[k] - r.oi[k]);
-            let t1: [Vec4; 3] = std::array::from_fn(|k| lane(&b.max[k]) * r.inv[k] - r.oi[k]);
-            let near = (t0[0].min(t1[0]).max(t0[1].min(t1[1])).max(t0[2].min(t1[2])) - r.err).max(r.t_min);
-            let far = (t0[0].max(t1[0]).min(t0[1].max(t1[1])).min(t0[2].max(t1[2])) * FMA_FAR_SCALE + r.err)
+            let t0: [Vec4; 3] = std::array::from_fn(|k| (lane(&b.min[k]) - r.org[k]) * r.inv[k]);
+            let t1: [Vec4; 3] = std::array::from_fn(|k| (lane(&b.max[k]) - r.org[k]) * r.inv[k]);
+            let near = t0[0].min(t1[0]).max(t0[1].min(t1[1])).max(t0[2].min(t1[2])).max(r.t_min);
+            let far = (t0[0].max(t1[0]).min(t0[1].max(t1[1])).min(t0[2].max(t1[2])) * FAR_SCALE)
                 .min(Vec4::splat(t_max));
             (near.cmple(far).bitmask(), near.to_array())
         };

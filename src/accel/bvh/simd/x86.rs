@@ -4,7 +4,7 @@
 
 use std::arch::x86_64::*;
 
-use super::{BoxRay8, Boxes8, Kernel, FMA_FAR_SCALE};
+use super::{BoxRay8, Boxes8, Kernel, FAR_SCALE};
 
 /// Token of the AVX2 + FMA path.
 #[derive(Clone, Copy, Debug)]
@@ -32,10 +32,9 @@ impl Avx512 {
 
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct RayM256 {
+    org: [__m256; 3],
     inv: [__m256; 3],
-    oi: [__m256; 3],
     t_min: __m256,
-    err: __m256,
 }
 
 #[inline(always)]
@@ -44,34 +43,31 @@ fn prepare(r: &BoxRay8) -> RayM256 {
     // AVX2; `_mm256_set1_ps` needs AVX.
     unsafe {
         RayM256 {
+            org: r.org.map(|x| _mm256_set1_ps(x)),
             inv: r.inv.map(|x| _mm256_set1_ps(x)),
-            oi: r.oi.map(|x| _mm256_set1_ps(x)),
             t_min: _mm256_set1_ps(r.t_min),
-            err: _mm256_set1_ps(r.err),
         }
     }
 }
 
-/// Near and far distances of the eight boxes: `b * inv - oi` in one FMA per plane, the error
-/// bound `err` taken off the near and added to the far distance ([`BoxRay8::new`] argues the
-/// bound; [`super::Portable`] does the same with a separate multiply).
+/// Near and far distances of the eight boxes (the same operations, in the same order, as
+/// [`super::Portable`], so every path enters the same children).
 #[inline(always)]
 fn near_far(r: &RayM256, b: &Boxes8, t_max: f32) -> (__m256, __m256) {
-    // SAFETY: as in `prepare`, and FMA (both tokens' CPUs have it). `Boxes8` is
-    // `repr(C, align(32))` and each row is 8 floats at a multiple of 32 bytes, so the aligned
-    // loads read exactly one row.
+    // SAFETY: as in `prepare` (AVX only). `Boxes8` is `repr(C, align(32))` and each row is
+    // 8 floats at a multiple of 32 bytes, so the aligned loads read exactly one row.
     unsafe {
         let slab = |k: usize| {
-            let t0 = _mm256_fmsub_ps(_mm256_load_ps(b.min[k].as_ptr()), r.inv[k], r.oi[k]);
-            let t1 = _mm256_fmsub_ps(_mm256_load_ps(b.max[k].as_ptr()), r.inv[k], r.oi[k]);
+            let t0 = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(b.min[k].as_ptr()), r.org[k]), r.inv[k]);
+            let t1 = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(b.max[k].as_ptr()), r.org[k]), r.inv[k]);
             (_mm256_min_ps(t0, t1), _mm256_max_ps(t0, t1))
         };
         let (nx, fx) = slab(0);
         let (ny, fy) = slab(1);
         let (nz, fz) = slab(2);
-        let near = _mm256_max_ps(_mm256_sub_ps(_mm256_max_ps(_mm256_max_ps(nx, ny), nz), r.err), r.t_min);
+        let near = _mm256_max_ps(_mm256_max_ps(_mm256_max_ps(nx, ny), nz), r.t_min);
         let far = _mm256_min_ps(
-            _mm256_fmadd_ps(_mm256_min_ps(_mm256_min_ps(fx, fy), fz), _mm256_set1_ps(FMA_FAR_SCALE), r.err),
+            _mm256_mul_ps(_mm256_min_ps(_mm256_min_ps(fx, fy), fz), _mm256_set1_ps(FAR_SCALE)),
             _mm256_set1_ps(t_max),
         );
         (near, far)
