@@ -200,7 +200,7 @@ fn build_range(ctx: &Ctx, prims: &mut [PrimRef], rb: RangeBounds, start: u32, de
     } else {
         match best_split(ctx, prims, &rb.b, &rb.cb) {
             Some((cost, axis, bin, binning)) => {
-                let leaf_cost = p.intersection_cost * n.div_ceil(p.leaf_block) as f32;
+                let leaf_cost = p.leaf_cost(n);
                 if n <= p.max_leaf_size && leaf_cost <= cost {
                     *at.out = Node::leaf(rb.b.aabb(), start, n as u32);
                     return;
