@@ -182,11 +182,16 @@ impl RayTri {
         }
         let neg = u.cmplt(zero) | v.cmplt(zero) | w.cmplt(zero);
         let pos = u.cmpgt(zero) | v.cmpgt(zero) | w.cmpgt(zero);
+        let inside = !(neg & pos);
+        if !inside.any() {
+            // Every lane outside an edge (most packets a ray reaches): no distance, no division.
+            return None;
+        }
         let det = u + v + w;
         let n = &q.n;
         let dir = [Vec4::splat(self.dir.x), Vec4::splat(self.dir.y), Vec4::splat(self.dir.z)];
         let t = (n[0] * a[0] + n[1] * a[1] + n[2] * a[2]) / (n[0] * dir[0] + n[1] * dir[1] + n[2] * dir[2]);
-        let ok = !(neg & pos)
+        let ok = inside
             & det.cmpne(zero)
             & det.is_finite_mask()
             & t.cmpge(Vec4::splat(self.t_min))

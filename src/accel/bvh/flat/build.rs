@@ -200,7 +200,7 @@ fn build_range(ctx: &Ctx, prims: &mut [PrimRef], rb: RangeBounds, start: u32, de
     } else {
         match best_split(ctx, prims, &rb.b, &rb.cb) {
             Some((cost, axis, bin, binning)) => {
-                let leaf_cost = p.intersection_cost * n as f32;
+                let leaf_cost = p.leaf_cost(n);
                 if n <= p.max_leaf_size && leaf_cost <= cost {
                     *at.out = Node::leaf(rb.b.aabb(), start, n as u32);
                     return;
@@ -291,6 +291,7 @@ fn best_split_n<const N: usize>(
     let p = &ctx.p;
     let binning = Binning::new(cb, nb);
     let area = b.area().max(f32::MIN_POSITIVE);
+    let block = p.leaf_block as u32;
     let mut bins = Bins { boxes: [[Box3::EMPTY; N]; 3], counts: [[0u32; N]; 3] };
     bins.add(prims, &binning);
     // Planes are compared by their unnormalised cost (left area * count + right area * count);
@@ -311,7 +312,7 @@ fn best_split_n<const N: usize>(
             acc = acc.union(boxes[k]);
             acc_n += counts[k];
             if counts[k - 1] > 0 {
-                right_cost[k] = acc.area() * acc_n as f32;
+                right_cost[k] = acc.area() * acc_n.div_ceil(block) as f32;
             }
         }
         let (mut left, mut left_n) = (Box3::EMPTY, 0u32);
@@ -321,7 +322,7 @@ fn best_split_n<const N: usize>(
             if counts[k - 1] == 0 || left_n as usize == prims.len() {
                 continue;
             }
-            let cost = left.area() * left_n as f32 + right_cost[k];
+            let cost = left.area() * left_n.div_ceil(block) as f32 + right_cost[k];
             if best.is_none_or(|(c, _, _)| cost < c) {
                 best = Some((cost, axis, k));
             }

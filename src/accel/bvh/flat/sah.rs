@@ -4,7 +4,7 @@ use super::Node;
 use crate::accel::bvh::BuildParams;
 
 /// Unnormalised SAH sum of the subtree at `root`: over its nodes, surface area times
-/// `traversal_cost` (interior) or `intersection_cost * count` (leaf).
+/// `traversal_cost` (interior) or [`BuildParams::leaf_cost`] (leaf).
 pub(crate) fn subtree_cost(nodes: &[Node], root: u32, params: &BuildParams) -> f64 {
     let mut sum = 0.0f64;
     if nodes.is_empty() {
@@ -14,7 +14,7 @@ pub(crate) fn subtree_cost(nodes: &[Node], root: u32, params: &BuildParams) -> f
     while let Some(i) = stack.pop() {
         let n = &nodes[i as usize];
         let c = if n.is_leaf() {
-            params.intersection_cost * n.count as f32
+            params.leaf_cost(n.count as usize)
         } else {
             stack.push(n.first);
             stack.push(n.first + 1);

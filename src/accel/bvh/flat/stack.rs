@@ -12,6 +12,10 @@
 //! - Zeroed storage (a plain `[(0, 0.0); N]`, no `unsafe` at all): 1.21x the CPU time, every
 //!   run. The memset is 1 KiB per binary traversal and 3 KiB per 4-wide one, and a ray runs
 //!   one traversal per block subtree and per instance it enters, most of them short.
+//! - The entries in a separate local borrowed by the stack, so that the length stays in a
+//!   register (with the length in the same object, the compiler reloads it around every push:
+//!   the wide traversal's assembly shows it): tried together with the child-order changes of
+//!   2026-12-02 (docs/performance.md, "Node step and leaves"), no gain measured.
 //! - `get_unchecked` in [`TraversalStack::pop_within`] (dropping the bounds check on the
 //!   pop): 0.99x median, 1.00x best run, within noise; not worth a second `unsafe`.
 

@@ -52,6 +52,16 @@ fn prepare(r: &BoxRay8) -> RayM256 {
 
 /// Near and far distances of the eight boxes (the same operations, in the same order, as
 /// [`super::Portable`], so every path enters the same children).
+///
+/// Tried and not kept (2026-12-02, docs/performance.md, "Node step and leaves"): one FMA per
+/// plane (`b * inv - org * inv`, with an absolute error bound `8u max |org * inv|` folded into
+/// per-ray near and far constants to stay conservative, since the product cancels for planes
+/// near the origin), alone and with each axis's near and far plane picked once per ray by the
+/// direction's sign (Embree's octant order: no min/max per node, 6 FMAs and 6 min/max in
+/// all). Single-thread AO renders: 0.98-1.03x main's CPU time on the monastery with 8,000
+/// ducks, 1.02-1.03x on a cache-resident scene (64 ducks): the node step's arithmetic is not
+/// what bounds the trace here, and the per-ray constants (12 registers instead of 7) cost
+/// every instance entry. The code is in /work/meas/s22/octonly.diff.
 #[inline(always)]
 fn near_far(r: &RayM256, b: &Boxes8, t_max: f32) -> (__m256, __m256) {
     // SAFETY: as in `prepare` (AVX only). `Boxes8` is `repr(C, align(32))` and each row is

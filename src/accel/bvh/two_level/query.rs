@@ -173,16 +173,25 @@ impl Top {
 /// conjugate), as Embree interpolates a motion instance per ray.
 #[inline]
 fn object_ray(ray: &Ray, item: &TopItem) -> Ray {
-    if let Some(motion) = &item.motion {
-        let at = motion.at(ray.time);
-        let back = at.rotation.conjugate();
-        return Ray { origin: back * (ray.origin - at.translation), dir: back * ray.dir, ..*ray };
-    }
-    Ray {
-        origin: (item.inv.matrix3 * (Vec3A::from(ray.origin) - item.translation)).into(),
-        dir: item.inv.transform_vector3(ray.dir),
-        ..*ray
-    }
+    // Origin and direction as values, one `Ray` built from them: with a `Ray` returned from
+    // each branch the two were merged in memory, stored in 8- and 4-byte pieces and read back
+    // in 16 (a failed store forward on every instance entered, 2% of a render's samples).
+    let (origin, dir) = match &item.motion {
+        Some(motion) => moving_object_frame(ray, motion),
+        None => (
+            (item.inv.matrix3 * (Vec3A::from(ray.origin) - item.translation)).into(),
+            item.inv.transform_vector3(ray.dir),
+        ),
+    };
+    Ray { origin, dir, ..*ray }
+}
+
+/// [`object_ray`]'s origin and direction for an instance that moves over the shutter.
+#[cold]
+fn moving_object_frame(ray: &Ray, motion: &InstanceMotion) -> (Vec3, Vec3) {
+    let at = motion.at(ray.time);
+    let back = at.rotation.conjugate();
+    (back * (ray.origin - at.translation), back * ray.dir)
 }
 
 impl TopItem {
