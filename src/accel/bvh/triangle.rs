@@ -5,6 +5,7 @@
 //! the one-triangle test's; `tests/bvh_props.rs` pins that).
 
 use glam::{Vec3, Vec4};
+use rayon::prelude::*;
 
 use crate::geometry::{Ray, TriangleMesh};
 
@@ -36,12 +37,14 @@ pub(crate) const MAX_COORD: f32 = 1e30;
 /// area; and every coordinate below [`MAX_COORD`] in magnitude); returns them and how many were
 /// skipped. The mesh must have passed [`TriangleMesh::validate`].
 pub(crate) fn extract(mesh: &TriangleMesh, geom: u32) -> (Vec<Tri>, usize) {
-    let mut tris = Vec::with_capacity(mesh.triangle_count());
-    for i in 0..mesh.triangle_count() {
-        if mesh.triangle_is_valid(i) && mesh.triangle(i).iter().all(|p| p.abs().max_element() < MAX_COORD) {
-            tris.push(Tri { p: mesh.triangle(i), geom, prim: i as u32 });
-        }
-    }
+    let tris: Vec<Tri> = (0..mesh.triangle_count())
+        .into_par_iter()
+        .with_min_len(super::flat::PAR_CHUNK)
+        .filter(|&i| {
+            mesh.triangle_is_valid(i) && mesh.triangle(i).iter().all(|p| p.abs().max_element() < MAX_COORD)
+        })
+        .map(|i| Tri { p: mesh.triangle(i), geom, prim: i as u32 })
+        .collect();
     let skipped = mesh.triangle_count() - tris.len();
     (tris, skipped)
 }

@@ -5,14 +5,11 @@
 
 use rayon::prelude::*;
 
-use super::{build, BoxRay, FlatBvh, Node, Wide};
+use super::{build_with, BoxRay, FlatBvh, Node, Wide, PAR_CHUNK};
 use crate::accel::bvh::simd::Kernel;
 use crate::accel::bvh::triangle::{RayTri, Tri, Tri4};
 use crate::accel::bvh::BuildParams;
 use crate::geometry::Aabb;
-
-/// Items per rayon task when copying triangles and their bounds.
-const PAR_CHUNK: usize = 16 * 1024;
 
 /// Closest triangle found so far, in the space it was tested in.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -38,8 +35,7 @@ pub(crate) struct MeshBvh {
 impl MeshBvh {
     /// Builds over `tris`, which must all be valid (see [`crate::accel::bvh::triangle::extract`]).
     pub fn build(tris: Vec<Tri>, params: BuildParams) -> Self {
-        let bounds: Vec<Aabb> = tris.par_iter().with_min_len(PAR_CHUNK).map(Tri::bounds).collect();
-        let (bvh, order) = build(&bounds, params);
+        let (bvh, order) = build_with(tris.len(), |i| tris[i].bounds(), params);
         let tris: Vec<Tri> = order.par_iter().with_min_len(PAR_CHUNK).map(|&i| tris[i as usize]).collect();
         let (packets, wide) = packets_and_wide(&bvh, &tris);
         Self { bvh, wide, tris, packets }
@@ -106,23 +102,24 @@ impl MeshBvh {
 }
 
 /// The packets of every binary leaf (in node order) and the wide tree whose leaves name them,
-/// made at the same time (both only read the tree).
+/// made at the same time (both only read the tree); the packets over rayon (each is packed
+/// from its own range of triangles, straight into its place).
 fn packets_and_wide(bvh: &FlatBvh, tris: &[Tri]) -> (Vec<Tri4>, Wide) {
     let mut first_packet = vec![0u32; bvh.nodes.len()];
-    let mut total = 0;
+    // Per packet: its first triangle and how many it holds.
+    let mut ranges: Vec<(u32, u32)> = Vec::with_capacity(tris.len().div_ceil(2));
     for (i, n) in bvh.nodes.iter().enumerate().filter(|(_, n)| n.is_leaf()) {
-        first_packet[i] = total;
-        total += n.count.div_ceil(4);
+        first_packet[i] = ranges.len() as u32;
+        for start in (n.first..n.first + n.count).step_by(4) {
+            ranges.push((start, (n.first + n.count - start).min(4)));
+        }
     }
     let packets = || {
-        let mut packets = Vec::with_capacity(total as usize);
-        for n in bvh.nodes.iter().filter(|n| n.is_leaf()) {
-            for start in (n.first..n.first + n.count).step_by(4) {
-                let end = (start + 4).min(n.first + n.count);
-                packets.push(Tri4::pack(&tris[start as usize..end as usize], start));
-            }
-        }
-        packets
+        ranges
+            .par_iter()
+            .with_min_len(PAR_CHUNK / 4)
+            .map(|&(start, len)| Tri4::pack(&tris[start as usize..(start + len) as usize], start))
+            .collect()
     };
     rayon::join(packets, || Wide::new(bvh, |i, n: &Node| (first_packet[i as usize], n.count.div_ceil(4))))
 }

@@ -15,7 +15,7 @@ mod stack;
 mod traverse;
 mod wide;
 
-pub(crate) use build::build;
+pub(crate) use build::{build, build_with};
 pub(crate) use mesh::{MeshBvh, PrimHit};
 pub(crate) use sah::{sah_cost, subtree_cost};
 #[cfg(test)]
@@ -26,6 +26,9 @@ pub(crate) use wide::Wide;
 use glam::Vec3;
 
 use crate::geometry::Aabb;
+
+/// Items per rayon task when building (copying triangles, their boxes, primitive references).
+pub(crate) const PAR_CHUNK: usize = 16 * 1024;
 
 /// One BVH node: bounds plus either a child index (interior) or a primitive range (leaf).
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -85,26 +85,33 @@ impl Wide {
     fn collapse(&mut self, bvh: &FlatBvh, n2: u32) -> u32 {
         let nodes = &bvh.nodes;
         let root = &nodes[n2 as usize];
-        // A fixed array, not a `Vec`: one allocation per wide node showed in build profiles.
+        // Fixed arrays, not a `Vec`: one allocation per wide node showed in build profiles. Each
+        // child's area is computed once, when it joins (`None`: a leaf, never opened).
+        let area = |k: u32| {
+            let n = &nodes[k as usize];
+            (!n.is_leaf()).then(|| n.aabb().surface_area())
+        };
         let mut kids = [0u32; WIDTH];
+        let mut areas = [None; WIDTH];
         (kids[0], kids[1]) = (root.first, root.first + 1);
+        (areas[0], areas[1]) = (area(kids[0]), area(kids[1]));
         let mut len = 2;
         while len < WIDTH {
-            let open = kids[..len]
-                .iter()
-                .enumerate()
-                .filter(|(_, &k)| !nodes[k as usize].is_leaf())
-                .max_by(|(_, &a), (_, &b)| {
-                    let (a, b) =
-                        (nodes[a as usize].aabb().surface_area(), nodes[b as usize].aabb().surface_area());
-                    a.total_cmp(&b)
-                })
-                .map(|(i, _)| i);
-            let Some(i) = open else { break };
+            // The interior child of largest area (the last of equals).
+            let mut open: Option<(usize, f32)> = None;
+            for (i, a) in areas[..len].iter().enumerate() {
+                if let Some(a) = *a {
+                    if open.is_none_or(|(_, b)| a.total_cmp(&b).is_ge()) {
+                        open = Some((i, a));
+                    }
+                }
+            }
+            let Some((i, _)) = open else { break };
             // `swap_remove` then push both children, as the `Vec` did (same slot order).
             let k = kids[i];
-            kids[i] = kids[len - 1];
+            (kids[i], areas[i]) = (kids[len - 1], areas[len - 1]);
             (kids[len - 1], kids[len]) = (nodes[k as usize].first, nodes[k as usize].first + 1);
+            (areas[len - 1], areas[len]) = (area(kids[len - 1]), area(kids[len]));
             len += 1;
         }
         let kids = &kids[..len];

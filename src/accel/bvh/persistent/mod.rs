@@ -495,7 +495,12 @@ impl StaticBvh {
             let meshes = Arc::make_mut(&mut self.state.meshes);
             for (id, t) in adds {
                 meshes.insert(id, MeshEntry { block: u32::MAX, shared: true, triangles: t.len() });
-                tris.extend(t);
+                if tris.is_empty() {
+                    // The first mesh of an empty tree is moved, not copied.
+                    tris = t;
+                } else {
+                    tris.extend(t);
+                }
             }
             self.rebuild_from(tris);
             update.rebuilt = true;

@@ -8,7 +8,7 @@
 
 mod query;
 
-pub(crate) use query::{BvhScene, Top};
+pub(crate) use query::{BvhScene, Top, TopInstance};
 
 use std::sync::Arc;
 use std::time::Instant;
@@ -16,7 +16,7 @@ use std::time::Instant;
 use glam::Affine3A;
 
 use super::flat::MeshBvh;
-use super::persistent::{StaticBvh, StaticSnapshot};
+use super::persistent::{StaticBvh, StaticSnapshot, StaticUpdate};
 use super::triangle::{extract, Tri};
 use super::BuildParams;
 use crate::accel::snapshot::SnapshotPayload;
@@ -186,8 +186,14 @@ impl BvhAccel {
     /// Builds the BVH over the resting (`true`: every resting instance) or the top level's
     /// instances (those not in the resting level).
     fn build_level(&self, resting: bool) -> Top {
-        let instances: Vec<_> = self
-            .instances
+        let instances = self.level_instances(resting);
+        let params = self.top_params;
+        self.run(|| query::build_top(&instances, params))
+    }
+
+    /// The instances [`Self::build_level`] builds over.
+    fn level_instances(&self, resting: bool) -> Vec<TopInstance> {
+        self.instances
             .iter()
             .enumerate()
             .filter_map(|(i, x)| {
@@ -195,9 +201,24 @@ impl BvhAccel {
             })
             .filter(|(_, x)| !self.prototypes[x.proto as usize].bvh.is_empty())
             .map(|(id, x)| (id, self.prototypes[x.proto as usize].clone(), x.xf, x.inv, x.motion))
-            .collect();
-        let params = self.top_params;
-        self.run(|| query::build_top(&instances, params))
+            .collect()
+    }
+
+    /// Applies the staged static changes (`None`: nothing was staged) while `beside` runs on
+    /// the other side of a `rayon::join`, in the builds' pool.
+    fn apply_statics_with<R: Send>(
+        &mut self,
+        beside: impl FnOnce() -> R + Send,
+    ) -> (Option<StaticUpdate>, R) {
+        let staged = !self.staged_adds.is_empty() || !self.staged_removes.is_empty();
+        let adds = std::mem::take(&mut self.staged_adds);
+        let removes = std::mem::take(&mut self.staged_removes);
+        let statics = &mut self.statics;
+        let job = || rayon::join(|| staged.then(|| statics.apply_extracted(&removes, adds)), beside);
+        match &self.pool {
+            Some(p) => p.install(job),
+            None => job(),
+        }
     }
 }
 
@@ -360,15 +381,30 @@ impl Accelerator for BvhAccel {
     }
 
     fn commit(&mut self) -> Result<CommitReport, AccelError> {
-        let mut report = self.commit_static()?;
-        report.built_triangles += std::mem::take(&mut self.pending_built);
-        report.skipped_triangles += std::mem::take(&mut self.pending_skipped);
+        // The resting level first (it decides which instances the top level holds), then the
+        // static changes and the top level at once: they share nothing, and each fills the
+        // other's serial stretches. (The top level's time, which the resting schedule weighs,
+        // then includes sharing the cores with a static build at the commits that have one.)
+        self.rebuild_resting(false);
         let instances = self.top_instances();
-        if self.awake_changed {
-            let t = Instant::now();
-            self.scene.top = self.build_level(false);
+        let top = self.awake_changed.then(|| self.level_instances(false));
+        let params = self.top_params;
+        let (update, top) = self.apply_statics_with(|| {
+            top.map(|list| {
+                let t = Instant::now();
+                (query::build_top(&list, params), t.elapsed().as_secs_f64() * 1e3)
+            })
+        });
+        let mut report = CommitReport {
+            built_triangles: update.map_or(0, |u| u.built_triangles)
+                + std::mem::take(&mut self.pending_built),
+            skipped_triangles: std::mem::take(&mut self.pending_skipped),
+            ..CommitReport::default()
+        };
+        if let Some((top, ms)) = top {
+            self.scene.top = top;
             self.awake_changed = false;
-            self.schedule.record_top_build(instances, self.level.waiting, t.elapsed().as_secs_f64() * 1e3);
+            self.schedule.record_top_build(instances, self.level.waiting, ms);
         }
         self.scene.statics = self.statics.snapshot();
         report.instances = instances;
@@ -380,17 +416,11 @@ impl Accelerator for BvhAccel {
     }
 
     fn commit_static(&mut self) -> Result<CommitReport, AccelError> {
-        let mut report = CommitReport::default();
-        if !self.staged_adds.is_empty() || !self.staged_removes.is_empty() {
-            let adds = std::mem::take(&mut self.staged_adds);
-            let removes = std::mem::take(&mut self.staged_removes);
-            let statics = &mut self.statics;
-            let update = match &self.pool {
-                Some(p) => p.install(|| statics.apply_extracted(&removes, adds)),
-                None => statics.apply_extracted(&removes, adds),
-            };
-            report.built_triangles = update.built_triangles;
-        }
+        let (update, ()) = self.apply_statics_with(|| ());
+        let mut report = CommitReport {
+            built_triangles: update.map_or(0, |u| u.built_triangles),
+            ..CommitReport::default()
+        };
         // Not visible before `commit`: queries fail while the scene is dirty, which a
         // rebuild makes it.
         self.rebuild_resting(false);
