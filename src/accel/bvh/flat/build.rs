@@ -274,12 +274,13 @@ fn split_at(prims: &[PrimRef], mid: usize) -> (usize, RangeBounds, RangeBounds) 
 /// every centroid coincides. All three axes are binned in one pass over the range.
 fn best_split(ctx: &Ctx, prims: &[PrimRef], b: &Box3, cb: &Box3) -> Option<(f32, usize, usize, Binning)> {
     // Small ranges need few bins: clearing and sweeping them would cost more than binning.
-    // Embree grows its bins as 4 + n / 20 (up to 32); 4 + n / 2 keeps the monastery's SAH
-    // (36.490 against 36.487 with the former `min(2n)`) for 10-12% less build CPU.
-    // Tried: one bin per primitive (`min(prims.len())`): 5-8% less build CPU under load, but
-    // the monastery's SAH went from 36.487 to 36.510; 4 + n / 4: 17% less CPU, SAH 36.499;
-    // an exact sweep over the sorted centroids of ranges up to 16 (every binned split is
-    // one of those): SAH 36.46, but slower than binning them.
+    // Embree grows its bins as 4 + n / 20 (up to 32); 4 + n / 2 about keeps the monastery's
+    // SAH (`sah_cost` 30.498 against 30.483 with the former `min(2n)`; counting primitives
+    // one by one, before block counting: 36.490 against 36.487) for 10-12% less build CPU.
+    // Tried (before block counting): one bin per primitive (`min(prims.len())`): 5-8% less
+    // build CPU under load, but SAH 36.510; 4 + n / 4: 17% less CPU, SAH 36.499; Embree's
+    // 4 + n / 20: SAH 36.663; an exact sweep over the sorted centroids of ranges up to 16
+    // (every binned split is one of those): SAH 36.46, but slower than binning them.
     let nb = ctx.p.bins.min(4 + prims.len() / 2);
     if prims.len() == 2 {
         return best_split_pair(ctx, prims, b, cb);
