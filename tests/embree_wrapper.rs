@@ -223,9 +223,9 @@ fn moving_instance_is_where_its_motion_puts_it_at_every_shutter_time() {
     let proto = raised_square(&d);
     let open =
         RigidTransform { rotation: Quat::from_rotation_x(0.1), translation: Vec3::new(0.0, 0.0, -2.0) };
-    // A pure translation and a turn of 2e-4 rad are lerped as matrices, a turn of 0.4 rad is
-    // slerped as quaternions: lerping it would put the square 0.02 off halfway.
-    for angle in [0.0, 2e-4, 0.4] {
+    // A pure translation and turns of 2e-4 and 1.9e-3 rad are lerped as matrices, a turn of 0.4
+    // rad is slerped as quaternions: lerping it would put the square 0.02 off halfway.
+    for angle in [0.0, 2e-4, 1.9e-3, 0.4] {
         let close = RigidTransform {
             rotation: Quat::from_rotation_x(0.1 + angle),
             translation: Vec3::new(0.5, 0.0, -4.0),
