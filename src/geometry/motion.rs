@@ -82,7 +82,7 @@ impl InstanceMotion {
         }
         let (a, b) = (self.open.to_affine(), self.close.to_affine());
         let ends = local.transformed(&a).union(local.transformed(&b));
-        let angle = self.open.rotation.angle_between(self.close.rotation);
+        let angle = self.rotation_angle();
         if angle == 0.0 {
             return ends;
         }

@@ -13,7 +13,7 @@ use crate::geometry::InstanceMotion;
 
 use super::device::Device;
 use super::error::EmbreeError;
-use super::scene::{column_major_3x4, quaternion_decomposition, FrozenScene, LERP_MAX_ANGLE};
+use super::scene::{column_major_3x4, lerps_as_matrices, quaternion_decomposition, FrozenScene};
 
 /// One entry of an instance array: the index of its prototype in the array's prototype list
 /// and its placement. `None` is a hole Embree skips (index RTC_INVALID_GEOMETRY_ID).
@@ -80,14 +80,15 @@ impl InstanceArrayGeometry {
         )
     }
 
-    /// Replaces every entry of a moving array by its motion over the shutter (quaternion
-    /// decompositions at ray times 0 and 1, slerped by Embree), and commits the geometry.
+    /// Replaces every entry of a moving array by its motion over the shutter (at ray times 0
+    /// and 1: matrices when every entry barely turns, else quaternion decompositions, slerped
+    /// by Embree), and commits the geometry.
     pub fn set_moving(&mut self, entries: &[ArrayEntry<InstanceMotion>]) -> Result<(), EmbreeError> {
         debug_assert!(self.moving);
         if entries.iter().any(|(_, m)| !m.is_finite()) {
             return Err(EmbreeError::NonFiniteTransform);
         }
-        if entries.iter().all(|(_, m)| m.rotation_angle() <= LERP_MAX_ANGLE) {
+        if entries.iter().all(|(_, m)| lerps_as_matrices(m)) {
             // Matrices lerp exactly like the translation and are bounded in closed form (see
             // `InstanceGeometry::set_motion`).
             let open: Vec<_> = entries.iter().map(|(_, m)| column_major_3x4(&m.open.to_affine())).collect();

@@ -18,7 +18,6 @@ use super::error::EmbreeError;
 use super::filter::{self, GeometrySet, SkipContext};
 use super::geometry::TriangleGeometry;
 use super::instance_array::InstanceArrayGeometry;
-
 use super::quality::BuildQuality;
 
 /// Embree's scene flags (rtcSetSceneFlags(3)).
@@ -338,7 +337,13 @@ pub(super) fn column_major_3x4(xf: &Affine3A) -> [f32; 12] {
 /// instances' motions are pure translations, 51% turn by less than 1e-4 rad, 10% by 1e-4 to
 /// 1e-3, 4% by 1e-3 to 2e-3, 27% by more: 69% go as matrices at 1e-3, 73% at 2e-3
 /// (docs/performance.md, "Motion blur").
-pub(super) const LERP_MAX_ANGLE: f32 = 2e-3;
+const LERP_MAX_ANGLE: f32 = 2e-3;
+
+/// Whether `motion` goes to Embree as two matrices (lerped) rather than two quaternion
+/// decompositions (slerped): it turns by at most [`LERP_MAX_ANGLE`].
+pub(super) fn lerps_as_matrices(motion: &InstanceMotion) -> bool {
+    motion.rotation_angle() <= LERP_MAX_ANGLE
+}
 
 /// Embree's decomposition of a rigid transform: unit scale, no skew or shift, the rotation as
 /// a quaternion (`r` the real part) and the translation.
@@ -442,7 +447,7 @@ impl InstanceGeometry {
         // meanwhile (see `set_transform`).
         unsafe {
             sys::rtcSetGeometryTimeStepCount(self.raw, 2);
-            if motion.rotation_angle() <= LERP_MAX_ANGLE {
+            if lerps_as_matrices(motion) {
                 for (step, t) in [&motion.open, &motion.close].into_iter().enumerate() {
                     let m = column_major_3x4(&t.to_affine());
                     let format = sys::RTCFormat::RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR;

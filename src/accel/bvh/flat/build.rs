@@ -219,31 +219,11 @@ impl Binning {
 fn build_range(ctx: &Ctx, prims: &mut [PrimRef], rb: RangeBounds, start: u32, depth: u32, at: Slots) {
     let n = prims.len();
     debug_assert!(at.rest.len() + 2 >= 2 * n);
-    if n <= 1 {
+    let Some((mid, lb, rbb)) = split(ctx, prims, &rb, depth) else {
         *at.out = Node::leaf(rb.b.aabb(), start, n as u32);
         return;
-    }
-    let p = &ctx.p;
-    let (mid, lb, rbb) = if depth >= MAX_SAH_DEPTH {
-        let mid = median_split(prims, &rb.cb);
-        split_at(prims, mid)
-    } else {
-        match best_split(ctx, prims, &rb.b, &rb.cb) {
-            Some((cost, axis, bin, binning)) => {
-                let leaf_cost = p.leaf_cost(n);
-                if n <= p.max_leaf_size && leaf_cost <= cost {
-                    *at.out = Node::leaf(rb.b.aabb(), start, n as u32);
-                    return;
-                }
-                partition(prims, |b| binning.bin_on(b, axis) < bin)
-            }
-            None if n <= p.max_leaf_size => {
-                *at.out = Node::leaf(rb.b.aabb(), start, n as u32);
-                return;
-            }
-            None => split_at(prims, n / 2),
-        }
     };
+    let p = &ctx.p;
     debug_assert!(mid > 0 && mid < n);
     *at.out = Node::interior(rb.b.aabb(), at.base);
     let (pair, rest) = at.rest.split_at_mut(2);
@@ -261,6 +241,30 @@ fn build_range(ctx: &Ctx, prims: &mut [PrimRef], rb: RangeBounds, start: u32, de
     } else {
         build_range(ctx, l, lb, start, depth + 1, left);
         build_range(ctx, r, rbb, rstart, depth + 1, right);
+    }
+}
+
+/// Where to split `prims` (whose bounds are `rb`): the split point and both sides' bounds,
+/// with `prims` partitioned; `None` for a leaf.
+fn split(
+    ctx: &Ctx,
+    prims: &mut [PrimRef],
+    rb: &RangeBounds,
+    depth: u32,
+) -> Option<(usize, RangeBounds, RangeBounds)> {
+    let (n, p) = (prims.len(), &ctx.p);
+    if n <= 1 {
+        return None;
+    }
+    if depth >= MAX_SAH_DEPTH {
+        let mid = median_split(prims, &rb.cb);
+        return Some(split_at(prims, mid));
+    }
+    match best_split(ctx, prims, &rb.b, &rb.cb) {
+        Some((cost, _, _, _)) if n <= p.max_leaf_size && p.leaf_cost(n) <= cost => None,
+        Some((_, axis, bin, binning)) => Some(partition(prims, |b| binning.bin_on(b, axis) < bin)),
+        None if n <= p.max_leaf_size => None,
+        None => Some(split_at(prims, n / 2)),
     }
 }
 
