@@ -4,8 +4,9 @@
 
 use dormant::accel::{self, Accelerator, Backend, Hit};
 use dormant::crosscheck::{camera_rays, surface_rays};
-use dormant::geometry::Ray;
+use dormant::geometry::{InstanceMotion, Ray, RigidTransform};
 use dormant::scene::default_scene;
+use glam::{Quat, Vec3};
 use proptest::prelude::*;
 
 fn loaded(backend: Backend) -> Box<dyn Accelerator> {
@@ -87,6 +88,34 @@ fn instanced_hits_come_back_from_packets() {
         }
         let instanced = hits.iter().flatten().filter(|h| matches!(h.object, accel::HitObject::Instance(_)));
         assert!(instanced.count() > 10, "{backend}: the default scene's bodies are in view");
+    }
+}
+
+/// Moving instances (motion blur): the lanes of one packet, each at its own time, see every
+/// instance where it is at that time, as single rays do.
+#[test]
+fn moving_instances_in_packets_hit_like_single_rays() {
+    let desc = default_scene();
+    let mut rays = camera_rays(&desc, 24, 16);
+    for (i, r) in rays.iter_mut().enumerate() {
+        r.time = (i * 37 % 101) as f32 / 100.0;
+    }
+    for backend in Backend::compiled() {
+        let mut a = accel::create(backend, Some(2)).unwrap();
+        let loaded = accel::load_scene(&desc, a.as_mut()).unwrap();
+        for (id, body) in loaded.instances.iter().zip(&desc.bodies) {
+            let (_, rotation, translation) = body.transform.to_scale_rotation_translation();
+            let open = RigidTransform { rotation, translation: translation.into() };
+            let close = RigidTransform {
+                rotation: Quat::from_rotation_y(0.3) * rotation,
+                translation: Vec3::from(translation) + Vec3::new(0.3, 0.1, 0.0),
+            };
+            a.set_instance_motion(*id, Some(InstanceMotion { open, close })).unwrap();
+        }
+        a.commit().unwrap();
+        for group in [8, 5] {
+            check_groups(a.as_ref(), &rays, group);
+        }
     }
 }
 

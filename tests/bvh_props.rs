@@ -15,7 +15,9 @@ fn config(cases: u32) -> ProptestConfig {
     ProptestConfig { cases, failure_persistence: None, ..ProptestConfig::default() }
 }
 
-/// Brute force on every SIMD path, and every path's hits equal the portable path's.
+/// Brute force on every SIMD path, ray by ray and in packets (`intersect_packet`,
+/// `intersect_p_packet`) of 8 (the renderer's) and 3 (a partial one), and every path's single
+/// rays hit what the portable path's do.
 fn check_scene(q: &dyn SceneQuery, rays: &[Ray], tris: &[RefTri], rel: f64) -> Result<(), TestCaseError> {
     let portable: Vec<_> = SimdPath::with_override(SimdPath::Portable, || {
         rays.iter().map(|r| (q.intersect(r), q.intersect_p(r))).collect()
@@ -27,6 +29,19 @@ fn check_scene(q: &dyn SceneQuery, rays: &[Ray], tris: &[RefTri], rel: f64) -> R
                 check_hit(ray, hit, tris, rel).map_err(|e| TestCaseError::fail(format!("{path:?}: {e}")))?;
                 check_any(ray, any, tris).map_err(|e| TestCaseError::fail(format!("{path:?}: {e}")))?;
                 prop_assert_eq!(&(hit, any), expected, "{:?} against portable, ray {:?}", path, ray);
+            }
+            for group in [8, 3] {
+                let mut hits = vec![None; rays.len()];
+                let mut any = vec![false; rays.len()];
+                for ((r, h), a) in rays.chunks(group).zip(hits.chunks_mut(group)).zip(any.chunks_mut(group)) {
+                    q.intersect_packet(r, h);
+                    q.intersect_p_packet(r, a);
+                }
+                for ((ray, hit), any) in rays.iter().zip(hits).zip(any) {
+                    let packet = |e| TestCaseError::fail(format!("{path:?}, packets of {group}: {e}"));
+                    check_hit(ray, hit, tris, rel).map_err(packet)?;
+                    check_any(ray, any, tris).map_err(packet)?;
+                }
             }
             Ok(())
         })?;

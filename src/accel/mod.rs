@@ -110,8 +110,9 @@ pub trait SceneQuery: Sync {
     fn intersect_p(&self, ray: &Ray) -> bool;
 
     /// Closest hits of a group of rays, `hits[i]` for `rays[i]`, equal to [`Self::intersect`]
-    /// per ray. For coherent groups (neighbouring pixels): Embree traces up to 16 at a time as
-    /// one packet; the default (the BVH) loops over the rays.
+    /// per ray (up to ties between surfaces at one distance). For coherent groups
+    /// (neighbouring pixels): Embree traces up to 16 at a time as one packet, the BVH up to 8;
+    /// the default loops over the rays.
     ///
     /// # Panics
     /// If `rays` and `hits` differ in length.

@@ -5,6 +5,7 @@
 
 use rayon::prelude::*;
 
+use super::packet::{each_lane, Lanes, RayPacket, PACKET};
 use super::{build_with, BoxRay, FlatBvh, Node, Wide, PAR_CHUNK};
 use crate::accel::bvh::simd::Kernel;
 use crate::accel::bvh::triangle::{RayTri, Tri, Tri4};
@@ -98,6 +99,81 @@ impl MeshBvh {
                 .iter()
                 .any(|q| tray.intersect4(q, *t_max).is_some())
         })
+    }
+}
+
+/// Packet queries ([`super::packet`]): each lane gets what the single-ray query above gives it.
+impl MeshBvh {
+    /// [`Self::intersect_from`] for the `lanes` of a packet; returns the lanes that found a
+    /// hit (and lowered their `t_max` and `best`).
+    #[inline(always)]
+    pub fn intersect_packet_from<K: Kernel>(
+        &self,
+        k: K,
+        root: u32,
+        packet: &RayPacket,
+        lanes: Lanes,
+        t_max: &mut [f32; PACKET],
+        best: &mut [Option<PrimHit>; PACKET],
+    ) -> Lanes {
+        let mut found = 0;
+        self.wide.traverse_packet(
+            k,
+            &self.bvh,
+            root,
+            packet,
+            lanes,
+            t_max,
+            &mut |first, count, lanes, t_max| {
+                for q in &self.packets[first as usize..(first + count) as usize] {
+                    for i in each_lane(lanes) {
+                        if let Some((lane, h)) = packet.tray[i].intersect4(q, t_max[i]) {
+                            // Strictly closer only, as for one ray.
+                            if best[i].is_none_or(|b| h.t < b.t) {
+                                t_max[i] = h.t;
+                                let tri = self.tris[q.idx[lane] as usize];
+                                best[i] = Some(PrimHit { t: h.t, u: h.u, v: h.v, tri });
+                                found |= 1 << i;
+                            }
+                        }
+                    }
+                }
+                0
+            },
+        );
+        found
+    }
+
+    /// [`Self::occluded_from`] for the `lanes` of a packet: the lanes that hit a triangle
+    /// within their `[t_min, t_max]`.
+    #[inline(always)]
+    pub fn occluded_packet_from<K: Kernel>(
+        &self,
+        k: K,
+        root: u32,
+        packet: &RayPacket,
+        lanes: Lanes,
+        t_max: &[f32; PACKET],
+    ) -> Lanes {
+        let mut t_max = *t_max;
+        self.wide.traverse_packet(
+            k,
+            &self.bvh,
+            root,
+            packet,
+            lanes,
+            &mut t_max,
+            &mut |first, count, lanes, t_max| {
+                let mut blocked = 0;
+                for i in each_lane(lanes) {
+                    let packets = &self.packets[first as usize..(first + count) as usize];
+                    if packets.iter().any(|q| packet.tray[i].intersect4(q, t_max[i]).is_some()) {
+                        blocked |= 1 << i;
+                    }
+                }
+                blocked
+            },
+        )
     }
 }
 

@@ -10,6 +10,7 @@
 
 mod build;
 mod mesh;
+mod packet;
 mod sah;
 mod stack;
 mod traverse;
@@ -17,6 +18,7 @@ mod wide;
 
 pub(crate) use build::{build, build_with};
 pub(crate) use mesh::{MeshBvh, PrimHit};
+pub(crate) use packet::{each_lane, Lanes, RayPacket, PACKET};
 pub(crate) use sah::{sah_cost, subtree_cost};
 #[cfg(test)]
 pub(crate) use traverse::traverse;

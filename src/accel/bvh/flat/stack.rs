@@ -21,40 +21,50 @@
 
 use std::mem::MaybeUninit;
 
-/// Subtrees to visit later, each with its entry distance along the ray, last in first out.
-/// Holds at most `N` entries; pushing more panics (the builders bound tree depth so that the
-/// traversals never do).
-pub(crate) struct TraversalStack<const N: usize> {
+/// Subtrees to visit later, last in first out: for one ray `(node, entry distance)`, for a
+/// packet ([`super::packet`]) also the lanes that entered it. Holds at most `N` entries;
+/// pushing more panics (the builders bound tree depth so that the traversals never do).
+pub(crate) struct TraversalStack<E: Copy, const N: usize> {
     /// `entries[..len]` are initialised; the rest may not be.
-    entries: [MaybeUninit<(u32, f32)>; N],
+    entries: [MaybeUninit<E>; N],
     len: usize,
 }
 
-impl<const N: usize> TraversalStack<N> {
+impl<E: Copy, const N: usize> TraversalStack<E, N> {
     #[inline(always)]
     pub fn new() -> Self {
         Self { entries: [const { MaybeUninit::uninit() }; N], len: 0 }
     }
 
-    /// Saves subtree `node`, entered at distance `t`.
+    /// Saves an entry.
     #[inline(always)]
-    pub fn push(&mut self, node: u32, t: f32) {
+    pub fn push(&mut self, entry: E) {
         debug_assert!(self.len < N, "traversal stack overflow: deeper than {N}");
         // Indexing is bounds-checked: an overflow panics instead of writing past the array.
-        self.entries[self.len].write((node, t));
+        self.entries[self.len].write(entry);
         self.len += 1;
     }
 
+    /// The last entry pushed and not popped yet; `None` once the stack is empty.
+    #[inline(always)]
+    pub fn pop(&mut self) -> Option<E> {
+        if self.len == 0 {
+            return None;
+        }
+        self.len -= 1;
+        // SAFETY: `entries[..len]` are initialised: `push` writes `entries[len]` before it
+        // increments `len`, and only this pop decrements it, so the entry at the new `len` was
+        // written by a push and not popped since.
+        Some(unsafe { self.entries[self.len].assume_init() })
+    }
+}
+
+impl<const N: usize> TraversalStack<(u32, f32), N> {
     /// Pops entries until one was entered at `t <= t_max` (a subtree still in front of the
     /// closest hit found so far) and returns its node; `None` once the stack is empty.
     #[inline(always)]
     pub fn pop_within(&mut self, t_max: f32) -> Option<u32> {
-        while self.len > 0 {
-            self.len -= 1;
-            // SAFETY: `entries[..len]` are initialised: `push` writes `entries[len]` before it
-            // increments `len`, and only this pop decrements it, so the entry at the new `len`
-            // was written by a push and not popped since.
-            let (node, t) = unsafe { self.entries[self.len].assume_init() };
+        while let Some((node, t)) = self.pop() {
             if t <= t_max {
                 return Some(node);
             }

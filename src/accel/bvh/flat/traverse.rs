@@ -78,7 +78,7 @@ where
     if ray.hit(root_node, *t_max) == f32::INFINITY {
         return false;
     }
-    let mut stack = super::stack::TraversalStack::<STACK_SIZE>::new();
+    let mut stack = super::stack::TraversalStack::<(u32, f32), STACK_SIZE>::new();
     let mut node = root_node;
     loop {
         if node.is_leaf() {
@@ -93,7 +93,7 @@ where
             match (ta < f32::INFINITY, tb < f32::INFINITY) {
                 (true, true) => {
                     let (near, far, tfar) = if ta <= tb { (na, a + 1, tb) } else { (nb, a, ta) };
-                    stack.push(far as u32, tfar);
+                    stack.push((far as u32, tfar));
                     node = near;
                     continue;
                 }

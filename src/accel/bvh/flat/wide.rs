@@ -20,30 +20,30 @@ pub(crate) const WIDTH: usize = 8;
 
 /// Up to seven entries are pushed per wide level, and a wide tree is no deeper than its binary
 /// tree (shallower than [`STACK_SIZE`]).
-const WIDE_STACK: usize = (WIDTH - 1) * STACK_SIZE;
+pub(super) const WIDE_STACK: usize = (WIDTH - 1) * STACK_SIZE;
 
 /// Slot code of an unused child.
 const EMPTY: u32 = u32::MAX;
 /// `map` entry of a binary interior node that has no wide node of its own.
-const NONE: u32 = u32::MAX;
+pub(super) const NONE: u32 = u32::MAX;
 /// Stack code of a leaf child: `LEAF | node << 3 | slot`.
-const LEAF: u32 = 1 << 31;
+pub(super) const LEAF: u32 = 1 << 31;
 /// Stack code of a binary leaf entered on its own (folded into its parent's wide node, reached
 /// by entering a folded subtree): `FOLDED | binary node`.
-const FOLDED: u32 = LEAF | 1 << 30;
+pub(super) const FOLDED: u32 = LEAF | 1 << 30;
 
 /// Eight children's boxes in structure-of-arrays layout, plus what each child is.
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(64))]
 pub(crate) struct Node8 {
-    boxes: Boxes8,
+    pub(super) boxes: Boxes8,
     /// Interior child: wide node index. Leaf child: first leaf item. Unused: [`EMPTY`].
-    child: [u32; WIDTH],
+    pub(super) child: [u32; WIDTH],
     /// Leaf child: item count; 0 for interior children.
-    count: [u16; WIDTH],
+    pub(super) count: [u16; WIDTH],
     /// Bit `i` set when slot `i` is used (unused slots have inverted boxes, which an
     /// axis-parallel ray may not reject).
-    used: u32,
+    pub(super) used: u32,
 }
 
 const _: () = assert!(std::mem::size_of::<Node8>() == 256);
@@ -51,10 +51,10 @@ const _: () = assert!(std::mem::size_of::<Node8>() == 256);
 /// The wide tree plus, for each binary node, where traversal enters it.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Wide {
-    nodes: Vec<Node8>,
+    pub(super) nodes: Vec<Node8>,
     /// Per binary node: `(w, 0)` for the wide node `w` rooted there, `(first, count)` for a
     /// leaf (remapped), `(NONE, 0)` for an interior node folded into its parent's wide node.
-    map: Vec<(u32, u32)>,
+    pub(super) map: Vec<(u32, u32)>,
 }
 
 impl Wide {
@@ -162,7 +162,7 @@ impl Wide {
     where
         F: FnMut(u32, u32, &mut f32) -> bool,
     {
-        let mut stack = TraversalStack::<WIDE_STACK>::new();
+        let mut stack = TraversalStack::<(u32, f32), WIDE_STACK>::new();
         // Binary nodes folded into a wide node are entered through their children: at most
         // `WIDTH` of them are pending at once (the folded part of one wide node). Wide nodes
         // and leaves found there go on the stack.
@@ -181,9 +181,9 @@ impl Wide {
                 continue;
             }
             if count > 0 {
-                stack.push(FOLDED | r, t);
+                stack.push((FOLDED | r, t));
             } else if x != NONE {
-                stack.push(x, t);
+                stack.push((x, t));
             } else {
                 debug_assert!(np + 2 <= pending.len());
                 pending[np] = n.first + 1;
@@ -199,7 +199,7 @@ impl Wide {
         &self,
         k: K,
         // By reference: moving the 7 KiB stack would copy it.
-        stack: &mut TraversalStack<WIDE_STACK>,
+        stack: &mut TraversalStack<(u32, f32), WIDE_STACK>,
         ray: &BoxRay,
         t_max: &mut f32,
         leaf: &mut F,
@@ -242,7 +242,7 @@ impl Wide {
                         m += 1;
                     }
                     for &(code, t) in &hits[..m - 1] {
-                        stack.push(code, t);
+                        stack.push((code, t));
                     }
                     cur = hits[m - 1].0;
                     continue;

@@ -4,7 +4,7 @@
 //! # Layout and trade-off
 //!
 //! The tree has two kinds of parts:
-//! - **blocks**: immutable flattened BVHs ([`MeshBvh`]: 32-byte binary nodes, their 4-wide
+//! - **blocks**: immutable flattened BVHs ([`MeshBvh`]: 32-byte binary nodes, their 8-wide
 //!   traversal copy, triangles in leaf order) behind an `Arc`. The first build makes one block of everything (the *base*); each
 //!   mesh inserted later gets its own small block, built by binned SAH.
 //! - **overlay**: immutable binary nodes behind `Arc`s on top of the blocks. A link is either
@@ -28,7 +28,7 @@
 //! For traversal, every new root also gets a flattened copy of its overlay (a *view*: overlay
 //! nodes as ordinary 32-byte nodes whose leaves name block subtrees), so rays chase no
 //! pointers; it costs O(overlay nodes) per change and is shared by snapshots. A reference into
-//! a block enters the block's 4-wide tree at the matching node.
+//! a block enters the block's 8-wide tree at the matching node.
 //!
 //! Mesh bookkeeping (id -> block) is an `Arc<HashMap>` cloned on first write after a snapshot,
 //! so that part of a change is O(number of static meshes), once per commit.

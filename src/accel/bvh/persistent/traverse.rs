@@ -4,7 +4,9 @@
 use std::sync::Arc;
 
 use super::{Block, Link, StaticSnapshot};
-use crate::accel::bvh::flat::{interval_is_valid, BoxRay, FlatBvh, Node, PrimHit, Wide};
+use crate::accel::bvh::flat::{
+    interval_is_valid, BoxRay, FlatBvh, Lanes, Node, PrimHit, RayPacket, Wide, PACKET,
+};
 use crate::accel::bvh::simd::{dispatch, Kernel};
 use crate::accel::bvh::triangle::RayTri;
 use crate::accel::{Hit, HitObject, SceneQuery, StaticId};
@@ -48,6 +50,70 @@ impl StaticSnapshot {
         // without an overlay the view is one leaf, and this tests its box first.
         v.wide.traverse(k, &v.bvh, 0, bray, t_max, &mut |first, count, t_max| {
             v.refs[first as usize..(first + count) as usize].iter().any(|(b, i)| f(b, *i, t_max))
+        })
+    }
+}
+
+/// Packet queries: [`Wide::traverse_packet`] over the overlay, then each block subtree.
+impl StaticSnapshot {
+    /// [`Self::intersect_with`] for the `lanes` of a packet.
+    #[inline(always)]
+    pub(crate) fn intersect_packet_with<K: Kernel>(
+        &self,
+        k: K,
+        packet: &RayPacket,
+        lanes: Lanes,
+        t_max: &mut [f32; PACKET],
+        best: &mut [Option<PrimHit>; PACKET],
+    ) {
+        self.walk_packet(k, packet, lanes, t_max, |b, i, lanes, t_max| {
+            b.mesh.intersect_packet_from(k, i, packet, lanes, t_max, best);
+            0
+        });
+    }
+
+    /// [`Self::occluded_with`] for the `lanes` of a packet: the lanes blocked.
+    #[inline(always)]
+    pub(crate) fn occluded_packet_with<K: Kernel>(
+        &self,
+        k: K,
+        packet: &RayPacket,
+        lanes: Lanes,
+        t_max: &[f32; PACKET],
+    ) -> Lanes {
+        let mut t_max = *t_max;
+        self.walk_packet(k, packet, lanes, &mut t_max, |b, i, lanes, t_max| {
+            b.mesh.occluded_packet_from(k, i, packet, lanes, t_max)
+        })
+    }
+
+    /// [`Self::walk`] for a packet: `f` gets the lanes that entered a block subtree and
+    /// returns those it finished.
+    #[inline(always)]
+    fn walk_packet<K: Kernel, F>(
+        &self,
+        k: K,
+        packet: &RayPacket,
+        lanes: Lanes,
+        t_max: &mut [f32; PACKET],
+        mut f: F,
+    ) -> Lanes
+    where
+        F: FnMut(&Block, u32, Lanes, &mut [f32; PACKET]) -> Lanes,
+    {
+        let v = &*self.view;
+        if v.bvh.is_empty() {
+            return 0;
+        }
+        v.wide.traverse_packet(k, &v.bvh, 0, packet, lanes, t_max, &mut |first, count, lanes, t_max| {
+            let mut left = lanes;
+            for (b, i) in &v.refs[first as usize..(first + count) as usize] {
+                if left == 0 {
+                    break;
+                }
+                left &= !f(b, *i, left, t_max);
+            }
+            lanes & !left
         })
     }
 }

@@ -189,6 +189,9 @@ pub(crate) trait Kernel: Copy {
     /// Slab test of eight boxes: bit `i` set when child `i` is entered within `[t_min, t_max]`
     /// (a conservative far bound, `FAR_SCALE`), and each child's entry distance.
     fn box8(self, ray: &Self::Ray, b: &Boxes8, t_max: f32) -> (u32, [f32; 8]);
+    /// [`Self::box8`] with `+inf` as the distance of every child missed (packet traversal
+    /// takes the minimum over its lanes).
+    fn box8_or_inf(self, ray: &Self::Ray, b: &Boxes8, t_max: f32) -> (u32, [f32; 8]);
 }
 
 /// glam's `Vec4`, two halves per node.
@@ -212,19 +215,32 @@ impl Kernel for Portable {
 
     #[inline(always)]
     fn box8(self, r: &PortableRay, b: &Boxes8, t_max: f32) -> (u32, [f32; 8]) {
-        let half = |h: usize| {
-            let lane = |a: &[f32; 8]| Vec4::from_slice(&a[4 * h..4 * h + 4]);
-            let t0: [Vec4; 3] = std::array::from_fn(|k| (lane(&b.min[k]) - r.org[k]) * r.inv[k]);
-            let t1: [Vec4; 3] = std::array::from_fn(|k| (lane(&b.max[k]) - r.org[k]) * r.inv[k]);
-            let near = t0[0].min(t1[0]).max(t0[1].min(t1[1])).max(t0[2].min(t1[2])).max(r.t_min);
-            let far = (t0[0].max(t1[0]).min(t0[1].max(t1[1])).min(t0[2].max(t1[2])) * FAR_SCALE)
-                .min(Vec4::splat(t_max));
-            (near.cmple(far).bitmask(), near.to_array())
-        };
-        let (m0, n0) = half(0);
-        let (m1, n1) = half(1);
-        (m0 | m1 << 4, [n0[0], n0[1], n0[2], n0[3], n1[0], n1[1], n1[2], n1[3]])
+        portable_box8(r, b, t_max, false)
     }
+
+    #[inline(always)]
+    fn box8_or_inf(self, r: &PortableRay, b: &Boxes8, t_max: f32) -> (u32, [f32; 8]) {
+        portable_box8(r, b, t_max, true)
+    }
+}
+
+/// [`Portable`]'s box test; `inf_missed`: [`Kernel::box8_or_inf`].
+#[inline(always)]
+fn portable_box8(r: &PortableRay, b: &Boxes8, t_max: f32, inf_missed: bool) -> (u32, [f32; 8]) {
+    let half = |h: usize| {
+        let lane = |a: &[f32; 8]| Vec4::from_slice(&a[4 * h..4 * h + 4]);
+        let t0: [Vec4; 3] = std::array::from_fn(|k| (lane(&b.min[k]) - r.org[k]) * r.inv[k]);
+        let t1: [Vec4; 3] = std::array::from_fn(|k| (lane(&b.max[k]) - r.org[k]) * r.inv[k]);
+        let near = t0[0].min(t1[0]).max(t0[1].min(t1[1])).max(t0[2].min(t1[2])).max(r.t_min);
+        let far = (t0[0].max(t1[0]).min(t0[1].max(t1[1])).min(t0[2].max(t1[2])) * FAR_SCALE)
+            .min(Vec4::splat(t_max));
+        let hit = near.cmple(far);
+        let near = if inf_missed { Vec4::select(hit, near, Vec4::INFINITY) } else { near };
+        (hit.bitmask(), near.to_array())
+    };
+    let (m0, n0) = half(0);
+    let (m1, n1) = half(1);
+    (m0 | m1 << 4, [n0[0], n0[1], n0[2], n0[3], n1[0], n1[1], n1[2], n1[3]])
 }
 
 /// Runs `$body` with `$k` bound to the current path's kernel token, inside a function compiled

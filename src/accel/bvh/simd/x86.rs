@@ -105,6 +105,12 @@ impl Kernel for Avx2 {
         // SAFETY: the token exists only on a CPU with AVX2 and FMA.
         unsafe { box8_avx2(r, b, t_max) }
     }
+
+    #[inline(always)]
+    fn box8_or_inf(self, r: &RayM256, b: &Boxes8, t_max: f32) -> (u32, [f32; 8]) {
+        // SAFETY: as in `box8`.
+        unsafe { box8_or_inf_avx2(r, b, t_max) }
+    }
 }
 
 impl Kernel for Avx512 {
@@ -119,6 +125,13 @@ impl Kernel for Avx512 {
     fn box8(self, r: &RayM256, b: &Boxes8, t_max: f32) -> (u32, [f32; 8]) {
         // SAFETY: the token exists only on a CPU with AVX2, FMA, AVX-512F and AVX-512VL.
         unsafe { box8_avx512(r, b, t_max) }
+    }
+
+    /// The AVX2 kernel's: a masked move would need the mask in a vector again.
+    #[inline(always)]
+    fn box8_or_inf(self, r: &RayM256, b: &Boxes8, t_max: f32) -> (u32, [f32; 8]) {
+        // SAFETY: this CPU runs AVX2 and FMA (a subset of this token's features).
+        unsafe { box8_or_inf_avx2(r, b, t_max) }
     }
 }
 
@@ -140,4 +153,13 @@ unsafe fn box8_avx512(r: &RayM256, b: &Boxes8, t_max: f32) -> (u32, [f32; 8]) {
     let (near, far) = near_far(r, b, t_max);
     let mask = _mm256_cmp_ps_mask::<_CMP_LE_OQ>(near, far) as u32;
     (mask, to_array(near))
+}
+
+#[target_feature(enable = "avx,avx2,fma")]
+#[inline]
+unsafe fn box8_or_inf_avx2(r: &RayM256, b: &Boxes8, t_max: f32) -> (u32, [f32; 8]) {
+    let (near, far) = near_far(r, b, t_max);
+    let hit = _mm256_cmp_ps::<_CMP_LE_OQ>(near, far);
+    let near = _mm256_blendv_ps(_mm256_set1_ps(f32::INFINITY), near, hit);
+    (_mm256_movemask_ps(hit) as u32, to_array(near))
 }

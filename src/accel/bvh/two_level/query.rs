@@ -28,7 +28,9 @@ use std::sync::Arc;
 use glam::{Affine3A, Mat3A, Vec3, Vec3A};
 use rayon::prelude::*;
 
-use crate::accel::bvh::flat::{build, interval_is_valid, BoxRay, FlatBvh, MeshBvh, PrimHit, Wide};
+use crate::accel::bvh::flat::{
+    build, each_lane, interval_is_valid, BoxRay, FlatBvh, Lanes, MeshBvh, PrimHit, RayPacket, Wide, PACKET,
+};
 use crate::accel::bvh::persistent::StaticSnapshot;
 use crate::accel::bvh::simd::{dispatch, Kernel};
 use crate::accel::bvh::triangle::RayTri;
@@ -164,6 +166,89 @@ impl Top {
     }
 }
 
+/// Packet queries: the level's tree walked by the world packet, each instance entered by the
+/// lanes that reach it, with their rays in its object space ([`object_ray`], per lane).
+impl Top {
+    /// [`Self::intersect_with`] for the `lanes` of `packet`, made of `rays`.
+    #[inline(always)]
+    fn intersect_packet_with<'a, K: Kernel>(
+        &'a self,
+        k: K,
+        rays: &[Ray],
+        packet: &RayPacket,
+        lanes: Lanes,
+        t_max: &mut [f32; PACKET],
+        hit: &mut [Option<(PrimHit, &'a TopItem)>; PACKET],
+    ) {
+        let items = &self.items;
+        // Object-space lanes are rewritten per instance; the others are never read.
+        let mut object = *packet;
+        self.wide.traverse_packet(
+            k,
+            &self.bvh,
+            0,
+            packet,
+            lanes,
+            t_max,
+            &mut |first, count, lanes, t_max| {
+                for item in &items[first as usize..(first + count) as usize] {
+                    if item.ghost {
+                        continue;
+                    }
+                    for i in each_lane(lanes) {
+                        object.set(i, &object_ray(&rays[i], item));
+                    }
+                    let mut best = [None; PACKET];
+                    let found = item.blas.intersect_packet_from(k, 0, &object, lanes, t_max, &mut best);
+                    for i in each_lane(found) {
+                        if let Some(h) = best[i] {
+                            hit[i] = Some((h, item));
+                        }
+                    }
+                }
+                0
+            },
+        );
+    }
+
+    /// [`Self::occluded_with`] for the `lanes` of `packet`: the lanes blocked.
+    #[inline(always)]
+    fn occluded_packet_with<K: Kernel>(
+        &self,
+        k: K,
+        rays: &[Ray],
+        packet: &RayPacket,
+        lanes: Lanes,
+        t_max: &[f32; PACKET],
+    ) -> Lanes {
+        let items = &self.items;
+        let mut object = *packet;
+        let mut t_max = *t_max;
+        self.wide.traverse_packet(
+            k,
+            &self.bvh,
+            0,
+            packet,
+            lanes,
+            &mut t_max,
+            &mut |first, count, lanes, t_max| {
+                let mut left = lanes;
+                for item in items[first as usize..(first + count) as usize].iter().filter(|item| !item.ghost)
+                {
+                    if left == 0 {
+                        break;
+                    }
+                    for i in each_lane(left) {
+                        object.set(i, &object_ray(&rays[i], item));
+                    }
+                    left &= !item.blas.occluded_packet_from(k, 0, &object, left, t_max);
+                }
+                lanes & !left
+            },
+        )
+    }
+}
+
 /// The ray in the instance's object space. The origin is moved by the forward translation
 /// before the inverse linear part is applied: `inv * o` would add two large, nearly
 /// cancelling terms for instances far from the world origin (seen: t errors of 7e-5 at
@@ -219,6 +304,30 @@ fn unit(n: Vec3) -> Vec3 {
     n.normalize_or_zero()
 }
 
+/// The hit a ray reports from its closest static and instance hits (an instance hit, if any,
+/// is the nearer: instances record only hits nearer than the static one).
+#[inline(always)]
+fn scene_hit(ray: &Ray, static_hit: Option<PrimHit>, inst_hit: Option<(PrimHit, &TopItem)>) -> Option<Hit> {
+    if let Some((h, item)) = inst_hit {
+        return Some(Hit {
+            t: h.t,
+            u: h.u,
+            v: h.v,
+            ng: unit(item.world_normal(h.tri.normal(), ray.time)),
+            object: HitObject::Instance(InstanceId(item.id)),
+            prim: h.tri.prim,
+        });
+    }
+    static_hit.map(|h| Hit {
+        t: h.t,
+        u: h.u,
+        v: h.v,
+        ng: unit(h.tri.normal()),
+        object: HitObject::Static(StaticId(h.tri.geom)),
+        prim: h.tri.prim,
+    })
+}
+
 impl SceneQuery for BvhScene {
     /// The static tree, the resting level, then the top level, each up to the closest hit
     /// found so far (see the measurements at the top). Without resting instances that is the
@@ -236,6 +345,46 @@ impl SceneQuery for BvhScene {
         }
         dispatch!(|k| self.occluded_k(k, ray))
     }
+
+    /// Groups of up to [`PACKET`] rays walk the trees together (`flat::packet`); a group of
+    /// one is traced as a single ray.
+    fn intersect_packet(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
+        assert_eq!(rays.len(), hits.len(), "one hit slot per ray");
+        for (rays, hits) in rays.chunks(PACKET).zip(hits.chunks_mut(PACKET)) {
+            match rays {
+                [ray] => hits[0] = self.intersect(ray),
+                _ => dispatch!(|k| self.intersect_packet_k(k, rays, hits)),
+            }
+        }
+    }
+
+    fn intersect_p_packet(&self, rays: &[Ray], occluded: &mut [bool]) {
+        assert_eq!(rays.len(), occluded.len(), "one result slot per ray");
+        for (rays, occluded) in rays.chunks(PACKET).zip(occluded.chunks_mut(PACKET)) {
+            match rays {
+                [ray] => occluded[0] = self.intersect_p(ray),
+                _ => {
+                    let blocked = dispatch!(|k| self.occluded_packet_k(k, rays));
+                    for (i, o) in occluded.iter_mut().enumerate() {
+                        *o = blocked >> i & 1 == 1;
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The packet of `rays` (2 to [`PACKET`]), its valid lanes and their `t_max`.
+fn prepared(rays: &[Ray]) -> (RayPacket, Lanes, [f32; PACKET]) {
+    let mut lanes = 0;
+    let mut t_max = [f32::NEG_INFINITY; PACKET];
+    for (i, ray) in rays.iter().enumerate() {
+        if interval_is_valid(ray) {
+            lanes |= 1 << i;
+            t_max[i] = ray.t_max;
+        }
+    }
+    (RayPacket::new(rays), lanes, t_max)
 }
 
 impl BvhScene {
@@ -254,24 +403,39 @@ impl BvhScene {
         for level in [&self.resting, &self.top] {
             level.intersect_with(k, ray, &bray, &mut t_max, &mut inst_hit);
         }
-        if let Some((h, item)) = inst_hit {
-            return Some(Hit {
-                t: h.t,
-                u: h.u,
-                v: h.v,
-                ng: unit(item.world_normal(h.tri.normal(), ray.time)),
-                object: HitObject::Instance(InstanceId(item.id)),
-                prim: h.tri.prim,
-            });
+        scene_hit(ray, static_hit, inst_hit)
+    }
+
+    /// [`SceneQuery::intersect_packet`] of up to [`PACKET`] rays on SIMD path `K`: the same
+    /// order of structures as [`Self::intersect_k`].
+    #[inline(always)]
+    fn intersect_packet_k<K: Kernel>(&self, k: K, rays: &[Ray], hits: &mut [Option<Hit>]) {
+        let (packet, lanes, mut t_max) = prepared(rays);
+        let mut static_hit = [None; PACKET];
+        self.statics.intersect_packet_with(k, &packet, lanes, &mut t_max, &mut static_hit);
+        let mut inst_hit = [None; PACKET];
+        for level in [&self.resting, &self.top] {
+            level.intersect_packet_with(k, rays, &packet, lanes, &mut t_max, &mut inst_hit);
         }
-        static_hit.map(|h| Hit {
-            t: h.t,
-            u: h.u,
-            v: h.v,
-            ng: unit(h.tri.normal()),
-            object: HitObject::Static(StaticId(h.tri.geom)),
-            prim: h.tri.prim,
-        })
+        for (i, (ray, hit)) in rays.iter().zip(hits).enumerate() {
+            *hit = scene_hit(ray, static_hit[i], inst_hit[i]);
+        }
+    }
+
+    /// [`SceneQuery::intersect_p_packet`] of up to [`PACKET`] rays on SIMD path `K`: the
+    /// blocked lanes.
+    #[inline(always)]
+    fn occluded_packet_k<K: Kernel>(&self, k: K, rays: &[Ray]) -> Lanes {
+        let (packet, lanes, t_max) = prepared(rays);
+        let mut blocked = self.statics.occluded_packet_with(k, &packet, lanes, &t_max);
+        for level in [&self.resting, &self.top] {
+            let left = lanes & !blocked;
+            if left == 0 {
+                break;
+            }
+            blocked |= level.occluded_packet_with(k, rays, &packet, left, &t_max);
+        }
+        blocked
     }
 
     /// [`SceneQuery::intersect_p`] on SIMD path `K`.

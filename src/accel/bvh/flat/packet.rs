@@ -1,0 +1,253 @@
+//! Packet traversal of the wide trees: up to [`PACKET`] rays (a renderer's block of camera
+//! rays) walk one tree together. Each wide node is loaded once for the packet and tested with
+//! the single-ray box kernel for every lane still in it; a child is entered by the lanes that
+//! hit its box, nearest (over those lanes) first. Lanes drop out of a subtree when their own
+//! closest hit is nearer than its entry, and out of the whole walk when a leaf says they are
+//! done (any-hit). Each lane gets the hit a single ray would (up to ties between surfaces at
+//! the same distance, which the visiting order decides).
+//!
+//! Why per-lane box tests and not one box against eight lanes (Wald's packets): the node
+//! step's kernel stays the one every SIMD path already has and is tested on, and the win
+//! measured for coherent rays comes from loading each node once per packet (the trace is
+//! load-latency bound: docs/performance.md, "Node step and leaves"), not from the arithmetic.
+
+use glam::Vec4;
+
+use super::stack::TraversalStack;
+use super::wide::{FOLDED, LEAF, NONE, WIDE_STACK, WIDTH};
+use super::{BoxRay, FlatBvh, Wide};
+use crate::accel::bvh::simd::{BoxRay8, Kernel};
+use crate::accel::bvh::triangle::RayTri;
+use crate::geometry::Ray;
+
+/// Rays per packet: the renderer's 4x2 camera blocks.
+pub(crate) const PACKET: usize = 8;
+
+/// A set of packet lanes, bit `i` for lane `i`.
+pub(crate) type Lanes = u32;
+
+/// Up to [`PACKET`] rays prepared for the box and triangle tests. Lanes beyond the rays given
+/// repeat the last ray; traversals only look at the lanes they are asked for.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct RayPacket {
+    pub bray: [BoxRay; PACKET],
+    pub tray: [RayTri; PACKET],
+}
+
+impl RayPacket {
+    /// The packet of `rays` (1 to [`PACKET`] of them) in world or object space.
+    pub fn new(rays: &[Ray]) -> Self {
+        debug_assert!(!rays.is_empty() && rays.len() <= PACKET);
+        let ray = |i: usize| &rays[i.min(rays.len() - 1)];
+        Self {
+            bray: std::array::from_fn(|i| BoxRay::new(ray(i))),
+            tray: std::array::from_fn(|i| RayTri::new(ray(i))),
+        }
+    }
+
+    /// Replaces lane `i` by `ray`.
+    #[inline(always)]
+    pub fn set(&mut self, i: usize, ray: &Ray) {
+        self.bray[i] = BoxRay::new(ray);
+        self.tray[i] = RayTri::new(ray);
+    }
+}
+
+/// The lanes whose `t_max` is at least `t` (those a subtree entered at `t` may still serve).
+#[inline(always)]
+fn lanes_within(t_max: &[f32; PACKET], t: f32) -> Lanes {
+    let t = Vec4::splat(t);
+    let lo = Vec4::from_slice(&t_max[..4]).cmpge(t).bitmask();
+    let hi = Vec4::from_slice(&t_max[4..]).cmpge(t).bitmask();
+    lo | hi << 4
+}
+
+/// Iterates over the lanes of a set, lowest first.
+#[inline(always)]
+pub(crate) fn each_lane(mut lanes: Lanes) -> impl Iterator<Item = usize> {
+    std::iter::from_fn(move || {
+        (lanes != 0).then(|| {
+            let i = lanes.trailing_zeros() as usize;
+            lanes &= lanes - 1;
+            i
+        })
+    })
+}
+
+/// The transpose of the 8x8 bit matrix whose row `r` is byte `r` (bit `c` of it column `c`):
+/// bit `8r + c` goes to bit `8c + r` (Hacker's Delight, 7-3).
+#[inline(always)]
+fn transpose8x8(mut x: u64) -> u64 {
+    let t = (x ^ (x >> 7)) & 0x00AA_00AA_00AA_00AA;
+    x ^= t ^ (t << 7);
+    let t = (x ^ (x >> 14)) & 0x0000_CCCC_0000_CCCC;
+    x ^= t ^ (t << 14);
+    let t = (x ^ (x >> 28)) & 0x0000_0000_F0F0_F0F0;
+    x ^ t ^ (t << 28)
+}
+
+/// Stack entries of a packet walk: node code, nearest entry over its lanes, its lanes.
+type PacketStack = TraversalStack<(u32, f32, Lanes), WIDE_STACK>;
+
+impl Wide {
+    /// [`Wide::traverse`] for the `lanes` of a packet: visits the leaves of the subtree of
+    /// binary node `root` that any of them may hit, nearer first. `leaf` gets each leaf's item
+    /// range, the lanes that entered it and every lane's `t_max` (which it lowers on hits),
+    /// and returns the lanes it finished (any-hit; closest-hit returns none). Returns the
+    /// lanes finished in all.
+    ///
+    /// `leaf` is called from one place only, for the reason [`Wide::traverse`] gives.
+    #[inline(always)]
+    pub fn traverse_packet<K: Kernel, F>(
+        &self,
+        k: K,
+        bvh: &FlatBvh,
+        root: u32,
+        packet: &RayPacket,
+        lanes: Lanes,
+        t_max: &mut [f32; PACKET],
+        leaf: &mut F,
+    ) -> Lanes
+    where
+        F: FnMut(u32, u32, Lanes, &mut [f32; PACKET]) -> Lanes,
+    {
+        let mut stack = PacketStack::new();
+        // As in `traverse`: binary nodes folded into a wide node are entered through their
+        // children, each tested by every lane.
+        let mut pending = [0u32; 2 * WIDTH];
+        let mut np = 1;
+        pending[0] = root;
+        while np > 0 {
+            np -= 1;
+            let r = pending[np];
+            let Some(&(x, count)) = self.map.get(r as usize) else {
+                continue;
+            };
+            let n = &bvh.nodes[r as usize];
+            let (mut entered, mut t) = (0, f32::INFINITY);
+            for i in each_lane(lanes) {
+                let ti = packet.bray[i].hit(n, t_max[i]);
+                if ti < f32::INFINITY {
+                    entered |= 1 << i;
+                    t = t.min(ti);
+                }
+            }
+            if entered == 0 {
+                continue;
+            }
+            if count > 0 {
+                stack.push((FOLDED | r, t, entered));
+            } else if x != NONE {
+                stack.push((x, t, entered));
+            } else {
+                debug_assert!(np + 2 <= pending.len());
+                pending[np] = n.first + 1;
+                pending[np + 1] = n.first;
+                np += 2;
+            }
+        }
+        self.traverse8_packet(k, &mut stack, packet, lanes, t_max, leaf)
+    }
+
+    #[inline(always)]
+    fn traverse8_packet<K: Kernel, F>(
+        &self,
+        k: K,
+        stack: &mut PacketStack,
+        packet: &RayPacket,
+        mut active: Lanes,
+        t_max: &mut [f32; PACKET],
+        leaf: &mut F,
+    ) -> Lanes
+    where
+        F: FnMut(u32, u32, Lanes, &mut [f32; PACKET]) -> Lanes,
+    {
+        let kr: [K::Ray; PACKET] = std::array::from_fn(|i| {
+            let b = &packet.bray[i];
+            k.prepare(&BoxRay8 { org: b.org.into(), inv: b.inv.into(), t_min: b.t_min })
+        });
+        let mut finished = 0;
+        while let Some((mut cur, t, lanes)) = stack.pop() {
+            let mut lanes = lanes & active & lanes_within(t_max, t);
+            while lanes != 0 {
+                if cur & LEAF != 0 {
+                    let (first, count) = if cur & FOLDED == FOLDED {
+                        self.map[(cur & !FOLDED) as usize]
+                    } else {
+                        let (node, slot) = ((cur & !LEAF) >> 3, (cur & 7) as usize);
+                        let n = &self.nodes[node as usize];
+                        (n.child[slot], u32::from(n.count[slot]))
+                    };
+                    // The only call of `leaf`.
+                    let done = leaf(first, count, lanes, t_max);
+                    finished |= done;
+                    active &= !done;
+                    break;
+                }
+                // The node once, each lane's box test against it, without branches per lane
+                // and child: each lane's children in a byte of `rows` (bit = child), turned
+                // into each child's lanes (byte = child, bit = lane); each child's distance
+                // the nearest over its lanes (misses at infinity).
+                let n = &self.nodes[cur as usize];
+                let (mut rows, mut entered) = (0u64, 0u32);
+                let (mut lo, mut hi) = (Vec4::INFINITY, Vec4::INFINITY);
+                for i in each_lane(lanes) {
+                    let (mask, near) = k.box8_or_inf(&kr[i], &n.boxes, t_max[i]);
+                    let mask = mask & n.used;
+                    rows |= u64::from(mask) << (8 * i);
+                    entered |= mask;
+                    lo = lo.min(Vec4::from_slice(&near[..4]));
+                    hi = hi.min(Vec4::from_slice(&near[4..]));
+                }
+                let child_lanes = transpose8x8(rows).to_le_bytes();
+                let (lo, hi) = (lo.to_array(), hi.to_array());
+                let child_t = [lo[0], lo[1], lo[2], lo[3], hi[0], hi[1], hi[2], hi[3]];
+                // Entered children sorted farthest first (insertion sort); all but the nearest
+                // are pushed, the nearest is taken next.
+                let mut hits = [(0u32, 0f32, 0 as Lanes); WIDTH];
+                let mut m = 0;
+                for slot in each_lane(entered) {
+                    let code =
+                        if n.count[slot] > 0 { LEAF | (cur << 3) | slot as u32 } else { n.child[slot] };
+                    let mut j = m;
+                    while j > 0 && hits[j - 1].1 < child_t[slot] {
+                        hits[j] = hits[j - 1];
+                        j -= 1;
+                    }
+                    hits[j] = (code, child_t[slot], Lanes::from(child_lanes[slot]));
+                    m += 1;
+                }
+                if m == 0 {
+                    break;
+                }
+                for &entry in &hits[..m - 1] {
+                    stack.push(entry);
+                }
+                (cur, lanes) = (hits[m - 1].0, hits[m - 1].2);
+            }
+            if active == 0 {
+                break;
+            }
+        }
+        finished
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::transpose8x8;
+
+    #[test]
+    fn transpose_moves_every_bit_across_the_diagonal() {
+        let mut x = 0x9E37_79B9_7F4A_7C15u64;
+        for _ in 0..200 {
+            x = x.rotate_left(13).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            let t = transpose8x8(x);
+            for r in 0..8 {
+                for c in 0..8 {
+                    assert_eq!(x >> (8 * r + c) & 1, t >> (8 * c + r) & 1, "row {r} column {c} of {x:#x}");
+                }
+            }
+        }
+    }
+}
