@@ -105,10 +105,10 @@ fn moving_instances_in_packets_hit_like_single_rays() {
         let loaded = accel::load_scene(&desc, a.as_mut()).unwrap();
         for (id, body) in loaded.instances.iter().zip(&desc.bodies) {
             let (_, rotation, translation) = body.transform.to_scale_rotation_translation();
-            let open = RigidTransform { rotation, translation: translation.into() };
+            let open = RigidTransform { rotation, translation };
             let close = RigidTransform {
                 rotation: Quat::from_rotation_y(0.3) * rotation,
-                translation: Vec3::from(translation) + Vec3::new(0.3, 0.1, 0.0),
+                translation: translation + Vec3::new(0.3, 0.1, 0.0),
             };
             a.set_instance_motion(*id, Some(InstanceMotion { open, close })).unwrap();
         }

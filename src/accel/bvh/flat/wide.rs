@@ -25,12 +25,12 @@ pub(super) const WIDE_STACK: usize = (WIDTH - 1) * STACK_SIZE;
 /// Slot code of an unused child.
 const EMPTY: u32 = u32::MAX;
 /// `map` entry of a binary interior node that has no wide node of its own.
-pub(super) const NONE: u32 = u32::MAX;
+const NONE: u32 = u32::MAX;
 /// Stack code of a leaf child: `LEAF | node << 3 | slot`.
 pub(super) const LEAF: u32 = 1 << 31;
 /// Stack code of a binary leaf entered on its own (folded into its parent's wide node, reached
 /// by entering a folded subtree): `FOLDED | binary node`.
-pub(super) const FOLDED: u32 = LEAF | 1 << 30;
+const FOLDED: u32 = LEAF | 1 << 30;
 
 /// Eight children's boxes in structure-of-arrays layout, plus what each child is.
 #[derive(Clone, Copy, Debug)]
@@ -163,9 +163,30 @@ impl Wide {
         F: FnMut(u32, u32, &mut f32) -> bool,
     {
         let mut stack = TraversalStack::<(u32, f32), WIDE_STACK>::new();
-        // Binary nodes folded into a wide node are entered through their children: at most
-        // `WIDTH` of them are pending at once (the folded part of one wide node). Wide nodes
-        // and leaves found there go on the stack.
+        self.enter(
+            bvh,
+            root,
+            |n| {
+                let t = ray.hit(n, *t_max);
+                (t < f32::INFINITY).then_some(t)
+            },
+            |code, t| stack.push((code, t)),
+        );
+        self.traverse8(k, &mut stack, ray, t_max, leaf)
+    }
+
+    /// Where a traversal of the subtree of binary node `root` starts. Binary nodes folded
+    /// into a wide node are entered through their children: at most `WIDTH` of them are
+    /// pending at once (the folded part of one wide node). Each wide node or leaf found there
+    /// that `test` enters goes to `push` with its stack code and what `test` returned.
+    #[inline(always)]
+    pub(super) fn enter<T>(
+        &self,
+        bvh: &FlatBvh,
+        root: u32,
+        mut test: impl FnMut(&Node) -> Option<T>,
+        mut push: impl FnMut(u32, T),
+    ) {
         let mut pending = [0u32; 2 * WIDTH];
         let mut np = 1;
         pending[0] = root;
@@ -176,14 +197,13 @@ impl Wide {
                 continue;
             };
             let n = &bvh.nodes[r as usize];
-            let t = ray.hit(n, *t_max);
-            if t == f32::INFINITY {
+            let Some(t) = test(n) else {
                 continue;
-            }
+            };
             if count > 0 {
-                stack.push((FOLDED | r, t));
+                push(FOLDED | r, t);
             } else if x != NONE {
-                stack.push((x, t));
+                push(x, t);
             } else {
                 debug_assert!(np + 2 <= pending.len());
                 pending[np] = n.first + 1;
@@ -191,7 +211,6 @@ impl Wide {
                 np += 2;
             }
         }
-        self.traverse8(k, &mut stack, ray, t_max, leaf)
     }
 
     #[inline(always)]
@@ -230,8 +249,7 @@ impl Wide {
                     while mask != 0 {
                         let slot = mask.trailing_zeros() as usize;
                         mask &= mask - 1;
-                        let code =
-                            if n.count[slot] > 0 { LEAF | (cur << 3) | slot as u32 } else { n.child[slot] };
+                        let code = n.code(cur, slot);
                         // Insertion sort, descending by entry distance.
                         let mut j = m;
                         while j > 0 && hits[j - 1].1 < near[slot] {
@@ -248,13 +266,7 @@ impl Wide {
                     continue;
                 }
             } else {
-                let (first, count) = if cur & FOLDED == FOLDED {
-                    self.map[(cur & !FOLDED) as usize]
-                } else {
-                    let (node, slot) = ((cur & !LEAF) >> 3, (cur & 7) as usize);
-                    let n = &self.nodes[node as usize];
-                    (n.child[slot], u32::from(n.count[slot]))
-                };
+                let (first, count) = self.leaf_range(cur);
                 // The only call of `leaf` (see `traverse`).
                 if leaf(first, count, t_max) {
                     return true;
@@ -265,6 +277,33 @@ impl Wide {
                 Some(c) => cur = c,
                 None => return false,
             }
+        }
+    }
+}
+
+impl Wide {
+    /// The item range of the leaf with stack code `code` (`LEAF` or `FOLDED`).
+    #[inline(always)]
+    pub(super) fn leaf_range(&self, code: u32) -> (u32, u32) {
+        if code & FOLDED == FOLDED {
+            self.map[(code & !FOLDED) as usize]
+        } else {
+            let (node, slot) = ((code & !LEAF) >> 3, (code & 7) as usize);
+            let n = &self.nodes[node as usize];
+            (n.child[slot], u32::from(n.count[slot]))
+        }
+    }
+}
+
+impl Node8 {
+    /// The stack code of child `slot` of this node, wide node `at`: its wide node, or `LEAF`
+    /// with the node and slot.
+    #[inline(always)]
+    pub(super) fn code(&self, at: u32, slot: usize) -> u32 {
+        if self.count[slot] > 0 {
+            LEAF | (at << 3) | slot as u32
+        } else {
+            self.child[slot]
         }
     }
 }
