@@ -119,6 +119,35 @@ fn moving_instances_in_packets_hit_like_single_rays() {
     }
 }
 
+/// Lanes with an empty or NaN interval (`t_min > t_max`) miss and are never blocked, and do
+/// not disturb the valid lanes of their packet.
+#[test]
+fn lanes_with_empty_intervals_miss_inside_a_packet() {
+    let desc = default_scene();
+    let mut rays = camera_rays(&desc, 4, 2);
+    rays[1].t_min = 2.0;
+    rays[1].t_max = 1.0;
+    rays[4].t_max = f32::NAN;
+    rays[6].t_min = f32::NAN;
+    for backend in Backend::compiled() {
+        let a = loaded(backend);
+        let q = a.query().unwrap();
+        let mut hits = [None; 8];
+        let mut occluded = [true; 8];
+        q.intersect_packet(&rays, &mut hits);
+        q.intersect_p_packet(&rays, &mut occluded);
+        for i in [1, 4, 6] {
+            assert_eq!(hits[i], None, "{backend}: lane {i}");
+            assert!(!occluded[i], "{backend}: lane {i}");
+        }
+        for i in [0, 2, 3, 5, 7] {
+            assert_same_hit(hits[i], q.intersect(&rays[i]), &rays[i]);
+            assert_eq!(occluded[i], q.intersect_p(&rays[i]), "{backend}: lane {i}");
+        }
+        assert!(hits.iter().flatten().count() >= 4, "{backend}: the camera sees the scene");
+    }
+}
+
 #[test]
 #[should_panic(expected = "one hit slot per ray")]
 fn mismatched_lengths_panic() {
