@@ -141,6 +141,9 @@ impl Top {
                 }
                 let oray = object_ray(ray, item);
                 let mut best = None;
+                // Tried (2026-12-02): the `RayTri` made at the first leaf reached, so that an
+                // instance entered without reaching a leaf skips its setup: single-thread AO
+                // renders of the monastery with 8,000 ducks 7.12-7.15 s against 7.02-7.14 s.
                 if item.blas.intersect_from(k, 0, &BoxRay::new(&oray), &RayTri::new(&oray), t_max, &mut best)
                 {
                     if let Some(h) = best {
