@@ -205,6 +205,8 @@ fn bench_render_reports_both_backends_and_ratios_per_ray_type() {
         "bvh_over_embree_shadow",
         "bvh_over_embree_bounce",
         "bvh_over_embree_frame_samples",
+        "embree_frame_packets_over_single",
+        "bvh_frame_packets_over_single",
     ] {
         assert!(report["ratios"][key].as_f64().is_some_and(f64::is_finite), "ratio {key}");
     }

@@ -132,6 +132,8 @@ pub struct RenderRatios {
     pub bvh_over_embree_frame_samples: Option<f64>,
     /// Embree's frame with camera-ray packets over the same frame in single rays.
     pub embree_frame_packets_over_single: Option<f64>,
+    /// The same for the BVH (its own packets since 2026-12-02, `accel/bvh/flat/packet.rs`).
+    pub bvh_frame_packets_over_single: Option<f64>,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -239,6 +241,11 @@ impl SceneQuery for SingleRays<'_> {
 /// Best time in ms of `runs` runs of `f` (at least one).
 fn best_of(runs: u32, mut f: impl FnMut() -> f64) -> f64 {
     (0..runs.max(1)).map(|_| f()).fold(f64::INFINITY, f64::min)
+}
+
+/// A backend's frame with camera-ray packets over the same frame in single rays.
+fn frame_packets_over_single(t: &BackendRenderTiming) -> f64 {
+    t.frame.samples_per_s / t.frame_single_rays.samples_per_s.max(1e-12)
 }
 
 /// Closest hits of `rays` over rayon; the checksum keeps the work from being optimised away.
@@ -410,8 +417,8 @@ pub fn bench_render(
         bvh_over_embree_shadow: ratio(|t| t.shadow.mrays_per_s),
         bvh_over_embree_bounce: ratio(|t| t.bounce.mrays_per_s),
         bvh_over_embree_frame_samples: ratio(|t| t.frame.samples_per_s),
-        embree_frame_packets_over_single: find(Backend::Embree)
-            .map(|t| t.frame.samples_per_s / t.frame_single_rays.samples_per_s.max(1e-12)),
+        embree_frame_packets_over_single: find(Backend::Embree).map(frame_packets_over_single),
+        bvh_frame_packets_over_single: find(Backend::Bvh).map(frame_packets_over_single),
     };
     Ok(RenderBenchReport {
         scene: desc.name.clone(),
