@@ -5,7 +5,7 @@
 
 use rayon::prelude::*;
 
-use super::packet::{each_lane, Lanes, RayPacket, PACKET};
+use super::packet::{each_bit, Lanes, RayPacket, PACKET};
 use super::{build_with, BoxRay, FlatBvh, Node, Wide, PAR_CHUNK};
 use crate::accel::bvh::simd::Kernel;
 use crate::accel::bvh::triangle::{RayTri, Tri, Tri4};
@@ -134,7 +134,7 @@ impl MeshBvh {
             t_max,
             &mut |first, count, lanes, t_max| {
                 for q in &self.packets[first as usize..(first + count) as usize] {
-                    for i in each_lane(lanes) {
+                    for i in each_bit(lanes) {
                         if let Some((lane, h)) = packet.tray[i].intersect4(q, t_max[i]) {
                             // Strictly closer only, as for one ray.
                             if best[i].is_none_or(|b| h.t < b.t) {
@@ -172,9 +172,9 @@ impl MeshBvh {
             lanes,
             &mut t_max,
             &mut |first, count, lanes, t_max| {
+                let packets = &self.packets[first as usize..(first + count) as usize];
                 let mut blocked = 0;
-                for i in each_lane(lanes) {
-                    let packets = &self.packets[first as usize..(first + count) as usize];
+                for i in each_bit(lanes) {
                     if packets.iter().any(|q| packet.tray[i].intersect4(q, t_max[i]).is_some()) {
                         blocked |= 1 << i;
                     }

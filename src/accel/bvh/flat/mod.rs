@@ -18,7 +18,7 @@ mod wide;
 
 pub(crate) use build::{build, build_with};
 pub(crate) use mesh::{MeshBvh, PrimHit};
-pub(crate) use packet::{each_lane, Lanes, RayPacket, PACKET};
+pub(crate) use packet::{each_bit, Lanes, RayPacket, PACKET};
 pub(crate) use sah::{sah_cost, subtree_cost};
 #[cfg(test)]
 pub(crate) use traverse::traverse;

@@ -62,9 +62,9 @@ fn lanes_within(t_max: &[f32; PACKET], t: f32) -> Lanes {
     lo | hi << 4
 }
 
-/// Iterates over the lanes of a set, lowest first.
+/// The set bits of a mask, lowest first: the lanes of a [`Lanes`], or the children of a node.
 #[inline(always)]
-pub(crate) fn each_lane(mut lanes: Lanes) -> impl Iterator<Item = usize> {
+pub(crate) fn each_bit(mut lanes: Lanes) -> impl Iterator<Item = usize> {
     std::iter::from_fn(move || {
         (lanes != 0).then(|| {
             let i = lanes.trailing_zeros() as usize;
@@ -115,7 +115,7 @@ impl Wide {
         let mut stack = PacketStack::new();
         let enter = |n: &Node| {
             let (mut entered, mut t) = (0, f32::INFINITY);
-            for i in each_lane(lanes) {
+            for i in each_bit(lanes) {
                 let ti = packet.bray[i].hit(n, t_max[i]);
                 if ti < f32::INFINITY {
                     entered |= 1 << i;
@@ -198,7 +198,7 @@ impl Wide {
         let n = &self.nodes[cur as usize];
         let (mut rows, mut entered) = (0u64, 0u32);
         let (mut lo, mut hi) = (Vec4::INFINITY, Vec4::INFINITY);
-        for i in each_lane(lanes) {
+        for i in each_bit(lanes) {
             let (mask, near) = k.box8_or_inf(&kr[i], &n.boxes, t_max[i]);
             let mask = mask & n.used;
             rows |= u64::from(mask) << (8 * i);
@@ -212,7 +212,7 @@ impl Wide {
         // Insertion sort, descending by entry distance.
         let mut hits = [(0u32, 0f32, 0 as Lanes); WIDTH];
         let mut m = 0;
-        for slot in each_lane(entered) {
+        for slot in each_bit(entered) {
             let code = n.code(cur, slot);
             let mut j = m;
             while j > 0 && hits[j - 1].1 < child_t[slot] {

@@ -29,7 +29,7 @@ use glam::{Affine3A, Mat3A, Vec3, Vec3A};
 use rayon::prelude::*;
 
 use crate::accel::bvh::flat::{
-    build, each_lane, interval_is_valid, BoxRay, FlatBvh, Lanes, MeshBvh, PrimHit, RayPacket, Wide, PACKET,
+    build, each_bit, interval_is_valid, BoxRay, FlatBvh, Lanes, MeshBvh, PrimHit, RayPacket, Wide, PACKET,
 };
 use crate::accel::bvh::persistent::StaticSnapshot;
 use crate::accel::bvh::simd::{dispatch, Kernel};
@@ -198,12 +198,12 @@ impl Top {
                     if item.ghost {
                         continue;
                     }
-                    for i in each_lane(lanes) {
+                    for i in each_bit(lanes) {
                         object.set(i, &object_ray(&rays[i], item));
                     }
                     let mut best = [None; PACKET];
                     let found = item.blas.intersect_packet_from(k, 0, &object, lanes, t_max, &mut best);
-                    for i in each_lane(found) {
+                    for i in each_bit(found) {
                         if let Some(h) = best[i] {
                             hit[i] = Some((h, item));
                         }
@@ -241,7 +241,7 @@ impl Top {
                     if left == 0 {
                         break;
                     }
-                    for i in each_lane(left) {
+                    for i in each_bit(left) {
                         object.set(i, &object_ray(&rays[i], item));
                     }
                     left &= !item.blas.occluded_packet_from(k, 0, &object, left, t_max);
