@@ -141,10 +141,6 @@ impl Wide {
     where
         F: FnMut(u32, u32, Lanes, &mut [f32; PACKET]) -> Lanes,
     {
-        let kr: [K::Ray; PACKET] = std::array::from_fn(|i| {
-            let b = &packet.bray[i];
-            k.prepare(&BoxRay8 { org: b.org.into(), inv: b.inv.into(), t_min: b.t_min })
-        });
         let mut finished = 0;
         while let Some((mut cur, t, lanes)) = stack.pop() {
             let mut lanes = lanes & active & lanes_within(t_max, t);
@@ -157,7 +153,7 @@ impl Wide {
                     active &= !done;
                     break;
                 }
-                match self.enter_children(k, &kr, stack, cur, lanes, t_max) {
+                match self.enter_children(k, packet, stack, cur, lanes, t_max) {
                     Some(next) => (cur, lanes) = next,
                     None => break,
                 }
@@ -185,11 +181,16 @@ impl Wide {
     /// Pushing here, not in the caller: returning the sorted children (an array of eight
     /// entries and a count) for the caller to push cost the packets 3-5% of their gain on the
     /// monastery (4x2 camera packets 1.28-1.30x single rays against 1.32-1.34x; three runs).
+    ///
+    /// Each lane's kernel ray is prepared here, per node (broadcasts from the packet: loads, as
+    /// reading it prepared would be), not once per traversal into an array: that array, 1.8
+    /// KiB, was built aside and copied with `memcpy` at every traversal, 3.6% of a BVH
+    /// path-traced frame of the monastery with 8,000 ducks (most of it at instance entries).
     #[inline(always)]
     fn enter_children<K: Kernel>(
         &self,
         k: K,
-        kr: &[K::Ray; PACKET],
+        packet: &RayPacket,
         stack: &mut PacketStack,
         cur: u32,
         lanes: Lanes,
@@ -199,7 +200,9 @@ impl Wide {
         let (mut rows, mut entered) = (0u64, 0u32);
         let (mut lo, mut hi) = (Vec4::INFINITY, Vec4::INFINITY);
         for i in each_bit(lanes) {
-            let (mask, near) = k.box8_or_inf(&kr[i], &n.boxes, t_max[i]);
+            let b = &packet.bray[i];
+            let kr = k.prepare(&BoxRay8 { org: b.org.into(), inv: b.inv.into(), t_min: b.t_min });
+            let (mask, near) = k.box8_or_inf(&kr, &n.boxes, t_max[i]);
             let mask = mask & n.used;
             rows |= u64::from(mask) << (8 * i);
             entered |= mask;
