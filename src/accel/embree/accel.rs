@@ -61,6 +61,10 @@ pub struct EmbreeBuildParams {
     /// MEDIUM and HIGH measured 13.6, 10.8 and 7.9 ms per commit and 40.1, 36.1 and 31.5 ms
     /// for 640x360 primary rays (Embree 4.4, 2 threads).
     pub top_level: BuildQuality,
+    /// Every scene with `RTC_SCENE_FLAG_ROBUST`: conservative box tests and a watertight
+    /// triangle test, the guarantees the pure-Rust BVH always gives. Off by default, as in
+    /// Embree; `bench accel` measures Embree both ways.
+    pub robust: bool,
 }
 
 impl EmbreeBuildParams {
@@ -70,11 +74,23 @@ impl EmbreeBuildParams {
         static_scene: BuildQuality::Low,
         static_mesh: BuildQuality::Medium,
         top_level: BuildQuality::High,
+        robust: false,
     };
 
     /// Every scene at one quality (for comparing Embree's builders).
     pub const fn uniform(quality: BuildQuality) -> Self {
-        Self { prototype: quality, static_scene: quality, static_mesh: quality, top_level: quality }
+        Self {
+            prototype: quality,
+            static_scene: quality,
+            static_mesh: quality,
+            top_level: quality,
+            robust: false,
+        }
+    }
+
+    /// The scene flags for one of this backend's scenes.
+    fn flags(&self, dynamic: bool) -> SceneFlags {
+        SceneFlags { dynamic, robust: self.robust, ..SceneFlags::default() }
     }
 }
 
@@ -135,12 +151,10 @@ impl EmbreeAccel {
     }
 
     pub fn with_device(device: Device, params: EmbreeBuildParams) -> Result<Self, AccelError> {
-        let static_scene =
-            Scene::new(&device, SceneFlags { dynamic: true, ..SceneFlags::default() }, params.static_scene)?;
-        let mut top =
-            Scene::new(&device, SceneFlags { dynamic: true, ..SceneFlags::default() }, params.top_level)?;
+        let static_scene = Scene::new(&device, params.flags(true), params.static_scene)?;
+        let mut top = Scene::new(&device, params.flags(true), params.top_level)?;
         top.attach_by_id(InstanceGeometry::owning(&device, static_scene, &Affine3A::IDENTITY)?, STATIC_SLOT)?;
-        let mut resting = Scene::new(&device, SceneFlags::default(), params.top_level)?;
+        let mut resting = Scene::new(&device, params.flags(false), params.top_level)?;
         resting.commit()?;
         Ok(Self {
             device,
@@ -232,7 +246,7 @@ impl Accelerator for EmbreeAccel {
 
     fn add_prototype(&mut self, mesh: &TriangleMesh) -> Result<PrototypeId, AccelError> {
         let (geometry, skipped) = self.triangle_geometry(mesh, self.params.prototype)?;
-        let mut scene = Scene::new(&self.device, SceneFlags::default(), self.params.prototype)?;
+        let mut scene = Scene::new(&self.device, self.params.flags(false), self.params.prototype)?;
         // Hits inside ghosts of the resting scene are rejected by an argument filter.
         scene.attach(geometry.with_argument_filter()?)?;
         let frozen = scene.freeze()?;

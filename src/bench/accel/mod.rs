@@ -2,7 +2,8 @@
 //! one scene with the same rays.
 //!
 //! - **build**: the instanced scene (static environment, one prototype, N instances), Embree
-//!   at LOW/MEDIUM/HIGH (all its scenes at that quality) and the BVH;
+//!   at LOW/MEDIUM/HIGH (all its scenes at that quality), at MEDIUM with Embree's robust mode
+//!   (`medium-robust`: the watertight guarantees the BVH always gives) and the BVH;
 //! - **trace**: primary rays (one per pixel) and diffuse-bounce rays (cosine-distributed from
 //!   the primary hits, generated once through Embree), closest hit, rayon over all cores; best
 //!   of three runs;
@@ -93,8 +94,13 @@ pub struct AccelRatios {
     pub bvh_over_embree_trace: f64,
     /// The same against Embree at HIGH.
     pub bvh_over_embree_high_trace: f64,
+    /// The same against Embree at MEDIUM in robust mode (conservative box tests, watertight
+    /// triangles: the BVH's own guarantees).
+    pub bvh_over_embree_robust_trace: f64,
     /// BVH build time of the instanced scene over Embree's (MEDIUM).
     pub bvh_over_embree_build: f64,
+    /// The same against Embree at MEDIUM in robust mode.
+    pub bvh_over_embree_robust_build: f64,
     pub bvh_rebuild_over_insert: f64,
     pub bvh_insert_sah_over_rebuild: f64,
     pub embree_rebuild_over_insert: f64,
@@ -126,15 +132,20 @@ pub struct AccelBenchReport {
 /// A backend, its build configuration's name, and how to make one.
 type Variant = (Backend, String, Box<AccelFactory>);
 
-/// Embree at each build quality; none when Embree is not compiled in.
+/// Embree at each build quality, then at MEDIUM in robust mode; none when Embree is not
+/// compiled in.
 fn embree_variants(threads: Option<usize>) -> Vec<Variant> {
     #[cfg(feature = "embree")]
     {
-        crate::accel::embree::BuildQuality::ALL
+        use crate::accel::embree::{BuildQuality, EmbreeBuildParams};
+        let at = |name: String, params: EmbreeBuildParams| -> Variant {
+            (Backend::Embree, name, Box::new(move || embree_with(params, threads)))
+        };
+        let robust = EmbreeBuildParams { robust: true, ..EmbreeBuildParams::uniform(BuildQuality::Medium) };
+        BuildQuality::ALL
             .into_iter()
-            .map(|q| -> Variant {
-                (Backend::Embree, format!("{q:?}").to_lowercase(), Box::new(move || embree_at(q, threads)))
-            })
+            .map(|q| at(format!("{q:?}").to_lowercase(), EmbreeBuildParams::uniform(q)))
+            .chain([at("medium-robust".into(), robust)])
             .collect()
     }
     #[cfg(not(feature = "embree"))]
@@ -145,12 +156,12 @@ fn embree_variants(threads: Option<usize>) -> Vec<Variant> {
 }
 
 #[cfg(feature = "embree")]
-fn embree_at(
-    quality: crate::accel::embree::BuildQuality,
+fn embree_with(
+    params: crate::accel::embree::EmbreeBuildParams,
     threads: Option<usize>,
 ) -> Result<Box<dyn Accelerator>, AccelError> {
-    use crate::accel::embree::{Device, EmbreeAccel, EmbreeBuildParams};
-    let accel = EmbreeAccel::with_device(Device::new(threads)?, EmbreeBuildParams::uniform(quality))?;
+    use crate::accel::embree::{Device, EmbreeAccel};
+    let accel = EmbreeAccel::with_device(Device::new(threads)?, params)?;
     Ok(Box::new(accel))
 }
 
@@ -367,9 +378,17 @@ impl AccelRatios {
                 find_trace(Backend::Bvh, "sah"),
                 find_trace(Backend::Embree, "high"),
             ),
+            bvh_over_embree_robust_trace: ratio(
+                find_trace(Backend::Bvh, "sah"),
+                find_trace(Backend::Embree, "medium-robust"),
+            ),
             bvh_over_embree_build: ratio(
                 find_build(Backend::Bvh, "sah"),
                 find_build(Backend::Embree, "medium"),
+            ),
+            bvh_over_embree_robust_build: ratio(
+                find_build(Backend::Bvh, "sah"),
+                find_build(Backend::Embree, "medium-robust"),
             ),
             bvh_rebuild_over_insert: ratio(bvh_insert.map(|t| t.rebuild_ms), bvh_insert.map(|t| t.insert_ms)),
             bvh_insert_sah_over_rebuild: ratio(
