@@ -216,6 +216,28 @@ fn bench_render_reports_both_backends_and_ratios_per_ray_type() {
 }
 
 #[test]
+fn bench_render_embree_robust_is_recorded_with_the_same_camera_rays() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |robust: bool| {
+        let json = dir.path().join(format!("render-{robust}.json"));
+        let mut cmd = dormant();
+        cmd.args(["bench", "render", "--size", "32x18", "--spp", "1", "--runs", "1", "--json"]).arg(&json);
+        if robust {
+            cmd.arg("--embree-robust");
+        }
+        assert!(cmd.status().unwrap().success());
+        read_json(&json)
+    };
+    let (plain, robust) = (run(false), run(true));
+    assert_eq!(plain["embree_robust"], false);
+    assert_eq!(robust["embree_robust"], true);
+    // The same camera rays (the shadow and bounce sets come from Embree's camera hits, which
+    // robust mode may move at edges).
+    assert_eq!(plain["backends"][0]["camera"]["rays"], robust["backends"][0]["camera"]["rays"]);
+    assert!(robust["ratios"]["bvh_over_embree_camera"].as_f64().is_some_and(f64::is_finite));
+}
+
+#[test]
 fn missing_asset_is_an_input_error() {
     let output = dormant()
         .args(["verify", "--env", "/nonexistent/env.glb", "--object", "/nonexistent/duck.glb"])

@@ -23,6 +23,17 @@ pub(crate) use render::{bench_render, RenderBenchOptions};
 
 use std::time::Instant;
 
+/// Embree with `params` (quality per scene, robust mode) on its own device, for benchmarks
+/// that compare its configurations.
+#[cfg(feature = "embree")]
+pub(crate) fn embree_with(
+    params: crate::accel::embree::EmbreeBuildParams,
+    threads: Option<usize>,
+) -> Result<Box<dyn crate::accel::Accelerator>, crate::accel::AccelError> {
+    use crate::accel::embree::{Device, EmbreeAccel};
+    Ok(Box::new(EmbreeAccel::with_device(Device::new(threads)?, params)?))
+}
+
 /// Milliseconds `f` took, with its result.
 pub(crate) fn timed<R>(f: impl FnOnce() -> R) -> (R, f64) {
     let start = Instant::now();

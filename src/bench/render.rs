@@ -21,7 +21,7 @@ use serde::Serialize;
 
 use super::frame_rays::{trace_bare, BareFrameRays, FrameRays, RecordingQuery};
 use super::timed;
-use crate::accel::{self, Backend, SceneQuery};
+use crate::accel::{self, AccelError, Accelerator, Backend, SceneQuery};
 use crate::crosscheck::camera_rays;
 use crate::geometry::Ray;
 use crate::render::{
@@ -40,12 +40,30 @@ pub struct RenderBenchOptions {
     /// Repetitions of each measurement (the best is kept).
     pub runs: u32,
     pub threads: Option<usize>,
+    /// Embree's scenes in robust mode (`RTC_SCENE_FLAG_ROBUST`: a watertight triangle test
+    /// and conservative box tests, the guarantees the BVH always gives), for comparing like
+    /// for like. Off: Embree as dormant renders with it.
+    pub embree_robust: bool,
 }
 
 impl Default for RenderBenchOptions {
     fn default() -> Self {
-        Self { width: 640, height: 360, spp: 4, runs: 3, threads: None }
+        Self { width: 640, height: 360, spp: 4, runs: 3, threads: None, embree_robust: false }
     }
+}
+
+/// The accelerator `backend` is measured with: dormant's own configuration, or Embree's in
+/// robust mode when asked.
+fn accel_for(backend: Backend, opts: &RenderBenchOptions) -> Result<Box<dyn Accelerator>, AccelError> {
+    #[cfg(feature = "embree")]
+    if backend == Backend::Embree && opts.embree_robust {
+        use crate::accel::embree::EmbreeBuildParams;
+        return super::embree_with(
+            EmbreeBuildParams { robust: true, ..EmbreeBuildParams::DEFAULT },
+            opts.threads,
+        );
+    }
+    accel::create(backend, opts.threads)
 }
 
 /// One ray set traced by one backend.
@@ -144,6 +162,8 @@ pub struct RenderBenchReport {
     pub spp: u32,
     pub runs: u32,
     pub threads: usize,
+    /// Whether Embree ran in robust mode ([`RenderBenchOptions::embree_robust`]).
+    pub embree_robust: bool,
     pub backends: Vec<BackendRenderTiming>,
     pub ratios: RenderRatios,
 }
@@ -376,7 +396,7 @@ pub fn bench_render(
     let mut sets: Option<RaySets> = None;
     let mut backends = Vec::new();
     for backend in Backend::compiled() {
-        let mut accel = accel::create(backend, opts.threads)?;
+        let mut accel = accel_for(backend, opts)?;
         let (scene, build_ms) = timed(|| RenderScene::build(desc, accel.as_mut()));
         let scene = scene?;
         let query = accel.query()?;
@@ -427,6 +447,7 @@ pub fn bench_render(
         spp: opts.spp,
         runs: opts.runs.max(1),
         threads: opts.threads.unwrap_or_else(rayon::current_num_threads),
+        embree_robust: opts.embree_robust && Backend::Embree.is_compiled(),
         backends,
         ratios,
     })
@@ -439,7 +460,8 @@ mod tests {
     #[test]
     fn every_compiled_backend_is_measured_on_the_same_rays() {
         let desc = crate::scene::default_scene();
-        let opts = RenderBenchOptions { width: 24, height: 16, spp: 1, runs: 1, threads: None };
+        let opts =
+            RenderBenchOptions { width: 24, height: 16, spp: 1, runs: 1, ..RenderBenchOptions::default() };
         let report = bench_render(&desc, &opts).unwrap();
         let measured: Vec<Backend> = report.backends.iter().map(|b| b.backend).collect();
         assert_eq!(measured, Backend::compiled());

@@ -213,6 +213,10 @@ pub struct RenderBenchArgs {
     /// Repetitions of each measurement; the best is reported.
     #[arg(long, value_name = "N", default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
     pub runs: u32,
+    /// Build Embree's scenes in robust mode (RTC_SCENE_FLAG_ROBUST: a watertight triangle
+    /// test and conservative box tests, as the BVH always has), to compare like for like.
+    #[arg(long)]
+    pub embree_robust: bool,
 }
 
 #[derive(Debug, Args)]
@@ -468,6 +472,7 @@ fn render(
         spp: args.spp,
         runs: args.runs,
         threads,
+        embree_robust: args.embree_robust,
     };
     let report = bench::bench_render(&desc, &opts).map_err(|e| CliError::Runtime(e.to_string()))?;
     emit(&bench_json(&report), json, quiet)

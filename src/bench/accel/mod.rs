@@ -139,7 +139,7 @@ fn embree_variants(threads: Option<usize>) -> Vec<Variant> {
     {
         use crate::accel::embree::{BuildQuality, EmbreeBuildParams};
         let at = |name: String, params: EmbreeBuildParams| -> Variant {
-            (Backend::Embree, name, Box::new(move || embree_with(params, threads)))
+            (Backend::Embree, name, Box::new(move || super::embree_with(params, threads)))
         };
         let robust = EmbreeBuildParams { robust: true, ..EmbreeBuildParams::uniform(BuildQuality::Medium) };
         BuildQuality::ALL
@@ -153,16 +153,6 @@ fn embree_variants(threads: Option<usize>) -> Vec<Variant> {
         let _ = threads;
         Vec::new()
     }
-}
-
-#[cfg(feature = "embree")]
-fn embree_with(
-    params: crate::accel::embree::EmbreeBuildParams,
-    threads: Option<usize>,
-) -> Result<Box<dyn Accelerator>, AccelError> {
-    use crate::accel::embree::{Device, EmbreeAccel};
-    let accel = EmbreeAccel::with_device(Device::new(threads)?, params)?;
-    Ok(Box::new(accel))
 }
 
 /// Traces `rays` (closest hit) over rayon; returns ms and a checksum that keeps the work alive.
