@@ -337,6 +337,12 @@ pub(super) fn column_major_3x4(xf: &Affine3A) -> [f32; 12] {
 /// instances' motions are pure translations, 51% turn by less than 1e-4 rad, 10% by 1e-4 to
 /// 1e-3, 4% by 1e-3 to 2e-3, 27% by more: 69% go as matrices at 1e-3, 73% at 2e-3
 /// (docs/performance.md, "Motion blur").
+///
+/// Tried (session 24): the instances that turn further as matrices at more time steps (the
+/// slerp's poses at `1 + ceil(a / LERP_MAX_ANGLE)` times, up to 16, so that no segment turns
+/// by more than this): Embree's multi-segment builder made the atrium's blurred commit 3.2x
+/// slower (20.4-21.5 against 6.6-6.7 ms a frame; blur on / off 2.97-3.06 against 1.53-1.57),
+/// tracing unchanged. Two time steps, quaternions beyond this angle, stay.
 const LERP_MAX_ANGLE: f32 = 2e-3;
 
 /// Whether `motion` goes to Embree as two matrices (lerped) rather than two quaternion
