@@ -246,6 +246,42 @@ fn moving_instance_is_where_its_motion_puts_it_at_every_shutter_time() {
 }
 
 #[test]
+fn far_instance_turning_past_the_fixed_angle_stays_within_the_crosscheck_allowance() {
+    // 1,000 units out, the raised square (points within 3 of its origin) may turn by up to
+    // 2e-3 * sqrt(1000 / 3) = 0.037 rad as lerped matrices: halfway through a 0.03 turn they
+    // put it up to 0.03^2 / 8 * 3 = 3.4e-4 off the slerp, within 8 unit roundoffs of 1,000.
+    let d = device();
+    let proto = raised_square(&d);
+    let far = Vec3::new(1000.0, 0.0, -2.0);
+    let motion = InstanceMotion {
+        open: RigidTransform { rotation: Quat::from_rotation_x(0.1), translation: far },
+        close: RigidTransform {
+            rotation: Quat::from_rotation_x(0.13),
+            translation: far + Vec3::new(0.5, 0.0, -2.0),
+        },
+    };
+    let mut top = scene(&d);
+    top.attach_by_id(InstanceGeometry::new(&d, &proto, &Affine3A::IDENTITY).unwrap(), 0).unwrap();
+    top.instance_mut(0).unwrap().set_motion(&motion).unwrap();
+    top.commit().unwrap();
+    let view = top.view().unwrap();
+    let org = Vec3::new(1000.3, 0.2, 5.0);
+    // The crosscheck's allowance for Embree's transform: 16 unit roundoffs of the ray origin's
+    // and the translation's magnitudes (docs/crosscheck.md), along a ray nearly normal to the
+    // square.
+    let allowance = 16.0 * f32::EPSILON / 2.0 * (org.abs().max_element() + far.abs().max_element());
+    for time in [0.0, 0.25, 0.5, 0.75, 1.0] {
+        let hit = view.intersect1_at(org.to_array(), [0.0, 0.0, -1.0], 0.0, f32::INFINITY, time).unwrap();
+        let want = expected_t(&motion, time, org);
+        assert!(
+            (hit.t - want).abs() <= allowance,
+            "time {time}: t {} against {want} (allowance {allowance})",
+            hit.t
+        );
+    }
+}
+
+#[test]
 fn instance_array_places_each_entry_and_skips_holes() {
     let d = device();
     let proto = raised_square(&d);

@@ -24,8 +24,8 @@ pub type ArrayEntry<T> = (Option<u32>, T);
 pub struct InstanceArrayGeometry {
     pub(crate) raw: sys::RTCGeometry,
     device: Device,
-    /// Keeps the instanced scenes alive while Embree holds them.
-    _prototypes: Vec<Arc<FrozenScene>>,
+    /// The instanced scenes, kept alive while Embree holds them (and read for their radius).
+    prototypes: Vec<Arc<FrozenScene>>,
     /// Two time steps (quaternion decompositions) rather than one (3x4 matrices).
     moving: bool,
 }
@@ -50,10 +50,10 @@ impl InstanceArrayGeometry {
             sys::rtcNewGeometry(device.inner.raw, sys::RTCGeometryType::RTC_GEOMETRY_TYPE_INSTANCE_ARRAY)
         };
         device.check()?;
-        let array = Self { raw, device: device.clone(), _prototypes: prototypes.to_vec(), moving };
+        let array = Self { raw, device: device.clone(), prototypes: prototypes.to_vec(), moving };
         let mut scenes: Vec<sys::RTCScene> = prototypes.iter().map(|p| p.raw()).collect();
         // SAFETY: `raw` is a valid instance array; Embree copies the scene handles (retaining
-        // each) and `_prototypes` keeps them alive too. The time step count is set before any
+        // each) and `prototypes` keeps them alive too. The time step count is set before any
         // transform buffer.
         unsafe {
             sys::rtcSetGeometryInstancedScenes(array.raw, scenes.as_mut_ptr(), scenes.len());
@@ -88,7 +88,9 @@ impl InstanceArrayGeometry {
         if entries.iter().any(|(_, m)| !m.is_finite()) {
             return Err(EmbreeError::NonFiniteTransform);
         }
-        if entries.iter().all(|(_, m)| lerps_as_matrices(m)) {
+        let radius =
+            |p: Option<u32>| p.and_then(|p| self.prototypes.get(p as usize)).map_or(0.0, |s| s.radius());
+        if entries.iter().all(|&(p, ref m)| lerps_as_matrices(m, radius(p))) {
             // Matrices lerp exactly like the translation and are bounded in closed form (see
             // `InstanceGeometry::set_motion`).
             let open: Vec<_> = entries.iter().map(|(_, m)| column_major_3x4(&m.open.to_affine())).collect();

@@ -281,7 +281,10 @@ impl Scene {
     /// Commits and makes the scene immutable, for sharing as an instancing prototype.
     pub fn freeze(mut self) -> Result<Arc<FrozenScene>, EmbreeError> {
         self.commit()?;
-        Ok(Arc::new(FrozenScene { scene: self }))
+        let bounds = self.view().map(|v| v.bounds());
+        // The farthest corner of the bounds (an empty scene's are infinite: no radius).
+        let radius = bounds.map_or(f32::INFINITY, |b| b.min.abs().max(b.max.abs()).length());
+        Ok(Arc::new(FrozenScene { scene: self, radius }))
     }
 }
 
@@ -326,29 +329,46 @@ pub(super) fn column_major_3x4(xf: &Affine3A) -> [f32; 12] {
 
 /// The largest rotation over the shutter (radians) for which a moving instance is given to
 /// Embree as two matrices, which it lerps, rather than two quaternion decompositions, which it
-/// slerps like [`InstanceMotion::at`]. Lerping the matrices of a turn by `a` scales the object
+/// slerps like [`InstanceMotion::at`], for an instance no farther from the world origin than
+/// its points are from its own origin. Lerping the matrices of a turn by `a` scales the object
 /// across the turn's axis by `cos(a/2)` halfway through (the worst time), `1 - a^2/8`, and
 /// turns it to within `a^3/24` of the slerp: at 2e-3 the object's points move by 5e-7 of their
-/// distance from its origin, eight of f32's unit roundoffs, half of what the crosscheck allows
-/// Embree's own f32 transform (16 roundoffs of the ray origin's and the translation's
-/// magnitude, larger than that distance for bodies small next to their distance from the
-/// world origin, as in every scene here). A pure translation (`a = 0`) lerps exactly. On the
-/// atrium at shutter 0.5 (five frames sampled over the fall, 28k motions) 9% of the moving
-/// instances' motions are pure translations, 51% turn by less than 1e-4 rad, 10% by 1e-4 to
-/// 1e-3, 4% by 1e-3 to 2e-3, 27% by more: 69% go as matrices at 1e-3, 73% at 2e-3
-/// (docs/performance.md, "Motion blur").
+/// distance `r` from its origin, eight of f32's unit roundoffs. A pure translation (`a = 0`)
+/// lerps exactly.
+///
+/// An instance farther out may turn further ([`lerps_as_matrices`]): its points may then move
+/// by 5e-7 of its translation's magnitude instead, still eight unit roundoffs of it, half of
+/// what the crosscheck allows Embree's own f32 transform (16 roundoffs of the ray origin's and
+/// the translation's magnitude; docs/crosscheck.md). On the atrium at shutter 0.5 (five frames
+/// sampled over the fall, 28k motions) 9% of the moving instances' motions are pure
+/// translations, 51% turn by less than 1e-4 rad, 10% by 1e-4 to 1e-3, 4% by 1e-3 to 2e-3, 27%
+/// by more (docs/performance.md, "Motion blur").
 ///
 /// Tried (session 24): the instances that turn further as matrices at more time steps (the
 /// slerp's poses at `1 + ceil(a / LERP_MAX_ANGLE)` times, up to 16, so that no segment turns
 /// by more than this): Embree's multi-segment builder made the atrium's blurred commit 3.2x
 /// slower (20.4-21.5 against 6.6-6.7 ms a frame; blur on / off 2.97-3.06 against 1.53-1.57),
-/// tracing unchanged. Two time steps, quaternions beyond this angle, stay.
+/// tracing unchanged. Two time steps, quaternions beyond the angle, stay.
 const LERP_MAX_ANGLE: f32 = 2e-3;
 
-/// Whether `motion` goes to Embree as two matrices (lerped) rather than two quaternion
-/// decompositions (slerped): it turns by at most [`LERP_MAX_ANGLE`].
-pub(super) fn lerps_as_matrices(motion: &InstanceMotion) -> bool {
-    motion.rotation_angle() <= LERP_MAX_ANGLE
+/// Whether `motion` of an instance whose points lie within `radius` of its origin goes to
+/// Embree as two matrices (lerped) rather than two quaternion decompositions (slerped): it
+/// turns by at most [`LERP_MAX_ANGLE`] times `sqrt(max(reach, radius) / radius)`, `reach` the
+/// smaller magnitude (largest coordinate) of its translations at shutter open and close. The
+/// lerp then moves its points by at most 5e-7 `max(reach, radius)`.
+pub(super) fn lerps_as_matrices(motion: &InstanceMotion, radius: f32) -> bool {
+    let angle = motion.rotation_angle();
+    if angle <= LERP_MAX_ANGLE {
+        return true;
+    }
+    if !radius.is_finite() {
+        // Unknown extent (an empty or owned scene): the fixed angle only.
+        return false;
+    }
+    let reach = motion.open.translation.abs().max_element().min(motion.close.translation.abs().max_element());
+    // `a^2 r <= LERP_MAX_ANGLE^2 max(reach, r)`, without a division (a point-sized object,
+    // `r = 0`, lerps at any angle; a NaN radius never).
+    angle * angle * radius <= LERP_MAX_ANGLE * LERP_MAX_ANGLE * reach.max(radius)
 }
 
 /// Embree's decomposition of a rigid transform: unit scale, no skew or shift, the rotation as
@@ -440,9 +460,10 @@ impl InstanceGeometry {
     /// A rotating instance gets quaternion decompositions, which Embree slerps; bounding that
     /// motion costs Embree a root search per box corner and axis at every commit (13 us an
     /// instance for a pure translation, 65 us rotating, under load; `dormant bench
-    /// instances`). An instance that turns by at most [`LERP_MAX_ANGLE`] gets two matrices
-    /// instead, which Embree lerps and bounds in closed form: on the atrium most moving bodies
-    /// barely turn within the shutter (docs/performance.md, "Motion blur").
+    /// instances`). An instance that barely turns for its size and place
+    /// ([`lerps_as_matrices`]) gets two matrices instead, which Embree lerps and bounds in
+    /// closed form: on the atrium most moving bodies barely turn within the shutter
+    /// (docs/performance.md, "Motion blur").
     pub fn set_motion(&mut self, motion: &InstanceMotion) -> Result<(), EmbreeError> {
         if !motion.is_finite() {
             return Err(EmbreeError::NonFiniteTransform);
@@ -453,7 +474,7 @@ impl InstanceGeometry {
         // meanwhile (see `set_transform`).
         unsafe {
             sys::rtcSetGeometryTimeStepCount(self.raw, 2);
-            if lerps_as_matrices(motion) {
+            if lerps_as_matrices(motion, self.child_radius()) {
                 for (step, t) in [&motion.open, &motion.close].into_iter().enumerate() {
                     let m = column_major_3x4(&t.to_affine());
                     let format = sys::RTCFormat::RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR;
@@ -481,6 +502,15 @@ impl InstanceGeometry {
 
     fn child_is_owned(&self) -> bool {
         matches!(self.child, InstanceChild::Owned(_))
+    }
+
+    /// How far the child's points lie from its origin at most ([`FrozenScene`]); infinite for
+    /// an owned scene, which may change.
+    fn child_radius(&self) -> f32 {
+        match &self.child {
+            InstanceChild::Shared(frozen) => frozen.radius(),
+            InstanceChild::Owned(_) => f32::INFINITY,
+        }
     }
 
     /// The owned child scene, for changes; `None` for a shared prototype.
@@ -511,9 +541,16 @@ impl InstanceGeometry {
 /// A committed scene that can no longer change: a prototype shared by instances.
 pub struct FrozenScene {
     scene: Scene,
+    /// An upper bound on the distance of the scene's points from its origin (the farthest
+    /// corner of its bounds): how far a turn moves them ([`lerps_as_matrices`]).
+    radius: f32,
 }
 
 impl FrozenScene {
+    pub(super) fn radius(&self) -> f32 {
+        self.radius
+    }
+
     pub(super) fn raw(&self) -> sys::RTCScene {
         self.scene.raw
     }
@@ -638,5 +675,39 @@ impl<'a> SceneView<'a> {
             min: glam::Vec3::new(b.lower_x, b.lower_y, b.lower_z),
             max: glam::Vec3::new(b.upper_x, b.upper_y, b.upper_z),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::{Quat, Vec3};
+
+    use super::lerps_as_matrices;
+    use crate::geometry::{InstanceMotion, RigidTransform};
+
+    /// A turn by `angle` about x, translated to `at` (at both ends).
+    fn turn(angle: f32, at: Vec3) -> InstanceMotion {
+        let pose = |a: f32| RigidTransform { rotation: Quat::from_rotation_x(a), translation: at };
+        InstanceMotion { open: pose(0.0), close: pose(angle) }
+    }
+
+    #[test]
+    fn the_angle_lerped_grows_with_the_distance_from_the_origin_over_the_radius() {
+        let (origin, out) = (Vec3::ZERO, Vec3::new(0.0, -400.0, 2.0));
+        // Near the origin, or at most a radius out: 2e-3 rad.
+        assert!(lerps_as_matrices(&turn(1.9e-3, origin), 1.0));
+        assert!(!lerps_as_matrices(&turn(2.1e-3, origin), 1.0));
+        assert!(!lerps_as_matrices(&turn(2.1e-3, Vec3::splat(0.9)), 1.0));
+        // 400 radii out: 2e-3 * sqrt(400) = 0.04 rad.
+        assert!(lerps_as_matrices(&turn(0.039, out), 1.0));
+        assert!(!lerps_as_matrices(&turn(0.041, out), 1.0));
+        // The nearer end of the motion counts.
+        let mut moving = turn(0.039, out);
+        moving.close.translation = Vec3::new(0.0, -1.0, 0.0);
+        assert!(!lerps_as_matrices(&moving, 1.0));
+        // Unknown extent: the fixed angle only; a point-sized object: any angle.
+        assert!(!lerps_as_matrices(&turn(0.01, out), f32::INFINITY));
+        assert!(!lerps_as_matrices(&turn(0.01, out), f32::NAN));
+        assert!(lerps_as_matrices(&turn(1.0, out), 0.0));
     }
 }
