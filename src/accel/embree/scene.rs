@@ -9,7 +9,7 @@ use std::marker::PhantomData;
 use std::sync::Arc;
 
 use embree4_sys as sys;
-use glam::Affine3A;
+use glam::{Affine3A, Vec3};
 
 use crate::geometry::{InstanceMotion, RigidTransform, FRAME_TIME};
 
@@ -353,9 +353,9 @@ const LERP_MAX_ANGLE: f32 = 2e-3;
 
 /// Whether `motion` of an instance whose points lie within `radius` of its origin goes to
 /// Embree as two matrices (lerped) rather than two quaternion decompositions (slerped): it
-/// turns by at most [`LERP_MAX_ANGLE`] times `sqrt(max(reach, radius) / radius)`, `reach` the
-/// smaller magnitude (largest coordinate) of its translations at shutter open and close. The
-/// lerp then moves its points by at most 5e-7 `max(reach, radius)`.
+/// turns by at most [`LERP_MAX_ANGLE`] times `sqrt(max(reach, radius) / radius)`, `reach` a
+/// lower bound on its translation's largest coordinate over the shutter. The lerp then moves
+/// its points by at most 5e-7 `max(reach, radius)`.
 pub(super) fn lerps_as_matrices(motion: &InstanceMotion, radius: f32) -> bool {
     let angle = motion.rotation_angle();
     if angle <= LERP_MAX_ANGLE {
@@ -365,7 +365,13 @@ pub(super) fn lerps_as_matrices(motion: &InstanceMotion, radius: f32) -> bool {
         // Unknown extent (an empty or owned scene): the fixed angle only.
         return false;
     }
-    let reach = motion.open.translation.abs().max_element().min(motion.close.translation.abs().max_element());
+    // How far out the instance stays over the shutter, from below: per axis the smallest
+    // magnitude of its translation's coordinate on the way (0 where it changes sign), and the
+    // largest of those (the translation's largest coordinate is never smaller).
+    let (a, b) = (motion.open.translation, motion.close.translation);
+    let (lo, hi) = (a.min(b), a.max(b));
+    let crosses = lo.cmple(Vec3::ZERO) & hi.cmpge(Vec3::ZERO);
+    let reach = Vec3::select(crosses, Vec3::ZERO, lo.abs().min(hi.abs())).max_element();
     // `a^2 r <= LERP_MAX_ANGLE^2 max(reach, r)`, without a division (a point-sized object,
     // `r = 0`, lerps at any angle; a NaN radius never).
     angle * angle * radius <= LERP_MAX_ANGLE * LERP_MAX_ANGLE * reach.max(radius)
@@ -672,8 +678,8 @@ impl<'a> SceneView<'a> {
         // SAFETY: the scene is committed; `b` is a valid output struct.
         unsafe { sys::rtcGetSceneBounds(self.raw, &mut b) };
         crate::geometry::Aabb {
-            min: glam::Vec3::new(b.lower_x, b.lower_y, b.lower_z),
-            max: glam::Vec3::new(b.upper_x, b.upper_y, b.upper_z),
+            min: Vec3::new(b.lower_x, b.lower_y, b.lower_z),
+            max: Vec3::new(b.upper_x, b.upper_y, b.upper_z),
         }
     }
 }
@@ -701,10 +707,14 @@ mod tests {
         // 400 radii out: 2e-3 * sqrt(400) = 0.04 rad.
         assert!(lerps_as_matrices(&turn(0.039, out), 1.0));
         assert!(!lerps_as_matrices(&turn(0.041, out), 1.0));
-        // The nearer end of the motion counts.
+        // The nearer end of the motion counts, and a coordinate that changes sign counts as 0.
         let mut moving = turn(0.039, out);
         moving.close.translation = Vec3::new(0.0, -1.0, 0.0);
         assert!(!lerps_as_matrices(&moving, 1.0));
+        moving.close.translation = Vec3::new(0.0, 400.0, 2.0);
+        assert!(!lerps_as_matrices(&moving, 1.0));
+        moving.close.translation = Vec3::new(0.0, -401.0, 2.0);
+        assert!(lerps_as_matrices(&moving, 1.0));
         // Unknown extent: the fixed angle only; a point-sized object: any angle.
         assert!(!lerps_as_matrices(&turn(0.01, out), f32::INFINITY));
         assert!(!lerps_as_matrices(&turn(0.01, out), f32::NAN));
