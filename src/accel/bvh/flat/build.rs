@@ -1,7 +1,7 @@
 //! Binned SAH construction (Wald 2007), top-down, with the two halves of large ranges built in
 //! parallel by rayon. Primitive boxes are partitioned in place (so passes read memory in
-//! order), and nodes are written into one preallocated array, then copied out depth-first so
-//! siblings are adjacent.
+//! order). Ranges below the parallel threshold build their subtrees into arrays of their own,
+//! depth-first with siblings adjacent; the parallel top is then walked once to place them.
 
 use glam::{Vec3A, Vec4};
 use rayon::prelude::*;
@@ -133,51 +133,58 @@ pub(crate) fn build_with(
     // Exact in any grouping (min and max).
     let rb =
         prims.par_chunks(PAR_CHUNK).map(RangeBounds::of).reduce(|| RangeBounds::EMPTY, RangeBounds::merge);
-    // Nodes are written straight into `slots` (see `build_range`), then copied out in
-    // depth-first order, which drops the holes that leaves leave in their reserved regions.
-    // Filled over rayon: 64 bytes a primitive, written (and faulted in) by one thread took
-    // a serial stretch at the start of every build.
-    let mut slots: Vec<Node> = (0..2 * prims.len() - 1)
-        .into_par_iter()
-        .with_min_len(PAR_CHUNK)
-        .map(|_| Node::interior(Aabb::EMPTY, 0))
-        .collect();
-    let (root, rest) = slots.split_at_mut(1);
-    build_range(&ctx, &mut prims, rb, 0, 0, Slots { out: &mut root[0], rest, base: 1 });
+    let top = build_range(&ctx, &mut prims, rb, 0, 0);
     let order = prims.par_iter().with_min_len(PAR_CHUNK).map(PrimRef::index).collect();
-    (FlatBvh { nodes: compact(&slots) }, order)
+    let mut nodes = Vec::with_capacity(top.node_count());
+    nodes.push(Node::interior(Aabb::EMPTY, 0));
+    top.place(&mut nodes, 0);
+    (FlatBvh { nodes }, order)
 }
 
-/// The tree in `slots` (root at 0) with its nodes in depth-first order, each node's children
-/// pair allocated when the node is visited (left subtree before right).
-fn compact(slots: &[Node]) -> Vec<Node> {
-    let mut nodes = Vec::with_capacity(slots.len());
-    nodes.push(slots[0]);
-    let mut stack = vec![(0u32, 0u32)];
-    while let Some((old, new)) = stack.pop() {
-        let n = slots[old as usize];
-        if n.is_leaf() {
-            continue;
+/// A subtree as [`build_range`] leaves it: below the parallel threshold, its nodes in their
+/// final order (depth-first, each interior node's children pair allocated when the node is
+/// split, left subtree before right) with child indices relative to its root at 0; above it,
+/// the split node's box and its two halves, built at once.
+///
+/// Until session 24 (2026-12) the nodes went into one array of `2n - 1` slots, a disjoint
+/// region per subtree sized for the worst case (leaves of one primitive), and were copied out
+/// depth-first at the end: 8 MB for the monastery's 124,706 triangles, of which its 72,589
+/// nodes used 29%, spread so that every page was touched (13% of a whole scene load's page
+/// faults; docs/performance.md, "Build").
+enum Subtree {
+    Nodes(Vec<Node>),
+    Split(Aabb, Box<(Subtree, Subtree)>),
+}
+
+impl Subtree {
+    fn node_count(&self) -> usize {
+        match self {
+            Subtree::Nodes(nodes) => nodes.len(),
+            Subtree::Split(_, halves) => 1 + halves.0.node_count() + halves.1.node_count(),
         }
-        let first = nodes.len() as u32;
-        nodes.push(slots[n.first as usize]);
-        nodes.push(slots[n.first as usize + 1]);
-        nodes[new as usize].first = first;
-        stack.push((n.first + 1, first + 1));
-        stack.push((n.first, first));
     }
-    nodes
-}
 
-/// Where a subtree over `n` primitives goes: its root node `out`, and `rest`, at least
-/// `2n - 2` slots (starting at index `base`) for its descendants. An interior node puts its
-/// children pair first, then the left child's `2 * left - 2` slots, then the right child's;
-/// leaves leave their slots unused. Disjoint regions let both children be built at once and
-/// keep the layout independent of the thread count.
-struct Slots<'a> {
-    out: &'a mut Node,
-    rest: &'a mut [Node],
-    base: u32,
+    /// Writes this subtree's root at `nodes[at]` and appends its descendants: the whole tree
+    /// comes out depth-first, each node's children pair allocated when the node is visited,
+    /// left subtree before right.
+    fn place(&self, nodes: &mut Vec<Node>, at: usize) {
+        match self {
+            Subtree::Nodes(own) => {
+                // `own[k]` goes to `nodes.len() + k - 1` for k >= 1, and every child index
+                // is >= 1.
+                let offset = (nodes.len() - 1) as u32;
+                nodes[at] = shifted(own[0], offset);
+                nodes.extend(own[1..].iter().map(|&n| shifted(n, offset)));
+            }
+            Subtree::Split(b, halves) => {
+                let first = nodes.len();
+                nodes[at] = Node::interior(*b, first as u32);
+                nodes.extend([Node::interior(Aabb::EMPTY, 0); 2]);
+                halves.0.place(nodes, first);
+                halves.1.place(nodes, first + 1);
+            }
+        }
+    }
 }
 
 /// Binning of one range: centroid bounds (doubled centroids, `min + max`) and the bin mapping.
@@ -215,33 +222,61 @@ impl Binning {
 
 /// Builds the subtree over `prims` (whose bounds are `rb`), which start at `start` in the
 /// final order. The children's bounds come from the partition, so every level reads its
-/// range twice (binning, partition) rather than three times.
-fn build_range(ctx: &Ctx, prims: &mut [PrimRef], rb: RangeBounds, start: u32, depth: u32, at: Slots) {
+/// range twice (binning, partition) rather than three times. Ranges of at least the parallel
+/// threshold build their two halves at once; the tree does not depend on the thread count.
+fn build_range(ctx: &Ctx, prims: &mut [PrimRef], rb: RangeBounds, start: u32, depth: u32) -> Subtree {
     let n = prims.len();
-    debug_assert!(at.rest.len() + 2 >= 2 * n);
+    if n < ctx.p.parallel_threshold {
+        // At most `2n - 1` nodes: the capacity is reserved, its pages touched only as used.
+        let mut nodes = Vec::with_capacity(2 * n - 1);
+        nodes.push(Node::interior(Aabb::EMPTY, 0));
+        build_serial(ctx, prims, rb, start, depth, &mut nodes, 0);
+        return Subtree::Nodes(nodes);
+    }
     let Some((mid, lb, rbb)) = split(ctx, prims, &rb, depth) else {
-        *at.out = Node::leaf(rb.b.aabb(), start, n as u32);
-        return;
+        return Subtree::Nodes(vec![Node::leaf(rb.b.aabb(), start, n as u32)]);
     };
-    let p = &ctx.p;
     debug_assert!(mid > 0 && mid < n);
-    *at.out = Node::interior(rb.b.aabb(), at.base);
-    let (pair, rest) = at.rest.split_at_mut(2);
-    let (lout, rout) = pair.split_at_mut(1);
-    let (lrest, rrest) = rest.split_at_mut(2 * mid - 2);
-    let left = Slots { out: &mut lout[0], rest: lrest, base: at.base + 2 };
-    let right = Slots { out: &mut rout[0], rest: rrest, base: at.base + 2 * mid as u32 };
     let (l, r) = prims.split_at_mut(mid);
     let rstart = start + mid as u32;
-    if n >= p.parallel_threshold {
-        rayon::join(
-            || build_range(ctx, l, lb, start, depth + 1, left),
-            || build_range(ctx, r, rbb, rstart, depth + 1, right),
-        );
-    } else {
-        build_range(ctx, l, lb, start, depth + 1, left);
-        build_range(ctx, r, rbb, rstart, depth + 1, right);
+    let halves = rayon::join(
+        || build_range(ctx, l, lb, start, depth + 1),
+        || build_range(ctx, r, rbb, rstart, depth + 1),
+    );
+    Subtree::Split(rb.b.aabb(), Box::new(halves))
+}
+
+/// `n` with its children `offset` further on (a leaf's range does not move).
+fn shifted(mut n: Node, offset: u32) -> Node {
+    if !n.is_leaf() {
+        n.first += offset;
     }
+    n
+}
+
+/// [`build_range`] below the parallel threshold, into `nodes`: the subtree's root goes to
+/// `nodes[at]`, each interior node's children pair is appended when the node is split, and
+/// the left subtree is built before the right.
+fn build_serial(
+    ctx: &Ctx,
+    prims: &mut [PrimRef],
+    rb: RangeBounds,
+    start: u32,
+    depth: u32,
+    nodes: &mut Vec<Node>,
+    at: usize,
+) {
+    let Some((mid, lb, rbb)) = split(ctx, prims, &rb, depth) else {
+        nodes[at] = Node::leaf(rb.b.aabb(), start, prims.len() as u32);
+        return;
+    };
+    debug_assert!(mid > 0 && mid < prims.len());
+    let first = nodes.len();
+    nodes[at] = Node::interior(rb.b.aabb(), first as u32);
+    nodes.extend([Node::interior(Aabb::EMPTY, 0); 2]);
+    let (l, r) = prims.split_at_mut(mid);
+    build_serial(ctx, l, lb, start, depth + 1, nodes, first);
+    build_serial(ctx, r, rbb, start + mid as u32, depth + 1, nodes, first + 1);
 }
 
 /// Where to split `prims` (whose bounds are `rb`): the split point and both sides' bounds,
