@@ -52,12 +52,14 @@ impl BuildParams {
         leaf_block: 4,
     };
 
-    /// More bins and small leaves: for structures built once and traced a lot. Leaves of up
-    /// to 8 (two packets) with block counting measured no better than 4 (0.92-0.98x main's
-    /// CPU time against 0.93-0.96x, docs/performance.md, "Node step and leaves").
+    /// More bins: for structures built once and traced a lot. Leaves of up to 8 triangles (two
+    /// packets; the SAH counts blocks of four, so a leaf grows past one packet only where that
+    /// pays): since session 24, when they measured builds 8-10% faster than leaves of 4 with
+    /// the same traces (docs/performance.md, "Build"; first measured no better for the trace,
+    /// "Node step and leaves").
     pub const QUALITY: BuildParams = BuildParams {
         bins: 32,
-        max_leaf_size: 4,
+        max_leaf_size: 8,
         traversal_cost: 1.2,
         intersection_cost: 1.0,
         parallel_threshold: 2048,
