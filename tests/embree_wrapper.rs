@@ -217,6 +217,29 @@ fn expected_t(motion: &InstanceMotion, time: f32, org: Vec3) -> f32 {
     n.dot(p - org) / n.dot(Vec3::NEG_Z)
 }
 
+/// The raised square instanced alone with `motion`, traced straight down from `org` at five
+/// shutter times: each time with the hit distance Embree reports and the one
+/// [`expected_t`] gives.
+fn traced_over_the_shutter(
+    d: &Device,
+    proto: &Arc<dormant::accel::embree::FrozenScene>,
+    motion: &InstanceMotion,
+    org: Vec3,
+) -> Vec<(f32, f32, f32)> {
+    let mut top = scene(d);
+    top.attach_by_id(InstanceGeometry::new(d, proto, &Affine3A::IDENTITY).unwrap(), 0).unwrap();
+    top.instance_mut(0).unwrap().set_motion(motion).unwrap();
+    top.commit().unwrap();
+    let view = top.view().unwrap();
+    [0.0, 0.25, 0.5, 0.75, 1.0]
+        .into_iter()
+        .map(|time| {
+            let hit = view.intersect1_at(org.to_array(), [0.0, 0.0, -1.0], 0.0, f32::INFINITY, time).unwrap();
+            (time, hit.t, expected_t(motion, time, org))
+        })
+        .collect()
+}
+
 #[test]
 fn moving_instance_is_where_its_motion_puts_it_at_every_shutter_time() {
     let d = device();
@@ -231,16 +254,8 @@ fn moving_instance_is_where_its_motion_puts_it_at_every_shutter_time() {
             translation: Vec3::new(0.5, 0.0, -4.0),
         };
         let motion = InstanceMotion { open, close };
-        let mut top = scene(&d);
-        top.attach_by_id(InstanceGeometry::new(&d, &proto, &Affine3A::IDENTITY).unwrap(), 0).unwrap();
-        top.instance_mut(0).unwrap().set_motion(&motion).unwrap();
-        top.commit().unwrap();
-        let view = top.view().unwrap();
-        let org = Vec3::new(0.3, 0.2, 5.0);
-        for time in [0.0, 0.25, 0.5, 0.75, 1.0] {
-            let hit = view.intersect1_at(org.to_array(), [0.0, 0.0, -1.0], 0.0, f32::INFINITY, time).unwrap();
-            let want = expected_t(&motion, time, org);
-            assert!((hit.t - want).abs() < 1e-4, "angle {angle}, time {time}: t {} against {want}", hit.t);
+        for (time, t, want) in traced_over_the_shutter(&d, &proto, &motion, Vec3::new(0.3, 0.2, 5.0)) {
+            assert!((t - want).abs() < 1e-4, "angle {angle}, time {time}: t {t} against {want}");
         }
     }
 }
@@ -260,24 +275,13 @@ fn far_instance_turning_past_the_fixed_angle_stays_within_the_crosscheck_allowan
             translation: far + Vec3::new(0.5, 0.0, -2.0),
         },
     };
-    let mut top = scene(&d);
-    top.attach_by_id(InstanceGeometry::new(&d, &proto, &Affine3A::IDENTITY).unwrap(), 0).unwrap();
-    top.instance_mut(0).unwrap().set_motion(&motion).unwrap();
-    top.commit().unwrap();
-    let view = top.view().unwrap();
     let org = Vec3::new(1000.3, 0.2, 5.0);
     // The crosscheck's allowance for Embree's transform: 16 unit roundoffs of the ray origin's
     // and the translation's magnitudes (docs/crosscheck.md), along a ray nearly normal to the
     // square.
     let allowance = 16.0 * f32::EPSILON / 2.0 * (org.abs().max_element() + far.abs().max_element());
-    for time in [0.0, 0.25, 0.5, 0.75, 1.0] {
-        let hit = view.intersect1_at(org.to_array(), [0.0, 0.0, -1.0], 0.0, f32::INFINITY, time).unwrap();
-        let want = expected_t(&motion, time, org);
-        assert!(
-            (hit.t - want).abs() <= allowance,
-            "time {time}: t {} against {want} (allowance {allowance})",
-            hit.t
-        );
+    for (time, t, want) in traced_over_the_shutter(&d, &proto, &motion, org) {
+        assert!((t - want).abs() <= allowance, "time {time}: t {t} against {want} (allowance {allowance})");
     }
 }
 
