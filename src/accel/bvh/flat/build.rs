@@ -7,6 +7,7 @@ use glam::{Vec3A, Vec4};
 use rayon::prelude::*;
 
 use super::{FlatBvh, Node, PAR_CHUNK};
+use crate::accel::bvh::simd::truncate3;
 use crate::accel::bvh::BuildParams;
 use crate::geometry::Aabb;
 
@@ -191,6 +192,8 @@ impl Subtree {
 struct Binning {
     cmin: Vec3A,
     scale: Vec3A,
+    /// The last bin's index, as a float: scaled centroids are clamped to it before truncation.
+    last: Vec3A,
     bins: usize,
 }
 
@@ -203,20 +206,35 @@ impl Binning {
             Vec3A::splat(nb as f32 * (1.0 - 1e-6)) / ext,
             Vec3A::ZERO,
         );
-        Binning { cmin: cb.min, scale, bins: nb }
+        Binning { cmin: cb.min, scale, last: Vec3A::splat((nb - 1) as f32), bins: nb }
+    }
+
+    /// The centroid of `b` in bin units: bin `k` covers `[k, k + 1)`, and every value is at
+    /// least 0 (`cmin` is the least centroid, `scale` at least 0).
+    #[inline(always)]
+    fn scaled(&self, b: &Box3) -> Vec3A {
+        (b.center2() - self.cmin) * self.scale
     }
 
     /// `bins_of(b)[axis]`, computed for that axis only.
     #[inline(always)]
     fn bin_on(&self, b: &Box3, axis: usize) -> usize {
-        (((b.center2()[axis] - self.cmin[axis]) * self.scale[axis]) as usize).min(self.bins - 1)
+        (self.scaled(b)[axis] as usize).min(self.bins - 1)
     }
 
+    /// Partitions `prims` into those whose bin on `axis` is below `bin` (`1..bins`) and the
+    /// rest ([`partition`]). The test is `scaled < bin` rather than `bin_on < bin`: the same,
+    /// since `trunc(x) < bin` exactly when `x < bin` for `x >= 0`, without the conversion.
+    fn partition(&self, prims: &mut [PrimRef], axis: usize, bin: usize) -> (usize, RangeBounds, RangeBounds) {
+        debug_assert!(bin >= 1 && bin < self.bins);
+        let at = bin as f32;
+        partition(prims, |b| self.scaled(b)[axis] < at)
+    }
+
+    /// The bin of `b` on each axis: clamped to the last bin, then truncated.
     #[inline(always)]
     fn bins_of(&self, b: &Box3) -> [usize; 3] {
-        let k = (b.center2() - self.cmin) * self.scale;
-        let last = self.bins - 1;
-        [(k.x as usize).min(last), (k.y as usize).min(last), (k.z as usize).min(last)]
+        truncate3(self.scaled(b).min(self.last))
     }
 }
 
@@ -297,7 +315,7 @@ fn split(
     }
     match best_split(ctx, prims, &rb.b, &rb.cb) {
         Some((cost, _, _, _)) if n <= p.max_leaf_size && p.leaf_cost(n) <= cost => None,
-        Some((_, axis, bin, binning)) => Some(partition(prims, |b| binning.bin_on(b, axis) < bin)),
+        Some((_, axis, bin, binning)) => Some(binning.partition(prims, axis, bin)),
         None if n <= p.max_leaf_size => None,
         None => Some(split_at(prims, n / 2)),
     }
@@ -313,14 +331,16 @@ fn split_at(prims: &[PrimRef], mid: usize) -> (usize, RangeBounds, RangeBounds) 
 /// every centroid coincides. All three axes are binned in one pass over the range.
 fn best_split(ctx: &Ctx, prims: &[PrimRef], b: &Box3, cb: &Box3) -> Option<(f32, usize, usize, Binning)> {
     // Small ranges need few bins: clearing and sweeping them would cost more than binning.
-    // Embree grows its bins as 4 + n / 20 (up to 32); 4 + n / 2 about keeps the monastery's
-    // SAH (`sah_cost` 30.498 against 30.483 with the former `min(2n)`; counting primitives
-    // one by one, before block counting: 36.490 against 36.487) for 10-12% less build CPU.
-    // Tried (before block counting): one bin per primitive (`min(prims.len())`): 5-8% less
-    // build CPU under load, but SAH 36.510; 4 + n / 4: 17% less CPU, SAH 36.499; Embree's
-    // 4 + n / 20: SAH 36.663; an exact sweep over the sorted centroids of ranges up to 16
-    // (every binned split is one of those): SAH 36.46, but slower than binning them.
-    let nb = ctx.p.bins.min(4 + prims.len() / 2);
+    // Embree's rule, 4 + n / 20 (up to `bins`): since session 25, when it measured the
+    // monastery's tree 0.72-0.78x the build time of the former 4 + n / 2, with `sah_cost`
+    // 29.581 against 29.500 (+0.3%) and the same trace in `bench accel` (docs/performance.md,
+    // "Build"). Measured then (one thread, in-process medians, SAH): n / 2 45.6 ms, 29.500;
+    // n / 4 44.4, 29.457; n / 8 42.5, 29.543; n / 12 38-41, 29.578; n / 20 33-35, 29.581;
+    // n / 32 33-34, 29.879; n / 64 38-40, 30.114; 4 bins everywhere 34-35, 32.93. (Before
+    // block counting and the build's second pass, n / 20 had measured slower than n / 2.)
+    // Also tried: an exact sweep over the sorted centroids of ranges up to 16 (every binned
+    // split is one of those): lower SAH, but slower than binning them.
+    let nb = ctx.p.bins.min(4 + prims.len() / 20);
     if prims.len() == 2 {
         return best_split_pair(ctx, prims, b, cb);
     }
@@ -472,6 +492,9 @@ fn median_split(prims: &mut [PrimRef], cb: &Box3) -> usize {
 /// (every element is tested once, and counted on its side then). Branch-free (Lomuto: each
 /// element swaps with the first right one, which moves on when it went left): which side an
 /// element goes is close to random, and a branch on it mispredicted about half the time.
+/// Tried (session 25): both sides' bounds kept in registers and updated through selects
+/// instead of indexing the pair by the side: 7-12% slower builds (twice the min/max work for
+/// store forwarding that was not the bottleneck).
 fn partition(prims: &mut [PrimRef], left: impl Fn(&Box3) -> bool) -> (usize, RangeBounds, RangeBounds) {
     let mut sides = [RangeBounds::EMPTY; 2];
     let mut k = 0;

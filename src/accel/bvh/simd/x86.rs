@@ -1,10 +1,25 @@
 //! The x86-64 kernels: AVX2 (8 boxes in one `__m256`) and AVX-512 (the same with the compare
 //! going straight to a mask register). Their tokens are made only by [`super::dispatch!`] once
-//! the path is known to run here; every intrinsic below relies on that.
+//! the path is known to run here; every intrinsic below relies on that, except
+//! [`truncate3`]'s, which are SSE2 (part of x86-64).
 
 use std::arch::x86_64::*;
 
+use glam::Vec3A;
+
 use super::{BoxRay8, Boxes8, Kernel, FAR_SCALE};
+
+/// [`super::truncate3`]: one SSE2 conversion, then the three lanes moved out.
+#[inline(always)]
+pub(crate) fn truncate3(x: Vec3A) -> [usize; 3] {
+    // SAFETY: SSE2 is part of the x86-64 baseline, so every CPU this runs on has these
+    // instructions; they only convert and move register lanes.
+    unsafe {
+        let k = _mm_cvttps_epi32(x.into());
+        let (y, z) = (_mm_shuffle_epi32::<0b01_01_01_01>(k), _mm_shuffle_epi32::<0b10_10_10_10>(k));
+        [k, y, z].map(|v| _mm_cvtsi128_si32(v) as u32 as usize)
+    }
+}
 
 /// Token of the AVX2 + FMA path.
 #[derive(Clone, Copy, Debug)]
