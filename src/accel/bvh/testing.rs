@@ -22,7 +22,8 @@ pub fn watertight_hit4(ray: &Ray, tris: &[[Vec3; 3]]) -> Option<(usize, f32, f32
     assert!(!tris.is_empty() && tris.len() <= 4);
     let tris: Vec<Tri> =
         tris.iter().enumerate().map(|(i, p)| Tri { p: *p, geom: 0, prim: i as u32 }).collect();
-    let q = Tri4::pack(&tris, 0);
+    let idx: Vec<u32> = (0..tris.len() as u32).collect();
+    let q = Tri4::pack(&tris, &idx);
     RayTri::new(ray).intersect4(&q, ray.t_max).map(|(lane, h)| (q.idx[lane] as usize, h.t, h.u, h.v))
 }
 

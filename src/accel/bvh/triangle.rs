@@ -141,16 +141,17 @@ pub(crate) struct Tri4 {
 }
 
 impl Tri4 {
-    /// Packs `tris` (1 to 4 of them, indices `first..`) into one packet.
-    pub fn pack(tris: &[Tri], first: u32) -> Self {
-        debug_assert!(!tris.is_empty() && tris.len() <= 4);
-        let lane = |i: usize| i.min(tris.len() - 1);
+    /// Packs the triangles `tris[idx[..]]` (1 to 4 of them) into one packet.
+    pub fn pack(tris: &[Tri], idx: &[u32]) -> Self {
+        debug_assert!(!idx.is_empty() && idx.len() <= 4);
+        let idx: [u32; 4] = std::array::from_fn(|i| idx[i.min(idx.len() - 1)]);
+        let lanes: [&Tri; 4] = idx.map(|i| &tris[i as usize]);
         let p = std::array::from_fn(|v| {
-            std::array::from_fn(|a| Vec4::from_array(std::array::from_fn(|i| tris[lane(i)].p[v][a])))
+            std::array::from_fn(|a| Vec4::from_array(std::array::from_fn(|i| lanes[i].p[v][a])))
         });
-        let normals: [Vec3; 4] = std::array::from_fn(|i| tris[lane(i)].normal());
+        let normals: [Vec3; 4] = lanes.map(Tri::normal);
         let n = std::array::from_fn(|a| Vec4::from_array(std::array::from_fn(|i| normals[i][a])));
-        Self { p, n, idx: std::array::from_fn(|i| first + lane(i) as u32) }
+        Self { p, n, idx }
     }
 
     /// Lane `i`'s vertices.

@@ -327,7 +327,7 @@ mod tests {
         let mut t_max = ray.t_max;
         let mut best = None;
         traverse(&m.bvh.nodes, root, &b, &mut t_max, |first, count, t_max| {
-            for tri in &m.tris[first as usize..(first + count) as usize] {
+            for tri in m.leaf_tris(first, count) {
                 if let Some(h) = rt.intersect(&tri.p, *t_max) {
                     *t_max = h.t;
                     best = Some(h.t);

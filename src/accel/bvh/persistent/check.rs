@@ -38,7 +38,7 @@ impl StaticBvh {
                         while let Some(k) = inner.pop() {
                             let n = &nodes[k as usize];
                             if n.is_leaf() {
-                                for t in &b.mesh.tris[n.first as usize..(n.first + n.count) as usize] {
+                                for t in b.mesh.leaf_tris(n.first, n.count) {
                                     if s.meshes.get(&StaticId(t.geom)).is_none_or(|e| e.block != b.id) {
                                         return Err(format!(
                                             "stale triangle of mesh {} in block {}",

@@ -343,8 +343,7 @@ impl StaticBvh {
         let meshes = &self.state.meshes;
         block
             .mesh
-            .tris
-            .iter()
+            .tris_in_leaf_order()
             .filter(move |t| meshes.get(&StaticId(t.geom)).is_some_and(|e| e.block == block.id))
             .copied()
     }
