@@ -331,7 +331,7 @@ fn run_workload(
     let accel_options = AccelBenchOptions {
         width: size.accel_width,
         height: size.accel_height,
-        trace_runs: 2,
+        runs: 2,
         threads: options.threads,
         ..AccelBenchOptions::default()
     };

@@ -195,7 +195,7 @@ pub struct AccelArgs {
     /// Primary rays: one per pixel of an image of this size.
     #[arg(long, value_name = "WxH", default_value = "1280x720")]
     pub size: super::render::Size,
-    /// Repetitions of each trace measurement; the best is reported.
+    /// Repetitions of each build and trace measurement; the best is reported.
     #[arg(long, value_name = "N", default_value_t = 3)]
     pub runs: u32,
 }
@@ -451,7 +451,7 @@ fn accel(args: &AccelArgs, threads: Option<usize>, quiet: bool, json: &JsonOutpu
     let opts = AccelBenchOptions {
         width: args.size.width,
         height: args.size.height,
-        trace_runs: args.runs,
+        runs: args.runs,
         threads,
         ..AccelBenchOptions::default()
     };
