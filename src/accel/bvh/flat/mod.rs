@@ -2,8 +2,8 @@
 //! modified. Every structure of this backend is made of these: prototype meshes, the top level
 //! over instances, and the immutable blocks of the persistent static tree.
 //!
-//! A node is a leaf when `count > 0` (primitives `first..first + count` of the owner's
-//! reordered primitive array) and interior otherwise, with its children at `first` and
+//! A node is a leaf when `count > 0` (positions `first..first + count` of the owner's leaf
+//! order: the primitive order the build returns) and interior otherwise, with its children at `first` and
 //! `first + 1` so both sit in one cache line pair. Rays traverse the [`Wide`] copy (8 children
 //! per node, tested together by the SIMD path's kernel); the binary tree stays the structure of
 //! record.

@@ -5,7 +5,7 @@
 //!
 //! The tree has two kinds of parts:
 //! - **blocks**: immutable flattened BVHs ([`MeshBvh`]: 32-byte binary nodes, their 8-wide
-//!   traversal copy, triangles in leaf order) behind an `Arc`. The first build makes one block of everything (the *base*); each
+//!   traversal copy, triangles and their leaf order) behind an `Arc`. The first build makes one block of everything (the *base*); each
 //!   mesh inserted later gets its own small block, built by binned SAH.
 //! - **overlay**: immutable binary nodes behind `Arc`s on top of the blocks. A link is either
 //!   an overlay node or a reference to a node *inside* a block.
