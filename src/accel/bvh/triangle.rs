@@ -36,17 +36,24 @@ pub(crate) const MAX_COORD: f32 = 1e30;
 /// Copies the usable triangles of `mesh` ([`TriangleMesh::triangle_is_valid`]: finite, non-zero
 /// area; and every coordinate below [`MAX_COORD`] in magnitude); returns them and how many were
 /// skipped. The mesh must have passed [`TriangleMesh::validate`].
+///
+/// Usable triangles are counted first: when all are (the common case), they are copied
+/// straight into place. A filtered parallel collect gathers per-thread pieces and then copies
+/// them into one vector on the calling thread.
 pub(crate) fn extract(mesh: &TriangleMesh, geom: u32) -> (Vec<Tri>, usize) {
-    let tris: Vec<Tri> = (0..mesh.triangle_count())
-        .into_par_iter()
-        .with_min_len(super::flat::PAR_CHUNK)
-        .filter(|&i| {
-            mesh.triangle_is_valid(i) && mesh.triangle(i).iter().all(|p| p.abs().max_element() < MAX_COORD)
-        })
-        .map(|i| Tri { p: mesh.triangle(i), geom, prim: i as u32 })
-        .collect();
-    let skipped = mesh.triangle_count() - tris.len();
-    (tris, skipped)
+    let n = mesh.triangle_count();
+    let usable = |i: usize| {
+        mesh.triangle_is_valid(i) && mesh.triangle(i).iter().all(|p| p.abs().max_element() < MAX_COORD)
+    };
+    let tri = |i: usize| Tri { p: mesh.triangle(i), geom, prim: i as u32 };
+    let chunk = super::flat::PAR_CHUNK;
+    let kept = (0..n).into_par_iter().with_min_len(chunk).filter(|&i| usable(i)).count();
+    let tris: Vec<Tri> = if kept == n {
+        (0..n).into_par_iter().with_min_len(chunk).map(tri).collect()
+    } else {
+        (0..n).into_par_iter().with_min_len(chunk).filter(|&i| usable(i)).map(tri).collect()
+    };
+    (tris, n - kept)
 }
 
 /// A triangle hit in the space the triangle was tested in.
