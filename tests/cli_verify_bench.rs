@@ -249,6 +249,16 @@ fn missing_asset_is_an_input_error() {
 }
 
 #[test]
+fn bench_runs_of_zero_are_a_usage_error_naming_the_flag() {
+    for bench in ["accel", "render"] {
+        let output = dormant().args(["bench", bench, "--runs", "0"]).output().unwrap();
+        assert_eq!(output.status.code(), Some(2), "{bench}");
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(stderr.contains("--runs"), "{bench}: {stderr}");
+    }
+}
+
+#[test]
 fn bench_integration_takes_the_old_range_spelling_and_names_the_flag_in_errors() {
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/tiny.toml");
     for flag in ["--frames", "--range"] {

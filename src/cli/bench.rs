@@ -196,7 +196,7 @@ pub struct AccelArgs {
     #[arg(long, value_name = "WxH", default_value = "1280x720")]
     pub size: super::render::Size,
     /// Repetitions of each build and trace measurement; the best is reported.
-    #[arg(long, value_name = "N", default_value_t = 3)]
+    #[arg(long, value_name = "N", default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
     pub runs: u32,
 }
 
