@@ -25,7 +25,7 @@
 
 use std::sync::Arc;
 
-use glam::{Affine3A, Mat3A, Vec3, Vec3A};
+use glam::{Affine3A, Mat3, Vec3};
 use rayon::prelude::*;
 
 use crate::accel::bvh::flat::{
@@ -41,23 +41,33 @@ use crate::geometry::{Aabb, InstanceMotion, Ray};
 /// Instances per rayon task when a level's bounds and items are made in parallel.
 const PAR_CHUNK: usize = 1024;
 
-/// One instance as traversal needs it.
+/// One instance as traversal needs it: what a ray reads to enter it, in one cache line.
+///
+/// Measured 2026-12-02 (session 26): this record was 144 bytes (the inverse as an
+/// `Affine3A`, the normal matrix and the motion inline), three cache lines per instance a ray
+/// entered (docs/performance.md, "Session 26: counted instead of timed").
 #[derive(Clone, Debug)]
+#[repr(C, align(64))]
 pub(crate) struct TopItem {
+    /// Linear part of the inverse transform: object directions are `linear * dir`. Its
+    /// transpose takes object normals to world (the inverse transpose of the forward part).
+    linear: Mat3,
+    /// The forward transform's translation: object origins are `linear * (o - translation)`.
+    translation: Vec3,
     pub blas: Arc<MeshBvh>,
-    pub inv: Affine3A,
-    /// The forward transform's translation: object origins are `inv.matrix3 * (o - translation)`.
-    pub translation: Vec3A,
-    /// Inverse transpose of the linear part: object normals to world.
-    pub normal: Mat3A,
     pub id: u32,
     /// A ghost of the resting level: its instance woke, moved or was removed since the level
     /// was built, and rays skip it (`crate::accel::RestingSchedule`).
     pub ghost: bool,
-    /// Motion over the shutter (motion blur; top level only): rays see the instance where it
-    /// is at their time instead of at `inv`'s transform ([`object_ray`]).
-    pub motion: Option<Box<InstanceMotion>>,
+    /// Whether the instance moves over the shutter ([`Top::motion`]; top level only).
+    moving: bool,
 }
+
+const _: () = assert!(std::mem::size_of::<TopItem>() == 64);
+
+/// An instance hit: the triangle hit in object space, the instance and, if it moves, its
+/// motion.
+type InstanceHit<'a> = (PrimHit, &'a TopItem, Option<&'a InstanceMotion>);
 
 /// One instance for [`build_top`]: id, prototype BVH, transform, its inverse and its motion.
 pub(crate) type TopInstance = (u32, Arc<MeshBvh>, Affine3A, Affine3A, Option<InstanceMotion>);
@@ -69,6 +79,9 @@ pub(crate) struct Top {
     pub bvh: FlatBvh,
     pub wide: Wide,
     pub items: Vec<TopItem>,
+    /// Per item, its motion over the shutter (motion blur): rays see a moving instance where
+    /// it is at their time instead of at its transform ([`object_ray`]).
+    motion: Vec<Option<Box<InstanceMotion>>>,
     /// Position in `items` of each instance id (`u32::MAX`: not in this level).
     leaf_of: Vec<u32>,
 }
@@ -86,28 +99,29 @@ pub(crate) fn build_top(instances: &[TopInstance], params: BuildParams) -> Top {
         })
         .collect();
     let (bvh, order) = build(&bounds, params);
-    let items = order
+    let (items, motion) = order
         .par_iter()
         .with_min_len(PAR_CHUNK)
         .map(|&i| {
             let (id, blas, xf, inv, motion) = &instances[i as usize];
-            TopItem {
+            let item = TopItem {
+                linear: inv.matrix3.into(),
+                translation: xf.translation.into(),
                 blas: blas.clone(),
-                inv: *inv,
-                translation: xf.translation,
-                normal: inv.matrix3.transpose(),
                 id: *id,
                 ghost: false,
-                motion: motion.map(Box::new),
-            }
+                moving: motion.is_some(),
+            };
+            (item, motion.map(Box::new))
         })
-        .collect::<Vec<_>>();
+        .unzip();
     let wide = Wide::new(&bvh, |_, n| (n.first, n.count));
+    let items: Vec<TopItem> = items;
     let mut leaf_of = vec![u32::MAX; items.iter().map(|x| x.id as usize + 1).max().unwrap_or(0)];
     for (i, item) in items.iter().enumerate() {
         leaf_of[item.id as usize] = i as u32;
     }
-    Top { bvh, wide, items, leaf_of }
+    Top { bvh, wide, items, motion, leaf_of }
 }
 
 impl Top {
@@ -122,6 +136,18 @@ impl Top {
         }
     }
 
+    /// The items of leaf range `first..first + count` that rays enter (not ghosts), each with
+    /// its motion if it moves.
+    #[inline(always)]
+    fn live(&self, first: u32, count: u32) -> impl Iterator<Item = (&TopItem, Option<&InstanceMotion>)> {
+        let range = first as usize..(first + count) as usize;
+        self.items[range.clone()]
+            .iter()
+            .zip(range)
+            .filter(|(item, _)| !item.ghost)
+            .map(|(item, i)| (item, if item.moving { self.motion[i].as_deref() } else { None }))
+    }
+
     /// Closest instance hit with `t <= *t_max`; lowers `*t_max` and overwrites `hit` when it
     /// finds one.
     #[inline(always)]
@@ -131,15 +157,11 @@ impl Top {
         ray: &Ray,
         bray: &BoxRay,
         t_max: &mut f32,
-        hit: &mut Option<(PrimHit, &'a TopItem)>,
+        hit: &mut Option<InstanceHit<'a>>,
     ) {
-        let items = &self.items;
         self.wide.traverse(k, &self.bvh, 0, bray, t_max, &mut |first, count, t_max| {
-            for item in &items[first as usize..(first + count) as usize] {
-                if item.ghost {
-                    continue;
-                }
-                let oray = object_ray(ray, item);
+            for (item, motion) in self.live(first, count) {
+                let oray = object_ray(ray, item, motion);
                 let mut best = None;
                 // Tried (2026-12-02): the `RayTri` made at the first leaf reached, so that an
                 // instance entered without reaching a leaf skips its setup: single-thread AO
@@ -147,7 +169,7 @@ impl Top {
                 if item.blas.intersect_from(k, 0, &BoxRay::new(&oray), &RayTri::new(&oray), t_max, &mut best)
                 {
                     if let Some(h) = best {
-                        *hit = Some((h, item));
+                        *hit = Some((h, item, motion));
                     }
                 }
             }
@@ -158,11 +180,10 @@ impl Top {
     /// Whether any instance is hit within `[t_min, t_max]`.
     #[inline(always)]
     fn occluded_with<K: Kernel>(&self, k: K, ray: &Ray, bray: &BoxRay, t_max: f32) -> bool {
-        let items = &self.items;
         let mut t_max = t_max;
         self.wide.traverse(k, &self.bvh, 0, bray, &mut t_max, &mut |first, count, t_max| {
-            items[first as usize..(first + count) as usize].iter().filter(|item| !item.ghost).any(|item| {
-                let oray = object_ray(ray, item);
+            self.live(first, count).any(|(item, motion)| {
+                let oray = object_ray(ray, item, motion);
                 item.blas.occluded_from(k, 0, &BoxRay::new(&oray), &RayTri::new(&oray), *t_max)
             })
         })
@@ -181,9 +202,8 @@ impl Top {
         packet: &RayPacket,
         lanes: Lanes,
         t_max: &mut [f32; PACKET],
-        hit: &mut [Option<(PrimHit, &'a TopItem)>; PACKET],
+        hit: &mut [Option<InstanceHit<'a>>; PACKET],
     ) {
-        let items = &self.items;
         // Object-space lanes are rewritten per instance; the others are never read.
         let mut object = *packet;
         self.wide.traverse_packet(
@@ -194,18 +214,15 @@ impl Top {
             lanes,
             t_max,
             &mut |first, count, lanes, t_max| {
-                for item in &items[first as usize..(first + count) as usize] {
-                    if item.ghost {
-                        continue;
-                    }
+                for (item, motion) in self.live(first, count) {
                     for i in each_bit(lanes) {
-                        object.set(i, &object_ray(&rays[i], item));
+                        object.set(i, &object_ray(&rays[i], item, motion));
                     }
                     let mut best = [None; PACKET];
                     let found = item.blas.intersect_packet_from(k, 0, &object, lanes, t_max, &mut best);
                     for i in each_bit(found) {
                         if let Some(h) = best[i] {
-                            hit[i] = Some((h, item));
+                            hit[i] = Some((h, item, motion));
                         }
                     }
                 }
@@ -224,7 +241,6 @@ impl Top {
         lanes: Lanes,
         t_max: &[f32; PACKET],
     ) -> Lanes {
-        let items = &self.items;
         let mut object = *packet;
         let mut t_max = *t_max;
         self.wide.traverse_packet(
@@ -236,13 +252,12 @@ impl Top {
             &mut t_max,
             &mut |first, count, lanes, t_max| {
                 let mut left = lanes;
-                for item in items[first as usize..(first + count) as usize].iter().filter(|item| !item.ghost)
-                {
+                for (item, motion) in self.live(first, count) {
                     if left == 0 {
                         break;
                     }
                     for i in each_bit(left) {
-                        object.set(i, &object_ray(&rays[i], item));
+                        object.set(i, &object_ray(&rays[i], item, motion));
                     }
                     left &= !item.blas.occluded_packet_from(k, 0, &object, left, t_max);
                 }
@@ -260,16 +275,13 @@ impl Top {
 /// A moving instance is placed at the ray's time first (its rotation is inverted by the
 /// conjugate), as Embree interpolates a motion instance per ray.
 #[inline]
-fn object_ray(ray: &Ray, item: &TopItem) -> Ray {
+fn object_ray(ray: &Ray, item: &TopItem, motion: Option<&InstanceMotion>) -> Ray {
     // Origin and direction as values, one `Ray` built from them: with a `Ray` returned from
     // each branch the two were merged in memory, stored in 8- and 4-byte pieces and read back
     // in 16 (a failed store forward on every instance entered, 2% of a render's samples).
-    let (origin, dir) = match &item.motion {
+    let (origin, dir) = match motion {
         Some(motion) => moving_object_frame(ray, motion),
-        None => (
-            (item.inv.matrix3 * (Vec3A::from(ray.origin) - item.translation)).into(),
-            item.inv.transform_vector3(ray.dir),
-        ),
+        None => (item.linear * (ray.origin - item.translation), item.linear * ray.dir),
     };
     Ray { origin, dir, ..*ray }
 }
@@ -283,12 +295,13 @@ fn moving_object_frame(ray: &Ray, motion: &InstanceMotion) -> (Vec3, Vec3) {
 }
 
 impl TopItem {
-    /// Object normal `n` in world space for a hit by a ray at shutter time `time`.
+    /// Object normal `n` in world space for a hit by a ray at shutter time `time` (`motion`:
+    /// the instance's, if it moves).
     #[inline]
-    fn world_normal(&self, n: Vec3, time: f32) -> Vec3 {
-        match &self.motion {
+    fn world_normal(&self, n: Vec3, time: f32, motion: Option<&InstanceMotion>) -> Vec3 {
+        match motion {
             Some(m) => m.at(time).rotation * n,
-            None => Vec3::from(self.normal * Vec3A::from(n)),
+            None => self.linear.transpose() * n,
         }
     }
 }
@@ -310,13 +323,13 @@ fn unit(n: Vec3) -> Vec3 {
 /// The hit a ray reports from its closest static and instance hits (an instance hit, if any,
 /// is the nearer: instances record only hits nearer than the static one).
 #[inline(always)]
-fn scene_hit(ray: &Ray, static_hit: Option<PrimHit>, inst_hit: Option<(PrimHit, &TopItem)>) -> Option<Hit> {
-    if let Some((h, item)) = inst_hit {
+fn scene_hit(ray: &Ray, static_hit: Option<PrimHit>, inst_hit: Option<InstanceHit>) -> Option<Hit> {
+    if let Some((h, item, motion)) = inst_hit {
         return Some(Hit {
             t: h.t,
             u: h.u,
             v: h.v,
-            ng: unit(item.world_normal(h.tri.normal(), ray.time)),
+            ng: unit(item.world_normal(h.tri.normal(), ray.time, motion)),
             object: HitObject::Instance(InstanceId(item.id)),
             prim: h.tri.prim,
         });
@@ -400,7 +413,7 @@ impl BvhScene {
         let mut static_hit: Option<PrimHit> = None;
         self.statics.intersect_with(k, &bray, &tray, &mut t_max, &mut static_hit);
         // Instances record only hits up to the nearest so far: one found is nearer.
-        let mut inst_hit: Option<(PrimHit, &TopItem)> = None;
+        let mut inst_hit: Option<InstanceHit> = None;
         // One call site for both levels, so that its leaf closure is inlined into the SIMD
         // path's entry (see `flat::Wide::traverse`).
         for level in [&self.resting, &self.top] {
