@@ -304,11 +304,14 @@ impl Node8 {
     /// with the node and slot.
     #[inline(always)]
     pub(super) fn code(&self, at: u32, slot: usize) -> u32 {
-        if self.count[slot] > 0 {
-            LEAF | (at << 3) | slot as u32
-        } else {
-            self.child[slot]
-        }
+        // A select, not a branch: whether a child is a leaf follows no pattern a predictor
+        // learns (cachegrind's branch simulation: 11% of a render's mispredictions were this
+        // branch).
+        std::hint::select_unpredictable(
+            self.count[slot] > 0,
+            LEAF | (at << 3) | slot as u32,
+            self.child[slot],
+        )
     }
 }
 
