@@ -3,10 +3,10 @@
 //! over instances, and the immutable blocks of the persistent static tree.
 //!
 //! A node is a leaf when `count > 0` (positions `first..first + count` of the owner's leaf
-//! order: the primitive order the build returns) and interior otherwise, with its children at `first` and
-//! `first + 1` so both sit in one cache line pair. Rays traverse the [`Wide`] copy (8 children
-//! per node, tested together by the SIMD path's kernel); the binary tree stays the structure of
-//! record.
+//! order: the primitive order the build returns) and interior otherwise, with its children at
+//! `first` and `first + 1` so both sit in one cache line pair. Rays traverse the [`Wide`] copy
+//! (8 children per node, tested together by the SIMD path's kernel); the binary tree stays the
+//! structure of record.
 
 mod build;
 mod mesh;

@@ -304,13 +304,9 @@ mod tests {
 
     #[test]
     fn truncate3_matches_the_casts() {
-        let mut s = 7u32;
+        let mut rng = crate::rng::SplitMix64::new(7);
         for _ in 0..10_000 {
-            let mut f = || {
-                s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-                (s >> 8) as f32 / (1u32 << 24) as f32 * 64.0
-            };
-            let x = Vec3A::new(f(), f(), f());
+            let x = Vec3A::new(rng.unit(), rng.unit(), rng.unit()) * 64.0;
             assert_eq!(truncate3(x), [x.x as usize, x.y as usize, x.z as usize], "{x}");
         }
         for v in [0.0, 0.999_999_9, 1.0, 31.999_998, 32.0, 63.0] {

@@ -99,7 +99,7 @@ pub(crate) fn build_top(instances: &[TopInstance], params: BuildParams) -> Top {
         })
         .collect();
     let (bvh, order) = build(&bounds, params);
-    let (items, motion) = order
+    let (items, motion): (Vec<TopItem>, Vec<_>) = order
         .par_iter()
         .with_min_len(PAR_CHUNK)
         .map(|&i| {
@@ -116,7 +116,6 @@ pub(crate) fn build_top(instances: &[TopInstance], params: BuildParams) -> Top {
         })
         .unzip();
     let wide = Wide::new(&bvh, |_, n| (n.first, n.count));
-    let items: Vec<TopItem> = items;
     let mut leaf_of = vec![u32::MAX; items.iter().map(|x| x.id as usize + 1).max().unwrap_or(0)];
     for (i, item) in items.iter().enumerate() {
         leaf_of[item.id as usize] = i as u32;
