@@ -91,17 +91,19 @@ impl MeshBvh {
     ) -> bool {
         let mut found = false;
         self.wide.traverse(k, &self.bvh, root, bray, t_max, &mut |first, count, t_max| {
-            for q in &self.packets[first as usize..(first + count) as usize] {
-                if let Some((lane, h)) = tray.intersect4(q, *t_max) {
-                    // Strictly closer only: ties keep the first triangle found.
-                    if best.is_none_or(|b| h.t < b.t) {
-                        *t_max = h.t;
-                        let tri = self.tris[q.idx[lane] as usize];
-                        *best = Some(PrimHit { t: h.t, u: h.u, v: h.v, tri });
-                        found = true;
+            k.leaf(|| {
+                for q in &self.packets[first as usize..(first + count) as usize] {
+                    if let Some((lane, h)) = tray.intersect4(q, *t_max) {
+                        // Strictly closer only: ties keep the first triangle found.
+                        if best.is_none_or(|b| h.t < b.t) {
+                            *t_max = h.t;
+                            let tri = self.tris[q.idx[lane] as usize];
+                            *best = Some(PrimHit { t: h.t, u: h.u, v: h.v, tri });
+                            found = true;
+                        }
                     }
                 }
-            }
+            });
             false
         });
         found
@@ -119,9 +121,11 @@ impl MeshBvh {
     ) -> bool {
         let mut t_max = t_max;
         self.wide.traverse(k, &self.bvh, root, bray, &mut t_max, &mut |first, count, t_max| {
-            self.packets[first as usize..(first + count) as usize]
-                .iter()
-                .any(|q| tray.intersect4(q, *t_max).is_some())
+            k.leaf(|| {
+                self.packets[first as usize..(first + count) as usize]
+                    .iter()
+                    .any(|q| tray.intersect4(q, *t_max).is_some())
+            })
         })
     }
 }
@@ -149,19 +153,21 @@ impl MeshBvh {
             lanes,
             t_max,
             &mut |first, count, lanes, t_max| {
-                for q in &self.packets[first as usize..(first + count) as usize] {
-                    for i in each_bit(lanes) {
-                        if let Some((lane, h)) = packet.tray[i].intersect4(q, t_max[i]) {
-                            // Strictly closer only, as for one ray.
-                            if best[i].is_none_or(|b| h.t < b.t) {
-                                t_max[i] = h.t;
-                                let tri = self.tris[q.idx[lane] as usize];
-                                best[i] = Some(PrimHit { t: h.t, u: h.u, v: h.v, tri });
-                                found |= 1 << i;
+                k.leaf(|| {
+                    for q in &self.packets[first as usize..(first + count) as usize] {
+                        for i in each_bit(lanes) {
+                            if let Some((lane, h)) = packet.tray[i].intersect4(q, t_max[i]) {
+                                // Strictly closer only, as for one ray.
+                                if best[i].is_none_or(|b| h.t < b.t) {
+                                    t_max[i] = h.t;
+                                    let tri = self.tris[q.idx[lane] as usize];
+                                    best[i] = Some(PrimHit { t: h.t, u: h.u, v: h.v, tri });
+                                    found |= 1 << i;
+                                }
                             }
                         }
                     }
-                }
+                });
                 0
             },
         );
@@ -189,13 +195,15 @@ impl MeshBvh {
             &mut t_max,
             &mut |first, count, lanes, t_max| {
                 let packets = &self.packets[first as usize..(first + count) as usize];
-                let mut blocked = 0;
-                for i in each_bit(lanes) {
-                    if packets.iter().any(|q| packet.tray[i].intersect4(q, t_max[i]).is_some()) {
-                        blocked |= 1 << i;
+                k.leaf(|| {
+                    let mut blocked = 0;
+                    for i in each_bit(lanes) {
+                        if packets.iter().any(|q| packet.tray[i].intersect4(q, t_max[i]).is_some()) {
+                            blocked |= 1 << i;
+                        }
                     }
-                }
-                blocked
+                    blocked
+                })
             },
         )
     }

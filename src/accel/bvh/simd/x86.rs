@@ -126,6 +126,12 @@ impl Kernel for Avx2 {
         // SAFETY: as in `box8`.
         unsafe { box8_or_inf_avx2(r, b, t_max) }
     }
+
+    #[inline(always)]
+    fn leaf<R>(self, f: impl FnOnce() -> R) -> R {
+        // SAFETY: as in `box8`.
+        unsafe { run_avx2(f) }
+    }
 }
 
 impl Kernel for Avx512 {
@@ -147,6 +153,13 @@ impl Kernel for Avx512 {
     fn box8_or_inf(self, r: &RayM256, b: &Boxes8, t_max: f32) -> (u32, [f32; 8]) {
         // SAFETY: this CPU runs AVX2 and FMA (a subset of this token's features).
         unsafe { box8_or_inf_avx2(r, b, t_max) }
+    }
+
+    /// Compiled for AVX2: the leaf tests are 4-wide, and AVX-512 adds nothing to them.
+    #[inline(always)]
+    fn leaf<R>(self, f: impl FnOnce() -> R) -> R {
+        // SAFETY: as in `box8_or_inf`.
+        unsafe { run_avx2(f) }
     }
 }
 
@@ -177,4 +190,11 @@ unsafe fn box8_or_inf_avx2(r: &RayM256, b: &Boxes8, t_max: f32) -> (u32, [f32; 8
     let hit = _mm256_cmp_ps::<_CMP_LE_OQ>(near, far);
     let near = _mm256_blendv_ps(_mm256_set1_ps(f32::INFINITY), near, hit);
     (_mm256_movemask_ps(hit) as u32, to_array(near))
+}
+
+/// Runs `f` (inlined: a closure called once) compiled for AVX2 and FMA.
+#[target_feature(enable = "avx,avx2,fma")]
+#[inline]
+unsafe fn run_avx2<R>(f: impl FnOnce() -> R) -> R {
+    f()
 }
