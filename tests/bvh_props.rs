@@ -269,8 +269,14 @@ proptest! {
             // Two triangles sharing an edge, with the ray aimed at the edge's midpoint.
             tris[1] = [tris[0][1], tris[0][0], tris[1][2]];
         }
-        let aim = if shared { (tris[0][0] + tris[0][1]) * 0.5 } else { snap(target) };
-        let (origin, aim) = if on_grid && !shared { (snap(origin), tris[0][0]) } else { (origin, aim) };
+        let aim = if shared {
+            (tris[0][0] + tris[0][1]) * 0.5
+        } else if on_grid {
+            tris[0][0]
+        } else {
+            target
+        };
+        let origin = snap(origin);
         prop_assume!(aim != origin);
         let mut ray = Ray::new(origin, aim - origin);
         ray.t_max = t_max;

@@ -73,8 +73,9 @@ impl MeshBvh {
     /// `best` when it finds one. Returns whether it found one.
     ///
     /// The leaf closures here and in [`Self::occluded_from`] stay out of line (a mesh is
-    /// traversed from two places in one query, the static tree's blocks and the instances)
-    /// and are compiled without the query's SIMD features (legacy SSE; `perf annotate`). Tried
+    /// traversed from two places in one query, the static tree's blocks and the instances),
+    /// so their tests run inside [`Kernel::leaf`], which compiles them for the path (without
+    /// it they were legacy SSE, the x86-64 baseline). Tried
     /// 2026-12-02: leaf tests as types with `#[inline(always)]` visits, inlined into the
     /// AVX2 entry: single-thread AO renders of the monastery with 8,000 ducks took the same
     /// CPU time (7.00-7.03 s against 7.00-7.10 s, three runs each), and the same types for the
