@@ -6,7 +6,7 @@
 use rayon::prelude::*;
 
 use super::packet::{each_bit, Lanes, RayPacket, PACKET};
-use super::{build_with, BoxRay, FlatBvh, Node, Wide, PAR_CHUNK};
+use super::{build_with, BoxRay, FlatBvh, Node, Start, Wide, PAR_CHUNK};
 use crate::accel::bvh::simd::Kernel;
 use crate::accel::bvh::triangle::{RayTri, Tri, Tri4};
 use crate::accel::bvh::BuildParams;
@@ -79,12 +79,18 @@ impl MeshBvh {
     /// 2026-12-02: leaf tests as types with `#[inline(always)]` visits, inlined into the
     /// AVX2 entry: single-thread AO renders of the monastery with 8,000 ducks took the same
     /// CPU time (7.00-7.03 s against 7.00-7.10 s, three runs each), and the same types for the
-    /// packet queries were slower (4x2 camera packets 5.5-6.9 against 8.2 Mrays/s).
+    /// packet queries were slower (4x2 camera packets 5.5-6.9 against 8.2 Mrays/s). Counted
+    /// (session 28, cachegrind, monastery with 8,000 ducks): the leaf closures inlined into the
+    /// entry (`#[inline(always)]` on them), 0.7% more instructions than the calls they save
+    /// (the ray's box constants are reloaded from the stack either way, and `Iter::any` of the
+    /// any-hit leaf then stayed out of line as baseline SSE); the whole traversal inside
+    /// `Kernel::leaf` instead (one out-of-line traversal per mesh query, leaves inlined into
+    /// it), 0.3% more.
     #[inline(always)]
     pub fn intersect_from<K: Kernel>(
         &self,
         k: K,
-        root: u32,
+        root: Start,
         bray: &BoxRay,
         tray: &RayTri,
         t_max: &mut f32,
@@ -115,7 +121,7 @@ impl MeshBvh {
     pub fn occluded_from<K: Kernel>(
         &self,
         k: K,
-        root: u32,
+        root: Start,
         bray: &BoxRay,
         tray: &RayTri,
         t_max: f32,
@@ -139,7 +145,7 @@ impl MeshBvh {
     pub fn intersect_packet_from<K: Kernel>(
         &self,
         k: K,
-        root: u32,
+        root: Start,
         packet: &RayPacket,
         lanes: Lanes,
         t_max: &mut [f32; PACKET],
@@ -181,7 +187,7 @@ impl MeshBvh {
     pub fn occluded_packet_from<K: Kernel>(
         &self,
         k: K,
-        root: u32,
+        root: Start,
         packet: &RayPacket,
         lanes: Lanes,
         t_max: &[f32; PACKET],

@@ -15,7 +15,7 @@ use glam::Vec4;
 
 use super::stack::TraversalStack;
 use super::wide::{LEAF, WIDE_STACK, WIDTH};
-use super::{BoxRay, FlatBvh, Node, Wide};
+use super::{BoxRay, FlatBvh, Node, Start, Wide};
 use crate::accel::bvh::simd::{BoxRay8, Kernel};
 use crate::accel::bvh::triangle::RayTri;
 use crate::geometry::Ray;
@@ -90,8 +90,8 @@ fn transpose8x8(mut x: u64) -> u64 {
 type PacketStack = TraversalStack<(u32, f32, Lanes), WIDE_STACK>;
 
 impl Wide {
-    /// [`Wide::traverse`] for the `lanes` of a packet: visits the leaves of the subtree of
-    /// binary node `root` that any of them may hit, nearer first. `leaf` gets each leaf's item
+    /// [`Wide::traverse`] for the `lanes` of a packet: visits the leaves of the subtree `root`
+    /// that any of them may hit, nearer first. `leaf` gets each leaf's item
     /// range, the lanes that entered it and every lane's `t_max` (which it lowers on hits),
     /// and returns the lanes it finished (any-hit; closest-hit returns none). Returns the
     /// lanes finished in all.
@@ -103,7 +103,7 @@ impl Wide {
         &self,
         k: K,
         bvh: &FlatBvh,
-        root: u32,
+        root: Start,
         packet: &RayPacket,
         lanes: Lanes,
         t_max: &mut [f32; PACKET],
@@ -124,7 +124,9 @@ impl Wide {
             }
             (entered != 0).then_some((t, entered))
         };
-        self.enter(bvh, root, enter, |code, (t, entered)| stack.push((code, t, entered)));
+        // A root entered by the caller is entered by all of `lanes`, at any distance.
+        let entered = (f32::NEG_INFINITY, lanes);
+        self.enter(bvh, root, entered, enter, |code, (t, entered)| stack.push((code, t, entered)));
         self.traverse8_packet(k, &mut stack, packet, lanes, t_max, leaf)
     }
 

@@ -5,7 +5,7 @@ use std::sync::Arc;
 
 use super::{Block, Link, StaticSnapshot};
 use crate::accel::bvh::flat::{
-    interval_is_valid, BoxRay, FlatBvh, Lanes, Node, PrimHit, RayPacket, Wide, PACKET,
+    interval_is_valid, BoxRay, FlatBvh, Lanes, Node, PrimHit, RayPacket, Start, Wide, PACKET,
 };
 use crate::accel::bvh::simd::{dispatch, Kernel};
 use crate::accel::bvh::triangle::RayTri;
@@ -24,7 +24,7 @@ impl StaticSnapshot {
         best: &mut Option<PrimHit>,
     ) {
         self.walk(k, bray, t_max, |b, i, t_max| {
-            b.mesh.intersect_from(k, i, bray, tray, t_max, best);
+            b.mesh.intersect_from(k, Start::Entered(i), bray, tray, t_max, best);
             false
         });
     }
@@ -33,7 +33,9 @@ impl StaticSnapshot {
     #[inline(always)]
     pub(crate) fn occluded_with<K: Kernel>(&self, k: K, bray: &BoxRay, tray: &RayTri, t_max: f32) -> bool {
         let mut t_max = t_max;
-        self.walk(k, bray, &mut t_max, |b, i, t_max| b.mesh.occluded_from(k, i, bray, tray, *t_max))
+        self.walk(k, bray, &mut t_max, |b, i, t_max| {
+            b.mesh.occluded_from(k, Start::Entered(i), bray, tray, *t_max)
+        })
     }
 
     /// Visits the block subtrees the ray may hit, nearer first; `f` returns `true` to stop.
@@ -48,7 +50,7 @@ impl StaticSnapshot {
         }
         // `f` is called from one place only, so that it is inlined (see `flat::Wide::traverse`);
         // without an overlay the view is one leaf, and this tests its box first.
-        v.wide.traverse(k, &v.bvh, 0, bray, t_max, &mut |first, count, t_max| {
+        v.wide.traverse(k, &v.bvh, Start::Test(0), bray, t_max, &mut |first, count, t_max| {
             v.refs[first as usize..(first + count) as usize].iter().any(|(b, i)| f(b, *i, t_max))
         })
     }
@@ -67,7 +69,7 @@ impl StaticSnapshot {
         best: &mut [Option<PrimHit>; PACKET],
     ) {
         self.walk_packet(k, packet, lanes, t_max, |b, i, lanes, t_max| {
-            b.mesh.intersect_packet_from(k, i, packet, lanes, t_max, best);
+            b.mesh.intersect_packet_from(k, Start::Entered(i), packet, lanes, t_max, best);
             0
         });
     }
@@ -83,7 +85,7 @@ impl StaticSnapshot {
     ) -> Lanes {
         let mut t_max = *t_max;
         self.walk_packet(k, packet, lanes, &mut t_max, |b, i, lanes, t_max| {
-            b.mesh.occluded_packet_from(k, i, packet, lanes, t_max)
+            b.mesh.occluded_packet_from(k, Start::Entered(i), packet, lanes, t_max)
         })
     }
 
@@ -105,16 +107,24 @@ impl StaticSnapshot {
         if v.bvh.is_empty() {
             return 0;
         }
-        v.wide.traverse_packet(k, &v.bvh, 0, packet, lanes, t_max, &mut |first, count, lanes, t_max| {
-            let mut left = lanes;
-            for (b, i) in &v.refs[first as usize..(first + count) as usize] {
-                if left == 0 {
-                    break;
+        v.wide.traverse_packet(
+            k,
+            &v.bvh,
+            Start::Test(0),
+            packet,
+            lanes,
+            t_max,
+            &mut |first, count, lanes, t_max| {
+                let mut left = lanes;
+                for (b, i) in &v.refs[first as usize..(first + count) as usize] {
+                    if left == 0 {
+                        break;
+                    }
+                    left &= !f(b, *i, left, t_max);
                 }
-                left &= !f(b, *i, left, t_max);
-            }
-            lanes & !left
-        })
+                lanes & !left
+            },
+        )
     }
 }
 
