@@ -265,6 +265,25 @@ impl Wide {
         }
     }
 
+    /// The node loop of [`Self::traverse`], from its first entry `first`: each node's hit
+    /// children sorted farthest first, all but the nearest pushed, the nearest taken next.
+    ///
+    /// Tried and not kept (docs/performance.md, "Node step and leaves"): fast paths for one
+    /// hit (no sort, no push) and two (one compare) with three or more pushed and sorted on
+    /// the stack, together with the leaf children's stack codes stored in the node (no
+    /// branch on `count`): 1.05x the CPU time on a cache-resident scene, no gain on the
+    /// monastery; any-hit queries visiting children in slot order (no sort, as Embree's
+    /// `occluded`): 1.03x and 0.99-1.0x. Prefetching the four cache lines of each pushed
+    /// interior child (2026-12-02, `bench render` on the monastery, BVH over Embree in one
+    /// process, two runs each): bounce 0.585-0.589 against 0.572-0.578, camera 0.685-0.696
+    /// against 0.695-0.718: noise. The one-hit fast path alone, counted (session 27,
+    /// cachegrind, 320x180 path-traced frames): 1.6% fewer trace instructions on the
+    /// monastery with 8,000 ducks, 0.4% on the default scene, with 0.7% / 15% more
+    /// simulated mispredictions: not kept. Each hit child inserted into place on the stack
+    /// (Embree's way; no buffer copied there): 0.1% fewer instructions, 11% more branches,
+    /// 5% more mispredictions. Pushing the farther children with one bounds check and one
+    /// length update (session 28, same count): a slice copy 2.1% more trace instructions, a
+    /// fixed copy of all eight entries 13% more (the pairs are copied field by field).
     #[inline(always)]
     fn traverse8<K: Kernel, F>(
         &self,
@@ -291,26 +310,7 @@ impl Wide {
                 let mut mask = mask & n.used;
                 if mask != 0 {
                     // Hit children sorted farthest first: all but the last are pushed, the
-                    // last (nearest) is taken next. Tried and not kept (docs/performance.md,
-                    // "Node step and leaves"): fast paths for one hit (no sort, no push) and
-                    // two (one compare) with three or more pushed and sorted on the stack,
-                    // together with the leaf children's stack codes stored in the node (no
-                    // branch on `count`): 1.05x the CPU time on a cache-resident scene, no
-                    // gain on the monastery; any-hit queries visiting children in slot order
-                    // (no sort, as Embree's `occluded`): 1.03x and 0.99-1.0x. Prefetching the
-                    // four cache lines of each pushed interior child (2026-12-02, `bench
-                    // render` on the monastery, BVH over Embree in one process, two runs
-                    // each): bounce 0.585-0.589 against 0.572-0.578, camera 0.685-0.696
-                    // against 0.695-0.718: noise. The one-hit fast path alone, counted
-                    // (session 27, cachegrind, 320x180 path-traced frames): 1.6% fewer trace
-                    // instructions on the monastery with 8,000 ducks, 0.4% on the default scene,
-                    // with 0.7% / 15% more simulated mispredictions: not kept. Each hit child
-                    // inserted into place on the stack (Embree's way; no buffer copied there):
-                    // 0.1% fewer instructions, 11% more branches, 5% more mispredictions.
-                    // Pushing the farther children with one bounds check and one length
-                    // update (session 28, same count): a slice copy 2.1% more trace
-                    // instructions, a fixed copy of all eight entries 13% more (the pairs
-                    // are copied field by field).
+                    // last (nearest) is taken next (the variants tried: above).
                     let mut m = 0;
                     while mask != 0 {
                         let slot = mask.trailing_zeros() as usize;
