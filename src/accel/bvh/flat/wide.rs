@@ -41,8 +41,18 @@ pub(crate) enum Start {
     Test(u32),
     /// The caller has entered the node's box already: the static tree's overlay leaf that
     /// names a block subtree has that subtree's box, and testing it again cost a scalar box
-    /// test per block entered (cachegrind, session 28: see `enter`).
+    /// test per block entered (cachegrind: docs/performance.md, session 28).
     Entered(u32),
+}
+
+impl Start {
+    /// The binary node the traversal starts at.
+    #[inline(always)]
+    pub fn node(self) -> u32 {
+        match self {
+            Start::Test(n) | Start::Entered(n) => n,
+        }
+    }
 }
 
 /// Eight children's boxes in structure-of-arrays layout, plus what each child is.
@@ -214,10 +224,7 @@ impl Wide {
         mut test: impl FnMut(&Node) -> Option<T>,
         mut push: impl FnMut(u32, T),
     ) {
-        let (node, tested) = match root {
-            Start::Test(n) => (n, true),
-            Start::Entered(n) => (n, false),
-        };
+        let node = root.node();
         // The common case first (a tree's root, an instance's prototype, a block subtree):
         // `root` has a wide node of its own, and the pending list is neither zeroed nor walked
         // (cachegrind, session 27: zeroing it was 8.8M instructions of a render of the
@@ -226,7 +233,10 @@ impl Wide {
             return;
         };
         let n = &bvh.nodes[node as usize];
-        let root_t = if tested { test(n) } else { Some(entered) };
+        let root_t = match root {
+            Start::Test(_) => test(n),
+            Start::Entered(_) => Some(entered),
+        };
         let Some(root_t) = root_t else {
             return;
         };

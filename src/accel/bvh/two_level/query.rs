@@ -168,8 +168,8 @@ impl Top {
                 // renders of the monastery with 8,000 ducks 7.12-7.15 s against 7.02-7.14 s.
                 // Counted (session 28, cachegrind, the same scene at 320x180, a `OnceCell` made
                 // at the first leaf): 0.45% fewer program instructions, 4% more simulated
-                // mispredictions, and the leaf tests moved into the entries (/work/meas/s28/
-                // lazy-raytri.diff): not kept.
+                // mispredictions, and the leaf tests moved into the entries: not kept (the
+                // code: /work/meas/s28/lazy-raytri.diff).
                 if item.blas.intersect_from(
                     k,
                     Start::Test(0),
