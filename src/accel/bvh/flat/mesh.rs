@@ -127,7 +127,7 @@ impl MeshBvh {
         t_max: f32,
     ) -> bool {
         let mut t_max = t_max;
-        self.wide.traverse(k, &self.bvh, root, bray, &mut t_max, &mut |first, count, t_max| {
+        self.wide.traverse_any_hit(k, &self.bvh, root, bray, &mut t_max, &mut |first, count, t_max| {
             k.leaf(|| {
                 self.packets[first as usize..(first + count) as usize]
                     .iter()

@@ -185,6 +185,48 @@ impl Wide {
     where
         F: FnMut(u32, u32, &mut f32) -> bool,
     {
+        self.traverse_ordered::<K, F, true>(k, bvh, root, ray, t_max, leaf)
+    }
+
+    /// [`Self::traverse`] for any-hit queries (`leaf` stops at the first hit): each node's hit
+    /// children are visited in slot order, not sorted by distance, as Embree's `occluded`
+    /// does. Counted (session 29, cachegrind, 320x180 frames of the monastery with 8,000
+    /// ducks): 4.2% fewer program instructions path-traced (trace -7.5%), 3.0% fewer trace
+    /// instructions in AO, fewer simulated mispredictions, images byte-identical; timed,
+    /// single-thread path-traced renders 5.34 s against 5.57 s (median of four, alternating),
+    /// AO and a cache-resident scene within noise. Timed alone in 2026-12-02, before the
+    /// kernel and stack changes since, it was neutral to 3% slower.
+    #[inline(always)]
+    pub fn traverse_any_hit<K: Kernel, F>(
+        &self,
+        k: K,
+        bvh: &FlatBvh,
+        root: Start,
+        ray: &BoxRay,
+        t_max: &mut f32,
+        leaf: &mut F,
+    ) -> bool
+    where
+        F: FnMut(u32, u32, &mut f32) -> bool,
+    {
+        self.traverse_ordered::<K, F, false>(k, bvh, root, ray, t_max, leaf)
+    }
+
+    /// [`Self::traverse`] (`NEAREST_FIRST`: closest-hit queries) or [`Self::traverse_any_hit`]
+    /// as the caller's own parameter (the static tree's walk serves both).
+    #[inline(always)]
+    pub fn traverse_ordered<K: Kernel, F, const NEAREST_FIRST: bool>(
+        &self,
+        k: K,
+        bvh: &FlatBvh,
+        root: Start,
+        ray: &BoxRay,
+        t_max: &mut f32,
+        leaf: &mut F,
+    ) -> bool
+    where
+        F: FnMut(u32, u32, &mut f32) -> bool,
+    {
         let mut stack = TraversalStack::<(u32, f32), WIDE_STACK>::new();
         // The last entry found is visited first, straight from here: a root with a wide node
         // of its own (most traversals) never goes through the stack.
@@ -207,7 +249,7 @@ impl Wide {
         let Some((first, _)) = first else {
             return false;
         };
-        self.traverse8(k, &mut stack, first, ray, t_max, leaf)
+        self.traverse8::<K, F, NEAREST_FIRST>(k, &mut stack, first, ray, t_max, leaf)
     }
 
     /// Where a traversal of the subtree `root` starts. Binary nodes folded into a wide node
@@ -275,27 +317,28 @@ impl Wide {
         }
     }
 
-    /// The node loop of [`Self::traverse`], from its first entry `first`: each node's hit
-    /// children sorted farthest first, all but the nearest pushed, the nearest taken next.
+    /// The node loop of [`Self::traverse_ordered`], from its first entry `first`: each node's
+    /// hit children sorted farthest first, all but the nearest pushed, the nearest taken next
+    /// (`NEAREST_FIRST`), or the first in slot order taken and the others pushed.
     ///
-    /// Tried and not kept (docs/performance.md, "Node step and leaves"): fast paths for one
-    /// hit (no sort, no push) and two (one compare) with three or more pushed and sorted on
-    /// the stack, together with the leaf children's stack codes stored in the node (no
-    /// branch on `count`): 1.05x the CPU time on a cache-resident scene, no gain on the
-    /// monastery; any-hit queries visiting children in slot order (no sort, as Embree's
-    /// `occluded`): 1.03x and 0.99-1.0x. Prefetching the four cache lines of each pushed
-    /// interior child (2026-12-02, `bench render` on the monastery, BVH over Embree in one
-    /// process, two runs each): bounce 0.585-0.589 against 0.572-0.578, camera 0.685-0.696
-    /// against 0.695-0.718: noise. The one-hit fast path alone, counted (session 27,
-    /// cachegrind, 320x180 path-traced frames): 1.6% fewer trace instructions on the
-    /// monastery with 8,000 ducks, 0.4% on the default scene, with 0.7% / 15% more
-    /// simulated mispredictions: not kept. Each hit child inserted into place on the stack
-    /// (Embree's way; no buffer copied there): 0.1% fewer instructions, 11% more branches,
-    /// 5% more mispredictions. Pushing the farther children with one bounds check and one
-    /// length update (session 28, same count): a slice copy 2.1% more trace instructions, a
-    /// fixed copy of all eight entries 13% more (the pairs are copied field by field).
+    /// Tried and not kept (docs/performance.md, "Node step and leaves"): fast paths for one hit
+    /// (no sort, no push) and two (one compare) with three or more pushed and sorted on the
+    /// stack, together with the leaf children's stack codes stored in the node (no branch on
+    /// `count`): 1.05x the CPU time on a cache-resident scene, no gain on the monastery;
+    /// any-hit queries visiting children in slot order: 1.03x and 0.99-1.0x then, kept in
+    /// session 29 when counted ([`Self::traverse_any_hit`]). Prefetching the four cache lines
+    /// of each pushed interior child (2026-12-02, `bench render` on the monastery, BVH over
+    /// Embree in one process, two runs each): bounce 0.585-0.589 against 0.572-0.578, camera
+    /// 0.685-0.696 against 0.695-0.718: noise. The one-hit fast path alone, counted (session
+    /// 27, cachegrind, 320x180 path-traced frames): 1.6% fewer trace instructions on the
+    /// monastery with 8,000 ducks, 0.4% on the default scene, with 0.7% / 15% more simulated
+    /// mispredictions: not kept. Each hit child inserted into place on the stack (Embree's way;
+    /// no buffer copied there): 0.1% fewer instructions, 11% more branches, 5% more
+    /// mispredictions. Pushing the farther children with one bounds check and one length update
+    /// (session 28, same count): a slice copy 2.1% more trace instructions, a fixed copy of all
+    /// eight entries 13% more (the pairs are copied field by field).
     #[inline(always)]
-    fn traverse8<K: Kernel, F>(
+    fn traverse8<K: Kernel, F, const NEAREST_FIRST: bool>(
         &self,
         k: K,
         // By reference: moving the 7 KiB stack would copy it.
@@ -318,6 +361,19 @@ impl Wide {
                 let n = &self.nodes[cur as usize];
                 let (mask, near) = k.box8(&kr, &n.boxes, *t_max);
                 let mut mask = mask & n.used;
+                if mask != 0 && !NEAREST_FIRST {
+                    // Any-hit: the first hit child next, the others pushed as found.
+                    let slot = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    let next = n.code(cur, slot);
+                    while mask != 0 {
+                        let slot = mask.trailing_zeros() as usize;
+                        mask &= mask - 1;
+                        stack.push((n.code(cur, slot), near[slot]));
+                    }
+                    cur = next;
+                    continue;
+                }
                 if mask != 0 {
                     // Hit children sorted farthest first: all but the last are pushed, the
                     // last (nearest) is taken next (the variants tried: above).

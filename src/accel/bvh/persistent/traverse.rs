@@ -23,7 +23,7 @@ impl StaticSnapshot {
         t_max: &mut f32,
         best: &mut Option<PrimHit>,
     ) {
-        self.walk(k, bray, t_max, |b, i, t_max| {
+        self.walk::<K, _, true>(k, bray, t_max, |b, i, t_max| {
             b.mesh.intersect_from(k, Start::Entered(i), bray, tray, t_max, best);
             false
         });
@@ -33,14 +33,21 @@ impl StaticSnapshot {
     #[inline(always)]
     pub(crate) fn occluded_with<K: Kernel>(&self, k: K, bray: &BoxRay, tray: &RayTri, t_max: f32) -> bool {
         let mut t_max = t_max;
-        self.walk(k, bray, &mut t_max, |b, i, t_max| {
+        self.walk::<K, _, false>(k, bray, &mut t_max, |b, i, t_max| {
             b.mesh.occluded_from(k, Start::Entered(i), bray, tray, *t_max)
         })
     }
 
-    /// Visits the block subtrees the ray may hit, nearer first; `f` returns `true` to stop.
+    /// Visits the block subtrees the ray may hit (nearer first when `NEAREST_FIRST`, else in
+    /// the order [`Wide::traverse_any_hit`] takes); `f` returns `true` to stop.
     #[inline(always)]
-    fn walk<K: Kernel, F>(&self, k: K, bray: &BoxRay, t_max: &mut f32, mut f: F) -> bool
+    fn walk<K: Kernel, F, const NEAREST_FIRST: bool>(
+        &self,
+        k: K,
+        bray: &BoxRay,
+        t_max: &mut f32,
+        mut f: F,
+    ) -> bool
     where
         F: FnMut(&Block, u32, &mut f32) -> bool,
     {
@@ -50,9 +57,16 @@ impl StaticSnapshot {
         }
         // `f` is called from one place only, so that it is inlined (see `flat::Wide::traverse`);
         // without an overlay the view is one leaf, and this tests its box first.
-        v.wide.traverse(k, &v.bvh, Start::Test(0), bray, t_max, &mut |first, count, t_max| {
-            v.refs[first as usize..(first + count) as usize].iter().any(|(b, i)| f(b, *i, t_max))
-        })
+        v.wide.traverse_ordered::<K, _, NEAREST_FIRST>(
+            k,
+            &v.bvh,
+            Start::Test(0),
+            bray,
+            t_max,
+            &mut |first, count, t_max| {
+                v.refs[first as usize..(first + count) as usize].iter().any(|(b, i)| f(b, *i, t_max))
+            },
+        )
     }
 }
 

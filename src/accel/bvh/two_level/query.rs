@@ -191,12 +191,25 @@ impl Top {
     #[inline(always)]
     fn occluded_with<K: Kernel>(&self, k: K, ray: &Ray, bray: &BoxRay, t_max: f32) -> bool {
         let mut t_max = t_max;
-        self.wide.traverse(k, &self.bvh, Start::Test(0), bray, &mut t_max, &mut |first, count, t_max| {
-            self.live(first, count).any(|(item, motion)| {
-                let oray = object_ray(ray, item, motion);
-                item.blas.occluded_from(k, Start::Test(0), &BoxRay::new(&oray), &RayTri::new(&oray), *t_max)
-            })
-        })
+        self.wide.traverse_any_hit(
+            k,
+            &self.bvh,
+            Start::Test(0),
+            bray,
+            &mut t_max,
+            &mut |first, count, t_max| {
+                self.live(first, count).any(|(item, motion)| {
+                    let oray = object_ray(ray, item, motion);
+                    item.blas.occluded_from(
+                        k,
+                        Start::Test(0),
+                        &BoxRay::new(&oray),
+                        &RayTri::new(&oray),
+                        *t_max,
+                    )
+                })
+            },
+        )
     }
 }
 
