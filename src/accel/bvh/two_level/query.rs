@@ -172,7 +172,7 @@ impl Top {
                 // code: /work/meas/s28/lazy-raytri.diff).
                 if item.blas.intersect_from(
                     k,
-                    Start::Test(0),
+                    Start::Entered(0),
                     &BoxRay::new(&oray),
                     &RayTri::new(&oray),
                     t_max,
@@ -202,7 +202,7 @@ impl Top {
                     let oray = object_ray(ray, item, motion);
                     item.blas.occluded_from(
                         k,
-                        Start::Test(0),
+                        Start::Entered(0),
                         &BoxRay::new(&oray),
                         &RayTri::new(&oray),
                         *t_max,
@@ -242,8 +242,14 @@ impl Top {
                         object.set(i, &object_ray(&rays[i], item, motion));
                     }
                     let mut best = [None; PACKET];
-                    let found =
-                        item.blas.intersect_packet_from(k, Start::Test(0), &object, lanes, t_max, &mut best);
+                    let found = item.blas.intersect_packet_from(
+                        k,
+                        Start::Entered(0),
+                        &object,
+                        lanes,
+                        t_max,
+                        &mut best,
+                    );
                     for i in each_bit(found) {
                         if let Some(h) = best[i] {
                             hit[i] = Some((h, item, motion));
@@ -283,7 +289,7 @@ impl Top {
                     for i in each_bit(left) {
                         object.set(i, &object_ray(&rays[i], item, motion));
                     }
-                    left &= !item.blas.occluded_packet_from(k, Start::Test(0), &object, left, t_max);
+                    left &= !item.blas.occluded_packet_from(k, Start::Entered(0), &object, left, t_max);
                 }
                 lanes & !left
             },
