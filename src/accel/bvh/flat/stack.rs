@@ -16,8 +16,8 @@
 //!   register (with the length in the same object, the compiler reloads it around every push:
 //!   the wide traversal's assembly shows it): tried together with the child-order changes of
 //!   2026-12-02 (docs/performance.md, "Node step and leaves"), no gain measured. Counted
-//!   (session 29, cachegrind, 320x180 path-traced frames): 0.6% fewer trace instructions on
-//!   the default scene, but 1.5% more and 15% more simulated mispredictions on the monastery
+//!   (session 29, cachegrind, 320x180 path-traced frames): 0.4% fewer trace instructions on
+//!   the default scene, but 1.1% more and 10% more simulated mispredictions on the monastery
 //!   with 8,000 ducks.
 //! - `get_unchecked` in [`TraversalStack::pop_within`] (dropping the bounds check on the
 //!   pop): 0.99x median, 1.00x best run, within noise; not worth a second `unsafe`.

@@ -194,7 +194,7 @@ impl Wide {
     /// [`Self::traverse`] for any-hit queries (`leaf` stops at the first hit): each node's hit
     /// children are visited in slot order, not sorted by distance, as Embree's `occluded`
     /// does. Counted (session 29, cachegrind, 320x180 frames of the monastery with 8,000
-    /// ducks): 4.2% fewer program instructions path-traced (trace -7.5%), 3.0% fewer trace
+    /// ducks): 4.2% fewer program instructions path-traced (trace -7.8%), 2.9% fewer trace
     /// instructions in AO, fewer simulated mispredictions, images byte-identical; timed,
     /// single-thread path-traced renders 5.34 s against 5.57 s (median of four, alternating),
     /// AO and a cache-resident scene within noise. Timed alone in 2026-12-02, before the
@@ -339,7 +339,9 @@ impl Wide {
     /// no buffer copied there): 0.1% fewer instructions, 11% more branches, 5% more
     /// mispredictions. Pushing the farther children with one bounds check and one length update
     /// (session 28, same count): a slice copy 2.1% more trace instructions, a fixed copy of all
-    /// eight entries 13% more (the pairs are copied field by field).
+    /// eight entries 13% more (the pairs are copied field by field). Any-hit pops without the
+    /// `t <= t_max` test (an any-hit query's `t_max` never falls; session 29): 0.3% fewer
+    /// program instructions on the ducks, 8% more simulated mispredictions.
     #[inline(always)]
     fn traverse8<K: Kernel, F, const NEAREST_FIRST: bool>(
         &self,

@@ -75,7 +75,7 @@ fn prepare(r: &BoxRay8) -> RayM256 {
 /// same order, and the images are byte-identical. Written this way round, the box row is
 /// the subtraction's second operand and loads into it: six loads fewer per node, and six
 /// registers free (cachegrind, session 29, 320x180 path-traced frames: trace instructions
-/// -4.7% on the monastery with 8,000 ducks, -3.0% on the default scene). The portable path
+/// -2.9% on the monastery with 8,000 ducks, -0.6% on the default scene). The portable path
 /// keeps `(plane - org) * inv`: in legacy SSE the origin must be copied before each
 /// subtraction, and the same change cost it 3% more program instructions.
 ///
@@ -83,8 +83,8 @@ fn prepare(r: &BoxRay8) -> RayM256 {
 /// every `ymm` register is caller-saved and a leaf test is a call, so they are spilled, and
 /// the compiler reloads them at each use. Reloading them after each leaf instead (from a copy
 /// behind `std::hint::black_box`) took those six loads out of the node loop but cost more at
-/// each traversal (the copy) and each leaf than it saved: +0.9% trace instructions on the
-/// ducks, +6% on the default scene (session 29). Not kept.
+/// each traversal (the copy) and each leaf than it saved: +0.6% trace instructions on the
+/// ducks, +5.9% on the default scene (session 29). Not kept.
 ///
 /// Tried and not kept (2026-12-02, docs/performance.md, "Node step and leaves"): one FMA per
 /// plane (`b * inv - org * inv`, with an absolute error bound `8u max |org * inv|` folded into
