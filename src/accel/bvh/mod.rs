@@ -5,8 +5,9 @@
 //! - `params`: [`BuildParams`] and its presets;
 //! - `triangle`: stored triangles and the watertight ray-triangle test;
 //! - `flat`: the flattened binned-SAH BVH (prototypes, top level, static blocks), its 8-wide
-//!   traversal copy (boxes in structure-of-arrays layout, children nearest first; triangle
-//!   leaves in packets of four), and the traversal stack every ray query uses;
+//!   traversal copy (boxes in structure-of-arrays layout, children nearest first for closest
+//!   hits and in slot order for any-hit queries; triangle leaves in packets of four), and the
+//!   traversal stack every ray query uses;
 //! - [`simd`]: the SIMD paths (portable, AVX2, AVX-512), chosen at run time
 //!   (`is_x86_feature_detected!`, or the `DORMANT_SIMD` environment variable) once per query,
 //!   and their 8-wide box kernels;

@@ -1,9 +1,10 @@
 //! An 8-wide copy of a flat BVH for traversal: every wide node tests its (up to) eight children
 //! in one go with the SIMD path's box kernel ([`crate::accel::bvh::simd::Kernel`]: AVX2 or
 //! AVX-512 intrinsics, or glam's `Vec4` in two halves on the portable path), boxes in
-//! structure-of-arrays layout, children visited nearest first. Built by collapsing the binary
-//! tree, which stays the structure of record (insertion, SAH, references into blocks); a binary
-//! node that was folded into its parent's wide node is entered through its children.
+//! structure-of-arrays layout, children visited nearest first (closest hits) or in slot order
+//! (any-hit queries, [`Wide::traverse_any_hit`]). Built by collapsing the binary tree, which
+//! stays the structure of record (insertion, SAH, references into blocks); a binary node that
+//! was folded into its parent's wide node is entered through its children.
 //!
 //! Leaves keep the owner's meaning with the range remapped at collapse: triangle meshes point
 //! leaves at their 4-triangle packets ([`crate::accel::bvh::triangle::Tri4`]), instance levels
