@@ -6,7 +6,7 @@
 use rayon::prelude::*;
 
 use super::packet::{each_bit, Lanes, RayPacket, PACKET};
-use super::{build_with, BoxRay, FlatBvh, Node, Start, Wide, PAR_CHUNK};
+use super::{build_with, BoxRay, FlatBvh, Node, Start, Wide, ANY_HIT, CLOSEST_HIT, PAR_CHUNK};
 use crate::accel::bvh::simd::Kernel;
 use crate::accel::bvh::triangle::{RayTri, Tri, Tri4};
 use crate::accel::bvh::BuildParams;
@@ -97,22 +97,29 @@ impl MeshBvh {
         best: &mut Option<PrimHit>,
     ) -> bool {
         let mut found = false;
-        self.wide.traverse(k, &self.bvh, root, bray, t_max, &mut |first, count, t_max| {
-            k.leaf(|| {
-                for q in &self.packets[first as usize..(first + count) as usize] {
-                    if let Some((lane, h)) = tray.intersect4(q, *t_max) {
-                        // Strictly closer only: ties keep the first triangle found.
-                        if best.is_none_or(|b| h.t < b.t) {
-                            *t_max = h.t;
-                            let tri = self.tris[q.idx[lane] as usize];
-                            *best = Some(PrimHit { t: h.t, u: h.u, v: h.v, tri });
-                            found = true;
+        self.wide.traverse::<_, _, CLOSEST_HIT>(
+            k,
+            &self.bvh,
+            root,
+            bray,
+            t_max,
+            &mut |first, count, t_max| {
+                k.leaf(|| {
+                    for q in &self.packets[first as usize..(first + count) as usize] {
+                        if let Some((lane, h)) = tray.intersect4(q, *t_max) {
+                            // Strictly closer only: ties keep the first triangle found.
+                            if best.is_none_or(|b| h.t < b.t) {
+                                *t_max = h.t;
+                                let tri = self.tris[q.idx[lane] as usize];
+                                *best = Some(PrimHit { t: h.t, u: h.u, v: h.v, tri });
+                                found = true;
+                            }
                         }
                     }
-                }
-            });
-            false
-        });
+                });
+                false
+            },
+        );
         found
     }
 
@@ -127,13 +134,20 @@ impl MeshBvh {
         t_max: f32,
     ) -> bool {
         let mut t_max = t_max;
-        self.wide.traverse_any_hit(k, &self.bvh, root, bray, &mut t_max, &mut |first, count, t_max| {
-            k.leaf(|| {
-                self.packets[first as usize..(first + count) as usize]
-                    .iter()
-                    .any(|q| tray.intersect4(q, *t_max).is_some())
-            })
-        })
+        self.wide.traverse::<_, _, ANY_HIT>(
+            k,
+            &self.bvh,
+            root,
+            bray,
+            &mut t_max,
+            &mut |first, count, t_max| {
+                k.leaf(|| {
+                    self.packets[first as usize..(first + count) as usize]
+                        .iter()
+                        .any(|q| tray.intersect4(q, *t_max).is_some())
+                })
+            },
+        )
     }
 }
 

@@ -23,7 +23,7 @@ pub(crate) use sah::{sah_cost, subtree_cost};
 #[cfg(test)]
 pub(crate) use traverse::traverse;
 pub(crate) use traverse::{interval_is_valid, BoxRay, FAR_SCALE, STACK_SIZE};
-pub(crate) use wide::{Start, Wide};
+pub(crate) use wide::{Start, Wide, ANY_HIT, CLOSEST_HIT};
 
 use glam::Vec3;
 

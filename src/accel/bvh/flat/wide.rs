@@ -2,7 +2,7 @@
 //! in one go with the SIMD path's box kernel ([`crate::accel::bvh::simd::Kernel`]: AVX2 or
 //! AVX-512 intrinsics, or glam's `Vec4` in two halves on the portable path), boxes in
 //! structure-of-arrays layout, children visited nearest first (closest hits) or in slot order
-//! (any-hit queries, [`Wide::traverse_any_hit`]). Built by collapsing the binary tree, which
+//! (any-hit queries: [`Wide::traverse`]). Built by collapsing the binary tree, which
 //! stays the structure of record (insertion, SAH, references into blocks); a binary node that
 //! was folded into its parent's wide node is entered through its children.
 //!
@@ -22,6 +22,11 @@ pub(crate) const WIDTH: usize = 8;
 /// Up to seven entries are pushed per wide level, and a wide tree is no deeper than its binary
 /// tree (shallower than [`STACK_SIZE`]).
 pub(super) const WIDE_STACK: usize = (WIDTH - 1) * STACK_SIZE;
+
+/// [`Wide::traverse`]'s order for closest-hit queries: each node's hit children nearer first.
+pub(crate) const CLOSEST_HIT: bool = true;
+/// [`Wide::traverse`]'s order for any-hit queries: each node's hit children in slot order.
+pub(crate) const ANY_HIT: bool = false;
 
 /// Slot code of an unused child.
 const EMPTY: u32 = u32::MAX;
@@ -168,58 +173,26 @@ impl Wide {
     }
 
     /// Visits the leaves of the subtree `root` of `bvh` (the tree this was collapsed from)
-    /// that the ray may hit, nearer first. `leaf` gets each leaf's item range
-    /// and the current `t_max`, which it lowers on hits; it returns `true` to stop (any-hit).
-    /// Returns whether `leaf` stopped the traversal.
+    /// that the ray may hit. `leaf` gets each leaf's item range and the current `t_max`, which
+    /// it lowers on hits; it returns `true` to stop (any-hit). Returns whether `leaf` stopped
+    /// the traversal.
+    ///
+    /// `NEAREST_FIRST` ([`CLOSEST_HIT`]): each node's hit children are visited nearer first.
+    /// Otherwise ([`ANY_HIT`], for queries whose `leaf` stops at the first hit) they are
+    /// visited in slot order, unsorted, as Embree's `occluded` does. Counted (session 29,
+    /// cachegrind, 320x180 frames of the monastery with 8,000 ducks): 4.2% fewer program
+    /// instructions path-traced (trace -7.8%), 2.9% fewer trace instructions in AO, fewer
+    /// simulated mispredictions, images byte-identical; timed, single-thread path-traced
+    /// renders 5.34 s against 5.57 s (median of four, alternating), AO and a cache-resident
+    /// scene within noise. Timed alone in 2026-12-02, before the kernel and stack changes
+    /// since, it was neutral to 3% slower.
     ///
     /// `leaf` is called from one place only: a closure called once is inlined into the query's
     /// `#[target_feature]` entry (`simd::dispatch!`), and with it the kernel of nested
     /// traversals (instances, blocks); called from two places it stayed out of line and every
     /// intrinsic in it became a call (seen in the first build of this file).
     #[inline(always)]
-    pub fn traverse<K: Kernel, F>(
-        &self,
-        k: K,
-        bvh: &FlatBvh,
-        root: Start,
-        ray: &BoxRay,
-        t_max: &mut f32,
-        leaf: &mut F,
-    ) -> bool
-    where
-        F: FnMut(u32, u32, &mut f32) -> bool,
-    {
-        self.traverse_ordered::<K, F, true>(k, bvh, root, ray, t_max, leaf)
-    }
-
-    /// [`Self::traverse`] for any-hit queries (`leaf` stops at the first hit): each node's hit
-    /// children are visited in slot order, not sorted by distance, as Embree's `occluded`
-    /// does. Counted (session 29, cachegrind, 320x180 frames of the monastery with 8,000
-    /// ducks): 4.2% fewer program instructions path-traced (trace -7.8%), 2.9% fewer trace
-    /// instructions in AO, fewer simulated mispredictions, images byte-identical; timed,
-    /// single-thread path-traced renders 5.34 s against 5.57 s (median of four, alternating),
-    /// AO and a cache-resident scene within noise. Timed alone in 2026-12-02, before the
-    /// kernel and stack changes since, it was neutral to 3% slower.
-    #[inline(always)]
-    pub fn traverse_any_hit<K: Kernel, F>(
-        &self,
-        k: K,
-        bvh: &FlatBvh,
-        root: Start,
-        ray: &BoxRay,
-        t_max: &mut f32,
-        leaf: &mut F,
-    ) -> bool
-    where
-        F: FnMut(u32, u32, &mut f32) -> bool,
-    {
-        self.traverse_ordered::<K, F, false>(k, bvh, root, ray, t_max, leaf)
-    }
-
-    /// [`Self::traverse`] (`NEAREST_FIRST`: closest-hit queries) or [`Self::traverse_any_hit`]
-    /// as the caller's own parameter (the static tree's walk serves both).
-    #[inline(always)]
-    pub fn traverse_ordered<K: Kernel, F, const NEAREST_FIRST: bool>(
+    pub fn traverse<K: Kernel, F, const NEAREST_FIRST: bool>(
         &self,
         k: K,
         bvh: &FlatBvh,
@@ -321,7 +294,7 @@ impl Wide {
         }
     }
 
-    /// The node loop of [`Self::traverse_ordered`], from its first entry `first`: each node's
+    /// The node loop of [`Self::traverse`], from its first entry `first`: each node's
     /// hit children sorted farthest first, all but the nearest pushed, the nearest taken next
     /// (`NEAREST_FIRST`), or the first in slot order taken and the others pushed.
     ///
@@ -330,7 +303,7 @@ impl Wide {
     /// stack, together with the leaf children's stack codes stored in the node (no branch on
     /// `count`): 1.05x the CPU time on a cache-resident scene, no gain on the monastery;
     /// any-hit queries visiting children in slot order: 1.03x and 0.99-1.0x then, kept in
-    /// session 29 when counted ([`Self::traverse_any_hit`]). Prefetching the four cache lines
+    /// session 29 when counted ([`Self::traverse`]). Prefetching the four cache lines
     /// of each pushed interior child (2026-12-02, `bench render` on the monastery, BVH over
     /// Embree in one process, two runs each): bounce 0.585-0.589 against 0.572-0.578, camera
     /// 0.685-0.696 against 0.695-0.718: noise. The one-hit fast path alone, counted (session

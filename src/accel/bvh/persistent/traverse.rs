@@ -5,7 +5,8 @@ use std::sync::Arc;
 
 use super::{Block, Link, StaticSnapshot};
 use crate::accel::bvh::flat::{
-    interval_is_valid, BoxRay, FlatBvh, Lanes, Node, PrimHit, RayPacket, Start, Wide, PACKET,
+    interval_is_valid, BoxRay, FlatBvh, Lanes, Node, PrimHit, RayPacket, Start, Wide, ANY_HIT, CLOSEST_HIT,
+    PACKET,
 };
 use crate::accel::bvh::simd::{dispatch, Kernel};
 use crate::accel::bvh::triangle::RayTri;
@@ -23,7 +24,7 @@ impl StaticSnapshot {
         t_max: &mut f32,
         best: &mut Option<PrimHit>,
     ) {
-        self.walk::<K, _, true>(k, bray, t_max, |b, i, t_max| {
+        self.walk::<K, _, CLOSEST_HIT>(k, bray, t_max, |b, i, t_max| {
             b.mesh.intersect_from(k, Start::Entered(i), bray, tray, t_max, best);
             false
         });
@@ -33,13 +34,13 @@ impl StaticSnapshot {
     #[inline(always)]
     pub(crate) fn occluded_with<K: Kernel>(&self, k: K, bray: &BoxRay, tray: &RayTri, t_max: f32) -> bool {
         let mut t_max = t_max;
-        self.walk::<K, _, false>(k, bray, &mut t_max, |b, i, t_max| {
+        self.walk::<K, _, ANY_HIT>(k, bray, &mut t_max, |b, i, t_max| {
             b.mesh.occluded_from(k, Start::Entered(i), bray, tray, *t_max)
         })
     }
 
-    /// Visits the block subtrees the ray may hit (nearer first when `NEAREST_FIRST`, else in
-    /// the order [`Wide::traverse_any_hit`] takes); `f` returns `true` to stop.
+    /// Visits the block subtrees the ray may hit, in the order `NEAREST_FIRST` picks
+    /// ([`Wide::traverse`]); `f` returns `true` to stop.
     #[inline(always)]
     fn walk<K: Kernel, F, const NEAREST_FIRST: bool>(
         &self,
@@ -57,7 +58,7 @@ impl StaticSnapshot {
         }
         // `f` is called from one place only, so that it is inlined (see `flat::Wide::traverse`);
         // without an overlay the view is one leaf, and this tests its box first.
-        v.wide.traverse_ordered::<K, _, NEAREST_FIRST>(
+        v.wide.traverse::<K, _, NEAREST_FIRST>(
             k,
             &v.bvh,
             Start::Test(0),

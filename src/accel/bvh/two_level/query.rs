@@ -30,7 +30,7 @@ use rayon::prelude::*;
 
 use crate::accel::bvh::flat::{
     build, each_bit, interval_is_valid, BoxRay, FlatBvh, Lanes, MeshBvh, PrimHit, RayPacket, Start, Wide,
-    PACKET,
+    ANY_HIT, CLOSEST_HIT, PACKET,
 };
 use crate::accel::bvh::persistent::StaticSnapshot;
 use crate::accel::bvh::simd::{dispatch, Kernel};
@@ -159,39 +159,46 @@ impl Top {
         t_max: &mut f32,
         hit: &mut Option<InstanceHit<'a>>,
     ) {
-        self.wide.traverse(k, &self.bvh, Start::Test(0), bray, t_max, &mut |first, count, t_max| {
-            for (item, motion) in self.live(first, count) {
-                let oray = object_ray(ray, item, motion);
-                let mut best = None;
-                // Tried (2026-12-02): the `RayTri` made at the first leaf reached, so that an
-                // instance entered without reaching a leaf skips its setup: single-thread AO
-                // renders of the monastery with 8,000 ducks 7.12-7.15 s against 7.02-7.14 s.
-                // Counted (session 28, cachegrind, the same scene at 320x180, a `OnceCell` made
-                // at the first leaf): 0.45% fewer program instructions, 4% more simulated
-                // mispredictions, and the leaf tests moved into the entries: not kept (the
-                // code: /work/meas/s28/lazy-raytri.diff).
-                if item.blas.intersect_from(
-                    k,
-                    Start::Entered(0),
-                    &BoxRay::new(&oray),
-                    &RayTri::new(&oray),
-                    t_max,
-                    &mut best,
-                ) {
-                    if let Some(h) = best {
-                        *hit = Some((h, item, motion));
+        self.wide.traverse::<_, _, CLOSEST_HIT>(
+            k,
+            &self.bvh,
+            Start::Test(0),
+            bray,
+            t_max,
+            &mut |first, count, t_max| {
+                for (item, motion) in self.live(first, count) {
+                    let oray = object_ray(ray, item, motion);
+                    let mut best = None;
+                    // Tried (2026-12-02): the `RayTri` made at the first leaf reached, so that an
+                    // instance entered without reaching a leaf skips its setup: single-thread AO
+                    // renders of the monastery with 8,000 ducks 7.12-7.15 s against 7.02-7.14 s.
+                    // Counted (session 28, cachegrind, the same scene at 320x180, a `OnceCell` made
+                    // at the first leaf): 0.45% fewer program instructions, 4% more simulated
+                    // mispredictions, and the leaf tests moved into the entries: not kept (the
+                    // code: /work/meas/s28/lazy-raytri.diff).
+                    if item.blas.intersect_from(
+                        k,
+                        Start::Entered(0),
+                        &BoxRay::new(&oray),
+                        &RayTri::new(&oray),
+                        t_max,
+                        &mut best,
+                    ) {
+                        if let Some(h) = best {
+                            *hit = Some((h, item, motion));
+                        }
                     }
                 }
-            }
-            false
-        });
+                false
+            },
+        );
     }
 
     /// Whether any instance is hit within `[t_min, t_max]`.
     #[inline(always)]
     fn occluded_with<K: Kernel>(&self, k: K, ray: &Ray, bray: &BoxRay, t_max: f32) -> bool {
         let mut t_max = t_max;
-        self.wide.traverse_any_hit(
+        self.wide.traverse::<_, _, ANY_HIT>(
             k,
             &self.bvh,
             Start::Test(0),
