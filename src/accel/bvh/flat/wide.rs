@@ -303,19 +303,21 @@ impl Wide {
     /// stack, together with the leaf children's stack codes stored in the node (no branch on
     /// `count`): 1.05x the CPU time on a cache-resident scene, no gain on the monastery;
     /// any-hit queries visiting children in slot order: 1.03x and 0.99-1.0x then, kept in
-    /// session 29 when counted ([`Self::traverse`]). Prefetching the four cache lines
-    /// of each pushed interior child (2026-12-02, `bench render` on the monastery, BVH over
-    /// Embree in one process, two runs each): bounce 0.585-0.589 against 0.572-0.578, camera
-    /// 0.685-0.696 against 0.695-0.718: noise. The one-hit fast path alone, counted (session
-    /// 27, cachegrind, 320x180 path-traced frames): 1.6% fewer trace instructions on the
-    /// monastery with 8,000 ducks, 0.4% on the default scene, with 0.7% / 15% more simulated
-    /// mispredictions: not kept. Each hit child inserted into place on the stack (Embree's way;
-    /// no buffer copied there): 0.1% fewer instructions, 11% more branches, 5% more
-    /// mispredictions. Pushing the farther children with one bounds check and one length update
-    /// (session 28, same count): a slice copy 2.1% more trace instructions, a fixed copy of all
-    /// eight entries 13% more (the pairs are copied field by field). Any-hit pops without the
-    /// `t <= t_max` test (an any-hit query's `t_max` never falls; session 29): 0.3% fewer
-    /// program instructions on the ducks, 8% more simulated mispredictions.
+    /// session 29 when counted ([`Self::traverse`]). Prefetching the four cache lines of each
+    /// pushed interior child (2026-12-02, `bench render` on the monastery, BVH over Embree in
+    /// one process, two runs each): bounce 0.585-0.589 against 0.572-0.578, camera 0.685-0.696
+    /// against 0.695-0.718: noise. The one-hit fast path alone, counted (session 27,
+    /// cachegrind, 320x180 path-traced frames): 1.6% fewer trace instructions on the monastery
+    /// with 8,000 ducks, 0.4% on the default scene, with 0.7% / 15% more simulated
+    /// mispredictions: not kept; counted again in session 29 on its kernel, 0.6% fewer program
+    /// instructions on the ducks with 4.8% more simulated mispredictions, 0.1% and 17% on the
+    /// default scene. Each hit child inserted into place on the stack (Embree's way; no buffer
+    /// copied there): 0.1% fewer instructions, 11% more branches, 5% more mispredictions.
+    /// Pushing the farther children with one bounds check and one length update (session 28,
+    /// same count): a slice copy 2.1% more trace instructions, a fixed copy of all eight
+    /// entries 13% more (the pairs are copied field by field). Any-hit pops without the `t <=
+    /// t_max` test (an any-hit query's `t_max` never falls; session 29): 0.3% fewer program
+    /// instructions on the ducks, 8% more simulated mispredictions.
     #[inline(always)]
     fn traverse8<K: Kernel, F, const NEAREST_FIRST: bool>(
         &self,
