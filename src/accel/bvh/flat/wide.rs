@@ -342,20 +342,20 @@ impl Wide {
                 let n = &self.nodes[cur as usize];
                 let (mask, near) = k.box8(&kr, &n.boxes, *t_max);
                 let mut mask = mask & n.used;
-                if mask != 0 && !NEAREST_FIRST {
-                    // Any-hit: the first hit child next, the others pushed as found.
-                    let slot = mask.trailing_zeros() as usize;
-                    mask &= mask - 1;
-                    let next = n.code(cur, slot);
-                    while mask != 0 {
+                if mask != 0 {
+                    if !NEAREST_FIRST {
+                        // Any-hit: the first hit child next, the others pushed as found.
                         let slot = mask.trailing_zeros() as usize;
                         mask &= mask - 1;
-                        stack.push((n.code(cur, slot), near[slot]));
+                        let next = n.code(cur, slot);
+                        while mask != 0 {
+                            let slot = mask.trailing_zeros() as usize;
+                            mask &= mask - 1;
+                            stack.push((n.code(cur, slot), near[slot]));
+                        }
+                        cur = next;
+                        continue;
                     }
-                    cur = next;
-                    continue;
-                }
-                if mask != 0 {
                     // Hit children sorted farthest first: all but the last are pushed, the
                     // last (nearest) is taken next (the variants tried: above).
                     let mut m = 0;
