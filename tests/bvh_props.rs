@@ -253,48 +253,6 @@ proptest! {
     }
 
     #[test]
-    fn four_triangle_test_matches_one_triangle_test(
-        tris in prop::collection::vec((vec3(4.0), vec3(4.0), vec3(4.0)), 1..=4),
-        shared in any::<bool>(),
-        on_grid in any::<bool>(),
-        origin in vec3(8.0),
-        target in vec3(3.0),
-        t_max in prop_oneof![Just(f32::INFINITY), 0.1f32..2.0],
-    ) {
-        // On an integer grid, rays through vertices and edges give edge functions of exactly
-        // zero in f32, which send lanes to the f64 fallback (only those that may be inside).
-        let snap = |p: Vec3| if on_grid { p.round() } else { p };
-        let mut tris: Vec<[Vec3; 3]> = tris.iter().map(|(a, b, c)| [snap(*a), snap(*b), snap(*c)]).collect();
-        if shared && tris.len() >= 2 {
-            // Two triangles sharing an edge, with the ray aimed at the edge's midpoint.
-            tris[1] = [tris[0][1], tris[0][0], tris[1][2]];
-        }
-        let aim = if shared {
-            (tris[0][0] + tris[0][1]) * 0.5
-        } else if on_grid {
-            tris[0][0]
-        } else {
-            target
-        };
-        let origin = snap(origin);
-        prop_assume!(aim != origin);
-        let mut ray = Ray::new(origin, aim - origin);
-        ray.t_max = t_max;
-        let mut expected: Option<(usize, f32, f32, f32)> = None;
-        for (i, p) in tris.iter().enumerate() {
-            if let Some((t, u, v)) = testing::watertight_hit(&ray, p) {
-                if expected.is_none_or(|e| t < e.1) {
-                    expected = Some((i, t, u, v));
-                }
-            }
-        }
-        let got = testing::watertight_hit4(&ray, &tris);
-        // Bit for bit: the same lane, t and barycentrics.
-        prop_assert_eq!(got.map(|(i, t, u, v)| (i, t.to_bits(), u.to_bits(), v.to_bits())),
-            expected.map(|(i, t, u, v)| (i, t.to_bits(), u.to_bits(), v.to_bits())));
-    }
-
-    #[test]
     fn instancing_matches_baked_triangles(
         protos in prop::collection::vec(soup(Vec3::ZERO, 2.0, 1.0, 1..40), 1..4),
         placements in prop::collection::vec((0usize..4, vec3(1.0), -3.0f32..3.0, vec3(1.0), vec3(10.0)), 1..16),
@@ -347,6 +305,62 @@ proptest! {
         let report = accel.commit().unwrap();
         prop_assert_eq!(report.instances, placed.len());
         check(&accel, &placed)?;
+    }
+}
+
+proptest! {
+    // One leaf test per case: cheap, so many cases.
+    #![proptest_config(config(2000))]
+
+    #[test]
+    fn leaf_test_matches_one_triangle_test_on_every_path(
+        tris in prop::collection::vec((vec3(4.0), vec3(4.0), vec3(4.0)), 1..=12),
+        shared in any::<bool>(),
+        on_grid in any::<bool>(),
+        origin in vec3(8.0),
+        target in vec3(3.0),
+        aim_at in 0usize..12,
+        t_max in prop_oneof![Just(f32::INFINITY), 0.1f32..2.0],
+    ) {
+        // On an integer grid, rays through vertices and edges give edge functions of exactly
+        // zero in f32, which send lanes to the f64 fallback (only those that may be inside).
+        let snap = |p: Vec3| if on_grid { p.round() } else { p };
+        let mut tris: Vec<[Vec3; 3]> = tris.iter().map(|(a, b, c)| [snap(*a), snap(*b), snap(*c)]).collect();
+        // The triangle aimed at, in any packet of the leaf (the wide paths test two at once).
+        let k = aim_at % tris.len();
+        if shared && k + 1 < tris.len() {
+            // Two triangles sharing an edge, with the ray aimed at the edge's midpoint.
+            tris[k + 1] = [tris[k][1], tris[k][0], tris[k + 1][2]];
+        }
+        let aim = if shared {
+            (tris[k][0] + tris[k][1]) * 0.5
+        } else if on_grid {
+            tris[k][0]
+        } else if aim_at % 2 == 0 {
+            (tris[k][0] + tris[k][1] + tris[k][2]) / 3.0
+        } else {
+            target
+        };
+        let origin = snap(origin);
+        prop_assume!(aim != origin);
+        let mut ray = Ray::new(origin, aim - origin);
+        ray.t_max = t_max;
+        let mut expected: Option<(usize, f32, f32, f32)> = None;
+        for (i, p) in tris.iter().enumerate() {
+            if let Some((t, u, v)) = testing::watertight_hit(&ray, p) {
+                if expected.is_none_or(|e| t < e.1) {
+                    expected = Some((i, t, u, v));
+                }
+            }
+        }
+        let bits = |h: Option<(usize, f32, f32, f32)>| h.map(|(i, t, u, v)| (i, t.to_bits(), u.to_bits(), v.to_bits()));
+        for path in SimdPath::supported() {
+            // Packets of four, tested one (portable) or two (AVX2, AVX-512) at a time: bit for
+            // bit the same triangle, t and barycentrics.
+            let (got, occluded) = testing::watertight_hit_leaf(&ray, &tris, path);
+            prop_assert_eq!(bits(got), bits(expected), "{:?}", path);
+            prop_assert_eq!(occluded, expected.is_some(), "{:?}", path);
+        }
     }
 }
 

@@ -6,6 +6,7 @@
 
 use glam::Vec3;
 
+use super::simd::{dispatch, Kernel, SimdPath};
 use super::triangle::{RayTri, Tri, Tri4};
 use super::{BuildParams, BvhAccel, StaticBvh};
 use crate::geometry::{Aabb, Ray};
@@ -16,15 +17,25 @@ pub fn watertight_hit(ray: &Ray, p: &[Vec3; 3]) -> Option<(f32, f32, f32)> {
     RayTri::new(ray).intersect(p, ray.t_max).map(|h| (h.t, h.u, h.v))
 }
 
-/// The 4-triangle packet test on `tris` (1 to 4 triangles, packed as the BVH packs a leaf):
-/// the closest lane hit within the ray's interval, as `(lane, t, u, v)`.
-pub fn watertight_hit4(ray: &Ray, tris: &[[Vec3; 3]]) -> Option<(usize, f32, f32, f32)> {
-    assert!(!tris.is_empty() && tris.len() <= 4);
+/// A leaf's test on `tris` (packed into packets of four as the BVH packs a leaf) on the SIMD
+/// path `path` (which this CPU must run): the closest triangle hit within the ray's interval,
+/// as `(index in tris, t, u, v)`, and whether the any-hit test found one.
+pub fn watertight_hit_leaf(
+    ray: &Ray,
+    tris: &[[Vec3; 3]],
+    path: SimdPath,
+) -> (Option<(usize, f32, f32, f32)>, bool) {
+    assert!(!tris.is_empty());
     let tris: Vec<Tri> =
         tris.iter().enumerate().map(|(i, p)| Tri { p: *p, geom: 0, prim: i as u32 }).collect();
     let idx: Vec<u32> = (0..tris.len() as u32).collect();
-    let q = Tri4::pack(&tris, &idx);
-    RayTri::new(ray).intersect4(&q, ray.t_max).map(|(lane, h)| (q.idx[lane] as usize, h.t, h.u, h.v))
+    let packets: Vec<Tri4> = idx.chunks(4).map(|c| Tri4::pack(&tris, c)).collect();
+    let rt = RayTri::new(ray);
+    SimdPath::with_override(path, || {
+        let closest = dispatch!(|k| k.closest_tri(&rt, &packets, ray.t_max));
+        let occluded = dispatch!(|k| k.occluded_tri(&rt, &packets, ray.t_max));
+        (closest.map(|(i, h)| (packets[i / 4].idx[i % 4] as usize, h.t, h.u, h.v)), occluded)
+    })
 }
 
 /// Checks the persistent tree's invariants (O(n)): overlay bounds, masks and heights match

@@ -1,8 +1,11 @@
 //! Triangles as the BVH leaves store them, and the watertight ray-triangle test (Woop, Benthin
 //! and Wald 2013) that keeps rays from leaking through edges shared by two triangles, on one
-//! triangle ([`RayTri::intersect`]) and on four at once ([`Tri4`], [`RayTri::intersect4`]: the
-//! same operations in the same order on glam's `Vec4` lanes, so each lane's hit is bit for bit
-//! the one-triangle test's; `tests/bvh_props.rs` pins that).
+//! triangle ([`RayTri::intersect`]) and on a leaf's packets of four ([`Tri4`],
+//! [`RayTri::closest_in`], [`RayTri::occluded_in`]): the same operations in the same order on
+//! the lanes of a [`TriLanes`] (four in glam's `Vec4`, or eight in AVX2), so each lane's hit is
+//! bit for bit the one-triangle test's; `tests/bvh_props.rs` pins that on every SIMD path.
+
+use std::ops::{Add, BitAnd, BitOr, Div, Index, Mul, Not, Sub};
 
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
@@ -148,18 +151,22 @@ impl RayTri {
     }
 }
 
-/// Four triangles in structure-of-arrays layout: `p[vertex][axis]` holds the four lanes.
+/// Four triangles in structure-of-arrays layout: `rows[v][axis]` holds coordinate `axis` of
+/// vertex `v` of the four lanes, and `rows[NORMAL]` their normals.
 /// A leaf with fewer than four triangles repeats its last one (a duplicate never wins: ties
 /// keep the lowest lane).
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(16))]
 pub(crate) struct Tri4 {
-    p: [[Vec4; 3]; 3],
-    /// Unnormalised normals `(p1 - p0) x (p2 - p0)` ([`Tri::normal`], bit for bit).
-    n: [Vec4; 3],
+    /// Vertices 0 to 2, then the unnormalised normals `(p1 - p0) x (p2 - p0)` ([`Tri::normal`],
+    /// bit for bit).
+    rows: [[Vec4; 3]; 4],
     /// Index of each lane's triangle in the owner's triangle array.
     pub idx: [u32; 4],
 }
+
+/// [`Tri4::row`]'s index of the normals.
+pub(crate) const NORMAL: usize = 3;
 
 impl Tri4 {
     /// Packs the triangles `tris[idx[..]]` (1 to 4 of them) into one packet.
@@ -167,81 +174,214 @@ impl Tri4 {
         debug_assert!(!idx.is_empty() && idx.len() <= 4);
         let idx: [u32; 4] = std::array::from_fn(|i| idx[i.min(idx.len() - 1)]);
         let lanes: [&Tri; 4] = idx.map(|i| &tris[i as usize]);
-        let p = std::array::from_fn(|v| {
-            std::array::from_fn(|a| Vec4::from_array(std::array::from_fn(|i| lanes[i].p[v][a])))
-        });
         let normals: [Vec3; 4] = lanes.map(Tri::normal);
-        let n = std::array::from_fn(|a| Vec4::from_array(std::array::from_fn(|i| normals[i][a])));
-        Self { p, n, idx }
+        let rows = std::array::from_fn(|v| {
+            std::array::from_fn(|a| {
+                Vec4::from_array(std::array::from_fn(|i| {
+                    if v == NORMAL {
+                        normals[i][a]
+                    } else {
+                        lanes[i].p[v][a]
+                    }
+                }))
+            })
+        });
+        Self { rows, idx }
+    }
+
+    /// Coordinate `axis` of vertex `v` (0 to 2) or of the normal ([`NORMAL`]) of each lane.
+    #[inline(always)]
+    pub fn row(&self, v: usize, axis: usize) -> Vec4 {
+        self.rows[v][axis]
     }
 
     /// Lane `i`'s vertices.
     fn lane(&self, i: usize) -> [Vec3; 3] {
-        std::array::from_fn(|v| Vec3::new(self.p[v][0][i], self.p[v][1][i], self.p[v][2][i]))
+        std::array::from_fn(|v| Vec3::new(self.rows[v][0][i], self.rows[v][1][i], self.rows[v][2][i]))
     }
 }
 
+/// The lane arithmetic of the packet test ([`RayTri::closest_in`]): one packet's four
+/// triangles in glam's `Vec4` (every path), or two packets' eight in one AVX register
+/// (`simd::x86`). Every operation is the IEEE one on each lane, in the order
+/// [`RayTri::intersect`] does it on one triangle, so a lane's hit is bit for bit that test's
+/// at either width (`tests/bvh_props.rs` pins it on every path).
+pub(crate) trait TriLanes:
+    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Div<Output = Self>
+{
+    /// One flag per lane.
+    type Mask: Copy + BitAnd<Output = Self::Mask> + BitOr<Output = Self::Mask> + Not<Output = Self::Mask>;
+    /// The lanes stored.
+    type Array: Copy + Index<usize, Output = f32>;
+    /// Packets per value (1 or 2): lane `4 * p + i` is lane `i` of packet `p`.
+    const PACKETS: usize;
+    fn splat(x: f32) -> Self;
+    /// [`Tri4::row`] of `q[..Self::PACKETS]`.
+    fn row(q: &[Tri4], v: usize, axis: usize) -> Self;
+    fn lt(self, o: Self) -> Self::Mask;
+    fn gt(self, o: Self) -> Self::Mask;
+    fn eq(self, o: Self) -> Self::Mask;
+    fn ne(self, o: Self) -> Self::Mask;
+    fn ge(self, o: Self) -> Self::Mask;
+    fn le(self, o: Self) -> Self::Mask;
+    fn finite(self) -> Self::Mask;
+    /// Bit `i` set for lane `i`.
+    fn bitmask(m: Self::Mask) -> u32;
+    fn to_array(self) -> Self::Array;
+}
+
+impl TriLanes for Vec4 {
+    type Mask = glam::BVec4A;
+    type Array = [f32; 4];
+    const PACKETS: usize = 1;
+
+    #[inline(always)]
+    fn splat(x: f32) -> Self {
+        Vec4::splat(x)
+    }
+
+    #[inline(always)]
+    fn row(q: &[Tri4], v: usize, axis: usize) -> Self {
+        q[0].row(v, axis)
+    }
+
+    #[inline(always)]
+    fn lt(self, o: Self) -> Self::Mask {
+        self.cmplt(o)
+    }
+
+    #[inline(always)]
+    fn gt(self, o: Self) -> Self::Mask {
+        self.cmpgt(o)
+    }
+
+    #[inline(always)]
+    fn eq(self, o: Self) -> Self::Mask {
+        self.cmpeq(o)
+    }
+
+    #[inline(always)]
+    fn ne(self, o: Self) -> Self::Mask {
+        self.cmpne(o)
+    }
+
+    #[inline(always)]
+    fn ge(self, o: Self) -> Self::Mask {
+        self.cmpge(o)
+    }
+
+    #[inline(always)]
+    fn le(self, o: Self) -> Self::Mask {
+        self.cmple(o)
+    }
+
+    #[inline(always)]
+    fn finite(self) -> Self::Mask {
+        self.is_finite_mask()
+    }
+
+    #[inline(always)]
+    fn bitmask(m: Self::Mask) -> u32 {
+        m.bitmask()
+    }
+
+    #[inline(always)]
+    fn to_array(self) -> [f32; 4] {
+        Vec4::to_array(&self)
+    }
+}
+
+/// What one packet test found.
+enum LaneTest<L: TriLanes> {
+    Miss,
+    /// A lane that may be inside is exactly on an edge in f32: the one-triangle test decides.
+    OnEdge,
+    /// `mask`: the lanes hit within the interval, with their distances and edge functions.
+    Hit {
+        mask: u32,
+        t: L,
+        v: L,
+        w: L,
+        det: L,
+    },
+}
+
 impl RayTri {
-    /// The closest of the four lanes hit with `t_min <= t <= t_max` (the lowest lane on ties),
-    /// with its lane; each lane's hit equals [`Self::intersect`] on that triangle.
+    /// The closest triangle of a leaf's `packets` hit with `t_min <= t <= t_max`: its index in
+    /// the packets' lanes (`4 * packet + lane`, the lowest on ties) and the hit, which equals
+    /// [`Self::intersect`] on that triangle. `L` tests `L::PACKETS` packets at once; a last
+    /// packet left over goes 4-wide.
+    ///
+    /// Eight lanes (the AVX2 and AVX-512 paths) test a leaf's two packets in one go: a leaf
+    /// holds up to eight triangles, in 1.66 packets on average (session 29, monastery with
+    /// 8,000 ducks), and the second packet cost a whole test.
+    #[inline(always)]
+    pub fn closest_in<L: TriLanes>(&self, packets: &[Tri4], t_max: f32) -> Option<(usize, TriHit)> {
+        // Loops and functions, no closures or iterator adaptors: on the AVX2 path, code left
+        // out of line would make every intrinsic a call.
+        let mut t_max = t_max;
+        let mut best: Option<(usize, TriHit)> = None;
+        let full = packets.len() / L::PACKETS * L::PACKETS;
+        let mut p = 0;
+        while p < packets.len() {
+            let hit = if p < full {
+                self.closest_lane::<L>(&packets[p..p + L::PACKETS], t_max)
+            } else {
+                // The last packet, when a leaf has one more than `L` takes.
+                self.closest_lane::<Vec4>(&packets[p..p + 1], t_max)
+            };
+            if let Some((i, h)) = hit {
+                // Strictly closer only: ties keep the lowest index.
+                if best.is_none_or(|(_, b)| h.t < b.t) {
+                    t_max = h.t;
+                    best = Some((4 * p + i, h));
+                }
+            }
+            p += if p < full { L::PACKETS } else { 1 };
+        }
+        best
+    }
+
+    /// Whether any triangle of `packets` is hit with `t_min <= t <= t_max` ([`Self::closest_in`]'s
+    /// lanes, without picking the closest).
+    #[inline(always)]
+    pub fn occluded_in<L: TriLanes>(&self, packets: &[Tri4], t_max: f32) -> bool {
+        let full = packets.len() / L::PACKETS * L::PACKETS;
+        let mut p = 0;
+        while p < full {
+            if self.occludes::<L>(&packets[p..p + L::PACKETS], t_max) {
+                return true;
+            }
+            p += L::PACKETS;
+        }
+        p < packets.len() && self.occludes::<Vec4>(&packets[p..p + 1], t_max)
+    }
+
+    /// Whether one packet test finds a lane hit.
+    #[inline(always)]
+    fn occludes<L: TriLanes>(&self, q: &[Tri4], t_max: f32) -> bool {
+        match self.test_lanes::<L>(q, t_max) {
+            LaneTest::Miss => false,
+            LaneTest::OnEdge => self.closest_scalar(q, t_max).is_some(),
+            LaneTest::Hit { .. } => true,
+        }
+    }
+
+    /// The closest of one packet test's lanes hit with `t_min <= t <= t_max` (the lowest lane
+    /// on ties), with its lane.
     ///
     /// The vertices are read by the ray's axes straight from the packet (one load each, the
     /// axis offsets fixed per ray), not shifted on all three axes first and then picked: that
     /// form stored the nine shifted rows to the stack and read them back by index (cachegrind,
     /// session 27, monastery with 8,000 ducks: the leaf closures ran 205M instructions before,
-    /// 184M after). A lane exactly on an edge goes to the one-triangle test only if it could be
-    /// inside: a strictly negative and a strictly positive edge function keep their signs in
-    /// f64 (both products are exact there), so such a lane is out either way.
-    ///
-    /// The axes index the packet with bounds checks (nine instructions per leaf call). Tried
-    /// (session 29, cachegrind, monastery with 8,000 ducks): the axes as a `u8` enum, whose
-    /// range the compiler knows: the leaf tests ran 6.2M fewer instructions and the query
-    /// entries 8.7M more (program +2.8M); not kept.
+    /// 184M after).
     #[inline(always)]
-    pub fn intersect4(&self, q: &Tri4, t_max: f32) -> Option<(usize, TriHit)> {
-        let (kx, ky, kz) = (self.kx, self.ky, self.kz);
-        let [ox, oy, oz] = self.org_k.map(Vec4::splat);
-        let (sx, sy) = (Vec4::splat(self.sx), Vec4::splat(self.sy));
-        // Vertex `v` relative to the origin, sheared so that the ray runs along +z: the same
-        // operations as `intersect`'s `a[kx] - sx * a[kz]`.
-        let sheared = |v: usize| {
-            let z = q.p[v][kz] - oz;
-            ((q.p[v][kx] - ox) - sx * z, (q.p[v][ky] - oy) - sy * z)
+    fn closest_lane<L: TriLanes>(&self, q: &[Tri4], t_max: f32) -> Option<(usize, TriHit)> {
+        let (mut mask, t, v, w, det) = match self.test_lanes::<L>(q, t_max) {
+            LaneTest::Miss => return None,
+            LaneTest::OnEdge => return self.closest_scalar(q, t_max),
+            LaneTest::Hit { mask, t, v, w, det } => (mask, t, v, w, det),
         };
-        let ((ax, ay), (bx, by), (cx, cy)) = (sheared(0), sheared(1), sheared(2));
-        let u = cx * by - cy * bx;
-        let v = ax * cy - ay * cx;
-        let w = bx * ay - by * ax;
-        let zero = Vec4::ZERO;
-        let neg = u.cmplt(zero) | v.cmplt(zero) | w.cmplt(zero);
-        let pos = u.cmpgt(zero) | v.cmpgt(zero) | w.cmpgt(zero);
-        let maybe_inside = !(neg & pos);
-        if !maybe_inside.any() {
-            // Every lane outside an edge (most packets a ray reaches): no distance, no division.
-            return None;
-        }
-        if (maybe_inside & (u.cmpeq(zero) | v.cmpeq(zero) | w.cmpeq(zero))).any() {
-            // A lane exactly on an edge in f32: the one-triangle test decides it in f64.
-            return self.intersect4_scalar(q, t_max);
-        }
-        let det = u + v + w;
-        let n = &q.n;
-        let a = [
-            q.p[0][0] - Vec4::splat(self.org.x),
-            q.p[0][1] - Vec4::splat(self.org.y),
-            q.p[0][2] - Vec4::splat(self.org.z),
-        ];
-        let dir = [Vec4::splat(self.dir.x), Vec4::splat(self.dir.y), Vec4::splat(self.dir.z)];
-        let t = (n[0] * a[0] + n[1] * a[1] + n[2] * a[2]) / (n[0] * dir[0] + n[1] * dir[1] + n[2] * dir[2]);
-        let ok = maybe_inside
-            & det.cmpne(zero)
-            & det.is_finite_mask()
-            & t.cmpge(Vec4::splat(self.t_min))
-            & t.cmple(Vec4::splat(t_max));
-        let mut mask = ok.bitmask();
-        if mask == 0 {
-            return None;
-        }
         let ts = t.to_array();
         let mut best = mask.trailing_zeros() as usize;
         mask &= mask - 1;
@@ -252,18 +392,81 @@ impl RayTri {
                 best = i;
             }
         }
-        let rcp = 1.0 / det[best];
-        Some((best, TriHit { t: ts[best], u: v[best] * rcp, v: w[best] * rcp }))
+        let rcp = 1.0 / det.to_array()[best];
+        Some((best, TriHit { t: ts[best], u: v.to_array()[best] * rcp, v: w.to_array()[best] * rcp }))
     }
 
-    /// [`Self::intersect4`] one lane at a time with [`Self::intersect`].
+    /// The watertight test on every lane of `q[..L::PACKETS]`: the same operations in the same
+    /// order as [`Self::intersect`]. A lane exactly on an edge goes to the one-triangle test
+    /// only if it could be inside: a strictly negative and a strictly positive edge function
+    /// keep their signs in f64 (both products are exact there), so such a lane is out either
+    /// way.
+    ///
+    /// The axes index the packet with bounds checks (nine instructions per leaf call). Tried
+    /// (session 29, cachegrind, monastery with 8,000 ducks): the axes as a `u8` enum, whose
+    /// range the compiler knows: the leaf tests ran 6.2M fewer instructions and the query
+    /// entries 8.7M more (program +2.8M); not kept.
+    #[inline(always)]
+    fn test_lanes<L: TriLanes>(&self, q: &[Tri4], t_max: f32) -> LaneTest<L> {
+        debug_assert_eq!(q.len(), L::PACKETS);
+        let (ax, ay) = self.sheared::<L>(q, 0);
+        let (bx, by) = self.sheared::<L>(q, 1);
+        let (cx, cy) = self.sheared::<L>(q, 2);
+        let u = cx * by - cy * bx;
+        let v = ax * cy - ay * cx;
+        let w = bx * ay - by * ax;
+        let zero = L::splat(0.0);
+        let neg = u.lt(zero) | v.lt(zero) | w.lt(zero);
+        let pos = u.gt(zero) | v.gt(zero) | w.gt(zero);
+        let maybe_inside = !(neg & pos);
+        if L::bitmask(maybe_inside) == 0 {
+            // Every lane outside an edge (most packets a ray reaches): no distance, no division.
+            return LaneTest::Miss;
+        }
+        if L::bitmask(maybe_inside & (u.eq(zero) | v.eq(zero) | w.eq(zero))) != 0 {
+            return LaneTest::OnEdge;
+        }
+        let det = u + v + w;
+        let (o, d) = (self.org, self.dir);
+        let a = [
+            L::row(q, 0, 0) - L::splat(o.x),
+            L::row(q, 0, 1) - L::splat(o.y),
+            L::row(q, 0, 2) - L::splat(o.z),
+        ];
+        let n = [L::row(q, NORMAL, 0), L::row(q, NORMAL, 1), L::row(q, NORMAL, 2)];
+        let dir = [L::splat(d.x), L::splat(d.y), L::splat(d.z)];
+        let t = (n[0] * a[0] + n[1] * a[1] + n[2] * a[2]) / (n[0] * dir[0] + n[1] * dir[1] + n[2] * dir[2]);
+        let ok =
+            maybe_inside & det.ne(zero) & det.finite() & t.ge(L::splat(self.t_min)) & t.le(L::splat(t_max));
+        match L::bitmask(ok) {
+            0 => LaneTest::Miss,
+            mask => LaneTest::Hit { mask, t, v, w, det },
+        }
+    }
+
+    /// Vertex `v` of each lane relative to the origin, sheared so that the ray runs along +z
+    /// (x and y): the same operations as [`Self::intersect`]'s `a[kx] - sx * a[kz]`.
+    ///
+    /// A function, not a closure: a closure is not `#[inline(always)]`, and the AVX2 lanes'
+    /// intrinsics in one left out of line become calls.
+    #[inline(always)]
+    fn sheared<L: TriLanes>(&self, q: &[Tri4], v: usize) -> (L, L) {
+        let z = L::row(q, v, self.kz) - L::splat(self.org_k[2]);
+        let x = (L::row(q, v, self.kx) - L::splat(self.org_k[0])) - L::splat(self.sx) * z;
+        let y = (L::row(q, v, self.ky) - L::splat(self.org_k[1])) - L::splat(self.sy) * z;
+        (x, y)
+    }
+
+    /// [`Self::closest_lane`] one lane at a time with [`Self::intersect`].
     #[cold]
-    fn intersect4_scalar(&self, q: &Tri4, t_max: f32) -> Option<(usize, TriHit)> {
+    fn closest_scalar(&self, q: &[Tri4], t_max: f32) -> Option<(usize, TriHit)> {
         let mut best: Option<(usize, TriHit)> = None;
-        for i in 0..4 {
-            if let Some(h) = self.intersect(&q.lane(i), t_max) {
-                if best.is_none_or(|(_, b)| h.t < b.t) {
-                    best = Some((i, h));
+        for (p, packet) in q.iter().enumerate() {
+            for i in 0..4 {
+                if let Some(h) = self.intersect(&packet.lane(i), t_max) {
+                    if best.is_none_or(|(_, b)| h.t < b.t) {
+                        best = Some((4 * p + i, h));
+                    }
                 }
             }
         }

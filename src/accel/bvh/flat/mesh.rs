@@ -104,16 +104,15 @@ impl MeshBvh {
             bray,
             t_max,
             &mut |first, count, t_max| {
+                let packets = &self.packets[first as usize..(first + count) as usize];
                 k.leaf(|| {
-                    for q in &self.packets[first as usize..(first + count) as usize] {
-                        if let Some((lane, h)) = tray.intersect4(q, *t_max) {
-                            // Strictly closer only: ties keep the first triangle found.
-                            if best.is_none_or(|b| h.t < b.t) {
-                                *t_max = h.t;
-                                let tri = self.tris[q.idx[lane] as usize];
-                                *best = Some(PrimHit { t: h.t, u: h.u, v: h.v, tri });
-                                found = true;
-                            }
+                    if let Some((i, h)) = k.closest_tri(tray, packets, *t_max) {
+                        // Strictly closer only: ties keep the first triangle found.
+                        if best.is_none_or(|b| h.t < b.t) {
+                            *t_max = h.t;
+                            let tri = self.tris[packets[i / 4].idx[i % 4] as usize];
+                            *best = Some(PrimHit { t: h.t, u: h.u, v: h.v, tri });
+                            found = true;
                         }
                     }
                 });
@@ -141,11 +140,8 @@ impl MeshBvh {
             bray,
             &mut t_max,
             &mut |first, count, t_max| {
-                k.leaf(|| {
-                    self.packets[first as usize..(first + count) as usize]
-                        .iter()
-                        .any(|q| tray.intersect4(q, *t_max).is_some())
-                })
+                let packets = &self.packets[first as usize..(first + count) as usize];
+                k.leaf(|| k.occluded_tri(tray, packets, *t_max))
             },
         )
     }
@@ -174,17 +170,16 @@ impl MeshBvh {
             lanes,
             t_max,
             &mut |first, count, lanes, t_max| {
+                let packets = &self.packets[first as usize..(first + count) as usize];
                 k.leaf(|| {
-                    for q in &self.packets[first as usize..(first + count) as usize] {
-                        for i in each_bit(lanes) {
-                            if let Some((lane, h)) = packet.tray[i].intersect4(q, t_max[i]) {
-                                // Strictly closer only, as for one ray.
-                                if best[i].is_none_or(|b| h.t < b.t) {
-                                    t_max[i] = h.t;
-                                    let tri = self.tris[q.idx[lane] as usize];
-                                    best[i] = Some(PrimHit { t: h.t, u: h.u, v: h.v, tri });
-                                    found |= 1 << i;
-                                }
+                    for i in each_bit(lanes) {
+                        if let Some((j, h)) = k.closest_tri(&packet.tray[i], packets, t_max[i]) {
+                            // Strictly closer only, as for one ray.
+                            if best[i].is_none_or(|b| h.t < b.t) {
+                                t_max[i] = h.t;
+                                let tri = self.tris[packets[j / 4].idx[j % 4] as usize];
+                                best[i] = Some(PrimHit { t: h.t, u: h.u, v: h.v, tri });
+                                found |= 1 << i;
                             }
                         }
                     }
@@ -219,7 +214,7 @@ impl MeshBvh {
                 k.leaf(|| {
                     let mut blocked = 0;
                     for i in each_bit(lanes) {
-                        if packets.iter().any(|q| packet.tray[i].intersect4(q, t_max[i]).is_some()) {
+                        if k.occluded_tri(&packet.tray[i], packets, t_max[i]) {
                             blocked |= 1 << i;
                         }
                     }

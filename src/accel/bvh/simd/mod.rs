@@ -1,6 +1,7 @@
 //! The SIMD paths of the BVH's ray queries: which one runs ([`SimdPath`]: run-time CPU
 //! detection, overridden by the `DORMANT_SIMD` environment variable), and the per-path kernels
-//! ([`Kernel`]: the 8-wide box test of [`crate::accel::bvh`]'s wide nodes).
+//! ([`Kernel`]: the 8-wide box test of [`crate::accel::bvh`]'s wide nodes, and how many triangle
+//! packets a leaf test takes at once).
 //!
 //! The default is AVX2 where the CPU runs it ([`SimdPath::best`]: AVX-512 measured slower).
 //! A query picks its path once ([`SimdPath::current`]) and runs the whole traversal as one
@@ -19,6 +20,7 @@ use glam::{Vec3A, Vec4};
 use serde::Serialize;
 
 use super::flat::FAR_SCALE;
+use super::triangle::{RayTri, Tri4, TriHit};
 
 #[cfg(target_arch = "x86_64")]
 pub(crate) use x86::{Avx2, Avx512};
@@ -198,6 +200,11 @@ pub(crate) trait Kernel: Copy {
     /// input costs a register copy (cachegrind, session 27, monastery with 8,000 ducks: the
     /// leaf tests ran 184M instructions in SSE, 162M compiled for AVX2).
     fn leaf<R>(self, f: impl FnOnce() -> R) -> R;
+    /// [`RayTri::closest_in`] on a leaf's `packets`, as many at once as this path's registers
+    /// hold: one on the portable path, two on AVX2 and AVX-512.
+    fn closest_tri(self, ray: &RayTri, packets: &[Tri4], t_max: f32) -> Option<(usize, TriHit)>;
+    /// [`RayTri::occluded_in`], as [`Self::closest_tri`].
+    fn occluded_tri(self, ray: &RayTri, packets: &[Tri4], t_max: f32) -> bool;
 }
 
 /// glam's `Vec4`, two halves per node.
@@ -232,6 +239,16 @@ impl Kernel for Portable {
     #[inline(always)]
     fn leaf<R>(self, f: impl FnOnce() -> R) -> R {
         f()
+    }
+
+    #[inline(always)]
+    fn closest_tri(self, ray: &RayTri, packets: &[Tri4], t_max: f32) -> Option<(usize, TriHit)> {
+        ray.closest_in::<Vec4>(packets, t_max)
+    }
+
+    #[inline(always)]
+    fn occluded_tri(self, ray: &RayTri, packets: &[Tri4], t_max: f32) -> bool {
+        ray.occluded_in::<Vec4>(packets, t_max)
     }
 }
 

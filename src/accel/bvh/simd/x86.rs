@@ -1,5 +1,5 @@
-//! The x86-64 kernels: AVX2 (8 boxes in one `__m256`) and AVX-512 (the same with the compare
-//! going straight to a mask register). Their tokens are made only by [`super::dispatch!`] once
+//! The x86-64 kernels: AVX2 (8 boxes in one `__m256`, and a leaf's triangles two packets at a
+//! time) and AVX-512 (the same with the box compare going straight to a mask register). Their tokens are made only by [`super::dispatch!`] once
 //! the path is known to run here; every intrinsic below relies on that, except
 //! [`truncate3`]'s, which are SSE2 (part of x86-64).
 
@@ -8,6 +8,7 @@ use std::arch::x86_64::*;
 use glam::Vec3A;
 
 use super::{BoxRay8, Boxes8, Kernel, FAR_SCALE};
+use crate::accel::bvh::triangle::{RayTri, Tri4, TriHit, TriLanes};
 
 /// [`super::truncate3`]: one SSE2 conversion, then the three lanes moved out.
 #[inline(always)]
@@ -155,6 +156,16 @@ impl Kernel for Avx2 {
         // SAFETY: as in `box8`.
         unsafe { run_avx2(f) }
     }
+
+    #[inline(always)]
+    fn closest_tri(self, ray: &RayTri, packets: &[Tri4], t_max: f32) -> Option<(usize, TriHit)> {
+        ray.closest_in::<F32x8>(packets, t_max)
+    }
+
+    #[inline(always)]
+    fn occluded_tri(self, ray: &RayTri, packets: &[Tri4], t_max: f32) -> bool {
+        ray.occluded_in::<F32x8>(packets, t_max)
+    }
 }
 
 impl Kernel for Avx512 {
@@ -178,11 +189,21 @@ impl Kernel for Avx512 {
         unsafe { box8_or_inf_avx2(r, b, t_max) }
     }
 
-    /// Compiled for AVX2: the leaf tests are 4-wide, and AVX-512 adds nothing to them.
+    /// Compiled for AVX2: the leaf tests are AVX2's, and AVX-512 adds nothing to them.
     #[inline(always)]
     fn leaf<R>(self, f: impl FnOnce() -> R) -> R {
         // SAFETY: as in `box8_or_inf`.
         unsafe { run_avx2(f) }
+    }
+
+    #[inline(always)]
+    fn closest_tri(self, ray: &RayTri, packets: &[Tri4], t_max: f32) -> Option<(usize, TriHit)> {
+        ray.closest_in::<F32x8>(packets, t_max)
+    }
+
+    #[inline(always)]
+    fn occluded_tri(self, ray: &RayTri, packets: &[Tri4], t_max: f32) -> bool {
+        ray.occluded_in::<F32x8>(packets, t_max)
     }
 }
 
@@ -220,4 +241,123 @@ unsafe fn box8_or_inf_avx2(r: &RayM256, b: &Boxes8, t_max: f32) -> (u32, [f32; 8
 #[inline]
 unsafe fn run_avx2<R>(f: impl FnOnce() -> R) -> R {
     f()
+}
+
+/// Eight triangle lanes, two [`Tri4`] packets, in one AVX register: [`TriLanes`] for the AVX2
+/// and AVX-512 leaf tests.
+///
+/// Private to this module, which makes values of it only inside [`Kernel::closest_tri`] and
+/// [`Kernel::occluded_tri`] of the AVX2 and AVX-512 tokens: every intrinsic below runs on a CPU
+/// with AVX2, which is what their `// SAFETY:` lines rely on.
+#[derive(Clone, Copy, Debug)]
+struct F32x8(__m256);
+
+/// Lane flags of [`F32x8`]: all bits set or clear per lane.
+#[derive(Clone, Copy, Debug)]
+struct Mask8(__m256);
+
+macro_rules! lane_op {
+    ($trait:ident, $method:ident, $intrinsic:ident, $ty:ident) => {
+        impl std::ops::$trait for $ty {
+            type Output = $ty;
+            #[inline(always)]
+            fn $method(self, o: $ty) -> $ty {
+                // SAFETY: values of this type exist only on a CPU with AVX2 (see `F32x8`).
+                $ty(unsafe { $intrinsic(self.0, o.0) })
+            }
+        }
+    };
+}
+
+lane_op!(Add, add, _mm256_add_ps, F32x8);
+lane_op!(Sub, sub, _mm256_sub_ps, F32x8);
+lane_op!(Mul, mul, _mm256_mul_ps, F32x8);
+lane_op!(Div, div, _mm256_div_ps, F32x8);
+lane_op!(BitAnd, bitand, _mm256_and_ps, Mask8);
+lane_op!(BitOr, bitor, _mm256_or_ps, Mask8);
+
+impl std::ops::Not for Mask8 {
+    type Output = Mask8;
+    #[inline(always)]
+    fn not(self) -> Mask8 {
+        // SAFETY: as in `lane_op!` (AVX).
+        Mask8(unsafe { _mm256_xor_ps(self.0, _mm256_castsi256_ps(_mm256_set1_epi32(-1))) })
+    }
+}
+
+impl F32x8 {
+    #[inline(always)]
+    fn cmp<const OP: i32>(self, o: F32x8) -> Mask8 {
+        // SAFETY: as in `lane_op!` (AVX).
+        Mask8(unsafe { _mm256_cmp_ps::<OP>(self.0, o.0) })
+    }
+}
+
+impl TriLanes for F32x8 {
+    type Mask = Mask8;
+    type Array = [f32; 8];
+    const PACKETS: usize = 2;
+
+    #[inline(always)]
+    fn splat(x: f32) -> Self {
+        // SAFETY: as in `lane_op!` (AVX).
+        F32x8(unsafe { _mm256_set1_ps(x) })
+    }
+
+    /// Packet 0's row in the low half, packet 1's in the high half: two 16-byte loads.
+    #[inline(always)]
+    fn row(q: &[Tri4], v: usize, axis: usize) -> Self {
+        // SAFETY: as in `lane_op!` (AVX).
+        F32x8(unsafe { _mm256_set_m128(q[1].row(v, axis).into(), q[0].row(v, axis).into()) })
+    }
+
+    #[inline(always)]
+    fn lt(self, o: Self) -> Mask8 {
+        self.cmp::<_CMP_LT_OQ>(o)
+    }
+
+    #[inline(always)]
+    fn gt(self, o: Self) -> Mask8 {
+        self.cmp::<_CMP_GT_OQ>(o)
+    }
+
+    #[inline(always)]
+    fn eq(self, o: Self) -> Mask8 {
+        self.cmp::<_CMP_EQ_OQ>(o)
+    }
+
+    /// Unordered: a NaN lane is not equal, as glam's `cmpne` (`_mm_cmpneq_ps`) has it.
+    #[inline(always)]
+    fn ne(self, o: Self) -> Mask8 {
+        self.cmp::<_CMP_NEQ_UQ>(o)
+    }
+
+    #[inline(always)]
+    fn ge(self, o: Self) -> Mask8 {
+        self.cmp::<_CMP_GE_OQ>(o)
+    }
+
+    #[inline(always)]
+    fn le(self, o: Self) -> Mask8 {
+        self.cmp::<_CMP_LE_OQ>(o)
+    }
+
+    /// `|x| < inf`: false for infinities and NaN, as glam's `is_finite_mask`.
+    #[inline(always)]
+    fn finite(self) -> Mask8 {
+        // SAFETY: as in `lane_op!` (AVX).
+        let abs = F32x8(unsafe { _mm256_andnot_ps(_mm256_set1_ps(-0.0), self.0) });
+        abs.lt(F32x8::splat(f32::INFINITY))
+    }
+
+    #[inline(always)]
+    fn bitmask(m: Mask8) -> u32 {
+        // SAFETY: as in `lane_op!` (AVX).
+        unsafe { _mm256_movemask_ps(m.0) as u32 }
+    }
+
+    #[inline(always)]
+    fn to_array(self) -> [f32; 8] {
+        to_array(self.0)
+    }
 }
