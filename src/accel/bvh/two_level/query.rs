@@ -96,6 +96,11 @@ pub(crate) fn build_top(instances: &[TopInstance], params: BuildParams) -> Top {
         .with_min_len(PAR_CHUNK)
         .map(|(_, blas, xf, _, motion)| match motion {
             Some(m) => m.bounds(&blas.bounds()),
+            // The moved root box, as Embree bounds an instance. Tried (session 30, cachegrind,
+            // 320x180 path-traced frame of the monastery with 8,000 ducks): the union of the
+            // root's eight children's boxes, each moved, tighter for a rotated duck: trace
+            // -1.1% (600.1M against 606.5M) for +9.5M instructions building the level's
+            // bounds (2% of the startup, paid again at every frame's top level); not kept.
             None => blas.bounds().transformed(xf),
         })
         .collect();
