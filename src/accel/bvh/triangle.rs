@@ -72,9 +72,9 @@ pub(crate) struct TriHit {
 pub(crate) struct RayTri {
     org: Vec3,
     dir: Vec3,
-    kx: usize,
-    ky: usize,
-    kz: usize,
+    kx: Axis,
+    ky: Axis,
+    kz: Axis,
     /// The origin's coordinates on the axes `kx`, `ky`, `kz`, picked once per ray: glam's
     /// `Vec3` indexed by a variable is a `match`, and the leaves read these on every call
     /// (cachegrind, session 27).
@@ -96,9 +96,9 @@ impl RayTri {
         Self {
             org: ray.origin,
             dir: ray.dir,
-            kx,
-            ky,
-            kz,
+            kx: Axis::new(kx),
+            ky: Axis::new(ky),
+            kz: Axis::new(kz),
             org_k: [o[kx], o[ky], o[kz]],
             sx: d[kx] / d[kz],
             sy: d[ky] / d[kz],
@@ -109,7 +109,7 @@ impl RayTri {
     /// Hit with `t_min <= t <= t_max`, if any. Both sides of the triangle are hit.
     #[inline(always)]
     pub fn intersect(&self, tri: &[Vec3; 3], t_max: f32) -> Option<TriHit> {
-        let (kx, ky, kz) = (self.kx, self.ky, self.kz);
+        let (kx, ky, kz) = (self.kx.0, self.ky.0, self.kz.0);
         let a = tri[0] - self.org;
         let b = tri[1] - self.org;
         let c = tri[2] - self.org;
@@ -168,6 +168,28 @@ pub(crate) struct Tri4 {
 /// [`Tri4::row`]'s index of the normals.
 pub(crate) const NORMAL: usize = 3;
 
+/// A coordinate axis, 0 to 2: what [`Tri4::row`] reads a packet by without a bounds check.
+///
+/// The watertight test reads the packet by the ray's axes, which are known only at run time;
+/// checked, that was nine compares and branches per leaf test. Tried in session 29: the
+/// axes as a `u8` enum, whose range the compiler knows: the leaf tests ran 6.2M fewer
+/// instructions (cachegrind, monastery with 8,000 ducks) and the query entries 8.7M more
+/// (making the enum from an index is a `match`). Here the one constructor clamps, and the
+/// compiler drops the clamp where it knows the index is below 3, as in [`RayTri::new`].
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Axis(usize);
+
+impl Axis {
+    pub const X: Axis = Axis(0);
+    pub const Y: Axis = Axis(1);
+    pub const Z: Axis = Axis(2);
+
+    #[inline(always)]
+    fn new(i: usize) -> Self {
+        Axis(i.min(2))
+    }
+}
+
 impl Tri4 {
     /// Packs the triangles `tris[idx[..]]` (1 to 4 of them) into one packet.
     pub fn pack(tris: &[Tri], idx: &[u32]) -> Self {
@@ -190,9 +212,14 @@ impl Tri4 {
     }
 
     /// Coordinate `axis` of vertex `v` (0 to 2) or of the normal ([`NORMAL`]) of each lane.
+    /// `v` is a constant wherever this is inlined, so its bounds check folds away; `axis` is
+    /// the ray's, and is read without one.
     #[inline(always)]
-    pub fn row(&self, v: usize, axis: usize) -> Vec4 {
-        self.rows[v][axis]
+    pub fn row(&self, v: usize, axis: Axis) -> Vec4 {
+        let row = &self.rows[v];
+        // SAFETY: `axis.0 < 3`, which `Axis`'s only constructor makes sure of, and `row` has
+        // three entries.
+        unsafe { *row.get_unchecked(axis.0) }
     }
 
     /// Lane `i`'s vertices.
@@ -217,7 +244,7 @@ pub(crate) trait TriLanes:
     const PACKETS: usize;
     fn splat(x: f32) -> Self;
     /// [`Tri4::row`] of `q[..Self::PACKETS]`.
-    fn row(q: &[Tri4], v: usize, axis: usize) -> Self;
+    fn row(q: &[Tri4], v: usize, axis: Axis) -> Self;
     fn lt(self, o: Self) -> Self::Mask;
     fn gt(self, o: Self) -> Self::Mask;
     fn eq(self, o: Self) -> Self::Mask;
@@ -241,7 +268,7 @@ impl TriLanes for Vec4 {
     }
 
     #[inline(always)]
-    fn row(q: &[Tri4], v: usize, axis: usize) -> Self {
+    fn row(q: &[Tri4], v: usize, axis: Axis) -> Self {
         q[0].row(v, axis)
     }
 
@@ -402,10 +429,7 @@ impl RayTri {
     /// keep their signs in f64 (both products are exact there), so such a lane is out either
     /// way.
     ///
-    /// The axes index the packet with bounds checks (nine instructions per leaf call). Tried
-    /// (session 29, cachegrind, monastery with 8,000 ducks): the axes as a `u8` enum, whose
-    /// range the compiler knows: the leaf tests ran 6.2M fewer instructions and the query
-    /// entries 8.7M more (program +2.8M); not kept.
+    /// The ray's axes index the packet without bounds checks ([`Axis`]).
     #[inline(always)]
     fn test_lanes<L: TriLanes>(&self, q: &[Tri4], t_max: f32) -> LaneTest<L> {
         debug_assert_eq!(q.len(), L::PACKETS);
@@ -429,11 +453,11 @@ impl RayTri {
         let det = u + v + w;
         let (o, d) = (self.org, self.dir);
         let a = [
-            L::row(q, 0, 0) - L::splat(o.x),
-            L::row(q, 0, 1) - L::splat(o.y),
-            L::row(q, 0, 2) - L::splat(o.z),
+            L::row(q, 0, Axis::X) - L::splat(o.x),
+            L::row(q, 0, Axis::Y) - L::splat(o.y),
+            L::row(q, 0, Axis::Z) - L::splat(o.z),
         ];
-        let n = [L::row(q, NORMAL, 0), L::row(q, NORMAL, 1), L::row(q, NORMAL, 2)];
+        let n = [L::row(q, NORMAL, Axis::X), L::row(q, NORMAL, Axis::Y), L::row(q, NORMAL, Axis::Z)];
         let dir = [L::splat(d.x), L::splat(d.y), L::splat(d.z)];
         let t = (n[0] * a[0] + n[1] * a[1] + n[2] * a[2]) / (n[0] * dir[0] + n[1] * dir[1] + n[2] * dir[2]);
         let ok =

@@ -8,7 +8,7 @@ use std::arch::x86_64::*;
 use glam::Vec3A;
 
 use super::{BoxRay8, Boxes8, Kernel, FAR_SCALE};
-use crate::accel::bvh::triangle::{RayTri, Tri4, TriHit, TriLanes};
+use crate::accel::bvh::triangle::{Axis, RayTri, Tri4, TriHit, TriLanes};
 
 /// [`super::truncate3`]: one SSE2 conversion, then the three lanes moved out.
 #[inline(always)]
@@ -306,7 +306,7 @@ impl TriLanes for F32x8 {
 
     /// Packet 0's row in the low half, packet 1's in the high half: two 16-byte loads.
     #[inline(always)]
-    fn row(q: &[Tri4], v: usize, axis: usize) -> Self {
+    fn row(q: &[Tri4], v: usize, axis: Axis) -> Self {
         // SAFETY: as in `lane_op!` (AVX).
         F32x8(unsafe { _mm256_set_m128(q[1].row(v, axis).into(), q[0].row(v, axis).into()) })
     }
