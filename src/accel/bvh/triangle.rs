@@ -243,6 +243,9 @@ pub(crate) trait TriLanes:
     /// Packets per value (1 or 2): lane `4 * p + i` is lane `i` of packet `p`.
     const PACKETS: usize;
     fn splat(x: f32) -> Self;
+    /// Lane-wise minimum and maximum (`minps` / `maxps`).
+    fn min(self, o: Self) -> Self;
+    fn max(self, o: Self) -> Self;
     /// [`Tri4::row`] of `q[..Self::PACKETS]`.
     fn row(q: &[Tri4], v: usize, axis: Axis) -> Self;
     fn lt(self, o: Self) -> Self::Mask;
@@ -265,6 +268,16 @@ impl TriLanes for Vec4 {
     #[inline(always)]
     fn splat(x: f32) -> Self {
         Vec4::splat(x)
+    }
+
+    #[inline(always)]
+    fn min(self, o: Self) -> Self {
+        Vec4::min(self, o)
+    }
+
+    #[inline(always)]
+    fn max(self, o: Self) -> Self {
+        Vec4::max(self, o)
     }
 
     #[inline(always)]
@@ -440,8 +453,13 @@ impl RayTri {
         let v = ax * cy - ay * cx;
         let w = bx * ay - by * ax;
         let zero = L::splat(0.0);
-        let neg = u.lt(zero) | v.lt(zero) | w.lt(zero);
-        let pos = u.gt(zero) | v.gt(zero) | w.gt(zero);
+        // Outside when one edge function is negative and another positive: the smallest below
+        // zero and the largest above. A lane with a NaN edge function may come out either way
+        // here (min and max pass NaN on from one operand only), but its `det` is NaN and the
+        // lane is never hit, on this path or the one-triangle test's. Four instructions fewer
+        // than three compares per side (session 30: the leaf tests -2.5% on the ducks).
+        let neg = u.min(v).min(w).lt(zero);
+        let pos = u.max(v).max(w).gt(zero);
         let maybe_inside = !(neg & pos);
         if L::bitmask(maybe_inside) == 0 {
             // Every lane outside an edge (most packets a ray reaches): no distance, no division.

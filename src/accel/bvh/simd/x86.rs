@@ -304,6 +304,18 @@ impl TriLanes for F32x8 {
         F32x8(unsafe { _mm256_set1_ps(x) })
     }
 
+    #[inline(always)]
+    fn min(self, o: Self) -> Self {
+        // SAFETY: as in `lane_op!` (AVX).
+        F32x8(unsafe { _mm256_min_ps(self.0, o.0) })
+    }
+
+    #[inline(always)]
+    fn max(self, o: Self) -> Self {
+        // SAFETY: as in `lane_op!` (AVX).
+        F32x8(unsafe { _mm256_max_ps(self.0, o.0) })
+    }
+
     /// Packet 0's row in the low half, packet 1's in the high half: two 16-byte loads.
     #[inline(always)]
     fn row(q: &[Tri4], v: usize, axis: Axis) -> Self {
