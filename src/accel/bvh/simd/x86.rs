@@ -131,6 +131,22 @@ fn to_array(v: __m256) -> [f32; 8] {
     out
 }
 
+/// [`Kernel::closest_tri`] and [`Kernel::occluded_tri`] on [`F32x8`] lanes: two packets per
+/// test, for the AVX2 and the AVX-512 token alike (both run AVX2).
+macro_rules! avx2_triangle_tests {
+    () => {
+        #[inline(always)]
+        fn closest_tri(self, ray: &RayTri, packets: &[Tri4], t_max: f32) -> Option<(usize, TriHit)> {
+            ray.closest_in::<F32x8>(packets, t_max)
+        }
+
+        #[inline(always)]
+        fn occluded_tri(self, ray: &RayTri, packets: &[Tri4], t_max: f32) -> bool {
+            ray.occluded_in::<F32x8>(packets, t_max)
+        }
+    };
+}
+
 impl Kernel for Avx2 {
     type Ray = RayM256;
 
@@ -157,15 +173,7 @@ impl Kernel for Avx2 {
         unsafe { run_avx2(f) }
     }
 
-    #[inline(always)]
-    fn closest_tri(self, ray: &RayTri, packets: &[Tri4], t_max: f32) -> Option<(usize, TriHit)> {
-        ray.closest_in::<F32x8>(packets, t_max)
-    }
-
-    #[inline(always)]
-    fn occluded_tri(self, ray: &RayTri, packets: &[Tri4], t_max: f32) -> bool {
-        ray.occluded_in::<F32x8>(packets, t_max)
-    }
+    avx2_triangle_tests!();
 }
 
 impl Kernel for Avx512 {
@@ -196,15 +204,7 @@ impl Kernel for Avx512 {
         unsafe { run_avx2(f) }
     }
 
-    #[inline(always)]
-    fn closest_tri(self, ray: &RayTri, packets: &[Tri4], t_max: f32) -> Option<(usize, TriHit)> {
-        ray.closest_in::<F32x8>(packets, t_max)
-    }
-
-    #[inline(always)]
-    fn occluded_tri(self, ray: &RayTri, packets: &[Tri4], t_max: f32) -> bool {
-        ray.occluded_in::<F32x8>(packets, t_max)
-    }
+    avx2_triangle_tests!();
 }
 
 // The kernels as `#[target_feature]` functions: inlined into the query's entry point (which
@@ -285,12 +285,15 @@ impl std::ops::Not for Mask8 {
     }
 }
 
-impl F32x8 {
-    #[inline(always)]
-    fn cmp<const OP: i32>(self, o: F32x8) -> Mask8 {
-        // SAFETY: as in `lane_op!` (AVX).
-        Mask8(unsafe { _mm256_cmp_ps::<OP>(self.0, o.0) })
-    }
+/// A [`TriLanes`] compare of [`F32x8`] by `_mm256_cmp_ps` with predicate `$op`.
+macro_rules! lane_cmp {
+    ($method:ident, $op:ident) => {
+        #[inline(always)]
+        fn $method(self, o: Self) -> Mask8 {
+            // SAFETY: as in `lane_op!` (AVX).
+            Mask8(unsafe { _mm256_cmp_ps::<$op>(self.0, o.0) })
+        }
+    };
 }
 
 impl TriLanes for F32x8 {
@@ -323,43 +326,21 @@ impl TriLanes for F32x8 {
         F32x8(unsafe { _mm256_set_m128(q[1].row(v, axis).into(), q[0].row(v, axis).into()) })
     }
 
-    #[inline(always)]
-    fn lt(self, o: Self) -> Mask8 {
-        self.cmp::<_CMP_LT_OQ>(o)
-    }
-
-    #[inline(always)]
-    fn gt(self, o: Self) -> Mask8 {
-        self.cmp::<_CMP_GT_OQ>(o)
-    }
-
-    #[inline(always)]
-    fn eq(self, o: Self) -> Mask8 {
-        self.cmp::<_CMP_EQ_OQ>(o)
-    }
-
-    /// Unordered: a NaN lane is not equal, as glam's `cmpne` (`_mm_cmpneq_ps`) has it.
-    #[inline(always)]
-    fn ne(self, o: Self) -> Mask8 {
-        self.cmp::<_CMP_NEQ_UQ>(o)
-    }
-
-    #[inline(always)]
-    fn ge(self, o: Self) -> Mask8 {
-        self.cmp::<_CMP_GE_OQ>(o)
-    }
-
-    #[inline(always)]
-    fn le(self, o: Self) -> Mask8 {
-        self.cmp::<_CMP_LE_OQ>(o)
-    }
+    // Ordered compares (false for a NaN lane), except `ne`, unordered (true for a NaN lane), as
+    // glam's `cmpne` (`_mm_cmpneq_ps`) has it.
+    lane_cmp!(lt, _CMP_LT_OQ);
+    lane_cmp!(gt, _CMP_GT_OQ);
+    lane_cmp!(eq, _CMP_EQ_OQ);
+    lane_cmp!(ne, _CMP_NEQ_UQ);
+    lane_cmp!(ge, _CMP_GE_OQ);
+    lane_cmp!(le, _CMP_LE_OQ);
 
     /// `|x| < inf`: false for infinities and NaN, as glam's `is_finite_mask`.
     #[inline(always)]
     fn finite(self) -> Mask8 {
         // SAFETY: as in `lane_op!` (AVX).
         let abs = F32x8(unsafe { _mm256_andnot_ps(_mm256_set1_ps(-0.0), self.0) });
-        abs.lt(F32x8::splat(f32::INFINITY))
+        TriLanes::lt(abs, F32x8::splat(f32::INFINITY))
     }
 
     #[inline(always)]
