@@ -1,7 +1,7 @@
 //! The x86-64 kernels: AVX2 (8 boxes in one `__m256`, and a leaf's triangles two packets at a
-//! time) and AVX-512 (the same with the box compare going straight to a mask register). Their tokens are made only by [`super::dispatch!`] once
-//! the path is known to run here; every intrinsic below relies on that, except
-//! [`truncate3`]'s, which are SSE2 (part of x86-64).
+//! time) and AVX-512 (the same with the box compare going straight to a mask register). Their
+//! tokens are made only by [`super::dispatch!`] once the path is known to run here; every
+//! intrinsic below relies on that, except [`truncate3`]'s, which are SSE2 (part of x86-64).
 
 use std::arch::x86_64::*;
 
