@@ -298,6 +298,11 @@ pub struct StaticVariant {
     pub primary_trace_ms: f64,
     /// Cosine-distributed bounces from the first variant's primary hits.
     pub bounce_trace_ms: f64,
+    /// SAH cost of the BVH's static tree (JSON null on Embree), to tell a worse tree from a
+    /// noisy timing: after the atrium's run the persistent tree is one rebuilt block with the
+    /// fresh build's cost and leaves, so their trace ratio there is the benchmark's noise
+    /// (docs/performance.md).
+    pub sah_cost: Option<f32>,
 }
 
 /// See [`IntegrationBenchReport::persistent_over_fresh_trace`].
@@ -362,11 +367,12 @@ fn static_variants(
     let variants = built
         .into_iter()
         .zip(best)
-        .map(|(BuiltVariant { name, build_ms, .. }, (primary_trace_ms, bounce_trace_ms))| StaticVariant {
+        .map(|(BuiltVariant { name, build_ms, accel }, (primary_trace_ms, bounce_trace_ms))| StaticVariant {
             name,
             build_ms,
             primary_trace_ms,
             bounce_trace_ms,
+            sah_cost: accel.static_sah_cost(),
         })
         .collect();
     Ok((variants, triangles))
