@@ -85,7 +85,13 @@ impl MeshBvh {
     /// (the ray's box constants are reloaded from the stack either way, and `Iter::any` of the
     /// any-hit leaf then stayed out of line as baseline SSE); the whole traversal inside
     /// `Kernel::leaf` instead (one out-of-line traversal per mesh query, leaves inlined into
-    /// it), 0.3% more.
+    /// it), 0.3% more. Session 31: the two single-ray leaves as visitor types (`visit`
+    /// `#[inline(always)]`, no closure), the AVX2 test behind an out-of-line `#[target_feature]`
+    /// function and the hit bookkeeping in the traversal: 1.9% more (1,381.3M against
+    /// 1,355.4M). The same types with the AVX-512 test inlined whole (32 vector registers, to
+    /// keep the ray's constants): the AVX-512 entry's dispatch closure, now too large, stayed
+    /// out of line compiled for the x86-64 baseline, and renders took twice as long (valgrind
+    /// cannot run AVX-512, so that path can only be timed).
     #[inline(always)]
     pub fn intersect_from<K: Kernel>(
         &self,

@@ -22,6 +22,14 @@
 //!
 //! Without resting instances the resting level is empty and rays trace the static tree and
 //! then the top level, as before. Any-hit queries keep that order (static first).
+//!
+//! Tried (session 31, cachegrind, 320x180 path-traced frames): the instance levels first for a
+//! ray whose origin lies in a child box of a level's root (a ray starting among the bodies),
+//! the static tree first otherwise. Closest queries ran 3.7% fewer instructions on the
+//! monastery with 8,000 ducks, any-hit queries 12% more (its sun and sky shadow rays end on
+//! the roof, which static first finds at once), and the test cost every scene: program +26.7M
+//! (ducks), +19.5M (default scene), +16.7M (monastery with one duck); not kept. For closest
+//! queries alone that is about -7M on the ducks against +3M on the other two.
 
 use std::sync::Arc;
 
