@@ -108,6 +108,15 @@ proptest! {
             let rays = rays_for(&all, seed, 48, 12.0);
             let (inc, fr) = (tree.snapshot(), fresh.snapshot());
             check_scene(&inc, &rays, &tris, 1e-5)?;
+            // A snapshot rebuilt into one block (what `bench integration` traces the persistent
+            // tree against) holds the same triangles in one piece and finds the same hits.
+            let rebuilt = inc.rebuilt(BuildParams::QUALITY);
+            prop_assert_eq!(rebuilt.triangles(), tree.triangles());
+            prop_assert_eq!(rebuilt.block_subtrees(), usize::from(tree.triangles() > 0));
+            prop_assert!(inc.block_subtrees() >= rebuilt.block_subtrees());
+            for ray in &rays {
+                prop_assert_eq!(rebuilt.intersect(ray).map(|h| h.t), fr.intersect(ray).map(|h| h.t));
+            }
             for path in SimdPath::supported() {
                 SimdPath::with_override(path, || {
                     for ray in &rays {

@@ -17,6 +17,7 @@ use std::time::Instant;
 use serde::Serialize;
 
 use super::accel as accel_bench;
+use super::persistent_tree::{best_traces, FragmentedTree, MostFragmented};
 use crate::accel::{self, AccelError, Backend};
 use crate::crosscheck::camera_rays;
 use crate::integrate::{
@@ -223,6 +224,11 @@ pub struct IntegrationBenchReport {
     /// triangles, trace time of the primary and of the bounce rays (issue 14's target:
     /// at most 1.05); `None` without that variant.
     pub persistent_over_fresh_trace: Option<PersistentOverFresh>,
+    /// The persistent tree where the run left it in the most pieces, against a fresh build of
+    /// the same triangles: the target's real test, since after the run the tree is one
+    /// rebuilt block ([`crate::bench::persistent_tree`]). `None` without static variants or
+    /// on Embree.
+    pub persistent_most_fragmented: Option<FragmentedTree>,
     pub ratios: IntegrationRatios,
     /// The same ratios for every form compared.
     pub ratios_by_form: BTreeMap<String, IntegrationRatios>,
@@ -256,6 +262,14 @@ fn means<'a>(frames: impl Iterator<Item = &'a FrameStats>) -> StageMeans {
     StageMeans { frames, stages, frame_ms: stages.frame_ms() }
 }
 
+/// What [`run_lockstep`] reports to as it goes: `progress` gets (frames rendered, frames
+/// planned) after each frame, `watch` each configuration's manager (by index) after it
+/// rendered a trajectory frame.
+struct Observers<'a> {
+    progress: &'a mut dyn FnMut(u32, u32),
+    watch: &'a mut dyn FnMut(usize, u32, &SceneManager),
+}
+
 /// Runs every configuration in lockstep, frame by frame (rotating which goes first), so load
 /// from other processes on a shared machine falls on all of them alike. Returns each one's
 /// per-frame statistics and its manager at the end.
@@ -264,7 +278,7 @@ fn run_lockstep(
     renderer: &FrameRenderer<'_>,
     options: &IntegrationBenchOptions,
     configs: &[ManagerOptions],
-    progress: &mut dyn FnMut(u32, u32),
+    observers: Observers<'_>,
 ) -> Result<Vec<(Vec<FrameStats>, SceneManager)>, SequenceError> {
     let mut managers = Vec::with_capacity(configs.len());
     for c in configs {
@@ -281,9 +295,10 @@ fn run_lockstep(
             let renderer = FrameRenderer { shutter: managers[i].options().shutter, ..*renderer };
             sequence.render_frame(&mut managers[i], frame, &renderer)?;
             frames[i].push(managers[i].last_frame().clone());
+            (observers.watch)(i, frame.index, &managers[i]);
         }
         rendered += 1;
-        progress(rendered, total);
+        (observers.progress)(rendered, total);
         Ok::<(), SequenceError>(())
     })?;
     Ok(frames.into_iter().zip(managers).collect())
@@ -355,15 +370,8 @@ fn static_variants(
     }
     let primary = camera_rays(&scene, 640, 360);
     let bounce = accel_bench::bounce_rays(built[0].accel.query()?, &primary);
-    // Round robin, best of nine each, so machine load falls on every variant alike.
-    let mut best = vec![(f64::INFINITY, f64::INFINITY); built.len()];
-    for _ in 0..9 {
-        for (i, variant) in built.iter().enumerate() {
-            let query = variant.accel.query()?;
-            best[i].0 = best[i].0.min(accel_bench::trace(query, &primary).0);
-            best[i].1 = best[i].1.min(accel_bench::trace(query, &bounce).0);
-        }
-    }
+    let queries = built.iter().map(|v| v.accel.query()).collect::<Result<Vec<_>, _>>()?;
+    let best = best_traces(&queries, &primary, &bounce);
     let variants = built
         .into_iter()
         .zip(best)
@@ -472,22 +480,32 @@ pub fn bench_integration(
             ..sequence.manager_options(&options.frames, c.settings())
         })
         .collect();
+    // The static scene the variants are made from: `always`'s, baked.
+    let always_baked = BenchConfig {
+        policy: IntegrationPolicy::Always,
+        form: IntegrationForm::Baked,
+        cache: true,
+        lookahead: true,
+        unblurred: false,
+    };
+    let watched = configs.iter().position(|&c| c == always_baked).filter(|_| options.static_variants);
+    let mut most_fragmented = MostFragmented::default();
+    let observers = Observers {
+        progress,
+        watch: &mut |i, frame, manager| {
+            if Some(i) == watched {
+                most_fragmented.observe(frame, manager);
+            }
+        },
+    };
     let results =
-        run_lockstep(sequence, &renderer(integrator, options), options, &manager_options, progress)?;
+        run_lockstep(sequence, &renderer(integrator, options), options, &manager_options, observers)?;
     let mut runs = Vec::new();
     let (mut rebuild_ms, mut rebuild_triangles, mut mean_insert_ms) = (0.0, 0, 0.0);
     let mut variants = Vec::new();
     for (config, (frames, manager)) in configs.into_iter().zip(results) {
         let run = policy_run(config, &frames, &settled, &manager);
-        if config
-            == (BenchConfig {
-                policy: IntegrationPolicy::Always,
-                form: IntegrationForm::Baked,
-                cache: true,
-                lookahead: true,
-                unblurred: false,
-            })
-        {
+        if config == always_baked {
             (variants, rebuild_triangles) = static_variants(&manager, &sequence.template, options)?;
             rebuild_ms = variants.first().map_or(0.0, |v| v.build_ms);
             mean_insert_ms = run.integrate_ms_per_island;
@@ -504,6 +522,7 @@ pub fn bench_integration(
     let ratios =
         options.forms.first().map_or_else(IntegrationRatios::default, |f| ratios_by_form[&f.to_string()]);
     let persistent_over_fresh_trace = PersistentOverFresh::of(&variants);
+    let persistent_most_fragmented = most_fragmented.measure(&sequence.template, options.threads)?;
     Ok(IntegrationBenchReport {
         scene: sequence.template.name.clone(),
         backend: options.backend,
@@ -522,6 +541,7 @@ pub fn bench_integration(
         rebuild_triangles,
         mean_insert_ms,
         persistent_over_fresh_trace,
+        persistent_most_fragmented,
         ratios,
         ratios_by_form,
         cache_histogram_buckets: FRACTION_BUCKETS,

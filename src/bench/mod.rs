@@ -9,6 +9,7 @@ mod frame_rays;
 pub mod instances;
 pub mod integration;
 pub mod paper;
+pub mod persistent_tree;
 pub mod regimes;
 pub mod render;
 

@@ -171,6 +171,21 @@ impl StaticSnapshot {
     pub fn contains(&self, id: StaticId) -> bool {
         self.meshes.contains_key(&id)
     }
+
+    /// Block subtrees the overlay's leaves name: how many pieces rays find the tree in (1 for a
+    /// tree that is one block, 0 for an empty one).
+    pub fn block_subtrees(&self) -> usize {
+        self.view.refs.len()
+    }
+
+    /// This version's live triangles rebuilt into one block with `params`: the tree a fresh
+    /// build of the same scene makes. `self` is unchanged.
+    pub fn rebuilt(&self, params: BuildParams) -> StaticSnapshot {
+        let mut tree = StaticBvh::new(params);
+        tree.restore(self.clone());
+        tree.rebuild();
+        tree.snapshot()
+    }
 }
 
 /// What [`StaticBvh::apply`] did.

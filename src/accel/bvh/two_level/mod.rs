@@ -81,9 +81,12 @@ pub struct BvhAccel {
 }
 
 impl BvhAccel {
+    /// [`Self::new`]'s parameters for meshes: prototypes and static blocks.
+    pub const MESH_PARAMS: BuildParams = BuildParams::QUALITY;
+
     /// An empty scene; `threads` bounds the rayon pool used for builds (`None`: the global pool).
     pub fn new(threads: Option<usize>) -> Self {
-        Self::with_params(BuildParams::QUALITY, BuildParams::TOP_LEVEL, threads)
+        Self::with_params(Self::MESH_PARAMS, BuildParams::TOP_LEVEL, threads)
     }
 
     /// Like [`Self::new`] with explicit parameters for meshes (prototypes and static blocks)

@@ -1,0 +1,118 @@
+//! The BVH's persistent static tree at its most fragmented point of a `bench integration` run,
+//! against a fresh build of the same triangles (issue 14: within 5% of a fresh build).
+//!
+//! After the atrium's whole run the persistent tree is one rebuilt block, the fresh build's
+//! own tree (`static_variants` in the report), because the last relink merged every island
+//! that never wakes. So the end of the run says nothing about how insertion and removal
+//! place blocks. The frame where the tree is in the most pieces (block subtrees under the
+//! overlay, just before a relink merges them) does: that snapshot is kept while the run goes
+//! (O(1), it shares the tree) and traced after it against a one-block rebuild of its own
+//! triangles.
+
+use serde::Serialize;
+
+use super::accel as accel_bench;
+use crate::accel::bvh::{BvhAccel, StaticSnapshot};
+use crate::accel::{self, AccelError, Backend, StaticSceneSnapshot};
+use crate::crosscheck::camera_rays;
+use crate::geometry::Ray;
+use crate::integrate::SceneManager;
+use crate::scene::SceneDescription;
+
+/// The persistent tree's most fragmented snapshot seen so far in a run.
+#[derive(Default)]
+pub(crate) struct MostFragmented {
+    seen: Option<(u32, usize, StaticSceneSnapshot)>,
+}
+
+impl MostFragmented {
+    /// Looks at `manager`'s static scene after trajectory frame `frame`; keeps it if the BVH's
+    /// tree is in more block subtrees than any kept before.
+    pub fn observe(&mut self, frame: u32, manager: &SceneManager) {
+        let Some(snapshot) = manager.static_snapshot() else {
+            return;
+        };
+        let Some(pieces) = snapshot.payload::<StaticSnapshot>().map(StaticSnapshot::block_subtrees) else {
+            return;
+        };
+        if self.seen.as_ref().is_none_or(|(_, most, _)| pieces > *most) {
+            self.seen = Some((frame, pieces, snapshot));
+        }
+    }
+
+    /// Traces the kept snapshot and a fresh build of its triangles with the same rays;
+    /// `None` if no BVH snapshot was seen. `template` gives the camera.
+    pub fn measure(
+        self,
+        template: &SceneDescription,
+        threads: Option<usize>,
+    ) -> Result<Option<FragmentedTree>, AccelError> {
+        let Some((frame, block_subtrees, snapshot)) = self.seen else {
+            return Ok(None);
+        };
+        let Some(tree) = snapshot.payload::<StaticSnapshot>() else {
+            return Ok(None);
+        };
+        let rebuilt = StaticSceneSnapshot::new(Backend::Bvh, tree.rebuilt(BvhAccel::MESH_PARAMS));
+        let mut accels = Vec::new();
+        for s in [&snapshot, &rebuilt] {
+            let mut a = accel::create(Backend::Bvh, threads)?;
+            a.restore_static_scene(s)?;
+            a.commit()?;
+            accels.push(a);
+        }
+        let primary = camera_rays(template, 640, 360);
+        let bounce = accel_bench::bounce_rays(accels[1].query()?, &primary);
+        let queries = [accels[0].query()?, accels[1].query()?];
+        let [persistent, fresh] = best_traces(&queries, &primary, &bounce)[..] else {
+            unreachable!("two queries traced");
+        };
+        Ok(Some(FragmentedTree {
+            frame,
+            block_subtrees,
+            triangles: tree.triangles(),
+            persistent_sah: accels[0].static_sah_cost(),
+            fresh_sah: accels[1].static_sah_cost(),
+            persistent_ms: persistent,
+            fresh_ms: fresh,
+            primary: persistent.0 / fresh.0,
+            bounce: persistent.1 / fresh.1,
+        }))
+    }
+}
+
+/// The persistent tree where a run left it in the most pieces, against a fresh build.
+#[derive(Clone, Debug, Serialize)]
+pub struct FragmentedTree {
+    /// Trajectory frame after which the snapshot was taken.
+    pub frame: u32,
+    /// Block subtrees under the overlay (1 for a tree that is one block).
+    pub block_subtrees: usize,
+    pub triangles: usize,
+    pub persistent_sah: Option<f32>,
+    pub fresh_sah: Option<f32>,
+    /// Primary and bounce trace milliseconds, best of nine, round robin.
+    pub persistent_ms: (f64, f64),
+    pub fresh_ms: (f64, f64),
+    /// Persistent over fresh trace time, primary rays (the target: at most 1.05).
+    pub primary: f64,
+    /// The same for diffuse bounces from the fresh build's primary hits.
+    pub bounce: f64,
+}
+
+/// Each query's best primary and bounce trace milliseconds over nine rounds, round robin, so
+/// that machine load falls on every query alike.
+pub(crate) fn best_traces(
+    queries: &[&dyn crate::accel::SceneQuery],
+    primary: &[Ray],
+    bounce: &[Ray],
+) -> Vec<(f64, f64)> {
+    let mut best = vec![(f64::INFINITY, f64::INFINITY); queries.len()];
+    for _ in 0..9 {
+        for (b, q) in best.iter_mut().zip(queries) {
+            b.0 = b.0.min(accel_bench::trace(*q, primary).0);
+            b.1 = b.1.min(accel_bench::trace(*q, bounce).0);
+        }
+    }
+    best
+}
