@@ -110,22 +110,38 @@ impl MeshBvh {
             bray,
             t_max,
             &mut |first, count, t_max| {
-                let packets = &self.packets[first as usize..(first + count) as usize];
-                k.leaf(|| {
-                    if let Some((i, h)) = k.closest_tri(tray, packets, *t_max) {
-                        // Strictly closer only: ties keep the first triangle found.
-                        if best.is_none_or(|b| h.t < b.t) {
-                            *t_max = h.t;
-                            let tri = self.tris[packets[i / 4].idx[i % 4] as usize];
-                            *best = Some(PrimHit { t: h.t, u: h.u, v: h.v, tri });
-                            found = true;
-                        }
-                    }
-                });
+                found |= self.intersect_leaf(k, (first, count), tray, t_max, best);
                 false
             },
         );
         found
+    }
+
+    /// The leaf test of [`Self::intersect_from`] on packets `first..first + count`: lowers
+    /// `*t_max` and overwrites `best` when it finds a hit strictly nearer than `best`'s.
+    #[inline(always)]
+    fn intersect_leaf<K: Kernel>(
+        &self,
+        k: K,
+        (first, count): (u32, u32),
+        tray: &RayTri,
+        t_max: &mut f32,
+        best: &mut Option<PrimHit>,
+    ) -> bool {
+        let packets = &self.packets[first as usize..(first + count) as usize];
+        k.leaf(|| {
+            let Some((i, h)) = k.closest_tri(tray, packets, *t_max) else {
+                return false;
+            };
+            // Strictly closer only: ties keep the first triangle found.
+            if best.is_some_and(|b| h.t >= b.t) {
+                return false;
+            }
+            *t_max = h.t;
+            let tri = self.tris[packets[i / 4].idx[i % 4] as usize];
+            *best = Some(PrimHit { t: h.t, u: h.u, v: h.v, tri });
+            true
+        })
     }
 
     /// Whether any triangle of the subtree at `root` is hit within `[t_min, t_max]`.
@@ -145,11 +161,15 @@ impl MeshBvh {
             root,
             bray,
             &mut t_max,
-            &mut |first, count, t_max| {
-                let packets = &self.packets[first as usize..(first + count) as usize];
-                k.leaf(|| k.occluded_tri(tray, packets, *t_max))
-            },
+            &mut |first, count, t_max| self.occluded_leaf(k, (first, count), tray, *t_max),
         )
+    }
+
+    /// The leaf test of [`Self::occluded_from`] on packets `first..first + count`.
+    #[inline(always)]
+    fn occluded_leaf<K: Kernel>(&self, k: K, (first, count): (u32, u32), tray: &RayTri, t_max: f32) -> bool {
+        let packets = &self.packets[first as usize..(first + count) as usize];
+        k.leaf(|| k.occluded_tri(tray, packets, t_max))
     }
 }
 
@@ -176,24 +196,41 @@ impl MeshBvh {
             lanes,
             t_max,
             &mut |first, count, lanes, t_max| {
-                let packets = &self.packets[first as usize..(first + count) as usize];
-                k.leaf(|| {
-                    for i in each_bit(lanes) {
-                        if let Some((j, h)) = k.closest_tri(&packet.tray[i], packets, t_max[i]) {
-                            // Strictly closer only, as for one ray.
-                            if best[i].is_none_or(|b| h.t < b.t) {
-                                t_max[i] = h.t;
-                                let tri = self.tris[packets[j / 4].idx[j % 4] as usize];
-                                best[i] = Some(PrimHit { t: h.t, u: h.u, v: h.v, tri });
-                                found |= 1 << i;
-                            }
-                        }
-                    }
-                });
+                found |= self.intersect_packet_leaf(k, (first, count), packet, lanes, t_max, best);
                 0
             },
         );
         found
+    }
+
+    /// The leaf test of [`Self::intersect_packet_from`] on packets `first..first + count`:
+    /// [`Self::intersect_leaf`] for each of `lanes`; returns the lanes that found a nearer hit.
+    #[inline(always)]
+    fn intersect_packet_leaf<K: Kernel>(
+        &self,
+        k: K,
+        (first, count): (u32, u32),
+        packet: &RayPacket,
+        lanes: Lanes,
+        t_max: &mut [f32; PACKET],
+        best: &mut [Option<PrimHit>; PACKET],
+    ) -> Lanes {
+        let packets = &self.packets[first as usize..(first + count) as usize];
+        k.leaf(|| {
+            let mut found = 0;
+            for i in each_bit(lanes) {
+                if let Some((j, h)) = k.closest_tri(&packet.tray[i], packets, t_max[i]) {
+                    // Strictly closer only, as for one ray.
+                    if best[i].is_none_or(|b| h.t < b.t) {
+                        t_max[i] = h.t;
+                        let tri = self.tris[packets[j / 4].idx[j % 4] as usize];
+                        best[i] = Some(PrimHit { t: h.t, u: h.u, v: h.v, tri });
+                        found |= 1 << i;
+                    }
+                }
+            }
+            found
+        })
     }
 
     /// [`Self::occluded_from`] for the `lanes` of a packet: the lanes that hit a triangle
@@ -215,19 +252,31 @@ impl MeshBvh {
             packet,
             lanes,
             &mut t_max,
-            &mut |first, count, lanes, t_max| {
-                let packets = &self.packets[first as usize..(first + count) as usize];
-                k.leaf(|| {
-                    let mut blocked = 0;
-                    for i in each_bit(lanes) {
-                        if k.occluded_tri(&packet.tray[i], packets, t_max[i]) {
-                            blocked |= 1 << i;
-                        }
-                    }
-                    blocked
-                })
-            },
+            &mut |first, count, lanes, t_max| self.occluded_packet_leaf(k, (first, count), packet, lanes, t_max),
         )
+    }
+
+    /// The leaf test of [`Self::occluded_packet_from`] on packets `first..first + count`: the
+    /// lanes blocked.
+    #[inline(always)]
+    fn occluded_packet_leaf<K: Kernel>(
+        &self,
+        k: K,
+        (first, count): (u32, u32),
+        packet: &RayPacket,
+        lanes: Lanes,
+        t_max: &[f32; PACKET],
+    ) -> Lanes {
+        let packets = &self.packets[first as usize..(first + count) as usize];
+        k.leaf(|| {
+            let mut blocked = 0;
+            for i in each_bit(lanes) {
+                if k.occluded_tri(&packet.tray[i], packets, t_max[i]) {
+                    blocked |= 1 << i;
+                }
+            }
+            blocked
+        })
     }
 }
 
