@@ -252,7 +252,9 @@ impl MeshBvh {
             packet,
             lanes,
             &mut t_max,
-            &mut |first, count, lanes, t_max| self.occluded_packet_leaf(k, (first, count), packet, lanes, t_max),
+            &mut |first, count, lanes, t_max| {
+                self.occluded_packet_leaf(k, (first, count), packet, lanes, t_max)
+            },
         )
     }
 
