@@ -73,6 +73,16 @@ impl BenchConfig {
         unblurred: false,
     };
 
+    /// `always`, baked, cache on, with lookahead: the run whose static scene the static
+    /// variants are made from.
+    const ALWAYS_BAKED: BenchConfig = BenchConfig {
+        policy: IntegrationPolicy::Always,
+        form: IntegrationForm::Baked,
+        cache: true,
+        lookahead: true,
+        unblurred: false,
+    };
+
     /// A short name for tables: `never`, `auto resting`, `auto baked, cache off`, `auto resting, online`.
     pub fn name(&self) -> String {
         let unblurred = if self.unblurred { ", no blur" } else { "" };
@@ -480,15 +490,8 @@ pub fn bench_integration(
             ..sequence.manager_options(&options.frames, c.settings())
         })
         .collect();
-    // The static scene the variants are made from: `always`'s, baked.
-    let always_baked = BenchConfig {
-        policy: IntegrationPolicy::Always,
-        form: IntegrationForm::Baked,
-        cache: true,
-        lookahead: true,
-        unblurred: false,
-    };
-    let watched = configs.iter().position(|&c| c == always_baked).filter(|_| options.static_variants);
+    let watched =
+        configs.iter().position(|&c| c == BenchConfig::ALWAYS_BAKED).filter(|_| options.static_variants);
     let mut most_fragmented = MostFragmented::default();
     let observers = Observers {
         progress,
@@ -505,7 +508,7 @@ pub fn bench_integration(
     let mut variants = Vec::new();
     for (config, (frames, manager)) in configs.into_iter().zip(results) {
         let run = policy_run(config, &frames, &settled, &manager);
-        if config == always_baked {
+        if config == BenchConfig::ALWAYS_BAKED {
             (variants, rebuild_triangles) = static_variants(&manager, &sequence.template, options)?;
             rebuild_ms = variants.first().map_or(0.0, |v| v.build_ms);
             mean_insert_ms = run.integrate_ms_per_island;
