@@ -6,8 +6,8 @@
 //! that never wakes. So the end of the run says nothing about how insertion and removal
 //! place blocks. The frame where the tree is in the most pieces (block subtrees under the
 //! overlay, just before a relink merges them) does: that snapshot is kept while the run goes
-//! (O(1), it shares the tree) and traced after it against a one-block rebuild of its own
-//! triangles.
+//! (O(1) to take; it keeps that version's blocks in memory to the end of the run) and traced
+//! after it against a one-block rebuild of its own triangles.
 
 use serde::Serialize;
 
