@@ -17,7 +17,7 @@ use std::time::Instant;
 use serde::Serialize;
 
 use super::accel as accel_bench;
-use super::persistent_tree::{best_traces, FragmentedTree, MostFragmented};
+use super::persistent_tree::{FragmentedTree, MostFragmented};
 use crate::accel::{self, AccelError, Backend};
 use crate::crosscheck::camera_rays;
 use crate::integrate::{
@@ -381,7 +381,7 @@ fn static_variants(
     let primary = camera_rays(&scene, 640, 360);
     let bounce = accel_bench::bounce_rays(built[0].accel.query()?, &primary);
     let queries = built.iter().map(|v| v.accel.query()).collect::<Result<Vec<_>, _>>()?;
-    let best = best_traces(&queries, &primary, &bounce);
+    let best = accel_bench::best_traces(&queries, &primary, &bounce);
     let variants = built
         .into_iter()
         .zip(best)
@@ -490,8 +490,11 @@ pub fn bench_integration(
             ..sequence.manager_options(&options.frames, c.settings())
         })
         .collect();
-    let watched =
-        configs.iter().position(|&c| c == BenchConfig::ALWAYS_BAKED).filter(|_| options.static_variants);
+    // Only the BVH keeps a persistent static tree to watch.
+    let watched = configs
+        .iter()
+        .position(|&c| c == BenchConfig::ALWAYS_BAKED)
+        .filter(|_| options.static_variants && options.backend == Backend::Bvh);
     let mut most_fragmented = MostFragmented::default();
     let observers = Observers {
         progress,

@@ -15,7 +15,6 @@ use super::accel as accel_bench;
 use crate::accel::bvh::{BvhAccel, StaticSnapshot};
 use crate::accel::{self, AccelError, Backend, StaticSceneSnapshot};
 use crate::crosscheck::camera_rays;
-use crate::geometry::Ray;
 use crate::integrate::SceneManager;
 use crate::scene::SceneDescription;
 
@@ -64,9 +63,8 @@ impl MostFragmented {
         let primary = camera_rays(template, 640, 360);
         let bounce = accel_bench::bounce_rays(accels[1].query()?, &primary);
         let queries = [accels[0].query()?, accels[1].query()?];
-        let [persistent, fresh] = best_traces(&queries, &primary, &bounce)[..] else {
-            unreachable!("two queries traced");
-        };
+        let best = accel_bench::best_traces(&queries, &primary, &bounce);
+        let (persistent, fresh) = (best[0], best[1]);
         Ok(Some(FragmentedTree {
             frame,
             block_subtrees,
@@ -98,21 +96,4 @@ pub struct FragmentedTree {
     pub primary: f64,
     /// The same for diffuse bounces from the fresh build's primary hits.
     pub bounce: f64,
-}
-
-/// Each query's best primary and bounce trace milliseconds over nine rounds, round robin, so
-/// that machine load falls on every query alike.
-pub(crate) fn best_traces(
-    queries: &[&dyn crate::accel::SceneQuery],
-    primary: &[Ray],
-    bounce: &[Ray],
-) -> Vec<(f64, f64)> {
-    let mut best = vec![(f64::INFINITY, f64::INFINITY); queries.len()];
-    for _ in 0..9 {
-        for (b, q) in best.iter_mut().zip(queries) {
-            b.0 = b.0.min(accel_bench::trace(*q, primary).0);
-            b.1 = b.1.min(accel_bench::trace(*q, bounce).0);
-        }
-    }
-    best
 }

@@ -167,6 +167,19 @@ pub(crate) fn trace(query: &dyn SceneQuery, rays: &[Ray]) -> (f64, f64) {
     (ms, sum)
 }
 
+/// Each query's best primary and bounce trace milliseconds over nine rounds, round robin, so
+/// that machine load falls on every query alike.
+pub(crate) fn best_traces(queries: &[&dyn SceneQuery], primary: &[Ray], bounce: &[Ray]) -> Vec<(f64, f64)> {
+    let mut best = vec![(f64::INFINITY, f64::INFINITY); queries.len()];
+    for _ in 0..9 {
+        for (b, q) in best.iter_mut().zip(queries) {
+            b.0 = b.0.min(trace(*q, primary).0);
+            b.1 = b.1.min(trace(*q, bounce).0);
+        }
+    }
+    best
+}
+
 /// Builds `desc` `runs` times (at least once), each from an empty accelerator, the last kept;
 /// returns it and every build's milliseconds. Prototypes are built as they are added, so a
 /// timing covers loading and commit. The previous build is dropped before the next starts.

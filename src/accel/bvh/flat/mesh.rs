@@ -8,7 +8,7 @@ use rayon::prelude::*;
 use super::packet::{each_bit, Lanes, RayPacket, PACKET};
 use super::{build_with, BoxRay, FlatBvh, Node, Start, Wide, ANY_HIT, CLOSEST_HIT, PAR_CHUNK};
 use crate::accel::bvh::simd::Kernel;
-use crate::accel::bvh::triangle::{RayTri, Tri, Tri4};
+use crate::accel::bvh::triangle::{RayTri, Tri, Tri4, TriHit};
 use crate::accel::bvh::BuildParams;
 use crate::geometry::Aabb;
 
@@ -128,20 +128,36 @@ impl MeshBvh {
         t_max: &mut f32,
         best: &mut Option<PrimHit>,
     ) -> bool {
-        let packets = &self.packets[first as usize..(first + count) as usize];
-        k.leaf(|| {
-            let Some((i, h)) = k.closest_tri(tray, packets, *t_max) else {
-                return false;
-            };
-            // Strictly closer only: ties keep the first triangle found.
-            if best.is_some_and(|b| h.t >= b.t) {
-                return false;
-            }
-            *t_max = h.t;
-            let tri = self.tris[packets[i / 4].idx[i % 4] as usize];
-            *best = Some(PrimHit { t: h.t, u: h.u, v: h.v, tri });
-            true
+        let packets = self.leaf_packets(first, count);
+        k.leaf(|| match k.closest_tri(tray, packets, *t_max) {
+            Some(hit) => self.record(packets, hit, t_max, best),
+            None => false,
         })
+    }
+
+    /// The packets of leaf range `first..first + count`.
+    #[inline(always)]
+    fn leaf_packets(&self, first: u32, count: u32) -> &[Tri4] {
+        &self.packets[first as usize..(first + count) as usize]
+    }
+
+    /// Keeps `hit` (lane `i` of `packets`) as the closest in `best` if it is strictly nearer
+    /// (ties keep the first triangle found) and lowers `*t_max` to it; returns whether it did.
+    #[inline(always)]
+    fn record(
+        &self,
+        packets: &[Tri4],
+        (i, h): (usize, TriHit),
+        t_max: &mut f32,
+        best: &mut Option<PrimHit>,
+    ) -> bool {
+        if best.is_some_and(|b| h.t >= b.t) {
+            return false;
+        }
+        *t_max = h.t;
+        let tri = self.tris[packets[i / 4].idx[i % 4] as usize];
+        *best = Some(PrimHit { t: h.t, u: h.u, v: h.v, tri });
+        true
     }
 
     /// Whether any triangle of the subtree at `root` is hit within `[t_min, t_max]`.
@@ -168,7 +184,7 @@ impl MeshBvh {
     /// The leaf test of [`Self::occluded_from`] on packets `first..first + count`.
     #[inline(always)]
     fn occluded_leaf<K: Kernel>(&self, k: K, (first, count): (u32, u32), tray: &RayTri, t_max: f32) -> bool {
-        let packets = &self.packets[first as usize..(first + count) as usize];
+        let packets = self.leaf_packets(first, count);
         k.leaf(|| k.occluded_tri(tray, packets, t_max))
     }
 }
@@ -215,16 +231,12 @@ impl MeshBvh {
         t_max: &mut [f32; PACKET],
         best: &mut [Option<PrimHit>; PACKET],
     ) -> Lanes {
-        let packets = &self.packets[first as usize..(first + count) as usize];
+        let packets = self.leaf_packets(first, count);
         k.leaf(|| {
             let mut found = 0;
             for i in each_bit(lanes) {
-                if let Some((j, h)) = k.closest_tri(&packet.tray[i], packets, t_max[i]) {
-                    // Strictly closer only, as for one ray.
-                    if best[i].is_none_or(|b| h.t < b.t) {
-                        t_max[i] = h.t;
-                        let tri = self.tris[packets[j / 4].idx[j % 4] as usize];
-                        best[i] = Some(PrimHit { t: h.t, u: h.u, v: h.v, tri });
+                if let Some(hit) = k.closest_tri(&packet.tray[i], packets, t_max[i]) {
+                    if self.record(packets, hit, &mut t_max[i], &mut best[i]) {
                         found |= 1 << i;
                     }
                 }
@@ -269,7 +281,7 @@ impl MeshBvh {
         lanes: Lanes,
         t_max: &[f32; PACKET],
     ) -> Lanes {
-        let packets = &self.packets[first as usize..(first + count) as usize];
+        let packets = self.leaf_packets(first, count);
         k.leaf(|| {
             let mut blocked = 0;
             for i in each_bit(lanes) {
