@@ -49,6 +49,19 @@ fn check_scene(q: &dyn SceneQuery, rays: &[Ray], tris: &[RefTri], rel: f64) -> R
     Ok(())
 }
 
+/// Islands: small clusters of `n` triangles around `c`, built deterministically from `seed`.
+fn clusters(specs: &[(Vec3, usize)], seed: u64) -> Vec<TriangleMesh> {
+    specs.iter().enumerate().map(|(k, (c, n))| cluster(*c, *n, seed.wrapping_add(k as u64))).collect()
+}
+
+/// A persistent tree built from `base` (mesh 100) that never relinks on its own.
+fn tree_over(base: &TriangleMesh) -> StaticBvh {
+    let mut tree = StaticBvh::new(BuildParams::QUALITY);
+    tree.rebuild_fraction = f32::INFINITY;
+    tree.apply(&[], &[(StaticId(100), base)]).unwrap();
+    tree
+}
+
 proptest! {
     #![proptest_config(config(48))]
 
@@ -77,15 +90,8 @@ proptest! {
         seed in any::<u64>(),
         island_seed in any::<u64>(),
     ) {
-        // Islands: small clusters at random places, built deterministically from the seed.
-        let islands: Vec<TriangleMesh> = islands
-            .iter()
-            .enumerate()
-            .map(|(k, (c, n))| cluster(*c, *n, island_seed.wrapping_add(k as u64)))
-            .collect();
-        let mut tree = StaticBvh::new(BuildParams::QUALITY);
-        tree.rebuild_fraction = f32::INFINITY;
-        tree.apply(&[], &[(StaticId(100), &base)]).unwrap();
+        let islands = clusters(&islands, island_seed);
+        let mut tree = tree_over(&base);
         let mut live = vec![false; islands.len()];
         for (add, k) in ops {
             let k = k % islands.len();
@@ -126,6 +132,54 @@ proptest! {
                     }
                     Ok(())
                 })?;
+            }
+        }
+    }
+
+    /// A commit (`apply`) makes the overlay afresh over every live block, re-braided: one
+    /// block per island inserted since the first build, the environment opened into at most
+    /// four pieces per block (at least 64 in all), the islands whole; hits those of brute force
+    /// and of a fresh build throughout, removals included.
+    #[test]
+    fn commits_rebraid_over_every_live_block(
+        base in soup(Vec3::ZERO, 10.0, 2.0, 50..300),
+        islands in prop::collection::vec((vec3(10.0), 1usize..40), 2..8),
+        batches in prop::collection::vec(prop::collection::vec((any::<bool>(), 0usize..8), 1..4), 1..6),
+        seed in any::<u64>(),
+    ) {
+        let islands = clusters(&islands, seed);
+        let mut tree = tree_over(&base);
+        let mut live = vec![false; islands.len()];
+        for batch in batches {
+            let (mut adds, mut removes) = (Vec::new(), Vec::new());
+            for (add, k) in batch {
+                let k = k % islands.len();
+                if add && !live[k] {
+                    adds.push((StaticId(k as u32), &islands[k]));
+                    live[k] = true;
+                } else if !add && live[k] && !adds.iter().any(|(id, _)| *id == StaticId(k as u32)) {
+                    removes.push(StaticId(k as u32));
+                    live[k] = false;
+                }
+            }
+            let update = tree.apply(&removes, &adds).unwrap();
+            prop_assert!(!update.rebuilt && !update.relinked);
+            testing::check_static_tree(&tree).map_err(TestCaseError::fail)?;
+            let snap = tree.snapshot();
+            let usable = |m: &TriangleMesh| (0..m.triangle_count()).any(|i| m.triangle_is_valid(i));
+            let blocks = 1 + (0..islands.len()).filter(|&k| live[k] && usable(&islands[k])).count();
+            prop_assert_eq!(snap.blocks(), blocks);
+            let most = if blocks == 1 { 1 } else { (4 * blocks).max(64) };
+            prop_assert!(snap.block_subtrees() >= blocks && snap.block_subtrees() <= most);
+            let mut meshes: Vec<(StaticId, &TriangleMesh)> = vec![(StaticId(100), &base)];
+            meshes.extend((0..islands.len()).filter(|&k| live[k]).map(|k| (StaticId(k as u32), &islands[k])));
+            let tris: Vec<RefTri> = meshes.iter().flat_map(|(id, m)| ref_tris(HitObject::Static(*id), m)).collect();
+            let all: Vec<&TriangleMesh> = std::iter::once(&base).chain(islands.iter()).collect();
+            let rays = rays_for(&all, seed, 48, 12.0);
+            check_scene(&snap, &rays, &tris, 1e-5)?;
+            let fresh = snap.rebuilt(BuildParams::QUALITY);
+            for ray in &rays {
+                prop_assert_eq!(snap.intersect(ray).map(|h| h.t), fresh.intersect(ray).map(|h| h.t));
             }
         }
     }

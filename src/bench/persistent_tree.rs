@@ -1,13 +1,13 @@
 //! The BVH's persistent static tree at its most fragmented point of a `bench integration` run,
 //! against a fresh build of the same triangles (issue 14: within 5% of a fresh build).
 //!
-//! After the atrium's whole run the persistent tree is one rebuilt block, the fresh build's
-//! own tree (`static_variants` in the report), because the last relink merged every island
-//! that never wakes. So the end of the run says nothing about how insertion and removal
-//! place blocks. The frame where the tree is in the most pieces (block subtrees under the
-//! overlay, just before a relink merges them) does: that snapshot is kept while the run goes
-//! (O(1) to take; it keeps that version's blocks in memory to the end of the run) and traced
-//! after it against a one-block rebuild of its own triangles.
+//! Until session 32 the persistent tree after the atrium's whole run was one rebuilt block, the
+//! fresh build's own tree (`static_variants` in the report): the end of the run said nothing
+//! about how the overlay places blocks. The frame where the tree is made of the most blocks
+//! (one per mesh inserted since the last rebuild or relink, just before a relink merges them)
+//! does: that snapshot is kept while the run goes (O(1) to take; it keeps that version's
+//! blocks in memory to the end of the run) and traced after it against a one-block rebuild of
+//! its own triangles.
 
 use serde::Serialize;
 
@@ -26,16 +26,16 @@ pub(crate) struct MostFragmented {
 
 impl MostFragmented {
     /// Looks at `manager`'s static scene after trajectory frame `frame`; keeps it if the BVH's
-    /// tree is in more block subtrees than any kept before.
+    /// tree is made of more blocks than any kept before.
     pub fn observe(&mut self, frame: u32, manager: &SceneManager) {
         let Some(snapshot) = manager.static_snapshot() else {
             return;
         };
-        let Some(pieces) = snapshot.payload::<StaticSnapshot>().map(StaticSnapshot::block_subtrees) else {
+        let Some(blocks) = snapshot.payload::<StaticSnapshot>().map(StaticSnapshot::blocks) else {
             return;
         };
-        if self.seen.as_ref().is_none_or(|(_, most, _)| pieces > *most) {
-            self.seen = Some((frame, pieces, snapshot));
+        if self.seen.as_ref().is_none_or(|(_, most, _)| blocks > *most) {
+            self.seen = Some((frame, blocks, snapshot));
         }
     }
 
@@ -46,7 +46,7 @@ impl MostFragmented {
         template: &SceneDescription,
         threads: Option<usize>,
     ) -> Result<Option<FragmentedTree>, AccelError> {
-        let Some((frame, block_subtrees, snapshot)) = self.seen else {
+        let Some((frame, blocks, snapshot)) = self.seen else {
             return Ok(None);
         };
         let Some(tree) = snapshot.payload::<StaticSnapshot>() else {
@@ -67,7 +67,8 @@ impl MostFragmented {
         let (persistent, fresh) = (best[0], best[1]);
         Ok(Some(FragmentedTree {
             frame,
-            block_subtrees,
+            blocks,
+            block_subtrees: tree.block_subtrees(),
             triangles: tree.triangles(),
             persistent_sah: accels[0].static_sah_cost(),
             fresh_sah: accels[1].static_sah_cost(),
@@ -84,7 +85,9 @@ impl MostFragmented {
 pub struct FragmentedTree {
     /// Trajectory frame after which the snapshot was taken.
     pub frame: u32,
-    /// Block subtrees under the overlay (1 for a tree that is one block).
+    /// Blocks the tree is made of (1 for a tree that is one block).
+    pub blocks: usize,
+    /// Block subtrees under the overlay: the pieces rays find the tree in.
     pub block_subtrees: usize,
     pub triangles: usize,
     pub persistent_sah: Option<f32>,

@@ -16,14 +16,21 @@
 //! changes, and an insert of k triangles costs O(k) for the block plus O(log n) overlay nodes per
 //! inserted subtree. Traversal stays fast because rays spend nearly all their time inside
 //! blocks, which are the same cache-friendly arrays as any other BVH here; only the few overlay
-//! nodes are pointer-chased. The price: inserted subtrees are never merged into the blocks,
-//! so after many inserts the overlay depends on insertion order. [`StaticBvh`] rebuilds the
-//! overlay over the existing blocks ([`StaticBvh::relink`], no triangle work) when the inserted
-//! triangles exceed [`StaticBvh::rebuild_fraction`] of the tree's size at the last relink, and
-//! rebuilds everything into one block only when the overlay gets deeper than
-//! [`MAX_OVERLAY_HEIGHT`]. Removing a mesh that has its own block unlinks its references and
-//! refits the path (collapsing path copies back into block references where they match
-//! again); removing a mesh that shares the base block rebuilds.
+//! nodes are pointer-chased.
+//!
+//! A commit ([`StaticBvh::apply`], what the accelerator calls) does not insert one block at a
+//! time: it builds the new meshes' blocks and then the whole overlay afresh over every live
+//! block, *re-braided* ([`rebraid`]): top-down by binned SAH over pieces of the blocks, the
+//! environment opened into subtrees the size of the islands around it, so the overlay's
+//! shape never depends on the order of the changes, and a ray aimed at an island is not walked
+//! through the whole environment subtree around it first. That costs O(p log p) for p pieces
+//! (at most four per block) per commit, not per mesh. The single-mesh [`StaticBvh::insert`]
+//! and [`StaticBvh::remove`] still insert by path copying and unlink and refit (collapsing path
+//! copies back into block references where they match again). Past
+//! [`StaticBvh::rebuild_fraction`] new triangles a commit relinks ([`StaticBvh::relink`]):
+//! the blocks that will never be removed are merged into one rebuilt block first. Removing a
+//! mesh that shares a rebuilt block rebuilds everything into one block, as an overlay deeper
+//! than [`MAX_OVERLAY_HEIGHT`] does.
 //!
 //! For traversal, every new root also gets a flattened copy of its overlay (a *view*: overlay
 //! nodes as ordinary 32-byte nodes whose leaves name block subtrees), so rays chase no
@@ -35,6 +42,7 @@
 
 mod check;
 mod insert;
+mod rebraid;
 mod remove;
 mod stats;
 mod traverse;
@@ -178,6 +186,17 @@ impl StaticSnapshot {
         self.view.refs.len()
     }
 
+    /// Blocks the tree is made of (1 for a tree that is one block, 0 for an empty one): how
+    /// many times it has been split by inserting meshes since it was last rebuilt or relinked.
+    /// O(overlay nodes).
+    pub fn blocks(&self) -> usize {
+        let mut n = 0;
+        if let Some(root) = &self.root {
+            stats::for_each_block(root, &mut |_| n += 1);
+        }
+        n
+    }
+
     /// This version's live triangles rebuilt into one block with `params`: the tree a fresh
     /// build of the same scene makes. `self` is unchanged.
     pub fn rebuilt(&self, params: BuildParams) -> StaticSnapshot {
@@ -295,23 +314,14 @@ impl StaticBvh {
 
     /// Inserts already extracted triangles as mesh `id` (which must not be present). Returns
     /// whether the overlay got deeper than [`MAX_OVERLAY_HEIGHT`] so the tree was rebuilt.
-    pub(crate) fn insert_tris(&mut self, id: StaticId, tris: Vec<Tri>) -> bool {
-        debug_assert!(!self.state.meshes.contains_key(&id));
-        let n = tris.len();
-        let block = if n > 0 {
-            let block = self.new_block(tris);
+    fn insert_tris(&mut self, id: StaticId, tris: Vec<Tri>) -> bool {
+        if let Some(block) = self.add_mesh(id, tris) {
             let root = match self.state.root.take() {
-                None => Link::Ref(block.clone(), 0),
+                None => Link::Ref(block, 0),
                 Some(root) => insert::insert_block(root, &block),
             };
             self.state.set_root(Some(root));
-            block.id
-        } else {
-            u32::MAX
-        };
-        Arc::make_mut(&mut self.state.meshes).insert(id, MeshEntry { block, shared: false, triangles: n });
-        self.state.triangles += n;
-        self.state.inserted_since_rebuild += n;
+        }
         if self.state.root.as_ref().is_some_and(|r| r.height() > MAX_OVERLAY_HEIGHT) {
             self.rebuild();
             return true;
@@ -319,14 +329,53 @@ impl StaticBvh {
         false
     }
 
+    /// Records mesh `id` (which must not be present) with its own block of `tris`, not linked
+    /// into the tree yet; returns the block (`None` for a mesh without usable triangles).
+    fn add_mesh(&mut self, id: StaticId, tris: Vec<Tri>) -> Option<Arc<Block>> {
+        debug_assert!(!self.state.meshes.contains_key(&id));
+        let n = tris.len();
+        let block = (n > 0).then(|| self.new_block(tris));
+        let entry =
+            MeshEntry { block: block.as_ref().map_or(u32::MAX, |b| b.id), shared: false, triangles: n };
+        Arc::make_mut(&mut self.state.meshes).insert(id, entry);
+        self.state.triangles += n;
+        self.state.inserted_since_rebuild += n;
+        block
+    }
+
+    /// Drops mesh `id`'s entry (not its triangles from the tree); returns it if it was present.
+    fn forget(&mut self, id: StaticId) -> Option<MeshEntry> {
+        // An absent `id` keeps its declaration: it may be made permanent before it is inserted.
+        if !self.state.meshes.contains_key(&id) {
+            return None;
+        }
+        self.permanent.remove(&id);
+        let entry = Arc::make_mut(&mut self.state.meshes).remove(&id)?;
+        self.state.triangles -= entry.triangles;
+        Some(entry)
+    }
+
+    /// The blocks of the current tree that hold live meshes.
+    fn live_blocks(&self) -> Vec<Arc<Block>> {
+        let live: HashSet<u32> =
+            self.state.meshes.values().filter(|e| e.triangles > 0).map(|e| e.block).collect();
+        let mut blocks = Vec::new();
+        if let Some(root) = &self.state.root {
+            stats::for_each_block(root, &mut |b| {
+                if live.contains(&b.id) {
+                    blocks.push(b.clone());
+                }
+            });
+        }
+        blocks
+    }
+
     /// Removes a mesh; returns whether it was present. A mesh with its own block is unlinked
     /// and the path refitted; one sharing a rebuilt block triggers a rebuild.
     pub fn remove(&mut self, id: StaticId) -> bool {
-        self.permanent.remove(&id);
-        let Some(entry) = Arc::make_mut(&mut self.state.meshes).remove(&id) else {
+        let Some(entry) = self.forget(id) else {
             return false;
         };
-        self.state.triangles -= entry.triangles;
         if entry.triangles == 0 {
             return true;
         }
@@ -363,49 +412,73 @@ impl StaticBvh {
             .copied()
     }
 
-    /// Rebuilds the overlay over the existing blocks, re-inserting each whole, largest first,
-    /// after merging the blocks that will never be removed (the rebuilt base and the blocks of
-    /// meshes declared with [`Self::set_permanent`]) into one rebuilt block. Every other mesh
-    /// keeps its own block and stays removable without a rebuild. What growth past
-    /// [`Self::rebuild_fraction`] triggers: the overlay's shape then depends less on insertion
-    /// order. Returns the triangles built into the merged block (0 when there was nothing to
+    /// Rebuilds the overlay over the existing blocks ([`rebraid`]) after merging the blocks
+    /// that will never be removed (the rebuilt base and the blocks of meshes declared with
+    /// [`Self::set_permanent`]) into one rebuilt block. Every other mesh keeps its own block
+    /// and stays removable without a rebuild. What growth past [`Self::rebuild_fraction`]
+    /// triggers: the environment and the islands that stay are then one tree again, whose
+    /// order is the SAH's and not the overlay's. Returns the triangles built into the merged block (0 when there was nothing to
     /// merge), or `None` when it fell back to a full rebuild (the overlay came out deeper than
     /// [`MAX_OVERLAY_HEIGHT`]).
     ///
     /// (Merging everything into one block, as a full rebuild does, traces a little faster but
     /// makes every later removal a full rebuild: on the 8,000-body atrium, where islands keep
     /// waking, the BVH backend then spent most of its frame time rebuilding. Keeping every
-    /// island's block instead left the tree after the atrium's run tracing bounce rays up to
-    /// 1.2x slower than a fresh build of the same triangles: each of some 500 small,
-    /// overlapping blocks is entered separately. Merging only what never wakes keeps both: 1.01-
+    /// island's block instead, in an overlay made by insertion (before session 32), left the
+    /// tree after the atrium's run tracing bounce rays up to 1.2x slower than a fresh build of
+    /// the same triangles: each of some 500 small, overlapping blocks is entered separately. Merging only what never wakes keeps both: 1.01-
     /// 1.03x. Merging only when a cost estimate said it pays merged early, then stopped, and
     /// left a tree slower than either (docs/performance.md).)
     pub fn relink(&mut self) -> Option<usize> {
-        let root = self.state.root.take()?;
+        let root = self.state.root.as_ref()?;
         let mut blocks = Vec::new();
-        stats::for_each_block(&root, &mut |b| blocks.push(b.clone()));
+        stats::for_each_block(root, &mut |b| blocks.push(b.clone()));
+        self.relink_blocks(blocks)
+    }
+
+    /// [`Self::relink`] over `blocks`: every live block, each whole (none of them may hold a
+    /// removed mesh's triangles). Returns the triangles merged, or `None` after a rebuild.
+    fn relink_blocks(&mut self, blocks: Vec<Arc<Block>>) -> Option<usize> {
         let (merge, keep) = self.mergeable(&blocks);
-        let (mut order, built) = match (merge.len() > 1).then(|| self.merge_blocks(&merge)).flatten() {
+        let (order, built) = match (merge.len() > 1).then(|| self.merge_blocks(&merge)).flatten() {
             Some(merged) => {
                 let built = merged.mesh.tris.len();
                 (std::iter::once(merged).chain(keep).collect(), built)
             }
             None => (blocks, 0),
         };
-        order.sort_by_key(|b| (std::cmp::Reverse(b.mesh.tris.len()), b.id));
-        let mut fresh = Link::Ref(order[0].clone(), 0);
-        for b in &order[1..] {
-            fresh = insert::insert_block(fresh, b);
-        }
         self.state.rebuilt_triangles = self.state.triangles;
         self.state.inserted_since_rebuild = 0;
-        if fresh.height() > MAX_OVERLAY_HEIGHT {
-            self.state.set_root(Some(root));
-            self.rebuild();
-            return None;
+        (!self.braid_or_rebuild(&order)).then_some(built)
+    }
+
+    /// [`Self::braid`], or a rebuild from the triangles of `blocks` where that fails; returns
+    /// whether it rebuilt.
+    fn braid_or_rebuild(&mut self, blocks: &[Arc<Block>]) -> bool {
+        if self.braid(blocks) {
+            return false;
         }
-        self.state.set_root(Some(fresh));
-        Some(built)
+        // From `blocks`, not the current tree: after a merge, only `blocks` holds the block
+        // the mesh entries name.
+        let tris = blocks.iter().flat_map(|b| self.live_tris_of(b)).collect();
+        self.rebuild_from(tris);
+        true
+    }
+
+    /// Makes the overlay a re-braided one ([`rebraid`]) over the whole of `blocks`; returns
+    /// false, leaving the tree as it was, if that came out deeper than
+    /// [`MAX_OVERLAY_HEIGHT`].
+    fn braid(&mut self, blocks: &[Arc<Block>]) -> bool {
+        let root = match blocks {
+            [] => None,
+            [one] => Some(Link::Ref(one.clone(), 0)),
+            _ => Some(rebraid::rebraid(blocks)),
+        };
+        if root.as_ref().is_some_and(|r| r.height() > MAX_OVERLAY_HEIGHT) {
+            return false;
+        }
+        self.state.set_root(root);
+        true
     }
 
     /// Splits `blocks` into those that will never be removed on their own (every live mesh in
@@ -455,9 +528,10 @@ impl StaticBvh {
     }
 
     /// Applies a batch of changes the way a commit should: removals first, then either one
-    /// rebuild (empty tree, a removal from a shared block, or more new triangles than
-    /// [`Self::rebuild_fraction`] allows) or one insertion per added mesh. Unknown ids in
-    /// `removes` are ignored; an added id that is present replaces that mesh.
+    /// rebuild (an empty tree, or a removal from a shared block), or a block per added mesh and
+    /// one new overlay over every live block: re-braided ([`rebraid`]), or relinked
+    /// ([`Self::relink`]) once the new triangles pass [`Self::rebuild_fraction`]. Unknown ids
+    /// in `removes` are ignored; an added id that is present replaces that mesh.
     pub fn apply(
         &mut self,
         removes: &[StaticId],
@@ -488,23 +562,21 @@ impl StaticBvh {
     ) -> StaticUpdate {
         let mut update = StaticUpdate::default();
         let mut need_rebuild = false;
+        let mut changed = !adds.is_empty();
         let replaced = adds.iter().map(|(id, _)| id);
         for id in removes.iter().chain(replaced) {
-            let Some(e) = self.state.meshes.get(id) else {
-                continue;
-            };
-            if e.shared && e.triangles > 0 {
-                // Drop the entry now and rebuild once below.
-                let e = Arc::make_mut(&mut self.state.meshes).remove(id).expect("present");
-                self.state.triangles -= e.triangles;
-                need_rebuild = true;
-            } else {
-                self.remove(*id);
+            // The entry goes now; the tree is rebuilt or re-braided without it below.
+            if let Some(e) = self.forget(*id) {
+                changed = true;
+                need_rebuild |= e.shared && e.triangles > 0;
             }
+        }
+        if !changed {
+            return update;
         }
         let added: usize = adds.iter().map(|(_, t)| t.len()).sum();
         let budget = self.rebuild_fraction * self.state.rebuilt_triangles as f32;
-        if need_rebuild || self.state.root.is_none() {
+        if need_rebuild || self.state.triangles == 0 {
             let mut tris = self.live_tris();
             let meshes = Arc::make_mut(&mut self.state.meshes);
             for (id, t) in adds {
@@ -519,23 +591,25 @@ impl StaticBvh {
             self.rebuild_from(tris);
             update.rebuilt = true;
             update.built_triangles = self.state.triangles;
+            return update;
+        }
+        let over_budget = (self.state.inserted_since_rebuild + added) as f32 > budget;
+        let mut blocks = self.live_blocks();
+        for (id, t) in adds {
+            update.built_triangles += t.len();
+            blocks.extend(self.add_mesh(id, t));
+        }
+        let merged = if over_budget {
+            update.relinked = true;
+            self.relink_blocks(blocks)
         } else {
-            let over_budget = (self.state.inserted_since_rebuild + added) as f32 > budget;
-            for (id, t) in adds {
-                update.built_triangles += t.len();
-                update.rebuilt |= self.insert_tris(id, t);
-            }
-            if update.rebuilt {
+            (!self.braid_or_rebuild(&blocks)).then_some(0)
+        };
+        match merged {
+            Some(merged) => update.built_triangles += merged,
+            None => {
+                update.rebuilt = true;
                 update.built_triangles = self.state.triangles;
-            } else if over_budget {
-                update.relinked = true;
-                match self.relink() {
-                    Some(merged) => update.built_triangles += merged,
-                    None => {
-                        update.rebuilt = true;
-                        update.built_triangles = self.state.triangles;
-                    }
-                }
             }
         }
         update

@@ -1,0 +1,103 @@
+//! Re-braiding (after Benthin, Woop, Wald and Áfra 2017, "Improved two-level BVHs using
+//! partial re-braiding"): the overlay built top-down by binned SAH over *pieces* of the
+//! blocks, the blocks larger than every other opened into subtrees, so that the overlay can
+//! put an island's block between the parts of the environment around it instead of beside the
+//! whole. Every commit of the persistent tree makes its overlay this way
+//! ([`super::StaticBvh::apply`]).
+//!
+//! Why: a ray walks each block subtree it enters to the end before the next, so a subtree of
+//! the environment that encloses an island (the floor and walls around a pile) is walked
+//! behind the island by rays aimed at it. Overlays made by inserting blocks one at a time
+//! (`insert.rs`, still what [`super::StaticBvh::insert`] does) kept such subtrees whole: at the
+//! atrium's most fragmented point (frame 693, 301 block subtrees) the tree traced 1.33-1.50x
+//! a fresh build of its triangles on primary rays and 1.07-1.24x on bounces. Re-braided
+//! (session 32, one run each, timed): 1.12 / 1.24 over the same 301 subtrees unopened; opened
+//! largest first into 2x as many pieces 0.88 / 1.05, 4x 0.98 / 1.02, 16x 0.94 / 1.14.
+//!
+//! Which pieces: counted per ray at each variant's most fragmented point (wide nodes, leaves,
+//! block traversals started and leaf packets, against the fresh build's), the whole blocks
+//! unopened walked 21% more wide nodes on primary rays and 13-17% more leaves and packets on
+//! bounces; opened into four pieces per block, largest first (2,028 pieces), or only where a
+//! piece is larger than the second-largest block (526-572 pieces), every count was at or
+//! below the fresh build's. The second is kept: it opens the environment down to the size of
+//! the islands around it and leaves the islands whole (a commit took 1.5-1.6 ms on average
+//! over the atrium's run, against 2.7 ms with four pieces per block and 1.9 ms for the former
+//! one-by-one insertion).
+
+use std::cmp::Ordering;
+use std::collections::BinaryHeap;
+use std::sync::Arc;
+
+use super::{Block, Link, ONode};
+use crate::accel::bvh::flat::{build, FlatBvh};
+use crate::accel::bvh::BuildParams;
+use crate::geometry::Aabb;
+
+/// At most this many pieces per block.
+const PIECES_PER_BLOCK: usize = 4;
+/// ... and at least this many in all, where blocks are few.
+const MIN_PIECES: usize = 64;
+
+/// A re-braided overlay over the whole of `blocks` (two or more).
+pub(crate) fn rebraid(blocks: &[Arc<Block>]) -> Link {
+    debug_assert!(blocks.len() > 1);
+    let whole: Vec<Link> = blocks.iter().map(|b| Link::Ref(b.clone(), 0)).collect();
+    let mut areas: Vec<f32> = whole.iter().map(|l| l.aabb().surface_area()).collect();
+    areas.sort_by(|a, b| b.total_cmp(a));
+    let budget = (PIECES_PER_BLOCK * blocks.len()).max(MIN_PIECES);
+    let pieces = pieces(whole, budget, areas[1]);
+    let bounds: Vec<Aabb> = pieces.iter().map(Link::aabb).collect();
+    // One piece per leaf: entering a piece starts a block traversal.
+    let (bvh, order) = build(&bounds, BuildParams::TOP_LEVEL);
+    link_of(&bvh, 0, &order, &pieces)
+}
+
+/// A piece waiting to be opened, ordered by surface area (largest first).
+struct Piece(f32, Link);
+
+impl PartialEq for Piece {
+    fn eq(&self, other: &Self) -> bool {
+        self.cmp(other) == Ordering::Equal
+    }
+}
+
+impl Eq for Piece {}
+
+impl PartialOrd for Piece {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl Ord for Piece {
+    fn cmp(&self, other: &Self) -> Ordering {
+        self.0.total_cmp(&other.0)
+    }
+}
+
+/// `whole` (block subtrees) opened largest first while the largest piece's surface area is
+/// above `min_area` and there are fewer than `budget` pieces; block leaves stay whole.
+fn pieces(whole: Vec<Link>, budget: usize, min_area: f32) -> Vec<Link> {
+    let mut open: BinaryHeap<Piece> = whole.into_iter().map(|l| Piece(l.aabb().surface_area(), l)).collect();
+    let mut done = Vec::new();
+    while open.len() + done.len() < budget && open.peek().is_some_and(|p| p.0 > min_area) {
+        let Some(Piece(_, l)) = open.pop() else { break };
+        match l.children() {
+            Some(kids) => open.extend(kids.into_iter().map(|k| Piece(k.aabb().surface_area(), k))),
+            None => done.push(l),
+        }
+    }
+    done.extend(open.into_iter().map(|Piece(_, l)| l));
+    done
+}
+
+/// Node `i` of the build over `pieces` as an overlay link.
+fn link_of(bvh: &FlatBvh, i: u32, order: &[u32], pieces: &[Link]) -> Link {
+    let n = &bvh.nodes[i as usize];
+    if n.is_leaf() {
+        debug_assert_eq!(n.count, 1);
+        return pieces[order[n.first as usize] as usize].clone();
+    }
+    let kids = [link_of(bvh, n.first, order, pieces), link_of(bvh, n.first + 1, order, pieces)];
+    Link::Node(Arc::new(ONode::new(kids, None)))
+}
