@@ -16,13 +16,14 @@
 //!
 //! Which pieces: counted per ray at each variant's most fragmented point (wide nodes, leaves,
 //! block traversals started and leaf packets, against the fresh build's), the whole blocks
-//! unopened walked 21% more wide nodes on primary rays and 13-17% more leaves and packets on
-//! bounces; opened into four pieces per block, largest first (2,028 pieces), or only where a
-//! piece is larger than the second-largest block (526-572 pieces), every count was at or
-//! below the fresh build's. The second is kept: it opens the environment down to the size of
-//! the islands around it and leaves the islands whole (a commit took 1.5-1.6 ms on average
-//! over the atrium's run, against 2.7 ms with four pieces per block and 1.9 ms for the former
-//! one-by-one insertion).
+//! unopened walked 21% more wide nodes on primary rays and tested 17% more leaves on bounces;
+//! opened into four pieces per block, largest first (2,028 pieces), or only where a piece is
+//! larger than the second-largest block (526-572 pieces), every count came within 4% of the
+//! fresh build's. The second is kept: it opens the environment down to the size of the
+//! islands around it and leaves the islands whole, in about a quarter of the pieces (a commit
+//! over the atrium's run took 1.9-2.1 ms on average, against 1.7-1.8 ms for the one-by-one
+//! insertion in the same session and 2.7 ms with four pieces per block in an earlier run).
+//! docs/performance.md ("Session 32") has the tables.
 
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
