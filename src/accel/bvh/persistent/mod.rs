@@ -417,18 +417,19 @@ impl StaticBvh {
     /// [`Self::set_permanent`]) into one rebuilt block. Every other mesh keeps its own block
     /// and stays removable without a rebuild. What growth past [`Self::rebuild_fraction`]
     /// triggers: the environment and the islands that stay are then one tree again, whose
-    /// order is the SAH's and not the overlay's. Returns the triangles built into the merged block (0 when there was nothing to
-    /// merge), or `None` when it fell back to a full rebuild (the overlay came out deeper than
-    /// [`MAX_OVERLAY_HEIGHT`]).
+    /// order is the SAH's and not the overlay's. Returns the triangles built into the merged
+    /// block (0 when there was nothing to merge), or `None` when it fell back to a full rebuild
+    /// (the overlay came out deeper than [`MAX_OVERLAY_HEIGHT`]).
     ///
     /// (Merging everything into one block, as a full rebuild does, traces a little faster but
     /// makes every later removal a full rebuild: on the 8,000-body atrium, where islands keep
     /// waking, the BVH backend then spent most of its frame time rebuilding. Keeping every
     /// island's block instead, in an overlay made by insertion (before session 32), left the
     /// tree after the atrium's run tracing bounce rays up to 1.2x slower than a fresh build of
-    /// the same triangles: each of some 500 small, overlapping blocks is entered separately. Merging only what never wakes keeps both: 1.01-
-    /// 1.03x. Merging only when a cost estimate said it pays merged early, then stopped, and
-    /// left a tree slower than either (docs/performance.md).)
+    /// the same triangles: each of some 500 small, overlapping blocks is entered separately.
+    /// Merging only what never wakes keeps both: 1.01-1.03x. Merging only when a cost estimate
+    /// said it pays merged early, then stopped, and left a tree slower than either
+    /// (docs/performance.md).)
     pub fn relink(&mut self) -> Option<usize> {
         let root = self.state.root.as_ref()?;
         let mut blocks = Vec::new();
