@@ -140,6 +140,17 @@ fn benches(c: &mut Criterion) {
             BatchSize::SmallInput,
         )
     });
+    // What a commit does (`apply`): the island's block, then the overlay re-braided over both.
+    g.bench_function("commit_1pct_island", |b| {
+        b.iter_batched(
+            || snap.clone(),
+            |s| {
+                base.restore(s);
+                base.apply(&[], &[(StaticId(1), &isl)]).unwrap();
+            },
+            BatchSize::SmallInput,
+        )
+    });
     g.bench_function("rebuild_with_island", |b| {
         b.iter(|| {
             let mut t = StaticBvh::new(BuildParams::QUALITY);
