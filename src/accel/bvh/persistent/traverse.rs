@@ -41,6 +41,11 @@ impl StaticSnapshot {
 
     /// Visits the block subtrees the ray may hit, in the order `NEAREST_FIRST` picks
     /// ([`Wide::traverse`]); `f` returns `true` to stop.
+    ///
+    /// Each subtree is walked to its end before the next is taken. One stack shared by the
+    /// overlay and the blocks would not change that: a depth-first walk visits the same nodes
+    /// in the same order either way. What made rays walk an environment subtree behind the
+    /// island they hit was the overlay's shape, which re-braiding fixes (`rebraid.rs`).
     #[inline(always)]
     fn walk<K: Kernel, F, const NEAREST_FIRST: bool>(
         &self,
