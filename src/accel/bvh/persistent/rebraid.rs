@@ -21,8 +21,9 @@
 //! larger than the second-largest block (526-572 pieces), every count came within 4% of the
 //! fresh build's. The second is kept: it opens the environment down to the size of the
 //! islands around it and leaves the islands whole, in about a quarter of the pieces (a commit
-//! over the atrium's run took 1.9-2.1 ms on average, against 1.7-1.8 ms for the one-by-one
-//! insertion in the same session and 2.7 ms with four pieces per block in an earlier run).
+//! over the atrium's run took 1.9-2.3 ms on average in five runs, against 1.7-1.8 ms for the
+//! one-by-one insertion in the same session; 1.5-1.6 ms against 2.7 ms with four pieces per
+//! block in single runs while the policies were compared).
 //! docs/performance.md ("Session 32") has the tables.
 
 use std::cmp::Ordering;
