@@ -19,11 +19,15 @@
 //! unopened walked 21% more wide nodes on primary rays and tested 17% more leaves on bounces;
 //! opened into four pieces per block, largest first (2,028 pieces), or only where a piece is
 //! larger than the second-largest block (526-572 pieces), every count came within 4% of the
-//! fresh build's. The second is kept: it opens the environment down to the size of the
-//! islands around it and leaves the islands whole, in about a quarter of the pieces (a commit
-//! over the atrium's run took 1.9-2.3 ms on average in five runs, against 1.7-1.8 ms for the
-//! one-by-one insertion in the same session; 1.5-1.6 ms against 2.7 ms with four pieces per
-//! block in single runs while the policies were compared).
+//! fresh build's. The second opens the environment down to the size of the islands around it
+//! and leaves the islands whole, in about a quarter of the pieces. Its threshold was then
+//! counted at one peak (frame 1302, 148 blocks): pieces opened down to the second-largest
+//! block's area (202 pieces) left bounce rays starting 4% more traversals than the fresh build
+//! and visiting 2% more wide nodes; down to a quarter of it (314 pieces, kept), 4% fewer
+//! traversals and 6% fewer nodes, leaves and packets within 2%; a tenth (522, the budget
+//! binding) tested 7% more packets; four times it (170), 10% more nodes. A commit over the
+//! atrium's run took 1.9-2.3 ms on average with the first threshold, against 1.7-1.8 ms for
+//! the one-by-one insertion in the same session.
 //! docs/performance.md ("Session 32") has the tables.
 
 use std::cmp::Ordering;
@@ -39,6 +43,9 @@ use crate::geometry::Aabb;
 const PIECES_PER_BLOCK: usize = 4;
 /// ... and at least this many in all, where blocks are few.
 const MIN_PIECES: usize = 64;
+/// Pieces are opened while their surface area is above this fraction of the second-largest
+/// block's (the largest island's, where the largest block is the environment).
+const OPEN_ABOVE: f32 = 0.25;
 
 /// A re-braided overlay over the whole of `blocks` (two or more).
 pub(crate) fn rebraid(blocks: &[Arc<Block>]) -> Link {
@@ -47,7 +54,7 @@ pub(crate) fn rebraid(blocks: &[Arc<Block>]) -> Link {
     let mut areas: Vec<f32> = whole.iter().map(|l| l.aabb().surface_area()).collect();
     areas.sort_by(|a, b| b.total_cmp(a));
     let budget = (PIECES_PER_BLOCK * blocks.len()).max(MIN_PIECES);
-    let pieces = pieces(whole, budget, areas[1]);
+    let pieces = pieces(whole, budget, OPEN_ABOVE * areas[1]);
     let bounds: Vec<Aabb> = pieces.iter().map(Link::aabb).collect();
     // One piece per leaf: entering a piece starts a block traversal.
     let (bvh, order) = build(&bounds, BuildParams::TOP_LEVEL);
