@@ -26,8 +26,8 @@
 //! and visiting 2% more wide nodes; down to a quarter of it (314 pieces, kept), 4% fewer
 //! traversals and 6% fewer nodes, leaves and packets within 2%; a tenth (522, the budget
 //! binding) tested 7% more packets; four times it (170), 10% more nodes. A commit over the
-//! atrium's run took 1.9-2.3 ms on average with the first threshold, against 1.7-1.8 ms for
-//! the one-by-one insertion in the same session.
+//! atrium's run took 2.3-2.5 ms on average with the kept threshold and 1.9-2.3 ms with the
+//! first, against 1.7-1.8 ms for the one-by-one insertion in the same session.
 //! docs/performance.md ("Session 32") has the tables.
 
 use std::cmp::Ordering;
