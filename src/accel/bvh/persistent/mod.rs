@@ -186,9 +186,9 @@ impl StaticSnapshot {
         self.view.refs.len()
     }
 
-    /// Blocks the tree is made of (1 for a tree that is one block, 0 for an empty one): how
-    /// many times it has been split by inserting meshes since it was last rebuilt or relinked.
-    /// O(overlay nodes).
+    /// Blocks the tree is made of (1 for a tree that is one block, 0 for an empty one): the
+    /// rebuilt base plus one per mesh that keeps a block of its own (inserted since the last
+    /// rebuild, or removable and so kept apart at the last relink). O(overlay nodes).
     pub fn blocks(&self) -> usize {
         let mut n = 0;
         if let Some(root) = &self.root {
@@ -431,10 +431,8 @@ impl StaticBvh {
     /// said it pays merged early, then stopped, and left a tree slower than either
     /// (docs/performance.md).)
     pub fn relink(&mut self) -> Option<usize> {
-        let root = self.state.root.as_ref()?;
-        let mut blocks = Vec::new();
-        stats::for_each_block(root, &mut |b| blocks.push(b.clone()));
-        self.relink_blocks(blocks)
+        self.state.root.as_ref()?;
+        self.relink_blocks(self.live_blocks())
     }
 
     /// [`Self::relink`] over `blocks`: every live block, each whole (none of them may hold a

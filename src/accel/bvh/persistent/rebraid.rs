@@ -50,11 +50,13 @@ const OPEN_ABOVE: f32 = 0.25;
 /// A re-braided overlay over the whole of `blocks` (two or more).
 pub(crate) fn rebraid(blocks: &[Arc<Block>]) -> Link {
     debug_assert!(blocks.len() > 1);
-    let whole: Vec<Link> = blocks.iter().map(|b| Link::Ref(b.clone(), 0)).collect();
-    let mut areas: Vec<f32> = whole.iter().map(|l| l.aabb().surface_area()).collect();
-    areas.sort_by(|a, b| b.total_cmp(a));
+    let whole: Vec<Piece> = blocks.iter().map(|b| Piece::new(Link::Ref(b.clone(), 0))).collect();
+    let (mut largest, mut second) = (0.0f32, 0.0f32);
+    for p in &whole {
+        (largest, second) = if p.0 > largest { (p.0, largest) } else { (largest, second.max(p.0)) };
+    }
     let budget = (PIECES_PER_BLOCK * blocks.len()).max(MIN_PIECES);
-    let pieces = pieces(whole, budget, OPEN_ABOVE * areas[1]);
+    let pieces = pieces(whole, budget, OPEN_ABOVE * second);
     let bounds: Vec<Aabb> = pieces.iter().map(Link::aabb).collect();
     // One piece per leaf: entering a piece starts a block traversal.
     let (bvh, order) = build(&bounds, BuildParams::TOP_LEVEL);
@@ -63,6 +65,12 @@ pub(crate) fn rebraid(blocks: &[Arc<Block>]) -> Link {
 
 /// A piece waiting to be opened, ordered by surface area (largest first).
 struct Piece(f32, Link);
+
+impl Piece {
+    fn new(link: Link) -> Self {
+        Piece(link.aabb().surface_area(), link)
+    }
+}
 
 impl PartialEq for Piece {
     fn eq(&self, other: &Self) -> bool {
@@ -86,13 +94,13 @@ impl Ord for Piece {
 
 /// `whole` (block subtrees) opened largest first while the largest piece's surface area is
 /// above `min_area` and there are fewer than `budget` pieces; block leaves stay whole.
-fn pieces(whole: Vec<Link>, budget: usize, min_area: f32) -> Vec<Link> {
-    let mut open: BinaryHeap<Piece> = whole.into_iter().map(|l| Piece(l.aabb().surface_area(), l)).collect();
+fn pieces(whole: Vec<Piece>, budget: usize, min_area: f32) -> Vec<Link> {
+    let mut open = BinaryHeap::from(whole);
     let mut done = Vec::new();
     while open.len() + done.len() < budget && open.peek().is_some_and(|p| p.0 > min_area) {
         let Some(Piece(_, l)) = open.pop() else { break };
         match l.children() {
-            Some(kids) => open.extend(kids.into_iter().map(|k| Piece(k.aabb().surface_area(), k))),
+            Some(kids) => open.extend(kids.into_iter().map(Piece::new)),
             None => done.push(l),
         }
     }
