@@ -321,6 +321,20 @@ impl Wide {
     /// hit child next (a running minimum with selects, the others pushed as found; session 31):
     /// 1.0% more program instructions on the ducks (1,368.7M against 1,355.4M), 0.1% fewer on
     /// the default scene.
+    ///
+    /// Octant order (session 33; Ylitie, Karras and Laine 2017; docs/performance.md, "Session
+    /// 33"): the collapse put each child in the slot of the corner it lies towards from its
+    /// parent's centre, and a closest-hit ray took the nearest hit child next by a running
+    /// minimum with selects and pushed the others in its direction's octant order, no sort.
+    /// Counted (callgrind, 320x180 path-traced frame of the ducks, whose closest single rays
+    /// are bounces): closest-hit queries -3.8% for 1% more node visits, program -0.8%, images
+    /// byte-identical. Timed (`bench accel`, two alternating pairs): bounces level (280-297 ms
+    /// against 268-281), but **primary rays 24% slower** (285-290 ms against 229-234): the
+    /// count had no single primary rays in it (the renderer traces camera rays in packets),
+    /// and why they lose was not measured (the pop order of the pushed children, likely).
+    /// Not kept; the code is in /work/meas/s33/octant.diff. Every child in octant order (the
+    /// paper's way) walked 11.6% more nodes on the bounces; the nearest next with the others
+    /// in slot order, 4.8%.
     #[inline(always)]
     fn traverse8<K: Kernel, F, const NEAREST_FIRST: bool>(
         &self,
