@@ -328,8 +328,8 @@ impl Wide {
     /// minimum with selects and pushed the others in its direction's octant order, no sort.
     /// Counted (callgrind, 320x180 path-traced frame of the ducks, whose closest single rays
     /// are bounces): closest-hit queries -3.8% for 1% more node visits, program -0.8%, images
-    /// byte-identical. Timed (`bench accel`, two alternating pairs): bounces level (280-297 ms
-    /// against 268-281), but **primary rays 24% slower** (285-290 ms against 229-234): the
+    /// byte-identical. Timed (`bench accel`, five pairs): bounces level (median 265 ms against
+    /// 268), but **primary rays slower in every pair** (median 241 ms against 210): the
     /// count had no single primary rays in it (the renderer traces camera rays in packets),
     /// yet counted with the camera rays traced singly they also ran 4.5% fewer closest-hit
     /// instructions and 10% fewer simulated mispredictions: the counts do not explain the
