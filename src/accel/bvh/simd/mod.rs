@@ -259,9 +259,10 @@ fn portable_box8(r: &PortableRay, b: &Boxes8, t_max: f32, inf_missed: bool) -> (
         let lane = |a: &[f32; 8]| Vec4::from_slice(&a[4 * h..4 * h + 4]);
         let t0: [Vec4; 3] = std::array::from_fn(|k| (lane(&b.min[k]) - r.org[k]) * r.inv[k]);
         let t1: [Vec4; 3] = std::array::from_fn(|k| (lane(&b.max[k]) - r.org[k]) * r.inv[k]);
-        let near = t0[0].min(t1[0]).max(t0[1].min(t1[1])).max(t0[2].min(t1[2])).max(r.t_min);
-        let far = (t0[0].max(t1[0]).min(t0[1].max(t1[1])).min(t0[2].max(t1[2])) * FAR_SCALE)
-            .min(Vec4::splat(t_max));
+        // The same reduction trees as the x86 paths' `near_far`, so NaN lanes agree too.
+        let near = t0[0].min(t1[0]).max(t0[1].min(t1[1])).max(t0[2].min(t1[2]).max(r.t_min));
+        let far = (t0[0].max(t1[0]).min(t0[1].max(t1[1])) * FAR_SCALE)
+            .min((t0[2].max(t1[2]) * FAR_SCALE).min(Vec4::splat(t_max)));
         let hit = near.cmple(far);
         let near = if inf_missed { Vec4::select(hit, near, Vec4::INFINITY) } else { near };
         (hit.bitmask(), near.to_array())
