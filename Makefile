@@ -25,7 +25,7 @@ test: setup
 	$(MAKE) test-no-embree
 
 test-no-embree:
-	$(CARGO) test --release -p dormant --no-default-features
+	$(CARGO) test --release -p dormant -p dormant-lab -p dormant-cli --no-default-features
 
 # The README's job array on a real single-node Slurm started on this machine (root; installs
 # slurm-wlm and munge), checked against one uninterrupted run. See docs/slurm.md.
@@ -55,7 +55,7 @@ compare-cycles: build
 lint:
 	$(CARGO) fmt --all --check
 	$(CARGO) clippy --workspace --all-targets -- -D warnings
-	$(CARGO) clippy -p dormant --no-default-features --all-targets -- -D warnings
+	$(CARGO) clippy -p dormant -p dormant-lab -p dormant-cli --no-default-features --all-targets -- -D warnings
 
 # Every cargo-fuzz target for FUZZ_SECONDS seconds (default 60) over a temporary copy of its
 # committed corpus; installs cargo-fuzz when missing (docs/fuzzing.md). Not part of `test`.

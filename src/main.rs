@@ -1,5 +1,10 @@
-//! The `dormant` binary: everything is in the library's `cli` module.
+//! The `dormant` binary: the command line ([`cli`]), which wires the renderer library
+//! (`dormant`) and the lab (`dormant_lab`) together, and the plot of a run's statistics
+//! ([`report`]).
+
+mod cli;
+mod report;
 
 fn main() -> std::process::ExitCode {
-    dormant::cli::main()
+    cli::main()
 }

@@ -3,7 +3,7 @@
 //! valid masks and instanced geometry.
 
 use dormant::accel::{self, Accelerator, Backend, Hit};
-use dormant::crosscheck::{camera_rays, surface_rays};
+use dormant_lab::crosscheck::{camera_rays, surface_rays};
 use dormant::geometry::{InstanceMotion, Ray, RigidTransform};
 use dormant::scene::default_scene;
 use glam::{Quat, Vec3};

@@ -11,7 +11,7 @@
 //! The constructed cases trace with Embree and the BVH, so they need the `embree` feature.
 
 use dormant::accel::{self, Backend, Hit};
-use dormant::crosscheck::{judge, AgreeReason, Answer, TriangleKey, Verdict};
+use dormant_lab::crosscheck::{judge, AgreeReason, Answer, TriangleKey, Verdict};
 use dormant::geometry::{Ray, TriangleMesh};
 use dormant::integrate::{HitTriangle, MeshRef};
 use dormant::physics::BodyId;
@@ -97,7 +97,7 @@ proptest! {
 #[cfg(feature = "embree")]
 mod constructed {
     use super::*;
-    use dormant::crosscheck::{reintersect, Fault, TieReason};
+    use dormant_lab::crosscheck::{reintersect, Fault, TieReason};
 
     /// Two parallel triangles 1e-4 apart (object space), in an instance about 40 units out.
     fn coincident_pair() -> ([Vec3; 3], [Vec3; 3], Affine3A) {

@@ -9,7 +9,7 @@
 use std::path::Path;
 
 use dormant::accel::{self, load_scene, Backend};
-use dormant::crosscheck::{camera_rays, compare, surface_rays, MappedQuery, VerifyReport};
+use dormant_lab::crosscheck::{camera_rays, compare, surface_rays, MappedQuery, VerifyReport};
 use dormant::geometry::{primitives, Ray};
 use dormant::integrate::{
     CacheBudget, IntegrationForm, IntegrationPolicy, IntegrationSettings, LoadedObjectMap, ManagerOptions,

@@ -6,13 +6,13 @@ use std::path::PathBuf;
 use clap::{Args, Subcommand};
 
 use super::{CliError, JsonOutput, SceneSource};
-use crate::bench::{
+use dormant_lab::bench::{
     self, AccelBenchOptions, AdaptiveBenchOptions, IntegrationBenchOptions, PaperBenchOptions, PaperPreset,
     RainAssets, RenderBenchOptions,
 };
-use crate::report::bench_json;
-use crate::scene::limits::MAX_SAMPLES_PER_PIXEL;
-use crate::sequence::{FrameRange, SequenceSource};
+use dormant_lab::report::bench_json;
+use dormant::scene::limits::MAX_SAMPLES_PER_PIXEL;
+use dormant::sequence::{FrameRange, SequenceSource};
 
 #[derive(Debug, Args)]
 pub struct BenchArgs {
@@ -85,7 +85,7 @@ pub struct PaperArgs {
     pub object: Vec<PathBuf>,
     /// Backends to compare (repeat; default: every compiled one).
     #[arg(long)]
-    pub backend: Vec<crate::accel::Backend>,
+    pub backend: Vec<dormant::accel::Backend>,
 }
 
 #[derive(Debug, Args)]
@@ -107,10 +107,10 @@ pub struct RegimesArgs {
     pub budgets: Vec<bench::Budget>,
     /// Backends to compare (repeat; default: every compiled one).
     #[arg(long)]
-    pub backend: Vec<crate::accel::Backend>,
+    pub backend: Vec<dormant::accel::Backend>,
     /// The integration form measured.
-    #[arg(long, value_enum, default_value_t = crate::integrate::IntegrationForm::default())]
-    pub integrate_as: crate::integrate::IntegrationForm,
+    #[arg(long, value_enum, default_value_t = dormant::integrate::IntegrationForm::default())]
+    pub integrate_as: dormant::integrate::IntegrationForm,
     /// Frames rendered per preview cell.
     #[arg(long, value_name = "N", default_value_t = 150)]
     pub preview_frames: u32,
@@ -156,7 +156,7 @@ pub struct IntegrationArgs {
     pub trajectory: Option<PathBuf>,
     /// Ray tracing backend (default: the first compiled in, Embree preferred).
     #[arg(long)]
-    pub backend: Option<crate::accel::Backend>,
+    pub backend: Option<dormant::accel::Backend>,
     /// Render frames A..B (half-open) of the simulation (`--range` is the old spelling).
     #[arg(long, value_name = "A..B", alias = "range")]
     pub frames: Option<FrameRange>,
@@ -165,7 +165,7 @@ pub struct IntegrationArgs {
     pub frame_step: Option<u32>,
     /// Image size of each traced frame.
     #[arg(long, value_name = "WxH", default_value = "320x180")]
-    pub size: super::render::Size,
+    pub size: dormant::render::ImageSize,
     /// Samples per pixel.
     #[arg(long, value_name = "N", default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=MAX_SAMPLES_PER_PIXEL as i64))]
     pub spp: u32,
@@ -174,8 +174,8 @@ pub struct IntegrationArgs {
     #[arg(long, value_enum, default_value_t = super::render::RenderMode::Shaded)]
     pub mode: super::render::RenderMode,
     /// The integration form the ratios describe; the other form runs too (`always`, `auto`).
-    #[arg(long, value_enum, default_value_t = crate::integrate::IntegrationForm::default())]
-    pub integrate_as: crate::integrate::IntegrationForm,
+    #[arg(long, value_enum, default_value_t = dormant::integrate::IntegrationForm::default())]
+    pub integrate_as: dormant::integrate::IntegrationForm,
     /// Compare this form only.
     #[arg(long)]
     pub one_form: bool,
@@ -194,7 +194,7 @@ pub struct AccelArgs {
     pub scene: SceneSource,
     /// Primary rays: one per pixel of an image of this size.
     #[arg(long, value_name = "WxH", default_value = "1280x720")]
-    pub size: super::render::Size,
+    pub size: dormant::render::ImageSize,
     /// Repetitions of each build and trace measurement; the best is reported.
     #[arg(long, value_name = "N", default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
     pub runs: u32,
@@ -206,7 +206,7 @@ pub struct RenderBenchArgs {
     pub scene: SceneSource,
     /// Size of the rendered frame; the ray sets have one camera ray per pixel.
     #[arg(long, value_name = "WxH", default_value = "640x360")]
-    pub size: super::render::Size,
+    pub size: dormant::render::ImageSize,
     /// Samples per pixel of the path-traced frame.
     #[arg(long, value_name = "N", default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=MAX_SAMPLES_PER_PIXEL as i64))]
     pub spp: u32,
@@ -225,9 +225,9 @@ pub struct AdaptiveBenchArgs {
     pub scene: SceneSource,
     /// Ray tracing backend (default: the first compiled in).
     #[arg(long)]
-    pub backend: Option<crate::accel::Backend>,
+    pub backend: Option<dormant::accel::Backend>,
     #[arg(long, value_name = "WxH", default_value = "480x270")]
-    pub size: super::render::Size,
+    pub size: dormant::render::ImageSize,
     /// Longest path (bounces).
     #[arg(long, value_name = "N", default_value_t = 6, value_parser = clap::value_parser!(u32).range(1..=64))]
     pub max_depth: u32,
@@ -293,7 +293,7 @@ fn paper(args: &PaperArgs, threads: Option<usize>, quiet: bool, json: &JsonOutpu
         false => CliError::Runtime(e.to_string()),
     })?;
     let written =
-        crate::report::write_paper(&report, &args.out).map_err(|e| CliError::Runtime(e.to_string()))?;
+        dormant_lab::report::write_paper(&report, &args.out).map_err(|e| CliError::Runtime(e.to_string()))?;
     json.emit(&bench_json(&report))?;
     print_written(&written, json, quiet);
     Ok(())
@@ -324,7 +324,7 @@ fn integration(
         forms: if args.one_form {
             vec![args.integrate_as]
         } else {
-            crate::integrate::IntegrationForm::starting_with(args.integrate_as)
+            dormant::integrate::IntegrationForm::starting_with(args.integrate_as)
         },
         cache_variants: args.cache_variants,
         shutter: args.shutter,
@@ -346,7 +346,7 @@ fn regimes(
     json: &JsonOutput,
 ) -> Result<(), CliError> {
     let scene =
-        crate::scene::file::SceneFile::load(&args.scene).map_err(|e| CliError::Input(e.to_string()))?;
+        dormant::scene::file::SceneFile::load(&args.scene).map_err(|e| CliError::Input(e.to_string()))?;
     let backends = chosen_backends(&args.backend)?;
     let budgets = if args.budgets.is_empty() { bench::Budget::ALL.to_vec() } else { args.budgets.clone() };
     let (counts, frame_count, sizes) = match args.quick {
@@ -375,16 +375,16 @@ fn regimes(
     let mut log = timed_log("bench regimes", quiet);
     let report = bench::bench_regimes(&options, &mut log)?;
     let written =
-        crate::report::write_regimes(&report, &args.out).map_err(|e| CliError::Runtime(e.to_string()))?;
+        dormant_lab::report::write_regimes(&report, &args.out).map_err(|e| CliError::Runtime(e.to_string()))?;
     json.emit(&bench_json(&report))?;
     print_written(&written, json, quiet);
     Ok(())
 }
 
 /// The backends named on the command line, or every compiled one.
-fn chosen_backends(named: &[crate::accel::Backend]) -> Result<Vec<crate::accel::Backend>, CliError> {
+fn chosen_backends(named: &[dormant::accel::Backend]) -> Result<Vec<dormant::accel::Backend>, CliError> {
     if named.is_empty() {
-        return Ok(crate::accel::Backend::compiled());
+        return Ok(dormant::accel::Backend::compiled());
     }
     named.iter().map(|&b| super::render::choose_backend(Some(b))).collect()
 }
@@ -416,8 +416,8 @@ fn print_written(written: &[std::path::PathBuf], json: &JsonOutput, quiet: bool)
 
 fn physics(args: &PhysicsArgs, quiet: bool, json: &JsonOutput) -> Result<(), CliError> {
     let (file, simulate) = args.scene.load()?;
-    let options = crate::physics::PhysicsBenchOptions { simulate, measure_frames: args.measure_frames };
-    let report = crate::physics::bench(&file, &options).map_err(super::simulate::physics_error)?;
+    let options = dormant_lab::bench::PhysicsBenchOptions { simulate, measure_frames: args.measure_frames };
+    let report = dormant_lab::bench::bench_physics(&file, &options).map_err(super::simulate::physics_error)?;
     emit(&bench_json(&report), json, quiet)
 }
 
@@ -498,7 +498,7 @@ fn adaptive(
     }
     let denoiser = match args.denoise {
         true => Some(
-            crate::render::Denoiser::new(threads)
+            dormant::render::Denoiser::new(threads)
                 .map_err(|e| CliError::Input(e.to_string()))?
                 .prefilter(args.denoise_prefilter),
         ),

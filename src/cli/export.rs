@@ -7,7 +7,7 @@ use clap::Args;
 
 use super::render::{load_sequence, sequence_error, sequence_source_of};
 use super::{write_json_atomic, CliError, JsonOutput};
-use crate::sequence::FrameRange;
+use dormant::sequence::FrameRange;
 
 #[derive(Debug, Args)]
 pub struct ExportArgs {

@@ -16,9 +16,9 @@ use std::path::{Path, PathBuf};
 
 use clap::{Args, Parser, Subcommand};
 
-use crate::scene::{self, SceneDescription};
+use dormant::scene::{self, SceneDescription};
 
-pub use render::Size;
+
 
 /// Errors that end a command, with the exit code they map to.
 #[derive(Debug, thiserror::Error)]
@@ -32,15 +32,15 @@ pub(crate) enum CliError {
 }
 
 /// Render failures while running (bad scenes are caught as input before rendering starts).
-impl From<crate::render::RenderError> for CliError {
-    fn from(e: crate::render::RenderError) -> Self {
+impl From<dormant::render::RenderError> for CliError {
+    fn from(e: dormant::render::RenderError) -> Self {
         CliError::Runtime(e.to_string())
     }
 }
 
 /// Bad scenes, trajectories and options are input; a failed render or build is runtime.
-impl From<crate::sequence::SequenceError> for CliError {
-    fn from(e: crate::sequence::SequenceError) -> Self {
+impl From<dormant::sequence::SequenceError> for CliError {
+    fn from(e: dormant::sequence::SequenceError) -> Self {
         if e.is_input() {
             CliError::Input(e.to_string())
         } else {
@@ -137,8 +137,8 @@ pub(crate) fn run(cli: &Cli) -> Result<(), CliError> {
     }
     let threads = cli.threads.map(|n| n as usize);
     // A bad DORMANT_SIMD is a usage error before any work (the library would fall back).
-    let simd = crate::accel::bvh::SimdPath::from_env().map_err(|e| CliError::Input(e.to_string()))?;
-    crate::accel::bvh::SimdPath::set_active(simd).map_err(|e| CliError::Input(e.to_string()))?;
+    let simd = dormant::accel::bvh::SimdPath::from_env().map_err(|e| CliError::Input(e.to_string()))?;
+    dormant::accel::bvh::SimdPath::set_active(simd).map_err(|e| CliError::Input(e.to_string()))?;
     match &cli.command {
         Command::Render(args) => render::run(args, threads, cli.quiet, &cli.json),
         Command::Simulate(args) => simulate::run(args, cli.quiet, &cli.json),
@@ -184,7 +184,7 @@ impl SceneSource {
 /// Writes pretty JSON atomically (temporary file, then rename).
 pub(crate) fn write_json_atomic(path: &Path, value: &serde_json::Value) -> Result<(), CliError> {
     let text = serde_json::to_string_pretty(value).expect("JSON values serialise");
-    crate::atomic_file::write_atomic(path, text.as_bytes())
+    dormant::atomic_file::write_atomic(path, text.as_bytes())
         .map_err(|e| CliError::Runtime(format!("cannot write {}: {e}", path.display())))
 }
 

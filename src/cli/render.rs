@@ -8,45 +8,23 @@ use clap::Args;
 use indicatif::ProgressBar;
 
 use super::CliError;
-use crate::accel::{self, Backend};
-use crate::integrate::{
+use dormant::accel::{self, Backend};
+use dormant::integrate::{
     CacheBudget, FrameStats, IntegrationForm, IntegrationPolicy, IntegrationSettings, SceneManager,
 };
-use crate::physics::SimulateOptions;
-use crate::render::{
+use dormant::physics::SimulateOptions;
+use dormant::render::{
+    ImageSize,
     self, AdaptiveSampling, AmbientOcclusion, Aov, DenoiseError, Denoiser, DirectLighting, Film, Integrator,
     PathTracer, RenderScene, RenderSettings,
 };
-use crate::report::{self, FrameRecord, RunInfo, StatsFile};
-use crate::scene::file::SceneFile;
-use crate::scene::limits::{image_size_problem, shutter_problem, MAX_IMAGE_SIDE, MAX_SAMPLES_PER_PIXEL};
-use crate::sequence::{
+use dormant::sequence::stats::{FrameRecord, RunInfo, StatsFile};
+use dormant::scene::file::SceneFile;
+use dormant::scene::limits::{shutter_problem, MAX_SAMPLES_PER_PIXEL};
+use dormant::sequence::{
     FrameRange, FrameRenderer, FrameSelection, KeptFrame, RenderedFrame, SeedMode, Sequence, SequenceError,
     SequenceSource,
 };
-
-/// Image size as `WIDTHxHEIGHT`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Size {
-    pub width: u32,
-    pub height: u32,
-}
-
-impl std::str::FromStr for Size {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        let Some((w, h)) = s.split_once(['x', 'X']) else {
-            return Err(format!("'{s}': expected WIDTHxHEIGHT, e.g. 1280x720"));
-        };
-        let (Ok(width), Ok(height)) = (w.trim().parse::<u32>(), h.trim().parse::<u32>()) else {
-            return Err(format!("'{s}': width and height must be whole numbers from 1 to {MAX_IMAGE_SIDE}"));
-        };
-        match image_size_problem(width, height) {
-            Some(problem) => Err(problem),
-            None => Ok(Size { width, height }),
-        }
-    }
-}
 
 /// What a render computes per pixel.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
@@ -83,7 +61,7 @@ pub struct RenderArgs {
     pub out: PathBuf,
     /// Image size.
     #[arg(long, value_name = "WxH", default_value = "960x540")]
-    pub size: Size,
+    pub size: ImageSize,
     /// Samples per pixel; with --noise-threshold, the most a pixel gets.
     #[arg(long, value_name = "N", default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=MAX_SAMPLES_PER_PIXEL as i64))]
     pub spp: u32,
@@ -491,7 +469,7 @@ fn render_sequence(
     rendered.map_err(|e| e.into_cli(&args.out))?;
     progress.finish_and_clear();
     let run_stats = stats_file.finish(&manager).map_err(|e| runtime(&e))?;
-    report::write_report_png(&run_stats, &args.out.join("report.png")).map_err(|e| runtime(&e))?;
+    crate::report::write_report_png(&run_stats, &args.out.join("report.png")).map_err(|e| runtime(&e))?;
     if args.video {
         let fps = 1.0 / (f64::from(sequence.trajectory.timestep) * f64::from(frames.step()));
         encode_video(args, &frame_paths, fps, writer.quiet)?;
@@ -769,7 +747,7 @@ pub(super) fn frame_files(args: &RenderArgs, index: u32) -> Vec<PathBuf> {
 fn copy_atomic(from: &Path, to: &Path) -> Result<(), CliError> {
     let bytes = std::fs::read(from)
         .map_err(|e| CliError::Runtime(format!("cannot read {} to reuse it: {e}", from.display())))?;
-    crate::atomic_file::write_atomic(to, &bytes)
+    dormant::atomic_file::write_atomic(to, &bytes)
         .map_err(|e| CliError::Runtime(format!("cannot write {}: {e}", to.display())))
 }
 
@@ -787,18 +765,4 @@ fn json_name(value: &impl serde::Serialize) -> String {
 pub enum Switch {
     On,
     Off,
-}
-
-#[cfg(test)]
-mod tests {
-    use super::Size;
-
-    #[test]
-    fn size_parses_and_rejects() {
-        assert_eq!("640x360".parse::<Size>(), Ok(Size { width: 640, height: 360 }));
-        assert!("640".parse::<Size>().is_err());
-        assert!("0x10".parse::<Size>().is_err());
-        assert!("axb".parse::<Size>().is_err());
-        assert!("20000x10".parse::<Size>().is_err());
-    }
 }

@@ -5,8 +5,8 @@ use std::collections::BTreeMap;
 
 use super::render::{frame_files, RenderArgs};
 use super::CliError;
-use crate::report::{self, FrameRecord, RunInfo};
-use crate::sequence::FrameSelection;
+use dormant::sequence::stats::{self, FrameRecord, RunInfo};
+use dormant::sequence::FrameSelection;
 
 /// The files of a sequence's run besides its frames.
 const OUTPUTS: [&str; 3] = ["stats.json", "stats.csv", "report.png"];
@@ -24,11 +24,11 @@ pub(super) fn kept_frames(
     selection: &FrameSelection,
 ) -> Result<Vec<FrameRecord>, CliError> {
     let ours = |name: &str| name.starts_with("frame_") || OUTPUTS.contains(&name);
-    crate::atomic_file::remove_stale_temporaries(&args.out, ours).map_err(|e| {
+    dormant::atomic_file::remove_stale_temporaries(&args.out, ours).map_err(|e| {
         CliError::Runtime(format!("cannot remove the temporary files left in {}: {e}", args.out.display()))
     })?;
     let Some(records) =
-        report::read_kept_frames(&args.out, run).map_err(|e| CliError::Input(e.to_string()))?
+        stats::read_kept_frames(&args.out, run).map_err(|e| CliError::Input(e.to_string()))?
     else {
         return Ok(Vec::new());
     };

@@ -3,8 +3,8 @@ use std::path::PathBuf;
 use clap::Args;
 
 use super::{CliError, JsonOutput};
-use crate::physics::{self, PhysicsError, SimulateOptions};
-use crate::scene::file::SceneFile;
+use dormant::physics::{self, PhysicsError, SimulateOptions};
+use dormant::scene::file::SceneFile;
 
 /// A scene file plus the overrides every physics command accepts.
 #[derive(Debug, Args)]

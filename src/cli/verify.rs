@@ -3,14 +3,14 @@ use std::path::PathBuf;
 use clap::Args;
 
 use super::{CliError, JsonOutput, SceneSource};
-use crate::accel::{self, AccelError, Accelerator, Backend};
-use crate::crosscheck::{self, MappedQuery, VerifyReport, BOUND};
-use crate::geometry::InstanceMotion;
-use crate::integrate::LoadedObjectMap;
-use crate::physics::SimulateOptions;
-use crate::scene::file::SceneFile;
-use crate::scene::SceneDescription;
-use crate::sequence::{SequenceError, SequenceSource};
+use dormant::accel::{self, AccelError, Accelerator, Backend};
+use dormant_lab::crosscheck::{self, MappedQuery, VerifyReport, BOUND};
+use dormant::geometry::InstanceMotion;
+use dormant::integrate::LoadedObjectMap;
+use dormant::physics::SimulateOptions;
+use dormant::scene::file::SceneFile;
+use dormant::scene::SceneDescription;
+use dormant::sequence::{SequenceError, SequenceSource};
 
 #[derive(Debug, Args)]
 pub struct VerifyArgs {
@@ -28,7 +28,7 @@ pub struct VerifyArgs {
     pub scene: SceneSource,
     /// Camera rays: one per pixel of an image of this size.
     #[arg(long, value_name = "WxH", default_value = "320x180")]
-    pub size: super::render::Size,
+    pub size: dormant::render::ImageSize,
     /// Random rays leaving random points on the scene's surfaces.
     #[arg(long, value_name = "N", default_value_t = 100_000)]
     pub surface_rays: usize,

@@ -11,7 +11,7 @@
 
 use std::path::Path;
 
-use dormant::cli::Size;
+use dormant::render::ImageSize;
 use dormant::physics::Trajectory;
 use dormant::scene::file::SceneFile;
 use dormant::scene::gltf::load_gltf_slice;
@@ -125,10 +125,10 @@ pub fn cli_values(data: &[u8]) -> Result<(), String> {
         assert!(r.start < r.end, "{text:?} parsed to an empty range {r:?}");
         assert_eq!(format!("{}..{}", r.start, r.end).parse::<FrameRange>(), Ok(r));
     }
-    let size = text.parse::<Size>();
+    let size = text.parse::<ImageSize>();
     if let Ok(s) = size {
         assert!((1..=16384).contains(&s.width) && (1..=16384).contains(&s.height), "{text:?}: {s:?}");
-        assert_eq!(format!("{}x{}", s.width, s.height).parse::<Size>(), Ok(s));
+        assert_eq!(format!("{}x{}", s.width, s.height).parse::<ImageSize>(), Ok(s));
     }
     match (frames, size) {
         (Err(a), Err(b)) => Err(format!("{a}; {b}")),

@@ -1,0 +1,169 @@
+//! The regime map of `dormant bench regimes`: `regimes.json`, `regimes.md` (one table row per
+//! body count and budget) and `regimes.png` (settled speed-up of `auto` against its ceiling
+//! over the body count, one panel per budget).
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use plotters::prelude::*;
+
+use super::plot::{draw_legend, err, write_png, Area, PlotResult, FONT};
+use super::ReportError;
+use crate::bench::regimes::{Budget, RegimeCell, RegimesReport};
+
+const WIDTH: u32 = 1500;
+const HEIGHT: u32 = 520;
+
+/// Writes `regimes.json`, `regimes.md` and `regimes.png` into `dir`; returns their paths.
+pub fn write_regimes(report: &RegimesReport, dir: &Path) -> Result<Vec<PathBuf>, ReportError> {
+    std::fs::create_dir_all(dir).map_err(|source| ReportError::Write { path: dir.to_path_buf(), source })?;
+    let png = dir.join("regimes.png");
+    write_png(&png, WIDTH, HEIGHT, |buffer| draw(report, buffer))?;
+    let value = super::bench_json(report);
+    let json = serde_json::to_string_pretty(&value).expect("JSON values serialise");
+    let mut written = vec![png];
+    for (name, text) in [("regimes.json", json), ("regimes.md", regimes_markdown(report))] {
+        let path = dir.join(name);
+        dormant::atomic_file::write_atomic(&path, text.as_bytes())
+            .map_err(|source| ReportError::Write { path: path.clone(), source })?;
+        written.push(path);
+    }
+    Ok(written)
+}
+
+fn num(v: f64) -> String {
+    if v.is_finite() {
+        format!("{v:.2}")
+    } else {
+        "n/a".into()
+    }
+}
+
+fn budget_name(b: Budget) -> String {
+    let (w, h, spp) = b.image();
+    image_name(b, w, h, spp)
+}
+
+fn image_name(b: Budget, w: u32, h: u32, spp: u32) -> String {
+    let mode = if b == Budget::Production { "path traced" } else { "shaded" };
+    format!("{mode} {w}x{h} {spp} spp")
+}
+
+/// The table: one row per body count, budget and backend.
+pub fn regimes_markdown(report: &RegimesReport) -> String {
+    let mut md = String::new();
+    let _ = writeln!(
+        md,
+        "Scene `{}`, integration form `{}`, {} threads, {:.0} min. Speed-ups are `never` over \
+         `auto` (lookahead on); the ceiling is `never`'s settled frame over its trace plus its \
+         commit times the awake share; the trace penalty is `always`'s settled trace over \
+         `never`'s.\n",
+        report.scene,
+        report.form,
+        report.threads,
+        report.wall_s / 60.0
+    );
+    let _ = writeln!(
+        md,
+        "| bodies | budget | backend | frames (settled) | settled speed-up | ceiling | of ceiling | \
+         run speed-up | auto over best | trace penalty | never ms | auto ms |"
+    );
+    let _ =
+        writeln!(md, "| ---: | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |");
+    for c in &report.cells {
+        let r = &c.ratios;
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {} ({}) | {} | {} | {} | {} | {} | {} | {:.1} | {:.1} |",
+            c.bodies,
+            image_name(c.budget, c.width, c.height, c.spp),
+            c.backend,
+            c.frames_rendered,
+            c.settled_frames,
+            num(r.settled_speedup),
+            num(r.ceiling),
+            num(r.of_ceiling),
+            num(r.run_speedup),
+            num(r.auto_over_best),
+            num(r.trace_penalty),
+            c.never_frame_ms,
+            c.auto_frame_ms
+        );
+    }
+    md
+}
+
+fn draw(report: &RegimesReport, buffer: &mut [u8]) -> PlotResult {
+    let root = BitMapBackend::with_buffer(buffer, (WIDTH, HEIGHT)).into_drawing_area();
+    root.fill(&WHITE).map_err(err)?;
+    let title = format!("Where integration pays: {} (settled speed-up of auto over never)", report.scene);
+    let root = root.titled(&title, (FONT, 22)).map_err(err)?;
+    let budgets: Vec<Budget> =
+        Budget::ALL.into_iter().filter(|b| report.cells.iter().any(|c| c.budget == *b)).collect();
+    let panels = root.split_evenly((1, budgets.len().max(1)));
+    for (budget, area) in budgets.iter().zip(&panels) {
+        let cells: Vec<&RegimeCell> = report.cells.iter().filter(|c| c.budget == *budget).collect();
+        panel(&cells, *budget, area)?;
+    }
+    root.present().map_err(err)
+}
+
+/// One budget: per backend, the settled speed-up (solid) and the ceiling (dashed) over bodies.
+fn panel(cells: &[&RegimeCell], budget: Budget, area: &Area<'_>) -> PlotResult {
+    let xs: Vec<f64> = cells.iter().map(|c| c.bodies.max(1) as f64).collect();
+    let (lo, hi) = xs.iter().fold((f64::MAX, 1.0f64), |(a, b), &x| (a.min(x), b.max(x)));
+    let top = cells
+        .iter()
+        .flat_map(|c| [c.ratios.settled_speedup, c.ratios.ceiling])
+        .filter(|v| v.is_finite())
+        .fold(1.2f64, f64::max)
+        * 1.15;
+    let mut chart = ChartBuilder::on(area)
+        .caption(budget_name(budget), (FONT, 18))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(50)
+        .build_cartesian_2d((lo * 0.8..hi * 1.25).log_scale(), 0.0..top)
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc("bodies")
+        .y_desc("speed-up")
+        .x_label_formatter(&|v| format!("{v:.0}"))
+        .label_style((FONT, 13))
+        .axis_desc_style((FONT, 15))
+        .draw()
+        .map_err(err)?;
+    let one = vec![(lo * 0.8, 1.0), (hi * 1.25, 1.0)];
+    chart.draw_series(LineSeries::new(one, BLACK.mix(0.4))).map_err(err)?;
+    let colours = [RGBColor(31, 119, 180), RGBColor(214, 39, 40)];
+    // Cells come count by count, each with every backend: one series per backend.
+    let mut backends = Vec::new();
+    for c in cells {
+        if !backends.contains(&c.backend) {
+            backends.push(c.backend);
+        }
+    }
+    for (backend, colour) in backends.into_iter().zip(colours.iter().cycle()) {
+        let series = |get: fn(&RegimeCell) -> f64| -> Vec<(f64, f64)> {
+            cells
+                .iter()
+                .filter(|c| c.backend == backend)
+                .map(|c| (c.bodies.max(1) as f64, get(c)))
+                .filter(|(_, y)| y.is_finite())
+                .collect()
+        };
+        let colour = *colour;
+        chart
+            .draw_series(LineSeries::new(series(|c| c.ratios.settled_speedup), colour.stroke_width(3)))
+            .map_err(err)?
+            .label(format!("{backend}: auto"))
+            .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], colour.stroke_width(3)));
+        chart
+            .draw_series(DashedLineSeries::new(series(|c| c.ratios.ceiling), 8, 5, colour.stroke_width(2)))
+            .map_err(err)?
+            .label(format!("{backend}: ceiling"))
+            .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], colour.stroke_width(1)));
+    }
+    draw_legend(&mut chart, SeriesLabelPosition::UpperLeft)
+}

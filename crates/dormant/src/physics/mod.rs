@@ -1,0 +1,26 @@
+//! Physics: Rapier worlds built from scene files, stepping with spawners, structures built
+//! asleep, projectiles, kinematic paths and scripted disturbances, the island tracker that turns Rapier's sleep state into
+//! `Slept`/`Woke` events with stable ids, trajectories (recording and replay), island
+//! statistics. Rapier's types stay inside this module; everything
+//! public speaks glam.
+
+mod body;
+mod colliders;
+mod error;
+mod island;
+mod kinematic;
+mod options;
+mod simulation;
+mod spawn;
+mod stats;
+mod structures;
+mod trajectory;
+
+pub use body::{BodyId, BodyInfo, BodyKind, BodyPose, BodyState};
+pub use colliders::ColliderChoice;
+pub use error::PhysicsError;
+pub use island::{IslandCounters, IslandEvent, IslandId, IslandTracker, SleepObservation};
+pub use options::SimulateOptions;
+pub use simulation::{simulate, simulate_observed, SimulatedFrame, Simulation, SimulationCounters};
+pub use stats::IslandStats;
+pub use trajectory::{RecordedScene, Replay, ReplayFrame, Trajectory, TrajectoryError, TrajectoryFrame};

@@ -1,0 +1,68 @@
+//! Turning a committed scene into pixels: camera rays, shading, tiles over rayon, the film and
+//! image output. Talks to geometry only through [`crate::accel::SceneQuery`] and the scene
+//! manager's hit mapping; image sequences of simulations are `crate::sequence`'s.
+
+mod adaptive;
+mod aov;
+mod bsdf;
+mod camera;
+pub mod denoise;
+mod emitters;
+mod film;
+mod image_size;
+mod integrator;
+mod render_scene;
+mod sampler;
+mod texture;
+mod tiles;
+mod video;
+
+pub use adaptive::{default_min_spp, relative_error, AdaptiveSampling, SppStats, CHECK_EVERY, DARK_FLOOR};
+pub use aov::{render_with_aovs, Aov, AovIntegrator};
+pub use bsdf::{sample_cone, sample_cosine};
+pub use camera::PinholeCamera;
+pub use denoise::{DenoiseError, Denoiser};
+pub(crate) use emitters::Emitters;
+pub use film::Film;
+pub use image_size::ImageSize;
+pub use film::{write_aov_png_atomic, write_exr_atomic, write_png_atomic};
+pub use integrator::{
+    AmbientOcclusion, DirectLighting, FrameContext, FrameIntegrator, Integrator, PathTracer,
+};
+pub use render_scene::RenderScene;
+pub(crate) use render_scene::{SurfaceHit, SurfaceKind};
+pub use sampler::PixelSampler;
+pub use tiles::{render_frame, render_frame_counted, RenderSettings, RenderStats};
+pub use video::{encode_video, ffmpeg_available, VideoError};
+
+use std::path::PathBuf;
+
+use crate::accel::AccelError;
+
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    #[error("image size {0}")]
+    InvalidSize(String),
+    #[error("samples per pixel must be from 1 to {}", crate::scene::limits::MAX_SAMPLES_PER_PIXEL)]
+    InvalidSpp,
+    #[error("noise threshold {0}: must be a number, 0 (off) or more")]
+    InvalidNoiseThreshold(f32),
+    #[error("minimum samples per pixel {min}: must be from 1 to the samples per pixel ({spp})")]
+    InvalidMinSpp { min: u32, spp: u32 },
+    #[error("cannot write {path}: {source}")]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("cannot encode {path}: {source}")]
+    Encode {
+        path: PathBuf,
+        #[source]
+        source: image::ImageError,
+    },
+    #[error("scene '{scene}': {what}")]
+    Scene { scene: String, what: String },
+    #[error(transparent)]
+    Accel(#[from] AccelError),
+}

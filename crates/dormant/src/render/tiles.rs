@@ -1,0 +1,310 @@
+//! One frame from camera to film: camera rays per pixel sample (tent filter), 16x16 tiles
+//! over rayon, camera rays of each pixel block traced as one packet, and the integrator bound
+//! to the frame finishing each sample.
+
+use std::time::Instant;
+
+use glam::{Vec2, Vec3};
+use rayon::prelude::*;
+
+use super::adaptive::{AdaptiveSampling, SppStats, Stopping};
+use super::integrator::dims;
+use super::{
+    Film, FrameContext, FrameIntegrator, Integrator, PinholeCamera, PixelSampler, RenderError, RenderScene,
+};
+use crate::accel::SceneQuery;
+use crate::geometry::Ray;
+use crate::scene::limits::{image_size_problem, MAX_SAMPLES_PER_PIXEL};
+
+/// Pixel offset distributed as a tent filter of radius one pixel per axis. Filter importance
+/// sampling (as in pbrt-v4): each sample is weighted 1 and lands where the filter puts it, so
+/// every pixel is computed alone (no splatting across tile borders) and the result is the
+/// tent-filtered image.
+fn tent_offset(u: Vec2) -> Vec2 {
+    // One square root and two selects rather than a branch on `u`, which is random, so such
+    // a branch mispredicts often (same values).
+    let tent = |u: f32| {
+        let low = u < 0.5;
+        let r = (if low { 2.0 * u } else { 2.0 - 2.0 * u }).sqrt();
+        if low {
+            r - 1.0
+        } else {
+            1.0 - r
+        }
+    };
+    Vec2::new(tent(u.x), tent(u.y))
+}
+
+/// Side of the square tiles rayon distributes.
+const TILE: u32 = 16;
+
+/// Pixel block whose camera rays (one sample each) are traced together as one packet
+/// ([`SceneQuery::intersect_packet`]) before each pixel's integrator continues alone. In
+/// `dormant bench render` (docs/performance.md) Embree traced 4x2 camera packets 1.3-1.6x
+/// (monastery, 8,000 ducks) and 3.1-3.4x (default scene) as fast as single rays; whole
+/// path-traced frames gained about 3% and 10%, as camera rays are one in 4-5 of their rays.
+const BLOCK: (u32, u32) = (4, 2);
+const BLOCK_PIXELS: usize = (BLOCK.0 * BLOCK.1) as usize;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RenderSettings {
+    pub width: u32,
+    pub height: u32,
+    /// Samples per pixel; with adaptive sampling, the most a pixel gets.
+    pub spp: u32,
+    /// Seeds the pixel sampler: a sequence passes the frame number so consecutive frames
+    /// decorrelate, or one value for every frame (`--seed fixed`).
+    pub seed: u32,
+    /// When a pixel may stop before `spp` samples (off: never).
+    pub adaptive: AdaptiveSampling,
+}
+
+impl RenderSettings {
+    /// Checks the size, the samples per pixel and adaptive sampling.
+    pub fn validate(&self) -> Result<(), RenderError> {
+        if let Some(problem) = image_size_problem(self.width, self.height) {
+            return Err(RenderError::InvalidSize(problem));
+        }
+        if !(1..=MAX_SAMPLES_PER_PIXEL).contains(&self.spp) {
+            return Err(RenderError::InvalidSpp);
+        }
+        self.adaptive.validate(self.spp)
+    }
+}
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct RenderStats {
+    pub rays: u64,
+    pub seconds: f64,
+    /// Camera samples per pixel: mean, least and most.
+    #[serde(flatten)]
+    pub spp: SppStats,
+}
+
+impl RenderStats {
+    pub fn mrays_per_second(&self) -> f64 {
+        self.rays as f64 / self.seconds.max(1e-9) / 1e6
+    }
+}
+
+/// The frame's camera: where it is at shutter open, and at close when the frame is motion
+/// blurred (`None`: no blur; `Some(open)` for a camera that stays put over the shutter).
+#[derive(Clone, Copy, Debug)]
+struct FrameCamera {
+    open: PinholeCamera,
+    close: Option<PinholeCamera>,
+}
+
+/// Sample `i` of pixel `(x, y)`'s camera ray.
+fn camera_ray(camera: &FrameCamera, spp: u32, x: u32, y: u32, sampler: &PixelSampler, i: u32) -> Ray {
+    // Tent reconstruction by filter importance sampling (see `tent_offset`); a single sample
+    // goes through the pixel's centre.
+    let jitter = if spp == 1 {
+        Vec2::splat(0.5)
+    } else {
+        Vec2::splat(0.5) + tent_offset(sampler.get_2d(i, dims::PIXEL))
+    };
+    let (px, py) = (x as f32 + jitter.x, y as f32 + jitter.y);
+    let lens = |c: &PinholeCamera| {
+        if c.has_aperture() {
+            c.ray_through_lens(px, py, sampler.get_2d(i, dims::LENS))
+        } else {
+            c.ray(px, py)
+        }
+    };
+    let open = lens(&camera.open);
+    let Some(close) = &camera.close else { return open };
+    // Motion blur: the sample's time in the shutter; a moving camera's ray is the one between
+    // its open and close rays (linear in origin, normalised linear in direction, as its key
+    // frames are linear in position and target).
+    let time = sampler.get_1d(i, dims::TIME);
+    if *close == camera.open {
+        return open.at_time(time);
+    }
+    let close = lens(close);
+    let dir = open.dir.lerp(close.dir, time).normalize_or(open.dir);
+    Ray::new(open.origin.lerp(close.origin, time), dir).at_time(time)
+}
+
+/// Renders one frame with `integrator`, tiles spread over the current rayon pool. Each
+/// pixel's samples depend only on (pixel, frame, index), so the image is identical whatever
+/// the thread count or tile order.
+pub fn render_frame(
+    scene: &RenderScene,
+    query: &dyn SceneQuery,
+    integrator: &dyn Integrator,
+    settings: &RenderSettings,
+) -> Result<(Film, RenderStats), RenderError> {
+    render_frame_counted(scene, query, integrator, settings, None).map(|(film, stats, _)| (film, stats))
+}
+
+/// [`render_frame`], also returning the camera samples each pixel got (row-major). With
+/// `samples` (one count per pixel, at most `spp`), pixel `p` gets exactly its first
+/// `samples[p]` samples and adaptive sampling is not applied: the AOV passes of an adaptive
+/// frame see the beauty pass's camera samples.
+pub fn render_frame_counted(
+    scene: &RenderScene,
+    query: &dyn SceneQuery,
+    integrator: &dyn Integrator,
+    settings: &RenderSettings,
+    samples: Option<&[u32]>,
+) -> Result<(Film, RenderStats, Vec<u32>), RenderError> {
+    settings.validate()?;
+    let start = Instant::now();
+    let (w, h) = (settings.width, settings.height);
+    debug_assert!(samples.is_none_or(|s| s.len() == (w * h) as usize));
+    let renderer = TileRenderer {
+        camera: FrameCamera {
+            open: PinholeCamera::new(&scene.camera, w, h),
+            close: scene.camera_close.as_ref().map(|c| PinholeCamera::new(c, w, h)),
+        },
+        query,
+        integrator: &*integrator.bind(FrameContext { scene, query }),
+        settings,
+        stopping: if samples.is_some() { None } else { settings.adaptive.stopping(settings.spp) },
+        samples,
+    };
+    let tiles_x = w.div_ceil(TILE);
+    let tiles: Vec<(u32, u32)> =
+        (0..tiles_x * h.div_ceil(TILE)).map(|t| ((t % tiles_x) * TILE, (t / tiles_x) * TILE)).collect();
+    let rendered: Vec<(u32, u32, Tile)> =
+        tiles.par_iter().map(|&(x0, y0)| (x0, y0, renderer.render(x0, y0))).collect();
+    let mut film = Film::new(w, h);
+    let mut counts = vec![0; (w * h) as usize];
+    let mut rays = 0;
+    for (x0, y0, tile) in rendered {
+        let tw = (x0 + TILE).min(w) - x0;
+        for (i, (p, n)) in tile.pixels.into_iter().zip(tile.samples).enumerate() {
+            let at = ((y0 + i as u32 / tw) * w + x0 + i as u32 % tw) as usize;
+            film.pixels[at] = p;
+            counts[at] = n;
+        }
+        rays += tile.rays;
+    }
+    let stats = RenderStats { rays, seconds: start.elapsed().as_secs_f64(), spp: SppStats::of(&counts) };
+    Ok((film, stats, counts))
+}
+
+/// A rendered tile: its pixels row by row, the samples each got, and the rays traced.
+struct Tile {
+    pixels: Vec<Vec3>,
+    samples: Vec<u32>,
+    rays: u64,
+}
+
+/// A pixel of a camera-ray block: its coordinates, sampler, and the most samples it may get.
+#[derive(Clone, Copy)]
+struct Cell {
+    x: u32,
+    y: u32,
+    sampler: PixelSampler,
+    budget: u32,
+}
+
+/// What every tile of a frame is rendered with.
+struct TileRenderer<'a> {
+    camera: FrameCamera,
+    /// Traces the camera-ray packets; the integrator traces the rest.
+    query: &'a dyn SceneQuery,
+    integrator: &'a dyn FrameIntegrator,
+    settings: &'a RenderSettings,
+    /// Adaptive sampling's rule, when on and no sample counts are fixed.
+    stopping: Option<Stopping>,
+    /// Fixed samples per pixel for the whole frame (row-major), instead of `spp`.
+    samples: Option<&'a [u32]>,
+}
+
+impl TileRenderer<'_> {
+    /// The tile whose top-left pixel is `(x0, y0)`.
+    fn render(&self, x0: u32, y0: u32) -> Tile {
+        let (w, h) = (self.settings.width, self.settings.height);
+        let (x1, y1) = ((x0 + TILE).min(w), (y0 + TILE).min(h));
+        let n = ((x1 - x0) * (y1 - y0)) as usize;
+        let mut acc = Accumulator {
+            x0,
+            y0,
+            tw: x1 - x0,
+            sums: vec![Vec3::ZERO; n],
+            squares: if self.stopping.is_some() { vec![Vec3::ZERO; n] } else { Vec::new() },
+            samples: vec![0; n],
+            rays: 0,
+        };
+        for by in (y0..y1).step_by(BLOCK.1 as usize) {
+            for bx in (x0..x1).step_by(BLOCK.0 as usize) {
+                // A fixed array, not a Vec: one block per 8 pixels is on the hot path.
+                let mut cells =
+                    [Cell { x: 0, y: 0, sampler: PixelSampler::new(0, 0, 0), budget: 0 }; BLOCK_PIXELS];
+                let mut n = 0;
+                for y in by..(by + BLOCK.1).min(y1) {
+                    for x in bx..(bx + BLOCK.0).min(x1) {
+                        let budget = self.samples.map_or(self.settings.spp, |s| s[(y * w + x) as usize]);
+                        cells[n] =
+                            Cell { x, y, sampler: PixelSampler::new(x, y, self.settings.seed), budget };
+                        n += 1;
+                    }
+                }
+                self.render_block(&cells[..n], &mut acc);
+            }
+        }
+        let pixels = acc.sums.iter().zip(&acc.samples).map(|(&sum, &k)| sum / k.max(1) as f32).collect();
+        Tile { pixels, samples: acc.samples, rays: acc.rays }
+    }
+
+    /// Samples the pixels of one block in index order, the camera rays of those still
+    /// sampling traced as one packet per index, until each has its budget or has converged.
+    fn render_block(&self, block: &[Cell], acc: &mut Accumulator) {
+        let spp = self.settings.spp;
+        let mut camera_rays = [Ray::new(Vec3::ZERO, Vec3::Z); BLOCK_PIXELS];
+        let mut hits = [None; BLOCK_PIXELS];
+        // Which cell each packet slot samples, and which cells stopped early.
+        let mut slots = [0usize; BLOCK_PIXELS];
+        let mut done = [false; BLOCK_PIXELS];
+        let most = block.iter().map(|c| c.budget).max().unwrap_or(0);
+        for i in 0..most {
+            let mut m = 0;
+            for (c, cell) in block.iter().enumerate() {
+                if i < cell.budget && !done[c] {
+                    camera_rays[m] = camera_ray(&self.camera, spp, cell.x, cell.y, &cell.sampler, i);
+                    slots[m] = c;
+                    m += 1;
+                }
+            }
+            if m == 0 {
+                break;
+            }
+            self.query.intersect_packet(&camera_rays[..m], &mut hits[..m]);
+            for ((ray, hit), &c) in camera_rays.iter().zip(hits).zip(&slots[..m]) {
+                let cell = &block[c];
+                let li = self.integrator.li_from_hit(ray, hit, &cell.sampler, i, &mut acc.rays);
+                done[c] = acc.add(cell, li, self.stopping.as_ref());
+            }
+        }
+    }
+}
+
+/// A tile's running sums per pixel, row by row. Per pixel, samples are summed in index order
+/// whatever the blocking, so the image is the same as tracing pixel by pixel.
+struct Accumulator {
+    x0: u32,
+    y0: u32,
+    tw: u32,
+    sums: Vec<Vec3>,
+    /// Sums of squared samples; only with adaptive sampling.
+    squares: Vec<Vec3>,
+    samples: Vec<u32>,
+    rays: u64,
+}
+
+impl Accumulator {
+    /// Adds sample `li` to `cell`'s pixel; whether the pixel has converged.
+    fn add(&mut self, cell: &Cell, li: Vec3, stopping: Option<&Stopping>) -> bool {
+        let at = ((cell.y - self.y0) * self.tw + (cell.x - self.x0)) as usize;
+        self.sums[at] += li;
+        self.samples[at] += 1;
+        let Some(stopping) = stopping else {
+            return false;
+        };
+        self.squares[at] += li * li;
+        stopping.converged(self.samples[at], self.sums[at], self.squares[at])
+    }
+}

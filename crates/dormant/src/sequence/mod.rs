@@ -1,0 +1,40 @@
+//! Sequences: a simulation replayed into rendered frames. This module owns the way from a
+//! scene file (or a trajectory) to frames:
+//!
+//! - [`Sequence`]: the trajectory (simulated now, or read from a file and checked against its
+//!   scene), the scene file's render assets and the frame template;
+//! - [`FrameSelection`]: which frames are rendered (a range and a step, or a list);
+//! - [`Sequence::replay`]: the one replay loop, which feeds every frame's island events to
+//!   the scene managers and hands each selected frame to the caller;
+//! - [`Sequence::render_frame`] and [`Sequence::render`]: the per-frame call into the
+//!   renderer through a [`SceneManager`](crate::integrate::SceneManager), whose trace time
+//!   goes back to its cost model;
+//! - [`KeptFrame`]: a frame an earlier run finished (`render --resume`), which the driver
+//!   brings the manager through as that run did instead of rendering it;
+//! - [`Sequence::describe_frame`]: a frame with every present body an instance, the
+//!   reference integrated scenes are checked against;
+//! - [`Sequence::export`]: the selected frames' poses, camera, lights and mesh sources as
+//!   plain data for another renderer (`dormant export`, `scripts/compare-cycles.py`).
+//!
+//! The CLI, `dormant verify` and the integration benchmarks all replay through here.
+
+mod describe;
+mod error;
+mod export;
+mod kept;
+mod render;
+mod replay;
+mod selection;
+mod source;
+pub mod stats;
+
+pub use error::SequenceError;
+pub use export::{
+    CameraExport, FrameExport, LightExport, MaterialExport, PrototypeExport, SequenceExport, SkyExport,
+    SunExport, EXPORT_FORMAT,
+};
+pub use kept::KeptFrame;
+pub use render::{FrameHandler, FrameRenderer, RenderedFrame, SeedMode};
+pub use replay::FrameVisitor;
+pub use selection::{FrameRange, FrameSelection};
+pub use source::{PhysicsSource, Sequence, SequenceSource};

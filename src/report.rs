@@ -1,0 +1,187 @@
+//! `report.png`, the plot of a rendered sequence's statistics: frame time by stage over the
+//! run, the geometry cache's hits over the run, and the histogram of the fraction of requested
+//! islands the cache already held. Drawn with the lab's figure helpers.
+
+use std::path::Path;
+
+use dormant::integrate::{StageTimes, FRACTION_BUCKETS};
+use dormant::sequence::stats::{FrameRecord, RunStats};
+use dormant_lab::report::plot::{count_labels, draw_legend, err, write_png, Area, PlotResult, FONT, STAGES};
+use dormant_lab::report::ReportError;
+use plotters::prelude::*;
+
+const PLOT_WIDTH: u32 = 1200;
+const PLOT_HEIGHT: u32 = 1350;
+
+/// A per-frame count of a record.
+type Count = fn(&FrameRecord) -> u64;
+
+fn stage_ms(f: &FrameRecord, stage: usize) -> f64 {
+    (StageTimes::STAGES[stage].1)(&f.stages)
+}
+
+/// Draws the report of `stats` and writes it to `path` as PNG.
+pub fn write_report_png(stats: &RunStats, path: &Path) -> Result<(), ReportError> {
+    write_png(path, PLOT_WIDTH, PLOT_HEIGHT, |buffer| draw(stats, buffer))
+}
+
+fn draw(stats: &RunStats, buffer: &mut [u8]) -> PlotResult {
+    let root = BitMapBackend::with_buffer(buffer, (PLOT_WIDTH, PLOT_HEIGHT)).into_drawing_area();
+    root.fill(&WHITE).map_err(err)?;
+    let run = &stats.run;
+    let title = format!(
+        "{}: {} frames, {}x{} {} spp, {} backend, integration {}",
+        run.scene, stats.summary.frames, run.width, run.height, run.spp, run.backend, run.integration
+    );
+    let root = root.titled(&title, (FONT, 22)).map_err(err)?;
+    let panels = root.split_evenly((3, 1));
+    stage_times(stats, &panels[0])?;
+    cache_hits(stats, &panels[1])?;
+    fraction_histogram(stats, &panels[2])?;
+    root.present().map_err(err)
+}
+
+fn frame_range(stats: &RunStats) -> std::ops::Range<f64> {
+    let first = stats.summary.first_frame.unwrap_or(0) as f64;
+    let last = stats.summary.last_frame.unwrap_or(0) as f64;
+    first..last.max(first + 1.0)
+}
+
+fn stage_times(stats: &RunStats, area: &Area<'_>) -> PlotResult {
+    let frames = &stats.frames;
+    let top = frames.iter().map(|f| f.frame_ms).fold(0.0, f64::max).max(1e-3) * 1.1;
+    let mut chart = ChartBuilder::on(area)
+        .caption("Frame time by stage (stacked)", (FONT, 20))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(70)
+        .build_cartesian_2d(frame_range(stats), 0.0..top)
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc("frame")
+        .x_label_formatter(&|v| format!("{v:.0}"))
+        .y_desc("time (ms)")
+        .label_style((FONT, 14))
+        .axis_desc_style((FONT, 16))
+        .draw()
+        .map_err(err)?;
+    // Top of each stage's band; drawn from the top band down so each covers the ones below.
+    for stage in (0..STAGES.len()).rev() {
+        let (name, colour) = STAGES[stage];
+        let points: Vec<(f64, f64)> =
+            frames.iter().map(|f| (f.frame as f64, (0..=stage).map(|s| stage_ms(f, s)).sum())).collect();
+        chart
+            .draw_series(AreaSeries::new(points, 0.0, colour.mix(0.85)).border_style(colour))
+            .map_err(err)?
+            .label(format!("{name} (median {:.2} ms)", median_of(stats, stage)))
+            .legend(move |(x, y)| Rectangle::new([(x, y - 6), (x + 14, y + 6)], colour.filled()));
+    }
+    draw_legend(&mut chart, SeriesLabelPosition::UpperRight)
+}
+
+fn median_of(stats: &RunStats, stage: usize) -> f64 {
+    (StageTimes::STAGES[stage].1)(&stats.summary.median.stages)
+}
+
+fn cache_hits(stats: &RunStats, area: &Area<'_>) -> PlotResult {
+    let series: [(&str, RGBColor, Count); 3] = [
+        ("full hits", RGBColor(44, 160, 44), |f| f.cache_full),
+        ("partial hits", RGBColor(255, 127, 14), |f| f.cache_partial),
+        ("misses", RGBColor(214, 39, 40), |f| f.cache_miss),
+    ];
+    let cumulative = |get: Count| -> Vec<(f64, f64)> {
+        let mut sum = 0u64;
+        stats
+            .frames
+            .iter()
+            .map(|f| {
+                sum += get(f);
+                (f.frame as f64, sum as f64)
+            })
+            .collect()
+    };
+    let top = series.iter().map(|s| cumulative(s.2).last().map_or(0.0, |p| p.1)).fold(0.0, f64::max).max(1.0)
+        * 1.15;
+    let caption = if stats.run.cache_enabled {
+        "Geometry cache lookups on reactivation, cumulative"
+    } else {
+        "Geometry cache: off (--cache off)"
+    };
+    let mut chart = ChartBuilder::on(area)
+        .caption(caption, (FONT, 20))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(70)
+        .build_cartesian_2d(frame_range(stats), 0.0..top)
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc("frame")
+        .x_label_formatter(&|v| format!("{v:.0}"))
+        .y_desc("cache requests (count)")
+        .y_labels(count_labels(top))
+        .y_label_formatter(&|v| format!("{v:.0}"))
+        .label_style((FONT, 14))
+        .axis_desc_style((FONT, 16))
+        .draw()
+        .map_err(err)?;
+    for (name, colour, get) in series {
+        let points = cumulative(get);
+        let total = points.last().map_or(0.0, |p| p.1);
+        chart
+            .draw_series(LineSeries::new(points, colour.stroke_width(3)))
+            .map_err(err)?
+            .label(format!("{name} ({total:.0})"))
+            .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], colour.stroke_width(3)));
+    }
+    draw_legend(&mut chart, SeriesLabelPosition::UpperLeft)
+}
+
+fn fraction_histogram(stats: &RunStats, area: &Area<'_>) -> PlotResult {
+    let cache = &stats.summary.cache.stats;
+    let counts = cache.fraction_histogram;
+    let top = counts.iter().copied().max().unwrap_or(0).max(1) as f64 * 1.15;
+    let caption = format!(
+        "Fraction of requested islands already integrated in the served cache entry ({} requests)",
+        cache.requests
+    );
+    let buckets = FRACTION_BUCKETS.len() as u32;
+    let mut chart = ChartBuilder::on(area)
+        .caption(caption, (FONT, 18))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(70)
+        .build_cartesian_2d((0u32..buckets).into_segmented(), 0.0..top)
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .disable_x_mesh()
+        .x_labels(FRACTION_BUCKETS.len())
+        .x_label_formatter(&|v| match v {
+            SegmentValue::CenterOf(i) | SegmentValue::Exact(i) => {
+                FRACTION_BUCKETS.get(*i as usize).copied().unwrap_or("").to_string()
+            }
+            SegmentValue::Last => String::new(),
+        })
+        .x_desc("fraction of requested islands held (bucket)")
+        .y_desc("requests (count)")
+        .y_labels(count_labels(top))
+        .y_label_formatter(&|v| format!("{v:.0}"))
+        .label_style((FONT, 13))
+        .axis_desc_style((FONT, 16))
+        .draw()
+        .map_err(err)?;
+    let colour = RGBColor(31, 119, 180);
+    chart
+        .draw_series(
+            Histogram::vertical(&chart)
+                .style(colour.filled())
+                .margin(6)
+                .data(counts.iter().enumerate().map(|(i, &n)| (i as u32, n as f64))),
+        )
+        .map_err(err)?
+        .label("requests per bucket")
+        .legend(move |(x, y)| Rectangle::new([(x, y - 6), (x + 14, y + 6)], colour.filled()));
+    draw_legend(&mut chart, SeriesLabelPosition::UpperLeft)
+}
