@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use dormant::integrate::{StageTimes, FRACTION_BUCKETS};
+use dormant::residency::{StageTimes, FRACTION_BUCKETS};
 use dormant::sequence::stats::{FrameRecord, RunStats};
 use dormant_lab::report::plot::{count_labels, draw_legend, err, write_png, Area, PlotResult, FONT, STAGES};
 use dormant_lab::report::ReportError;

@@ -3,9 +3,9 @@
 //! valid masks and instanced geometry.
 
 use dormant::accel::{self, Accelerator, Backend, Hit};
-use dormant_lab::crosscheck::{camera_rays, surface_rays};
 use dormant::geometry::{InstanceMotion, Ray, RigidTransform};
 use dormant::scene::default_scene;
+use dormant_lab::crosscheck::{camera_rays, surface_rays};
 use glam::{Quat, Vec3};
 use proptest::prelude::*;
 

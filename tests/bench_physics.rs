@@ -1,8 +1,8 @@
 //! The physics benchmark's report on the tiny scene.
 
 use dormant::physics::SimulateOptions;
-use dormant_lab::bench::{bench_physics as bench, PhysicsBenchOptions};
 use dormant::scene::file::SceneFile;
+use dormant_lab::bench::{bench_physics as bench, PhysicsBenchOptions};
 
 #[test]
 fn the_bench_measures_both_phases_and_serializes() {

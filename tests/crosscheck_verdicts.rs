@@ -11,10 +11,10 @@
 //! The constructed cases trace with Embree and the BVH, so they need the `embree` feature.
 
 use dormant::accel::{self, Backend, Hit};
-use dormant_lab::crosscheck::{judge, AgreeReason, Answer, TriangleKey, Verdict};
+use dormant::accel::{HitTriangle, MeshRef};
 use dormant::geometry::{Ray, TriangleMesh};
-use dormant::integrate::{HitTriangle, MeshRef};
 use dormant::physics::BodyId;
+use dormant_lab::crosscheck::{judge, AgreeReason, Answer, TriangleKey, Verdict};
 use glam::{Affine3A, Quat, Vec3};
 use proptest::prelude::*;
 

@@ -9,18 +9,18 @@
 use std::path::Path;
 
 use dormant::accel::{self, load_scene, Backend};
-use dormant_lab::crosscheck::{camera_rays, compare, surface_rays, MappedQuery, VerifyReport};
 use dormant::geometry::{primitives, Ray};
-use dormant::integrate::{
-    CacheBudget, IntegrationForm, IntegrationPolicy, IntegrationSettings, LoadedObjectMap, ManagerOptions,
-    ReactivationPath, ReactivationStrategy, SceneManager,
-};
 use dormant::physics::{
     BodyId, BodyInfo, BodyKind, BodyPose, BodyState, IslandEvent, IslandId, ReplayFrame, SimulateOptions,
+};
+use dormant::residency::{
+    CacheBudget, IntegrationForm, IntegrationPolicy, IntegrationSettings, LoadedObjectMap, ManagerOptions,
+    ReactivationPath, ReactivationStrategy, SceneManager,
 };
 use dormant::scene::file::SceneFile;
 use dormant::scene::{Body, Camera, Material, Prototype, SceneDescription, Sky, StaticMesh, Sun};
 use dormant::sequence::{FrameRange, FrameRenderer, SeedMode, Sequence, SequenceError, SequenceSource};
+use dormant_lab::crosscheck::{camera_rays, compare, surface_rays, MappedQuery, VerifyReport};
 use glam::{Quat, Vec3};
 use proptest::prelude::*;
 

@@ -10,9 +10,9 @@ use std::path::Path;
 use std::process::Command;
 
 use dormant::accel::Backend;
-use dormant::integrate::{IntegrationPolicy, ManagerOptions};
 use dormant::physics::SimulateOptions;
 use dormant::render::{DirectLighting, Film};
+use dormant::residency::{IntegrationPolicy, ManagerOptions};
 use dormant::scene::file::SceneFile;
 use dormant::sequence::{FrameRange, FrameRenderer, SeedMode, Sequence, SequenceError, SequenceSource};
 use glam::Vec3;

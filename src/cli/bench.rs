@@ -6,13 +6,13 @@ use std::path::PathBuf;
 use clap::{Args, Subcommand};
 
 use super::{CliError, JsonOutput, SceneSource};
+use dormant::scene::limits::MAX_SAMPLES_PER_PIXEL;
+use dormant::sequence::{FrameRange, SequenceSource};
 use dormant_lab::bench::{
     self, AccelBenchOptions, AdaptiveBenchOptions, IntegrationBenchOptions, PaperBenchOptions, PaperPreset,
     RainAssets, RenderBenchOptions,
 };
 use dormant_lab::report::bench_json;
-use dormant::scene::limits::MAX_SAMPLES_PER_PIXEL;
-use dormant::sequence::{FrameRange, SequenceSource};
 
 #[derive(Debug, Args)]
 pub struct BenchArgs {
@@ -109,8 +109,8 @@ pub struct RegimesArgs {
     #[arg(long)]
     pub backend: Vec<dormant::accel::Backend>,
     /// The integration form measured.
-    #[arg(long, value_enum, default_value_t = dormant::integrate::IntegrationForm::default())]
-    pub integrate_as: dormant::integrate::IntegrationForm,
+    #[arg(long, value_enum, default_value_t = dormant::residency::IntegrationForm::default())]
+    pub integrate_as: dormant::residency::IntegrationForm,
     /// Frames rendered per preview cell.
     #[arg(long, value_name = "N", default_value_t = 150)]
     pub preview_frames: u32,
@@ -174,8 +174,8 @@ pub struct IntegrationArgs {
     #[arg(long, value_enum, default_value_t = super::render::RenderMode::Shaded)]
     pub mode: super::render::RenderMode,
     /// The integration form the ratios describe; the other form runs too (`always`, `auto`).
-    #[arg(long, value_enum, default_value_t = dormant::integrate::IntegrationForm::default())]
-    pub integrate_as: dormant::integrate::IntegrationForm,
+    #[arg(long, value_enum, default_value_t = dormant::residency::IntegrationForm::default())]
+    pub integrate_as: dormant::residency::IntegrationForm,
     /// Compare this form only.
     #[arg(long)]
     pub one_form: bool,
@@ -324,7 +324,7 @@ fn integration(
         forms: if args.one_form {
             vec![args.integrate_as]
         } else {
-            dormant::integrate::IntegrationForm::starting_with(args.integrate_as)
+            dormant::residency::IntegrationForm::starting_with(args.integrate_as)
         },
         cache_variants: args.cache_variants,
         shutter: args.shutter,
@@ -374,8 +374,8 @@ fn regimes(
     create_out_dir(&args.out)?;
     let mut log = timed_log("bench regimes", quiet);
     let report = bench::bench_regimes(&options, &mut log)?;
-    let written =
-        dormant_lab::report::write_regimes(&report, &args.out).map_err(|e| CliError::Runtime(e.to_string()))?;
+    let written = dormant_lab::report::write_regimes(&report, &args.out)
+        .map_err(|e| CliError::Runtime(e.to_string()))?;
     json.emit(&bench_json(&report))?;
     print_written(&written, json, quiet);
     Ok(())
@@ -417,7 +417,8 @@ fn print_written(written: &[std::path::PathBuf], json: &JsonOutput, quiet: bool)
 fn physics(args: &PhysicsArgs, quiet: bool, json: &JsonOutput) -> Result<(), CliError> {
     let (file, simulate) = args.scene.load()?;
     let options = dormant_lab::bench::PhysicsBenchOptions { simulate, measure_frames: args.measure_frames };
-    let report = dormant_lab::bench::bench_physics(&file, &options).map_err(super::simulate::physics_error)?;
+    let report =
+        dormant_lab::bench::bench_physics(&file, &options).map_err(super::simulate::physics_error)?;
     emit(&bench_json(&report), json, quiet)
 }
 

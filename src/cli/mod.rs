@@ -18,8 +18,6 @@ use clap::{Args, Parser, Subcommand};
 
 use dormant::scene::{self, SceneDescription};
 
-
-
 /// Errors that end a command, with the exit code they map to.
 #[derive(Debug, thiserror::Error)]
 pub(crate) enum CliError {

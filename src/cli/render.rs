@@ -9,18 +9,17 @@ use indicatif::ProgressBar;
 
 use super::CliError;
 use dormant::accel::{self, Backend};
-use dormant::integrate::{
-    CacheBudget, FrameStats, IntegrationForm, IntegrationPolicy, IntegrationSettings, SceneManager,
-};
 use dormant::physics::SimulateOptions;
 use dormant::render::{
-    ImageSize,
-    self, AdaptiveSampling, AmbientOcclusion, Aov, DenoiseError, Denoiser, DirectLighting, Film, Integrator,
-    PathTracer, RenderScene, RenderSettings,
+    self, AdaptiveSampling, AmbientOcclusion, Aov, DenoiseError, Denoiser, DirectLighting, Film, ImageSize,
+    Integrator, PathTracer, RenderScene, RenderSettings,
 };
-use dormant::sequence::stats::{FrameRecord, RunInfo, StatsFile};
+use dormant::residency::{
+    CacheBudget, FrameStats, IntegrationForm, IntegrationPolicy, IntegrationSettings, SceneManager,
+};
 use dormant::scene::file::SceneFile;
 use dormant::scene::limits::{shutter_problem, MAX_SAMPLES_PER_PIXEL};
+use dormant::sequence::stats::{FrameRecord, RunInfo, StatsFile};
 use dormant::sequence::{
     FrameRange, FrameRenderer, FrameSelection, KeptFrame, RenderedFrame, SeedMode, Sequence, SequenceError,
     SequenceSource,

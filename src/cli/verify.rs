@@ -3,14 +3,14 @@ use std::path::PathBuf;
 use clap::Args;
 
 use super::{CliError, JsonOutput, SceneSource};
+use dormant::accel::LoadedObjectMap;
 use dormant::accel::{self, AccelError, Accelerator, Backend};
-use dormant_lab::crosscheck::{self, MappedQuery, VerifyReport, BOUND};
 use dormant::geometry::InstanceMotion;
-use dormant::integrate::LoadedObjectMap;
 use dormant::physics::SimulateOptions;
 use dormant::scene::file::SceneFile;
 use dormant::scene::SceneDescription;
 use dormant::sequence::{SequenceError, SequenceSource};
+use dormant_lab::crosscheck::{self, MappedQuery, VerifyReport, BOUND};
 
 #[derive(Debug, Args)]
 pub struct VerifyArgs {

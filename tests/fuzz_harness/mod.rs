@@ -11,8 +11,8 @@
 
 use std::path::Path;
 
-use dormant::render::ImageSize;
 use dormant::physics::Trajectory;
+use dormant::render::ImageSize;
 use dormant::scene::file::SceneFile;
 use dormant::scene::gltf::load_gltf_slice;
 use dormant::scene::SceneAssets;

@@ -17,8 +17,8 @@ use dormant::accel::embree::{
     SceneFlags, TriangleGeometry,
 };
 use dormant::geometry::{primitives, InstanceMotion, RigidTransform, TriangleMesh};
-use dormant::sequence::stats::median;
 use dormant::rng::SplitMix64;
+use dormant::sequence::stats::median;
 
 pub struct InstancesBenchOptions {
     pub count: usize,

@@ -18,14 +18,14 @@ use serde::Serialize;
 
 use super::accel as accel_bench;
 use super::persistent_tree::{FragmentedTree, MostFragmented};
-use dormant::accel::{self, AccelError, Backend};
 use crate::crosscheck::camera_rays;
-use dormant::integrate::{
+use dormant::accel::{self, AccelError, Backend};
+use dormant::physics::{BodyKind, BodyState};
+use dormant::render::{AdaptiveSampling, Integrator};
+use dormant::residency::{
     CacheStats, CostModelState, FrameStats, IntegrationForm, IntegrationPolicy, IntegrationSettings,
     ManagerOptions, ReactivationPath, SceneManager, StageTimes, FRACTION_BUCKETS,
 };
-use dormant::physics::{BodyKind, BodyState};
-use dormant::render::{AdaptiveSampling, Integrator};
 use dormant::scene::{SceneDescription, StaticMesh};
 use dormant::sequence::{FrameRenderer, FrameSelection, SeedMode, Sequence, SequenceError};
 

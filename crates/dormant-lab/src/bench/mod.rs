@@ -19,8 +19,8 @@ pub use adaptive::{bench_adaptive, AdaptiveBenchOptions};
 #[cfg(feature = "embree")]
 pub use instances::{bench_instances, InstancesBenchOptions};
 pub use integration::{bench_integration, IntegrationBenchOptions};
-pub use physics::{bench_physics, PhysicsBenchOptions, PhysicsBenchReport};
 pub use paper::{bench_paper, PaperBenchOptions, PaperPreset, RainAssets};
+pub use physics::{bench_physics, PhysicsBenchOptions, PhysicsBenchReport};
 pub use regimes::{bench_regimes, Budget, RegimeSizes, RegimesOptions};
 pub use render::{bench_render, RenderBenchOptions};
 

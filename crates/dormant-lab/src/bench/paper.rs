@@ -17,9 +17,9 @@ use super::integration::{
     bench_integration, IntegrationBenchOptions, IntegrationBenchReport, IntegrationRatios,
 };
 use dormant::accel::Backend;
-use dormant::integrate::IntegrationForm;
 use dormant::physics::{self, IslandStats, SimulateOptions};
 use dormant::render::DirectLighting;
+use dormant::residency::IntegrationForm;
 use dormant::scene::file::SceneFile;
 use dormant::sequence::{FrameRange, Sequence, SequenceError, SequenceSource};
 
@@ -446,7 +446,7 @@ fn check_claims(w: &WorkloadReport) -> Vec<ClaimCheck> {
         ));
         let requests = run
             .integration
-            .run_of(dormant::integrate::IntegrationPolicy::Auto, dormant::integrate::IntegrationForm::Baked)
+            .run_of(dormant::residency::IntegrationPolicy::Auto, dormant::residency::IntegrationForm::Baked)
             .map_or(0, |p| p.cache_stats.requests);
         claims.push(check(
             "Most cache requests find 90-99% of the requested islands already integrated",

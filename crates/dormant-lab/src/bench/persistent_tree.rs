@@ -12,10 +12,10 @@
 use serde::Serialize;
 
 use super::accel as accel_bench;
+use crate::crosscheck::camera_rays;
 use dormant::accel::bvh::StaticSnapshot;
 use dormant::accel::{self, AccelError, Backend, StaticSceneSnapshot};
-use crate::crosscheck::camera_rays;
-use dormant::integrate::SceneManager;
+use dormant::residency::SceneManager;
 use dormant::scene::SceneDescription;
 
 /// The persistent tree's most fragmented snapshot seen so far in a run.

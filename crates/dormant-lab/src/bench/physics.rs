@@ -39,7 +39,10 @@ pub struct PhysicsBenchReport {
 
 /// Simulates the scene to its last frame, then measures `measure_frames` frames as they
 /// are (mostly asleep) and `measure_frames` frames with every body woken before each frame.
-pub fn bench_physics(file: &SceneFile, options: &PhysicsBenchOptions) -> Result<PhysicsBenchReport, PhysicsError> {
+pub fn bench_physics(
+    file: &SceneFile,
+    options: &PhysicsBenchOptions,
+) -> Result<PhysicsBenchReport, PhysicsError> {
     if options.measure_frames == 0 {
         return Err(PhysicsError::Option { option: "measure_frames", message: "must be at least 1".into() });
     }

@@ -12,9 +12,9 @@ use serde::Serialize;
 
 use super::integration::{bench_integration, IntegrationBenchOptions, IntegrationRatios};
 use dormant::accel::Backend;
-use dormant::integrate::IntegrationForm;
 use dormant::physics::SimulateOptions;
 use dormant::render::{DirectLighting, Integrator, PathTracer};
+use dormant::residency::IntegrationForm;
 use dormant::scene::file::SceneFile;
 use dormant::sequence::{FrameRange, FrameSelection, Sequence, SequenceError, SequenceSource};
 
@@ -222,8 +222,8 @@ fn run_cell(
         spp,
         frames_rendered: report.frames_rendered,
         settled_frames: report.settled_frames,
-        never_frame_ms: mean(dormant::integrate::IntegrationPolicy::Never),
-        auto_frame_ms: mean(dormant::integrate::IntegrationPolicy::Auto),
+        never_frame_ms: mean(dormant::residency::IntegrationPolicy::Never),
+        auto_frame_ms: mean(dormant::residency::IntegrationPolicy::Auto),
         ratios: report.ratios,
         wall_s: t.elapsed().as_secs_f64(),
     })

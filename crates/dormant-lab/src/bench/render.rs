@@ -21,8 +21,8 @@ use serde::Serialize;
 
 use super::frame_rays::{trace_bare, BareFrameRays, FrameRays, RecordingQuery};
 use super::timed;
-use dormant::accel::{self, AccelError, Accelerator, Backend, SceneQuery};
 use crate::crosscheck::camera_rays;
+use dormant::accel::{self, AccelError, Accelerator, Backend, SceneQuery};
 use dormant::geometry::Ray;
 use dormant::render::{
     render_frame, sample_cone, sample_cosine, AdaptiveSampling, PathTracer, RenderError, RenderScene,

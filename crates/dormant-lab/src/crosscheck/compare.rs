@@ -5,9 +5,9 @@ use serde::{Serialize, Serializer};
 
 use super::exact::Exact;
 use super::verdict::{judge, Answer, RayVerdict, TriangleKey, Verdict};
+use dormant::accel::ObjectMap;
 use dormant::accel::{Hit, SceneQuery};
 use dormant::geometry::Ray;
-use dormant::integrate::ObjectMap;
 use dormant::scene::SceneDescription;
 
 /// A scene to compare, with the map from its hit ids to scene objects and triangles (an

@@ -4,8 +4,8 @@
 use glam::{DMat3, DVec3, Vec3};
 use serde::Serialize;
 
+use dormant::accel::HitTriangle;
 use dormant::geometry::Ray;
-use dormant::integrate::HitTriangle;
 
 /// Unit roundoff of f32, `2^-24`.
 pub const UNIT_ROUNDOFF: f64 = f32::EPSILON as f64 / 2.0;

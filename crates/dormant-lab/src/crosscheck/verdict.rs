@@ -7,8 +7,8 @@ use serde::Serialize;
 
 use super::exact::{reintersect, Exact};
 use dormant::accel::Hit;
+use dormant::accel::{HitTriangle, MeshRef};
 use dormant::geometry::Ray;
-use dormant::integrate::{HitTriangle, MeshRef};
 use dormant::physics::BodyId;
 
 /// What a hit is on in scene terms: the same for a body whether instanced or baked.

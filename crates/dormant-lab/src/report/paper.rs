@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use super::paper_plot::write_workload_png;
 use super::ReportError;
 use crate::bench::paper::{PaperReport, Verdict, WorkloadReport};
-use dormant::integrate::{IntegrationForm, IntegrationPolicy, FRACTION_BUCKETS};
+use dormant::residency::{IntegrationForm, IntegrationPolicy, FRACTION_BUCKETS};
 
 /// Writes `paper.json`, `paper.md` and `figures/<workload>.png` into `dir` (created if
 /// missing) and returns the paths written.

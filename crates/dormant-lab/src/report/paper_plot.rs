@@ -11,7 +11,7 @@ use super::plot::{count_labels, draw_legend, err, write_png, Area, PlotResult, F
 use super::ReportError;
 use crate::bench::integration::IntegrationBenchReport;
 use crate::bench::paper::WorkloadReport;
-use dormant::integrate::{IntegrationForm, IntegrationPolicy, StageTimes, FRACTION_BUCKETS};
+use dormant::residency::{IntegrationForm, IntegrationPolicy, StageTimes, FRACTION_BUCKETS};
 
 const WIDTH: u32 = 1400;
 const ROW_HEIGHT: u32 = 480;

@@ -19,12 +19,15 @@ pub mod bvh;
 pub mod embree;
 mod hit;
 mod load;
+mod object_map;
 mod resting;
 mod snapshot;
 
 pub use backend::{create, Backend};
 pub use hit::{Hit, HitObject};
 pub use load::{load_scene, LoadedScene};
+pub(crate) use object_map::mesh_triangle;
+pub use object_map::{normal_matrix, HitTriangle, LoadedObjectMap, MeshRef, ObjectMap, ResolvedHit};
 pub use snapshot::StaticSceneSnapshot;
 
 use glam::Affine3A;

@@ -24,8 +24,8 @@ pub use camera::PinholeCamera;
 pub use denoise::{DenoiseError, Denoiser};
 pub(crate) use emitters::Emitters;
 pub use film::Film;
-pub use image_size::ImageSize;
 pub use film::{write_aov_png_atomic, write_exr_atomic, write_png_atomic};
+pub use image_size::ImageSize;
 pub use integrator::{
     AmbientOcclusion, DirectLighting, FrameContext, FrameIntegrator, Integrator, PathTracer,
 };

@@ -8,8 +8,8 @@ use super::emitters::{EmitterSample, Emitters};
 use super::texture::sample;
 use super::RenderError;
 use crate::accel::{load_scene, Accelerator, Hit};
+use crate::accel::{LoadedObjectMap, MeshRef, ObjectMap, ResolvedHit};
 use crate::geometry::{Ray, TriangleMesh};
-use crate::integrate::{LoadedObjectMap, MeshRef, ObjectMap, ResolvedHit};
 use crate::scene::{Body, Light, Material, SceneDescription, Sky, Sun};
 
 /// Where a scene's hit ids are resolved: a map built here, or the scene manager's.

@@ -5,8 +5,8 @@
 //! uninterrupted run has there, and render the same images.
 
 use super::{FrameRenderer, Sequence, SequenceError};
-use crate::integrate::{FrameStats, SceneManager};
 use crate::physics::{IslandId, ReplayFrame};
+use crate::residency::{FrameStats, SceneManager};
 
 /// A frame an earlier run finished: its files are complete and its statistics kept.
 #[derive(Clone, Debug, PartialEq)]

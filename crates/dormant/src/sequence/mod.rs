@@ -7,7 +7,7 @@
 //! - [`Sequence::replay`]: the one replay loop, which feeds every frame's island events to
 //!   the scene managers and hands each selected frame to the caller;
 //! - [`Sequence::render_frame`] and [`Sequence::render`]: the per-frame call into the
-//!   renderer through a [`SceneManager`](crate::integrate::SceneManager), whose trace time
+//!   renderer through a [`SceneManager`](crate::residency::SceneManager), whose trace time
 //!   goes back to its cost model;
 //! - [`KeptFrame`]: a frame an earlier run finished (`render --resume`), which the driver
 //!   brings the manager through as that run did instead of rendering it;

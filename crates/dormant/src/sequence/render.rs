@@ -3,12 +3,12 @@
 //! manager's cost model.
 
 use super::{FrameSelection, KeptFrame, Sequence, SequenceError};
-use crate::integrate::{FrameStats, SceneManager};
 use crate::physics::ReplayFrame;
 use crate::render::{
     render_with_aovs, AdaptiveSampling, Aov, Emitters, Film, Integrator, PinholeCamera, RenderError,
     RenderScene, RenderSettings, RenderStats,
 };
+use crate::residency::{FrameStats, SceneManager};
 use crate::scene::Camera;
 
 /// Camera rays (one per pixel of this image) of the manager's trace-penalty probes: enough

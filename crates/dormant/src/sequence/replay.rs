@@ -1,8 +1,8 @@
 //! The one replay loop: every frame of a trajectory, in order, up to the last selected one.
 
 use super::{FrameSelection, Sequence};
-use crate::integrate::SceneManager;
 use crate::physics::ReplayFrame;
+use crate::residency::SceneManager;
 
 /// What [`Sequence::replay`] calls with each selected frame and the scene managers.
 pub type FrameVisitor<'v, E> = dyn FnMut(&ReplayFrame<'_>, &mut [SceneManager]) -> Result<(), E> + 'v;

@@ -10,9 +10,9 @@ use super::SequenceError;
 use crate::accel::{self, Backend};
 use std::sync::Arc;
 
-use crate::integrate::{IntegrationSettings, Lookahead, ManagerOptions, SceneManager};
 use crate::physics::{self, SimulateOptions, SimulatedFrame, Trajectory, TrajectoryError};
 use crate::render::AdaptiveSampling;
+use crate::residency::{IntegrationSettings, Lookahead, ManagerOptions, SceneManager};
 use crate::scene::file::SceneFile;
 use crate::scene::{SceneAssets, SceneDescription};
 

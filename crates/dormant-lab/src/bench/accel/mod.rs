@@ -29,8 +29,8 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::timed;
-use dormant::accel::{self, AccelError, Accelerator, Backend, SceneQuery, StaticId};
 use crate::crosscheck::camera_rays;
+use dormant::accel::{self, AccelError, Accelerator, Backend, SceneQuery, StaticId};
 use dormant::geometry::{Ray, TriangleMesh};
 use dormant::render::sample_cosine;
 use dormant::rng::SplitMix64;

@@ -10,7 +10,7 @@ use serde::Deserialize;
 
 use super::record::{FrameRecord, RunInfo, RunStats, STATS_FORMAT, STATS_VERSION};
 use super::StatsError;
-use crate::integrate::SceneManager;
+use crate::residency::SceneManager;
 
 /// The files are rewritten after a frame once at least this many times the last write's
 /// duration has passed since it: every frame when frames are slow, and at most about 5% of

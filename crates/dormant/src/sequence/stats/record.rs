@@ -7,8 +7,8 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use super::StatsError;
-use crate::integrate::{CacheStats, CostModelState, Decision, FrameStats, StageTimes, FRACTION_BUCKETS};
 use crate::render::{RenderStats, SppStats};
+use crate::residency::{CacheStats, CostModelState, Decision, FrameStats, StageTimes, FRACTION_BUCKETS};
 use crate::sequence::{KeptFrame, PhysicsSource};
 
 /// `format` field of stats.json.

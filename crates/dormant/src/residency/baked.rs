@@ -5,7 +5,7 @@ use std::sync::Arc;
 
 use glam::{Affine3A, Mat3};
 
-use super::object_map::normal_matrix;
+use crate::accel::normal_matrix;
 use crate::geometry::TriangleMesh;
 use crate::physics::{BodyId, BodyPose};
 

@@ -10,7 +10,7 @@
 //! 1. **reactivate**: integrated islands that woke leave: baked ones by removal or by a cached
 //!    static scene without them, whichever the accelerator says is cheaper; resting ones by
 //!    moving their instances back to the top level;
-//! 2. **integrate**: sleeping islands the policy accepts are integrated (`integrate.rs`);
+//! 2. **integrate**: sleeping islands the policy accepts are integrated (`admit.rs`);
 //! 3. **update**: instances follow the awake bodies (added, moved, removed);
 //! 4. **commit**: skipped when nothing changed.
 //!
@@ -19,7 +19,7 @@
 //! frames can be skipped between renders; an island that slept and woke in between never
 //! touches the accelerator.
 
-mod integrate;
+mod admit;
 mod probe;
 mod reactivate;
 mod slots;
@@ -34,9 +34,9 @@ use glam::Mat3;
 use super::cache::{CacheBudget, CacheOutcome, CacheStats, GeometryCache};
 use super::cost_model::{CostEstimate, CostModel, CostModelState, IntegrationForm};
 use super::lookahead::Lookahead;
-use super::object_map::{mesh_triangle, HitTriangle, MeshRef, ObjectMap, ResolvedHit};
 use super::policy::IntegrationPolicy;
 use super::stage_times::StageTimes;
+use crate::accel::{mesh_triangle, HitTriangle, MeshRef, ObjectMap, ResolvedHit};
 use crate::accel::{AccelError, Accelerator, HitObject, PrototypeId, SceneQuery, StaticSceneSnapshot};
 use crate::geometry::{Ray, TriangleMesh};
 use crate::physics::{BodyId, BodyInfo, IslandEvent, IslandId, ReplayFrame};
@@ -487,7 +487,7 @@ impl ObjectMap for SceneManager {
     }
 
     /// Instances at their frame pose: `time` is ignored (`dormant verify` checks motion blur
-    /// on loaded descriptions, [`crate::integrate::LoadedObjectMap`]).
+    /// on loaded descriptions, [`crate::accel::LoadedObjectMap`]).
     fn hit_triangle(
         &self,
         desc: &SceneDescription,

@@ -7,8 +7,8 @@ use std::sync::Arc;
 use glam::{Affine3A, Mat3};
 
 use crate::accel::{InstanceId, StaticId, StaticSceneSnapshot};
-use crate::integrate::baked::BakedIsland;
 use crate::physics::{BodyId, BodyPose, IslandId};
+use crate::residency::baked::BakedIsland;
 
 /// A body's place in the accelerator.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -1,4 +1,6 @@
-//! Integration: from simulated frames to the scenes the accelerators hold.
+//! Residency of sleeping bodies: from simulated frames to the scenes the accelerators hold,
+//! deciding where each body resides (the per-frame top level while awake; once its island
+//! sleeps, the resting scene or the static scene, "integrated").
 //!
 //! - [`SceneManager`] keeps one accelerator in step with a simulation: awake bodies are
 //!   instances; sleeping islands the [`IntegrationPolicy`] accepts are integrated in an
@@ -8,14 +10,12 @@
 //! - The cost model decides, under the `auto` policy, whether integrating pays off, with the
 //!   run's future when it is known ([`Lookahead`]).
 //! - [`StageTimes`]: the per-frame stage times every record and report is made of.
-//! - [`ObjectMap`] maps hits back to bodies, prototypes and triangles for shading.
 
 mod baked;
 mod cache;
 mod cost_model;
 mod lookahead;
 mod manager;
-mod object_map;
 mod policy;
 mod stage_times;
 
@@ -25,6 +25,5 @@ pub use lookahead::Lookahead;
 pub use manager::{
     Decision, FrameStats, ManagerOptions, ReactivationPath, ReactivationStrategy, SceneManager,
 };
-pub use object_map::{HitTriangle, LoadedObjectMap, MeshRef, ObjectMap, ResolvedHit};
 pub use policy::{IntegrationPolicy, IntegrationSettings};
 pub use stage_times::StageTimes;

@@ -3,8 +3,8 @@
 
 use super::slots::{InstanceOwner, Placement};
 use super::{FrameStats, SceneManager};
+use crate::accel::normal_matrix;
 use crate::accel::AccelError;
-use crate::integrate::object_map::normal_matrix;
 use crate::physics::{BodyId, ReplayFrame};
 
 impl SceneManager {

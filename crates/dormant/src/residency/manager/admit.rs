@@ -1,5 +1,6 @@
-//! Stage 2, integrate: the policy (and under `auto` the cost model) picks sleeping islands,
-//! which go into the static scene baked, or into the resting scene as instances.
+//! Stage 2, integrate: admits sleeping islands into residence. The policy (and under `auto`
+//! the cost model) picks them; they go into the static scene baked, or into the resting scene
+//! as instances.
 
 use std::sync::Arc;
 use std::time::Instant;
@@ -7,14 +8,14 @@ use std::time::Instant;
 use super::reactivate::triangles_in;
 use super::slots::{InstanceOwner, Integrated, Placement, StaticOwner};
 use super::{ms, Decision, FrameStats, SceneManager};
+use crate::accel::normal_matrix;
 use crate::accel::AccelError;
-use crate::integrate::baked::BakedIsland;
-use crate::integrate::cost_model::{
+use crate::physics::{IslandId, ReplayFrame};
+use crate::residency::baked::BakedIsland;
+use crate::residency::cost_model::{
     choose_batch, Candidate, CostEstimate, IntegrationForm, Outlook, Situation,
 };
-use crate::integrate::object_map::normal_matrix;
-use crate::integrate::policy::IntegrationPolicy;
-use crate::physics::{IslandId, ReplayFrame};
+use crate::residency::policy::IntegrationPolicy;
 
 /// A candidate island and what was decided about it.
 struct Considered {

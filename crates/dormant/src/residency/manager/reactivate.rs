@@ -6,8 +6,8 @@ use std::time::Instant;
 use super::slots::{CachedScene, Integrated, Placement, StaticOwner};
 use super::{ms, FrameStats, ReactivationPath, ReactivationStrategy, SceneManager};
 use crate::accel::AccelError;
-use crate::integrate::cache::CacheOutcome;
 use crate::physics::IslandId;
+use crate::residency::cache::CacheOutcome;
 
 impl SceneManager {
     /// Returns whether anything changed.
