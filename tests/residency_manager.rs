@@ -8,14 +8,14 @@
 
 use std::path::Path;
 
-use dormant::accel::{self, load_scene, Backend};
+use dormant::accel::{self, load_scene, Backend, LoadedObjectMap};
 use dormant::geometry::{primitives, Ray};
 use dormant::physics::{
     BodyId, BodyInfo, BodyKind, BodyPose, BodyState, IslandEvent, IslandId, ReplayFrame, SimulateOptions,
 };
 use dormant::residency::{
-    CacheBudget, IntegrationForm, IntegrationPolicy, IntegrationSettings, LoadedObjectMap, ManagerOptions,
-    ReactivationPath, ReactivationStrategy, SceneManager,
+    CacheBudget, IntegrationForm, IntegrationPolicy, IntegrationSettings, ManagerOptions, ReactivationPath,
+    ReactivationStrategy, SceneManager,
 };
 use dormant::scene::file::SceneFile;
 use dormant::scene::{Body, Camera, Material, Prototype, SceneDescription, Sky, StaticMesh, Sun};
