@@ -13,7 +13,8 @@ use crate::geometry::InstanceMotion;
 
 use super::device::Device;
 use super::error::EmbreeError;
-use super::scene::{column_major_3x4, lerps_as_matrices, quaternion_decomposition, FrozenScene};
+use super::frozen::FrozenScene;
+use super::motion::{column_major_3x4, lerps_as_matrices, quaternion_decomposition};
 
 /// One entry of an instance array: the index of its prototype in the array's prototype list
 /// and its placement. `None` is a hole Embree skips (index RTC_INVALID_GEOMETRY_ID).

@@ -7,7 +7,7 @@ use std::array;
 use embree4_sys as sys;
 
 use super::filter::{intersect_args, occluded_args};
-use super::scene::{EmbreeHit, SceneView};
+use super::view::{EmbreeHit, SceneView};
 use crate::geometry::Ray;
 
 /// Embree's hint on how alike a packet's rays are (`RTC_RAY_QUERY_FLAG_COHERENT` /

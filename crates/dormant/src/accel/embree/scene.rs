@@ -1,24 +1,25 @@
-//! Embree scenes: [`Scene`] (geometries plus the BVH its commit builds), [`InstanceGeometry`]
-//! (a scene placed in another by a transform), [`FrozenScene`] (a committed scene shared by
-//! instances) and [`SceneView`], the single-ray queries of a committed scene. Scenes and
-//! instances nest (a scene holds instances, an instance holds a scene and commits it), so they
-//! share this file; triangle meshes ([`TriangleGeometry`]) do not depend on them.
+//! Embree scenes: [`Scene`] (geometries plus the BVH its commit builds) and
+//! [`InstanceGeometry`] (a scene placed in another by a transform). Scenes and instances nest
+//! (a scene holds instances, an instance may own a scene and commits it), so they share this
+//! file; what a scene holds otherwise (triangle meshes, instance arrays, frozen prototypes)
+//! does not depend on it, and queries go through [`SceneView`] (`view.rs`).
 
 use std::collections::{BTreeMap, BTreeSet};
-use std::marker::PhantomData;
 use std::sync::Arc;
 
 use embree4_sys as sys;
-use glam::{Affine3A, Vec3};
+use glam::Affine3A;
 
-use crate::geometry::{InstanceMotion, RigidTransform, FRAME_TIME};
+use crate::geometry::InstanceMotion;
 
 use super::device::Device;
 use super::error::EmbreeError;
-use super::filter::{self, GeometrySet, SkipContext};
+use super::frozen::FrozenScene;
 use super::geometry::TriangleGeometry;
 use super::instance_array::InstanceArrayGeometry;
+use super::motion::{column_major_3x4, lerps_as_matrices, quaternion_decomposition};
 use super::quality::BuildQuality;
+use super::view::SceneView;
 
 /// Embree's scene flags (rtcSetSceneFlags(3)).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -81,19 +82,6 @@ impl From<InstanceGeometry> for Geometry {
     fn from(g: InstanceGeometry) -> Self {
         Geometry::Instance(g)
     }
-}
-
-/// A closest hit as Embree reports it. For an instanced hit, `ng` is in the instanced
-/// object's space and `inst_id` names the instance geometry in the top scene.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct EmbreeHit {
-    pub t: f32,
-    pub u: f32,
-    pub v: f32,
-    pub ng: [f32; 3],
-    pub prim_id: u32,
-    pub geom_id: u32,
-    pub inst_id: Option<u32>,
 }
 
 /// An Embree scene: geometries plus the acceleration structure built at [`Scene::commit`].
@@ -275,7 +263,7 @@ impl Scene {
 
     /// The scene for ray queries, or `None` while changes are uncommitted.
     pub fn view(&self) -> Option<SceneView<'_>> {
-        (!self.dirty).then_some(SceneView { raw: self.raw, skip: None, _scene: PhantomData })
+        (!self.dirty).then(|| SceneView::new(self.raw))
     }
 
     /// Commits and makes the scene immutable, for sharing as an instancing prototype.
@@ -284,7 +272,7 @@ impl Scene {
         let bounds = self.view().map(|v| v.bounds());
         // The farthest corner of the bounds (an empty scene's are infinite: no radius).
         let radius = bounds.map_or(f32::INFINITY, |b| b.min.abs().max(b.max.abs()).length());
-        Ok(Arc::new(FrozenScene { scene: self, radius }))
+        Ok(Arc::new(FrozenScene::new(self.raw, radius, Box::new(self))))
     }
 }
 
@@ -317,85 +305,6 @@ impl Drop for InstanceGeometry {
     }
 }
 
-/// Embree's FLOAT3X4_COLUMN_MAJOR layout of an affine transform.
-pub(super) fn column_major_3x4(xf: &Affine3A) -> [f32; 12] {
-    let m = xf.matrix3;
-    let t = xf.translation;
-    [
-        m.x_axis.x, m.x_axis.y, m.x_axis.z, m.y_axis.x, m.y_axis.y, m.y_axis.z, m.z_axis.x, m.z_axis.y,
-        m.z_axis.z, t.x, t.y, t.z,
-    ]
-}
-
-/// The largest rotation over the shutter (radians) for which a moving instance is given to
-/// Embree as two matrices, which it lerps, rather than two quaternion decompositions, which it
-/// slerps like [`InstanceMotion::at`], for an instance no farther from the world origin than
-/// its points are from its own origin. Lerping the matrices of a turn by `a` scales the object
-/// across the turn's axis by `cos(a/2)` halfway through (the worst time), `1 - a^2/8`, and
-/// turns it to within `a^3/24` of the slerp: at 2e-3 the object's points move by 5e-7 of their
-/// distance `r` from its origin, eight of f32's unit roundoffs. A pure translation (`a = 0`)
-/// lerps exactly.
-///
-/// An instance farther out may turn further ([`lerps_as_matrices`]): its points may then move
-/// by 5e-7 of its translation's magnitude instead, still eight unit roundoffs of it, half of
-/// what the crosscheck allows Embree's own f32 transform (16 roundoffs of the ray origin's and
-/// the translation's magnitude; docs/crosscheck.md). On the atrium at shutter 0.5 (five frames
-/// sampled over the fall, 28k motions) 9% of the moving instances' motions are pure
-/// translations, 51% turn by less than 1e-4 rad, 10% by 1e-4 to 1e-3, 4% by 1e-3 to 2e-3, 27%
-/// by more (docs/performance.md, "Motion blur").
-///
-/// Tried (session 24): the instances that turn further as matrices at more time steps (the
-/// slerp's poses at `1 + ceil(a / LERP_MAX_ANGLE)` times, up to 16, so that no segment turns
-/// by more than this): Embree's multi-segment builder made the atrium's blurred commit 3.2x
-/// slower (20.4-21.5 against 6.6-6.7 ms a frame; blur on / off 2.97-3.06 against 1.53-1.57),
-/// tracing unchanged. Two time steps, quaternions beyond the angle, stay.
-const LERP_MAX_ANGLE: f32 = 2e-3;
-
-/// Whether `motion` of an instance whose points lie within `radius` of its origin goes to
-/// Embree as two matrices (lerped) rather than two quaternion decompositions (slerped): it
-/// turns by at most [`LERP_MAX_ANGLE`] times `sqrt(max(reach, radius) / radius)`, `reach` a
-/// lower bound on its translation's largest coordinate over the shutter. The lerp then moves
-/// its points by at most 5e-7 `max(reach, radius)`.
-pub(super) fn lerps_as_matrices(motion: &InstanceMotion, radius: f32) -> bool {
-    let angle = motion.rotation_angle();
-    if angle <= LERP_MAX_ANGLE {
-        return true;
-    }
-    if !radius.is_finite() {
-        // Unknown extent (an empty or owned scene): the fixed angle only.
-        return false;
-    }
-    // How far out the instance stays over the shutter, from below: per axis the smallest
-    // magnitude of its translation's coordinate on the way (0 where it changes sign), and the
-    // largest of those (the translation's largest coordinate is never smaller).
-    let (a, b) = (motion.open.translation, motion.close.translation);
-    let (lo, hi) = (a.min(b), a.max(b));
-    let crosses = lo.cmple(Vec3::ZERO) & hi.cmpge(Vec3::ZERO);
-    let reach = Vec3::select(crosses, Vec3::ZERO, lo.abs().min(hi.abs())).max_element();
-    // `a^2 r <= LERP_MAX_ANGLE^2 max(reach, r)`, without a division (a point-sized object,
-    // `r = 0`, lerps at any angle; a NaN radius never).
-    angle * angle * radius <= LERP_MAX_ANGLE * LERP_MAX_ANGLE * reach.max(radius)
-}
-
-/// Embree's decomposition of a rigid transform: unit scale, no skew or shift, the rotation as
-/// a quaternion (`r` the real part) and the translation.
-pub(super) fn quaternion_decomposition(t: &RigidTransform) -> sys::RTCQuaternionDecomposition {
-    let (q, p) = (t.rotation, t.translation);
-    sys::RTCQuaternionDecomposition {
-        scale_x: 1.0,
-        scale_y: 1.0,
-        scale_z: 1.0,
-        quaternion_r: q.w,
-        quaternion_i: q.x,
-        quaternion_j: q.y,
-        quaternion_k: q.z,
-        translation_x: p.x,
-        translation_y: p.y,
-        translation_z: p.z,
-        ..Default::default()
-    }
-}
-
 impl InstanceGeometry {
     /// An instance of a frozen (committed, immutable) scene.
     pub fn new(
@@ -420,7 +329,7 @@ impl InstanceGeometry {
         };
         device.check()?;
         let child_raw = match &child {
-            InstanceChild::Shared(frozen) => frozen.scene.raw,
+            InstanceChild::Shared(frozen) => frozen.raw(),
             InstanceChild::Owned(scene) => scene.raw,
         };
         let mut instance = Self { raw, device: device.clone(), child, moving: false };
@@ -541,183 +450,5 @@ impl InstanceGeometry {
         unsafe { sys::rtcCommitGeometry(self.raw) };
         self.device.check()?;
         Ok(true)
-    }
-}
-
-/// A committed scene that can no longer change: a prototype shared by instances.
-pub struct FrozenScene {
-    scene: Scene,
-    /// An upper bound on the distance of the scene's points from its origin (the farthest
-    /// corner of its bounds): how far a turn moves them ([`lerps_as_matrices`]).
-    radius: f32,
-}
-
-impl FrozenScene {
-    pub(super) fn radius(&self) -> f32 {
-        self.radius
-    }
-
-    pub(super) fn raw(&self) -> sys::RTCScene {
-        self.scene.raw
-    }
-
-    pub fn view(&self) -> SceneView<'_> {
-        self.scene.view().expect("a frozen scene is committed")
-    }
-}
-
-/// Ray queries on a committed scene. Borrowing the scene keeps it unchanged while rays run.
-#[derive(Clone, Copy)]
-pub struct SceneView<'a> {
-    pub(super) raw: sys::RTCScene,
-    /// Instances (by geometry id in this scene) whose hits rays reject.
-    pub(super) skip: Option<&'a GeometrySet>,
-    _scene: PhantomData<&'a Scene>,
-}
-
-// SAFETY: rtcIntersect1/rtcOccluded1 may run concurrently on one committed scene from many
-// threads (rtcIntersect1(3)); the borrow keeps the scene committed and alive.
-unsafe impl Send for SceneView<'_> {}
-// SAFETY: see `Send`.
-unsafe impl Sync for SceneView<'_> {}
-
-fn embree_ray(org: [f32; 3], dir: [f32; 3], tnear: f32, tfar: f32, time: f32) -> sys::RTCRay {
-    sys::RTCRay {
-        org_x: org[0],
-        org_y: org[1],
-        org_z: org[2],
-        tnear,
-        dir_x: dir[0],
-        dir_y: dir[1],
-        dir_z: dir[2],
-        time,
-        tfar,
-        mask: u32::MAX,
-        id: 0,
-        flags: 0,
-    }
-}
-
-impl<'a> SceneView<'a> {
-    /// The same scene, with every hit inside the instances in `skip` (geometry ids in this
-    /// scene) rejected; an empty set is no filter at all.
-    pub fn skipping(self, skip: &'a GeometrySet) -> SceneView<'a> {
-        SceneView { skip: (!skip.is_empty()).then_some(skip), ..self }
-    }
-
-    /// The query context that carries the skipped set, if any.
-    pub(super) fn skip_context(&self) -> Option<SkipContext<'a>> {
-        self.skip.map(SkipContext::new)
-    }
-
-    /// Closest hit in `[tnear, tfar]` (rtcIntersect1), at shutter time 0.5.
-    pub fn intersect1(&self, org: [f32; 3], dir: [f32; 3], tnear: f32, tfar: f32) -> Option<EmbreeHit> {
-        self.intersect1_at(org, dir, tnear, tfar, FRAME_TIME)
-    }
-
-    /// Closest hit in `[tnear, tfar]` of a ray at shutter time `time` (motion blur).
-    pub fn intersect1_at(
-        &self,
-        org: [f32; 3],
-        dir: [f32; 3],
-        tnear: f32,
-        tfar: f32,
-        time: f32,
-    ) -> Option<EmbreeHit> {
-        let mut rayhit = sys::RTCRayHit {
-            ray: embree_ray(org, dir, tnear, tfar, time),
-            hit: sys::RTCHit {
-                geomID: sys::RTC_INVALID_GEOMETRY_ID,
-                instID: [sys::RTC_INVALID_GEOMETRY_ID; sys::RTC_MAX_INSTANCE_LEVEL_COUNT as usize],
-                ..Default::default()
-            },
-        };
-        let mut context = self.skip_context();
-        let mut args = filter::intersect_args(sys::RTCRayQueryFlags::RTC_RAY_QUERY_FLAG_INCOHERENT);
-        if let Some(c) = context.as_mut() {
-            c.intersect_args(&mut args);
-        }
-        // SAFETY: `rayhit` is an `RTCRayHit` laid out by bindings generated from the linked
-        // library's headers (so the library writes within it); the scene is committed and
-        // alive for the borrow; `args` is initialised as rtcInitIntersectArguments does and
-        // its context, if any, lives until the call returns.
-        unsafe { sys::rtcIntersect1(self.raw, &mut rayhit, &mut args) };
-        let h = &rayhit.hit;
-        (h.geomID != sys::RTC_INVALID_GEOMETRY_ID).then(|| EmbreeHit {
-            t: rayhit.ray.tfar,
-            u: h.u,
-            v: h.v,
-            ng: [h.Ng_x, h.Ng_y, h.Ng_z],
-            prim_id: h.primID,
-            geom_id: h.geomID,
-            inst_id: (h.instID[0] != sys::RTC_INVALID_GEOMETRY_ID).then_some(h.instID[0]),
-        })
-    }
-
-    /// Whether anything lies in `[tnear, tfar]` (rtcOccluded1), at shutter time 0.5.
-    pub fn occluded1(&self, org: [f32; 3], dir: [f32; 3], tnear: f32, tfar: f32) -> bool {
-        self.occluded1_at(org, dir, tnear, tfar, FRAME_TIME)
-    }
-
-    /// Whether anything lies in `[tnear, tfar]` of a ray at shutter time `time`.
-    pub fn occluded1_at(&self, org: [f32; 3], dir: [f32; 3], tnear: f32, tfar: f32, time: f32) -> bool {
-        let mut ray = embree_ray(org, dir, tnear, tfar, time);
-        let mut context = self.skip_context();
-        let mut args = filter::occluded_args(sys::RTCRayQueryFlags::RTC_RAY_QUERY_FLAG_INCOHERENT);
-        if let Some(c) = context.as_mut() {
-            c.occluded_args(&mut args);
-        }
-        // SAFETY: as in `intersect1`; rtcOccluded1 writes only `ray.tfar`.
-        unsafe { sys::rtcOccluded1(self.raw, &mut ray, &mut args) };
-        ray.tfar == f32::NEG_INFINITY
-    }
-
-    /// World bounds of the committed scene.
-    pub fn bounds(&self) -> crate::geometry::Aabb {
-        let mut b = sys::RTCBounds::default();
-        // SAFETY: the scene is committed; `b` is a valid output struct.
-        unsafe { sys::rtcGetSceneBounds(self.raw, &mut b) };
-        crate::geometry::Aabb {
-            min: Vec3::new(b.lower_x, b.lower_y, b.lower_z),
-            max: Vec3::new(b.upper_x, b.upper_y, b.upper_z),
-        }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use glam::{Quat, Vec3};
-
-    use super::lerps_as_matrices;
-    use crate::geometry::{InstanceMotion, RigidTransform};
-
-    /// A turn by `angle` about x, translated to `at` (at both ends).
-    fn turn(angle: f32, at: Vec3) -> InstanceMotion {
-        let pose = |a: f32| RigidTransform { rotation: Quat::from_rotation_x(a), translation: at };
-        InstanceMotion { open: pose(0.0), close: pose(angle) }
-    }
-
-    #[test]
-    fn the_angle_lerped_grows_with_the_distance_from_the_origin_over_the_radius() {
-        let (origin, out) = (Vec3::ZERO, Vec3::new(0.0, -400.0, 2.0));
-        // Near the origin, or at most a radius out: 2e-3 rad.
-        assert!(lerps_as_matrices(&turn(1.9e-3, origin), 1.0));
-        assert!(!lerps_as_matrices(&turn(2.1e-3, origin), 1.0));
-        assert!(!lerps_as_matrices(&turn(2.1e-3, Vec3::splat(0.9)), 1.0));
-        // 400 radii out: 2e-3 * sqrt(400) = 0.04 rad.
-        assert!(lerps_as_matrices(&turn(0.039, out), 1.0));
-        assert!(!lerps_as_matrices(&turn(0.041, out), 1.0));
-        // The nearer end of the motion counts, and a coordinate that changes sign counts as 0.
-        let mut moving = turn(0.039, out);
-        moving.close.translation = Vec3::new(0.0, -1.0, 0.0);
-        assert!(!lerps_as_matrices(&moving, 1.0));
-        moving.close.translation = Vec3::new(0.0, 400.0, 2.0);
-        assert!(!lerps_as_matrices(&moving, 1.0));
-        moving.close.translation = Vec3::new(0.0, -401.0, 2.0);
-        assert!(lerps_as_matrices(&moving, 1.0));
-        // Unknown extent: the fixed angle only; a point-sized object: any angle.
-        assert!(!lerps_as_matrices(&turn(0.01, out), f32::INFINITY));
-        assert!(!lerps_as_matrices(&turn(0.01, out), f32::NAN));
-        assert!(lerps_as_matrices(&turn(1.0, out), 0.0));
     }
 }

@@ -1,0 +1,126 @@
+//! How instance transforms reach Embree: the FLOAT3X4 column-major matrix layout, the
+//! quaternion decomposition of a rigid transform, and when a moving instance's two poses may
+//! go as matrices (lerped) instead of decompositions (slerped). Used by single instances
+//! ([`super::InstanceGeometry`]) and instance arrays alike.
+
+use embree4_sys as sys;
+use glam::{Affine3A, Vec3};
+
+use crate::geometry::{InstanceMotion, RigidTransform};
+
+/// Embree's FLOAT3X4_COLUMN_MAJOR layout of an affine transform.
+pub(super) fn column_major_3x4(xf: &Affine3A) -> [f32; 12] {
+    let m = xf.matrix3;
+    let t = xf.translation;
+    [
+        m.x_axis.x, m.x_axis.y, m.x_axis.z, m.y_axis.x, m.y_axis.y, m.y_axis.z, m.z_axis.x, m.z_axis.y,
+        m.z_axis.z, t.x, t.y, t.z,
+    ]
+}
+
+/// The largest rotation over the shutter (radians) for which a moving instance is given to
+/// Embree as two matrices, which it lerps, rather than two quaternion decompositions, which it
+/// slerps like [`InstanceMotion::at`], for an instance no farther from the world origin than
+/// its points are from its own origin. Lerping the matrices of a turn by `a` scales the object
+/// across the turn's axis by `cos(a/2)` halfway through (the worst time), `1 - a^2/8`, and
+/// turns it to within `a^3/24` of the slerp: at 2e-3 the object's points move by 5e-7 of their
+/// distance `r` from its origin, eight of f32's unit roundoffs. A pure translation (`a = 0`)
+/// lerps exactly.
+///
+/// An instance farther out may turn further ([`lerps_as_matrices`]): its points may then move
+/// by 5e-7 of its translation's magnitude instead, still eight unit roundoffs of it, half of
+/// what the crosscheck allows Embree's own f32 transform (16 roundoffs of the ray origin's and
+/// the translation's magnitude; docs/crosscheck.md). On the atrium at shutter 0.5 (five frames
+/// sampled over the fall, 28k motions) 9% of the moving instances' motions are pure
+/// translations, 51% turn by less than 1e-4 rad, 10% by 1e-4 to 1e-3, 4% by 1e-3 to 2e-3, 27%
+/// by more (docs/performance.md, "Motion blur").
+///
+/// Tried (session 24): the instances that turn further as matrices at more time steps (the
+/// slerp's poses at `1 + ceil(a / LERP_MAX_ANGLE)` times, up to 16, so that no segment turns
+/// by more than this): Embree's multi-segment builder made the atrium's blurred commit 3.2x
+/// slower (20.4-21.5 against 6.6-6.7 ms a frame; blur on / off 2.97-3.06 against 1.53-1.57),
+/// tracing unchanged. Two time steps, quaternions beyond the angle, stay.
+const LERP_MAX_ANGLE: f32 = 2e-3;
+
+/// Whether `motion` of an instance whose points lie within `radius` of its origin goes to
+/// Embree as two matrices (lerped) rather than two quaternion decompositions (slerped): it
+/// turns by at most [`LERP_MAX_ANGLE`] times `sqrt(max(reach, radius) / radius)`, `reach` a
+/// lower bound on its translation's largest coordinate over the shutter. The lerp then moves
+/// its points by at most 5e-7 `max(reach, radius)`.
+pub(super) fn lerps_as_matrices(motion: &InstanceMotion, radius: f32) -> bool {
+    let angle = motion.rotation_angle();
+    if angle <= LERP_MAX_ANGLE {
+        return true;
+    }
+    if !radius.is_finite() {
+        // Unknown extent (an empty or owned scene): the fixed angle only.
+        return false;
+    }
+    // How far out the instance stays over the shutter, from below: per axis the smallest
+    // magnitude of its translation's coordinate on the way (0 where it changes sign), and the
+    // largest of those (the translation's largest coordinate is never smaller).
+    let (a, b) = (motion.open.translation, motion.close.translation);
+    let (lo, hi) = (a.min(b), a.max(b));
+    let crosses = lo.cmple(Vec3::ZERO) & hi.cmpge(Vec3::ZERO);
+    let reach = Vec3::select(crosses, Vec3::ZERO, lo.abs().min(hi.abs())).max_element();
+    // `a^2 r <= LERP_MAX_ANGLE^2 max(reach, r)`, without a division (a point-sized object,
+    // `r = 0`, lerps at any angle; a NaN radius never).
+    angle * angle * radius <= LERP_MAX_ANGLE * LERP_MAX_ANGLE * reach.max(radius)
+}
+
+/// Embree's decomposition of a rigid transform: unit scale, no skew or shift, the rotation as
+/// a quaternion (`r` the real part) and the translation.
+pub(super) fn quaternion_decomposition(t: &RigidTransform) -> sys::RTCQuaternionDecomposition {
+    let (q, p) = (t.rotation, t.translation);
+    sys::RTCQuaternionDecomposition {
+        scale_x: 1.0,
+        scale_y: 1.0,
+        scale_z: 1.0,
+        quaternion_r: q.w,
+        quaternion_i: q.x,
+        quaternion_j: q.y,
+        quaternion_k: q.z,
+        translation_x: p.x,
+        translation_y: p.y,
+        translation_z: p.z,
+        ..Default::default()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::{Quat, Vec3};
+
+    use super::lerps_as_matrices;
+    use crate::geometry::{InstanceMotion, RigidTransform};
+
+    /// A turn by `angle` about x, translated to `at` (at both ends).
+    fn turn(angle: f32, at: Vec3) -> InstanceMotion {
+        let pose = |a: f32| RigidTransform { rotation: Quat::from_rotation_x(a), translation: at };
+        InstanceMotion { open: pose(0.0), close: pose(angle) }
+    }
+
+    #[test]
+    fn the_angle_lerped_grows_with_the_distance_from_the_origin_over_the_radius() {
+        let (origin, out) = (Vec3::ZERO, Vec3::new(0.0, -400.0, 2.0));
+        // Near the origin, or at most a radius out: 2e-3 rad.
+        assert!(lerps_as_matrices(&turn(1.9e-3, origin), 1.0));
+        assert!(!lerps_as_matrices(&turn(2.1e-3, origin), 1.0));
+        assert!(!lerps_as_matrices(&turn(2.1e-3, Vec3::splat(0.9)), 1.0));
+        // 400 radii out: 2e-3 * sqrt(400) = 0.04 rad.
+        assert!(lerps_as_matrices(&turn(0.039, out), 1.0));
+        assert!(!lerps_as_matrices(&turn(0.041, out), 1.0));
+        // The nearer end of the motion counts, and a coordinate that changes sign counts as 0.
+        let mut moving = turn(0.039, out);
+        moving.close.translation = Vec3::new(0.0, -1.0, 0.0);
+        assert!(!lerps_as_matrices(&moving, 1.0));
+        moving.close.translation = Vec3::new(0.0, 400.0, 2.0);
+        assert!(!lerps_as_matrices(&moving, 1.0));
+        moving.close.translation = Vec3::new(0.0, -401.0, 2.0);
+        assert!(lerps_as_matrices(&moving, 1.0));
+        // Unknown extent: the fixed angle only; a point-sized object: any angle.
+        assert!(!lerps_as_matrices(&turn(0.01, out), f32::INFINITY));
+        assert!(!lerps_as_matrices(&turn(0.01, out), f32::NAN));
+        assert!(lerps_as_matrices(&turn(1.0, out), 0.0));
+    }
+}
