@@ -30,7 +30,7 @@ pub struct InstancesBenchOptions {
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
-pub enum Layout {
+pub enum InstanceLayout {
     /// One RTC_GEOMETRY_TYPE_INSTANCE per instance.
     Geometries,
     /// One RTC_GEOMETRY_TYPE_INSTANCE_ARRAY holding every instance.
@@ -47,7 +47,7 @@ pub enum Motion {
 
 #[derive(Clone, Debug, Serialize)]
 pub struct InstancesRow {
-    pub layout: Layout,
+    pub layout: InstanceLayout,
     pub motion: Motion,
     pub update_ms: f64,
     pub commit_ms: f64,
@@ -98,7 +98,7 @@ fn placement(i: usize, run: u32, motion: Motion, prototypes: usize) -> (u32, Ins
 /// The top level in one layout: the scene and a way to give every instance new transforms.
 struct TopLevel {
     scene: Scene,
-    layout: Layout,
+    layout: InstanceLayout,
     motion: Motion,
     prototypes: Vec<Arc<FrozenScene>>,
     count: usize,
@@ -108,21 +108,21 @@ impl TopLevel {
     fn new(
         device: &Device,
         prototypes: &[Arc<FrozenScene>],
-        layout: Layout,
+        layout: InstanceLayout,
         motion: Motion,
         count: usize,
     ) -> Result<Self, EmbreeError> {
         let flags = SceneFlags { dynamic: true, ..SceneFlags::default() };
         let mut scene = Scene::new(device, flags, BuildQuality::High)?;
         match layout {
-            Layout::Geometries => {
+            InstanceLayout::Geometries => {
                 for i in 0..count {
                     let (p, _) = placement(i, 0, Motion::Still, prototypes.len());
                     let g = InstanceGeometry::new(device, &prototypes[p as usize], &Affine3A::IDENTITY)?;
                     scene.attach_by_id(g, i as u32)?;
                 }
             }
-            Layout::Array => {
+            InstanceLayout::Array => {
                 let array = InstanceArrayGeometry::new(device, prototypes, motion != Motion::Still)?;
                 scene.attach_by_id(array, 0)?;
             }
@@ -135,7 +135,7 @@ impl TopLevel {
         let n = self.prototypes.len();
         let placements = (0..self.count).map(|i| placement(i, run, self.motion, n));
         match (self.layout, self.motion) {
-            (Layout::Geometries, motion) => {
+            (InstanceLayout::Geometries, motion) => {
                 for (i, (_, m)) in placements.enumerate() {
                     let g = self.scene.instance_mut(i as u32)?;
                     match motion {
@@ -144,11 +144,11 @@ impl TopLevel {
                     }
                 }
             }
-            (Layout::Array, Motion::Still) => {
+            (InstanceLayout::Array, Motion::Still) => {
                 let entries: Vec<_> = placements.map(|(p, m)| (Some(p), m.open.to_affine())).collect();
                 self.scene.instance_array_mut(0)?.set_still(&entries)?;
             }
-            (Layout::Array, _) => {
+            (InstanceLayout::Array, _) => {
                 let entries: Vec<_> = placements.map(|(p, m)| (Some(p), m)).collect();
                 self.scene.instance_array_mut(0)?.set_moving(&entries)?;
             }
@@ -219,7 +219,7 @@ pub fn bench_instances(options: &InstancesBenchOptions) -> Result<InstancesRepor
     let rays = rays(options.rays);
     let mut rows = Vec::new();
     for motion in [Motion::Still, Motion::Translating, Motion::Rotating] {
-        for layout in [Layout::Geometries, Layout::Array] {
+        for layout in [InstanceLayout::Geometries, InstanceLayout::Array] {
             let mut top = TopLevel::new(&device, &prototypes, layout, motion, options.count)?;
             rows.push(measure(&mut top, &rays, options.runs)?);
         }
