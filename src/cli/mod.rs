@@ -6,7 +6,6 @@ mod export;
 mod info;
 mod progress;
 mod render;
-mod resume;
 mod simulate;
 mod verify;
 

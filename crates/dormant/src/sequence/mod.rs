@@ -22,6 +22,7 @@ mod describe;
 mod error;
 mod export;
 mod kept;
+pub mod output;
 mod render;
 mod replay;
 mod selection;

@@ -1,0 +1,118 @@
+//! [`FrameOutput`]: each frame written through the library's [`FrameWriter`], its line on
+//! stdout, and for `--json` its record.
+
+use std::path::{Path, PathBuf};
+
+use indicatif::ProgressBar;
+
+use super::RenderArgs;
+use crate::cli::CliError;
+use dormant::accel::Backend;
+use dormant::residency::FrameStats;
+use dormant::sequence::output::{FrameWriter, OutputError, OutputLayout};
+use dormant::sequence::RenderedFrame;
+
+/// Writes each rendered frame's files and reports it.
+pub(super) struct FrameOutput<'a> {
+    pub writer: FrameWriter<'a>,
+    pub args: &'a RenderArgs,
+    pub backend: Backend,
+    /// No per-frame line on stdout (`--quiet`, or the JSON report goes there).
+    pub quiet: bool,
+    /// Keep each frame's record for the `--json` report. Only then: a record is about 5.5 kB,
+    /// which a long sequence would otherwise accumulate for nothing (some 55 MB over the
+    /// soak's 10,000 frames).
+    pub keep_records: bool,
+    pub records: Vec<serde_json::Value>,
+    /// Frames kept from an earlier run (`--resume`), not written again.
+    pub kept: usize,
+}
+
+impl FrameOutput<'_> {
+    /// Writes `frame`'s files atomically (a reused frame's are copies of its source's);
+    /// returns the image's path.
+    pub fn write(
+        &mut self,
+        frame: &RenderedFrame,
+        scene_stats: Option<&FrameStats>,
+        progress: &ProgressBar,
+    ) -> Result<PathBuf, CliError> {
+        let written = self.writer.write(frame).map_err(output_error)?;
+        let path = written.files[0].clone();
+        if !self.quiet {
+            progress.suspend(|| println!("{}", self.summary(&path, frame, written.denoise_seconds)));
+        }
+        if self.keep_records {
+            self.records.push(self.record(frame, scene_stats, &written.files, written.denoise_seconds));
+        }
+        Ok(path)
+    }
+
+    /// The frame's `--json` record.
+    fn record(
+        &self,
+        frame: &RenderedFrame,
+        scene_stats: Option<&FrameStats>,
+        files: &[PathBuf],
+        denoise_seconds: Option<f64>,
+    ) -> serde_json::Value {
+        let layout = self.writer.layout;
+        // Files per pass (PNG, and EXR with --exr); the image and the noisy image come first.
+        let per_pass = layout.files_per_pass();
+        let noisy_path = layout.keep_noisy.then(|| &files[per_pass]);
+        let aov_paths: Vec<&PathBuf> = files
+            .iter()
+            .skip(per_pass * (1 + usize::from(layout.keep_noisy)))
+            .filter(|p| p.extension().is_some_and(|e| e == "png"))
+            .collect();
+        let stats = &frame.render;
+        serde_json::json!({ "frame": frame.index, "path": files[0], "rays": stats.rays,
+            "seconds": stats.seconds, "mrays_per_second": stats.mrays_per_second(), "aovs": aov_paths,
+            "spp_mean": stats.spp.mean, "spp_min": stats.spp.min, "spp_max": stats.spp.max,
+            "denoise_seconds": denoise_seconds, "noisy_path": noisy_path,
+            "reused_from": frame.reused_from, "scene": scene_stats })
+    }
+
+    /// The line printed for a written frame.
+    fn summary(&self, path: &Path, frame: &RenderedFrame, denoise_seconds: Option<f64>) -> String {
+        let args = self.args;
+        if let Some(source) = frame.reused_from {
+            return format!(
+                "wrote {} (nothing moved since frame {source}: its image, not traced)",
+                path.display()
+            );
+        }
+        let stats = &frame.render;
+        let spp = if stats.spp.min == stats.spp.max {
+            format!("{} spp", stats.spp.max)
+        } else {
+            format!("{:.1} spp mean, {} to {}", stats.spp.mean, stats.spp.min, stats.spp.max)
+        };
+        format!(
+            "rendered {} ({}x{}, {}, {:?} mode, {}): {:.2} s, {} rays, {:.1} Mrays/s",
+            path.display(),
+            args.size.width,
+            args.size.height,
+            spp,
+            args.mode,
+            self.backend,
+            stats.seconds,
+            stats.rays,
+            stats.mrays_per_second()
+        ) + &denoise_seconds.map(|s| format!(", denoised in {s:.2} s")).unwrap_or_default()
+    }
+}
+
+/// The output layout `args` ask for.
+pub(super) fn layout(args: &RenderArgs) -> OutputLayout {
+    OutputLayout { dir: args.out.clone(), exr: args.exr, keep_noisy: args.keep_noisy, aovs: args.aov.clone() }
+}
+
+/// An output failure as the CLI reports it: an earlier run's statistics that do not fit are
+/// the user's to fix (exit 2), anything else a runtime failure.
+pub(super) fn output_error(e: OutputError) -> CliError {
+    match e {
+        OutputError::Stats(e) => CliError::Input(e.to_string()),
+        e => CliError::Runtime(e.to_string()),
+    }
+}

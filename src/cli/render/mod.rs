@@ -1,0 +1,408 @@
+//! `dormant render`: its flags, and the wiring of a still of a built-in or asset scene, or of
+//! a sequence of a scene file or trajectory (`sequence.rs`); each frame's files and report
+//! line (`frame_output.rs`).
+
+mod frame_output;
+mod sequence;
+
+use std::path::{Path, PathBuf};
+
+use clap::Args;
+use indicatif::ProgressBar;
+
+use super::CliError;
+use dormant::accel::{self, Backend};
+use dormant::physics::SimulateOptions;
+use dormant::render::{
+    self, AdaptiveSampling, AmbientOcclusion, Aov, DenoiseError, Denoiser, DirectLighting, ImageSize,
+    Integrator, PathTracer, RenderScene, RenderSettings,
+};
+use dormant::residency::{CacheBudget, IntegrationForm, IntegrationPolicy};
+use dormant::scene::file::SceneFile;
+use dormant::scene::limits::{shutter_problem, MAX_SAMPLES_PER_PIXEL};
+use dormant::sequence::output::FrameWriter;
+use dormant::sequence::{FrameRange, RenderedFrame, SeedMode, Sequence, SequenceError, SequenceSource};
+
+use frame_output::FrameOutput;
+
+/// What a render computes per pixel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum RenderMode {
+    /// Path tracing: sun, sky and indirect light, MIS, GGX metallic-roughness.
+    Path,
+    /// Direct light only (sun and sky with shadows): the quick preview.
+    Shaded,
+    /// Ambient occlusion within one scene unit.
+    Ao,
+}
+
+#[derive(Debug, Args)]
+pub struct RenderArgs {
+    /// Scene file to simulate and render (default: the built-in scene, or --env/--object).
+    #[arg(value_name = "SCENE", conflicts_with_all = ["env", "object"])]
+    pub scene_file: Option<PathBuf>,
+    /// Replay this trajectory (from `dormant simulate`) instead of simulating; without SCENE,
+    /// render the scene recorded in it.
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["env", "object"])]
+    pub trajectory: Option<PathBuf>,
+    /// With SCENE or --trajectory: render frames A..B (half-open) of the simulation.
+    #[arg(long, value_name = "A..B")]
+    pub frames: Option<FrameRange>,
+    /// With SCENE or --trajectory: render every N-th frame, counted from frame 0 (default:
+    /// the scene's render.frame_step).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    pub frame_step: Option<u32>,
+    #[command(flatten)]
+    pub scene: super::SceneSource,
+    /// Output directory; frames are written as frame_NNNN.png.
+    #[arg(long, value_name = "DIR", default_value = "out/render")]
+    pub out: PathBuf,
+    /// Image size.
+    #[arg(long, value_name = "WxH", default_value = "960x540")]
+    pub size: ImageSize,
+    /// Samples per pixel; with --noise-threshold, the most a pixel gets.
+    #[arg(long, value_name = "N", default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=MAX_SAMPLES_PER_PIXEL as i64))]
+    pub spp: u32,
+    /// Adaptive sampling: the noise level left in the image. A pixel stops once its estimated
+    /// relative error (the standard error of its mean over its value, the value at least 0.1)
+    /// is at most T x sqrt(σ), σ the relative spread of its samples: T is the noise left in a
+    /// pixel with σ = 1, e.g. 0.07; 0 = off, every pixel gets --spp (default: the scene's
+    /// render.noise_threshold, else 0).
+    #[arg(long, value_name = "T", allow_negative_numbers = true)]
+    pub noise_threshold: Option<f32>,
+    /// With --noise-threshold: samples every pixel gets before its error is first checked
+    /// (then every 4); default: the scene's render.min_spp, else max(8, √spp), at most spp.
+    #[arg(long, value_name = "N")]
+    pub min_spp: Option<u32>,
+    /// Rendering mode: path tracing, direct light only, or ambient occlusion.
+    #[arg(long, value_enum, default_value_t = RenderMode::Path)]
+    pub mode: RenderMode,
+    /// Longest path (bounces) in `path` mode.
+    #[arg(long, value_name = "N", default_value_t = 6, value_parser = clap::value_parser!(u32).range(1..=64))]
+    pub max_depth: u32,
+    /// Ray tracing backend (default: the first compiled in, Embree preferred).
+    #[arg(long)]
+    pub backend: Option<Backend>,
+    /// Also write linear HDR radiance as frame_NNNN.exr.
+    #[arg(long)]
+    pub exr: bool,
+    /// Also write these passes (comma-separated) as frame_NNNN.KIND.png, and as .exr with
+    /// --exr: albedo (textured base colour), normal (shading normal), depth (distance),
+    /// baked (debug: instanced bodies blue, integrated ones orange, environment grey), spp
+    /// (camera samples per pixel, grey up to the frame's most; the counts in the EXR).
+    #[arg(long, value_enum, value_delimiter = ',', value_name = "KIND")]
+    pub aov: Vec<Aov>,
+    /// With SCENE or --trajectory: when sleeping islands are baked into the static scene.
+    #[arg(long, value_enum, default_value_t = IntegrationPolicy::Auto)]
+    pub integration: IntegrationPolicy,
+    /// With SCENE or --trajectory: how integrated islands are held: baked into the static
+    /// scene, or as instances in a resting scene rebuilt on a schedule.
+    #[arg(long, value_enum, default_value_t = IntegrationForm::default())]
+    pub integrate_as: IntegrationForm,
+    /// With SCENE or --trajectory: serve reactivations of baked islands from the geometry cache.
+    #[arg(long, value_enum, default_value_t = Switch::On)]
+    pub cache: Switch,
+    /// With SCENE or --trajectory: memory the geometry cache's saved scenes may keep alive
+    /// beyond the live scene, in MiB (least valuable entries are evicted beyond it).
+    #[arg(long, value_name = "MIB", default_value_t = CacheBudget::DEFAULT.bytes >> 20)]
+    pub cache_mib: usize,
+    /// With SCENE or --trajectory: most saved scenes in the geometry cache at once.
+    #[arg(long, value_name = "N", default_value_t = CacheBudget::DEFAULT.entries)]
+    pub cache_entries: usize,
+    /// With SCENE or --trajectory: let `auto` use the run's known future (each island's true
+    /// remaining sleep over the rendered frames) instead of estimating it.
+    #[arg(long, value_enum, default_value_t = Switch::On)]
+    pub lookahead: Switch,
+    /// How frames seed the sampler: one seed for all (like Cycles' default; a frame where
+    /// nothing moved is then the previous image, copied instead of traced) or the frame number
+    /// (noise changes from frame to frame).
+    #[arg(long, value_enum, default_value_t = SeedMode::Fixed)]
+    pub seed: SeedMode,
+    /// With a fixed seed: copy the previous frame's files for frames where nothing moved and
+    /// the camera stayed, instead of tracing them (`off` traces every frame).
+    #[arg(long, value_enum, default_value_t = Switch::On)]
+    pub reuse: Switch,
+    /// With SCENE or --trajectory: continue a run that was interrupted in --out DIR. Frames
+    /// whose files are all there and whose statistics DIR/stats.json holds are not rendered
+    /// again (the island events and decisions up to them are replayed); the rest are. DIR's
+    /// stats.json must come from the same options (exit 2 otherwise); without one, every
+    /// frame renders.
+    #[arg(long)]
+    pub resume: bool,
+    /// With SCENE or --trajectory: also encode the frames as DIR/video.mp4 (needs ffmpeg on PATH).
+    #[arg(long)]
+    pub video: bool,
+    /// With SCENE or --trajectory: motion blur. The shutter as a fraction of the frame interval
+    /// (the trajectory's timestep), centred on each frame, from 0 (off) to 1; default: the
+    /// scene's render.shutter, else 0. Cycles' default when blur is on is 0.5.
+    #[arg(long, value_name = "S", allow_negative_numbers = true)]
+    pub shutter: Option<f32>,
+    /// Exposure multiplier applied before tone mapping.
+    #[arg(long, default_value_t = 1.0)]
+    pub exposure: f32,
+    /// Denoise each image with Intel Open Image Denoise (OIDN 2, CPU), guided by the albedo and
+    /// normal passes (rendered for it even when --aov does not ask for them). Needs the
+    /// `oidn` feature, which `scripts/setup.sh` makes available.
+    #[arg(long)]
+    pub denoise: bool,
+    /// With --denoise: also write the image before denoising as frame_NNNN.noisy.png (and
+    /// .noisy.exr with --exr), like Cycles' "Noisy Image" pass.
+    #[arg(long, requires = "denoise")]
+    pub keep_noisy: bool,
+    /// With --denoise: denoise the albedo and normal guides first (like Cycles' "Accurate"
+    /// prefilter): less error on fine texture edges, about six times the denoising time.
+    #[arg(long, requires = "denoise")]
+    pub denoise_prefilter: bool,
+}
+
+/// The requested backend, or the first compiled in.
+pub(super) fn choose_backend(requested: Option<Backend>) -> Result<Backend, CliError> {
+    match requested {
+        Some(b) if !b.is_compiled() => {
+            Err(CliError::Input(format!("backend '{b}' is not compiled into this build")))
+        }
+        Some(b) => Ok(b),
+        None => Backend::compiled().first().copied().ok_or_else(|| {
+            CliError::Input(
+                "no ray tracing backend is compiled in: Embree is not compiled in (build with the default \
+                 feature `embree`)"
+                    .into(),
+            )
+        }),
+    }
+}
+
+/// The integrator for a mode.
+pub(super) fn integrator(mode: RenderMode, max_depth: u32) -> Box<dyn Integrator> {
+    match mode {
+        RenderMode::Path => Box::new(PathTracer { max_depth, ..PathTracer::default() }),
+        RenderMode::Shaded => Box::new(DirectLighting),
+        RenderMode::Ao => Box::new(AmbientOcclusion { radius: 1.0 }),
+    }
+}
+
+/// A sequence error as the CLI reports it; `flag` names the option that gave a frame range.
+pub(super) fn sequence_error(e: SequenceError, flag: &str) -> CliError {
+    match e {
+        SequenceError::Range { .. } => CliError::Input(format!("{flag} {e}")),
+        e if e.is_input() => CliError::Input(e.to_string()),
+        e => CliError::Runtime(e.to_string()),
+    }
+}
+
+/// Loads a sequence from `source`, with a progress bar while it simulates.
+pub(super) fn load_sequence(source: SequenceSource, quiet: bool) -> Result<Sequence, CliError> {
+    let bar = super::progress::frames_bar(quiet, "simulating", None);
+    let sequence = Sequence::load(source, &mut |step| {
+        bar.set_length(u64::from(step.frames));
+        bar.inc(1);
+    })
+    .map_err(|e| sequence_error(e, ""))?;
+    bar.finish_and_clear();
+    Ok(sequence)
+}
+
+/// What every frame of a `render` run is made with.
+pub(super) struct RenderJob<'a> {
+    pub args: &'a RenderArgs,
+    pub backend: Backend,
+    pub threads: Option<usize>,
+    pub integrator: &'a dyn Integrator,
+}
+
+pub(super) fn run(
+    args: &RenderArgs,
+    threads: Option<usize>,
+    quiet: bool,
+    json: &super::JsonOutput,
+) -> Result<(), CliError> {
+    let backend = choose_backend(args.backend)?;
+    check_flags(args)?;
+    let denoiser = args
+        .denoise
+        .then(|| Denoiser::new(threads).map(|d| d.prefilter(args.denoise_prefilter)))
+        .transpose()
+        .map_err(denoise_error)?;
+    std::fs::create_dir_all(&args.out).map_err(|e| {
+        CliError::Runtime(format!("cannot create output directory {}: {e}", args.out.display()))
+    })?;
+    let integrator = integrator(args.mode, args.max_depth);
+    let job = RenderJob { args, backend, threads, integrator: integrator.as_ref() };
+    let layout = frame_output::layout(args);
+    let mut output = FrameOutput {
+        writer: FrameWriter { layout: &layout, exposure: args.exposure, denoiser: denoiser.as_ref() },
+        args,
+        backend,
+        quiet: quiet || json.is_requested(),
+        keep_records: json.is_requested(),
+        records: Vec::new(),
+        kept: 0,
+    };
+    let (scene_name, is_sequence) = match sequence_source(args)? {
+        None => (render_still(&job, &mut output)?, false),
+        Some(source) => {
+            let sequence = load_sequence(source, quiet)?;
+            (sequence::render_sequence(&job, &sequence, &mut output, quiet)?, true)
+        }
+    };
+    json.emit(&serde_json::json!({
+        "scene": scene_name,
+        "backend": backend,
+        "width": args.size.width,
+        "height": args.size.height,
+        "spp": args.spp,
+        "noise_threshold": args.noise_threshold,
+        "min_spp": args.min_spp,
+        "mode": args.mode,
+        "denoise": args.denoise,
+        "integration": is_sequence.then_some(args.integration),
+        "frames": output.records,
+        "kept_frames": output.kept,
+    }))
+}
+
+/// A denoiser that cannot start: a missing library (or a build without it) is the user's to
+/// fix (exit 2), anything else a runtime failure.
+fn denoise_error(e: DenoiseError) -> CliError {
+    if e.is_missing_library() {
+        CliError::Input(e.to_string())
+    } else {
+        CliError::Runtime(e.to_string())
+    }
+}
+
+/// The AOV passes a frame renders: the requested ones in order, then the denoiser's guides
+/// that were not requested.
+fn aov_passes(args: &RenderArgs) -> Vec<Aov> {
+    let mut passes = args.aov.clone();
+    if args.denoise {
+        passes.extend(render::denoise::GUIDE_AOVS.iter().filter(|g| !args.aov.contains(g)));
+    }
+    passes
+}
+
+/// Flags that are wrong whatever the scene.
+fn check_flags(args: &RenderArgs) -> Result<(), CliError> {
+    if !args.exposure.is_finite() || args.exposure <= 0.0 {
+        return Err(CliError::Input(format!("--exposure {}: must be a positive number", args.exposure)));
+    }
+    check_shutter(args.shutter)?;
+    let sequence = args.scene_file.is_some() || args.trajectory.is_some();
+    if !sequence {
+        for (flag, given) in [
+            ("--frames", args.frames.is_some()),
+            ("--frame-step", args.frame_step.is_some()),
+            ("--resume", args.resume),
+            ("--shutter", args.shutter.is_some()),
+        ] {
+            if given {
+                return Err(CliError::Input(format!("{flag} needs a SCENE file or --trajectory")));
+            }
+        }
+    }
+    if args.video {
+        if !sequence {
+            return Err(CliError::Input(
+                "--video needs a SCENE file or --trajectory (a sequence of frames)".into(),
+            ));
+        }
+        if !render::ffmpeg_available() {
+            return Err(CliError::Input(render::VideoError::FfmpegMissing.to_string()));
+        }
+    }
+    Ok(())
+}
+
+/// Adaptive sampling from `--noise-threshold` and `--min-spp`, else from the scene file of
+/// `sequence` (`render.noise_threshold`, `render.min_spp`), else off; each checked naming the
+/// flag or field it came from.
+fn adaptive_sampling(args: &RenderArgs, sequence: Option<&Sequence>) -> Result<AdaptiveSampling, CliError> {
+    let file = sequence.map(|s| s.adaptive).unwrap_or_default();
+    let noise_threshold = args.noise_threshold.unwrap_or(file.noise_threshold);
+    if !(noise_threshold.is_finite() && noise_threshold >= 0.0) {
+        return Err(CliError::Input(format!(
+            "--noise-threshold {noise_threshold}: must be a number, 0 (off) or more"
+        )));
+    }
+    let adaptive = AdaptiveSampling { noise_threshold, min_spp: args.min_spp.or(file.min_spp) };
+    if !adaptive.is_on() {
+        return match args.min_spp {
+            Some(_) => Err(CliError::Input(
+                "--min-spp needs adaptive sampling: --noise-threshold (or the scene's render.noise_threshold) \
+                 above 0"
+                    .into(),
+            )),
+            None => Ok(AdaptiveSampling::OFF),
+        };
+    }
+    match adaptive.min_spp {
+        Some(min) if min == 0 || min > args.spp => {
+            let from = if args.min_spp.is_some() { "--min-spp" } else { "the scene's render.min_spp" };
+            Err(CliError::Input(format!("{from} {min}: must be from 1 to --spp ({})", args.spp)))
+        }
+        _ => Ok(adaptive),
+    }
+}
+
+/// `--shutter S` (render, verify, bench integration): from 0 to 1.
+pub(super) fn check_shutter(shutter: Option<f32>) -> Result<(), CliError> {
+    match shutter.and_then(shutter_problem) {
+        Some(problem) => Err(CliError::Input(format!("--shutter {problem}"))),
+        None => Ok(()),
+    }
+}
+
+/// A sequence: a scene file, maybe with a trajectory of it, or a trajectory alone with the
+/// scene recorded in it; `None` for a still.
+fn sequence_source(args: &RenderArgs) -> Result<Option<SequenceSource>, CliError> {
+    sequence_source_of(args.scene_file.as_deref(), args.trajectory.as_ref(), args.scene.count)
+}
+
+/// The sequence a SCENE file (with `count` objects), a trajectory, or both give; `None` for
+/// neither.
+pub(super) fn sequence_source_of(
+    scene_file: Option<&Path>,
+    trajectory: Option<&PathBuf>,
+    count: Option<u32>,
+) -> Result<Option<SequenceSource>, CliError> {
+    Ok(match (scene_file, trajectory) {
+        (Some(path), trajectory) => {
+            let file = SceneFile::load(path).map_err(|e| CliError::Input(e.to_string()))?;
+            let options = SimulateOptions { count, frames: None };
+            Some(SequenceSource::scene(file, options, trajectory.cloned()))
+        }
+        (None, Some(path)) => Some(SequenceSource::Recorded { trajectory: path.clone(), count }),
+        (None, None) => None,
+    })
+}
+
+/// The built-in scene or an asset pile, as one frame; returns the scene's name.
+fn render_still(job: &RenderJob<'_>, output: &mut FrameOutput<'_>) -> Result<String, CliError> {
+    let args = job.args;
+    let runtime = |e: &dyn std::fmt::Display| CliError::Runtime(e.to_string());
+    let description = args.scene.load()?;
+    let mut accel = accel::create(job.backend, job.threads).map_err(|e| runtime(&e))?;
+    let scene = RenderScene::build(&description, accel.as_mut()).map_err(|e| runtime(&e))?;
+    let query = accel.query().map_err(|e| runtime(&e))?;
+    let settings = RenderSettings {
+        width: args.size.width,
+        height: args.size.height,
+        spp: args.spp,
+        seed: 0,
+        adaptive: adaptive_sampling(args, None)?,
+    };
+    let (film, stats, aovs) =
+        render::render_with_aovs(&scene, query, job.integrator, &settings, &aov_passes(args))
+            .map_err(|e| runtime(&e))?;
+    let frame = RenderedFrame { index: 0, film, render: stats, aovs, reused_from: None };
+    output.write(&frame, None, &ProgressBar::hidden())?;
+    Ok(description.name)
+}
+
+/// `--cache on|off`, `--lookahead on|off`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Switch {
+    On,
+    Off,
+}

@@ -1,0 +1,282 @@
+//! A sequence's run: the scene manager from the integration flags, the frames through it with
+//! their statistics, `report.png` and the video, and what `--resume` keeps.
+
+use std::path::{Path, PathBuf};
+
+use super::frame_output::{output_error, FrameOutput};
+use super::{adaptive_sampling, aov_passes, sequence_error, RenderArgs, RenderJob, RenderMode, Switch};
+use crate::cli::CliError;
+use dormant::accel::Backend;
+use dormant::render::{AdaptiveSampling, Denoiser, RenderStats};
+use dormant::residency::{CacheBudget, IntegrationSettings, SceneManager};
+use dormant::sequence::output;
+use dormant::sequence::stats::{FrameRecord, RunInfo, StatsFile};
+use dormant::sequence::{FrameRenderer, FrameSelection, KeptFrame, Sequence, SequenceError};
+
+/// The selected frames of `sequence` through one scene manager, with `stats.json` and
+/// `stats.csv` written as frames finish, then `report.png` and, with `--video`, `video.mp4`;
+/// with `--resume`, the frames an earlier run finished are kept. Returns the scene's name.
+pub(super) fn render_sequence(
+    job: &RenderJob<'_>,
+    sequence: &Sequence,
+    output: &mut FrameOutput<'_>,
+    quiet: bool,
+) -> Result<String, CliError> {
+    let args = job.args;
+    let frames = sequence.select(args.frames, args.frame_step).map_err(|e| sequence_error(e, "--frames"))?;
+    let mut manager = scene_manager(args, sequence, &frames, job.backend, job.threads)?;
+    let passes = aov_passes(args);
+    let renderer = FrameRenderer {
+        integrator: job.integrator,
+        aovs: &passes,
+        width: args.size.width,
+        height: args.size.height,
+        spp: args.spp,
+        adaptive: adaptive_sampling(args, Some(sequence))?,
+        seed: args.seed,
+        reuse_static: args.reuse == Switch::On,
+        shutter: shutter(args, sequence),
+    };
+    let denoise = output.writer.denoiser.map(Denoiser::label);
+    let info = run_info(args, sequence, job.backend, &frames, renderer.adaptive, denoise);
+    let kept = kept_frames(output, &info, &frames)?;
+    let mut frame_paths: Vec<PathBuf> = match args.video {
+        true => kept.iter().map(|r| output.writer.layout.frame_files(r.frame).remove(0)).collect(),
+        false => Vec::new(),
+    };
+    let kept_frames: Vec<KeptFrame> = kept.iter().map(FrameRecord::kept).collect();
+    let mut stats_file = stats_file(args, sequence, &frames, info, kept);
+    let progress = crate::cli::progress::frames_bar(quiet, "rendering", Some(u64::from(frames.count())));
+    progress.set_position(kept_frames.len() as u64);
+    let mut rate = RayRate::default();
+    let rendered =
+        sequence.render(&frames, &mut manager, &renderer, &kept_frames, &mut |frame, stats, manager| {
+            let path = output.write(frame, Some(stats), &progress)?;
+            if args.video {
+                frame_paths.push(path);
+            }
+            let physics = sequence.physics_ms.get(frame.index as usize).copied();
+            let record = FrameRecord::new(stats, &frame.render, physics);
+            stats_file.push(record, manager).map_err(|e| runtime(&e))?;
+            let mrays = rate.add(&frame.render);
+            progress.set_message(format!(
+                "frame {} | {mrays:.1} Mrays/s | {} islands integrated",
+                frame.index, stats.integrated_islands
+            ));
+            progress.inc(1);
+            Ok::<(), LoopError>(())
+        });
+    rendered.map_err(|e| e.into_cli(&args.out))?;
+    progress.finish_and_clear();
+    let run_stats = stats_file.finish(&manager).map_err(|e| runtime(&e))?;
+    crate::report::write_report_png(&run_stats, &args.out.join("report.png")).map_err(|e| runtime(&e))?;
+    if args.video {
+        let fps = 1.0 / (f64::from(sequence.trajectory.timestep) * f64::from(frames.step()));
+        encode_video(args, &frame_paths, fps, output.quiet)?;
+    }
+    Ok(sequence.template.name.clone())
+}
+
+/// A failure while running, as the CLI reports it.
+fn runtime(e: &dyn std::fmt::Display) -> CliError {
+    CliError::Runtime(e.to_string())
+}
+
+/// With `--resume`, the records of the frames an earlier run in the output directory
+/// finished (and the line saying so); otherwise none.
+fn kept_frames(
+    output: &mut FrameOutput<'_>,
+    info: &RunInfo,
+    frames: &FrameSelection,
+) -> Result<Vec<FrameRecord>, CliError> {
+    if !output.args.resume {
+        return Ok(Vec::new());
+    }
+    let kept = output::kept_frames(output.writer.layout, info, frames).map_err(output_error)?;
+    if !output.quiet {
+        println!("{}", resume_summary(&kept, frames));
+    }
+    output.kept = kept.len();
+    Ok(kept)
+}
+
+/// The run's statistics file, holding the kept frames' records.
+fn stats_file(
+    args: &RenderArgs,
+    sequence: &Sequence,
+    frames: &FrameSelection,
+    info: RunInfo,
+    kept: Vec<FrameRecord>,
+) -> StatsFile {
+    let physics_total_ms = (!sequence.physics_ms.is_empty()).then(|| sequence.physics_ms.iter().sum::<f64>());
+    // Reserved up front: doubling a long run's records leaves the old buffers behind as holes
+    // in the heap, which the soak saw as resident memory growing.
+    let mut records = Vec::with_capacity(frames.count() as usize);
+    records.extend(kept);
+    StatsFile::new(&args.out, info, physics_total_ms, records)
+}
+
+/// The run's rays per second so far, for the progress bar.
+#[derive(Default)]
+struct RayRate {
+    rays: u64,
+    seconds: f64,
+}
+
+impl RayRate {
+    /// Adds a frame; returns the Mrays/s over every frame added.
+    fn add(&mut self, stats: &RenderStats) -> f64 {
+        self.rays += stats.rays;
+        self.seconds += stats.seconds;
+        if self.seconds > 0.0 {
+            self.rays as f64 / self.seconds / 1e6
+        } else {
+            0.0
+        }
+    }
+}
+
+/// The scene manager of a sequence's run: the integration flags, and the geometry cache's
+/// budget.
+fn scene_manager(
+    args: &RenderArgs,
+    sequence: &Sequence,
+    frames: &FrameSelection,
+    backend: Backend,
+    threads: Option<usize>,
+) -> Result<SceneManager, CliError> {
+    let settings = IntegrationSettings {
+        policy: args.integration,
+        form: args.integrate_as,
+        cache: args.cache == Switch::On,
+        lookahead: args.lookahead == Switch::On,
+    };
+    let mut manager_options = sequence.manager_options(frames, settings);
+    let cache_bytes = args.cache_mib.checked_mul(1 << 20).ok_or_else(|| {
+        CliError::Input(format!("--cache-mib {}: too large for this machine", args.cache_mib))
+    })?;
+    manager_options.cache_budget = CacheBudget { bytes: cache_bytes, entries: args.cache_entries };
+    manager_options.shutter = shutter(args, sequence);
+    sequence.manager(backend, threads, manager_options).map_err(|e| sequence_error(e, "--frames"))
+}
+
+/// What stops a sequence's render loop: the sequence, or writing a frame's files.
+enum LoopError {
+    Sequence(SequenceError),
+    Cli(CliError),
+}
+
+impl From<SequenceError> for LoopError {
+    fn from(e: SequenceError) -> Self {
+        LoopError::Sequence(e)
+    }
+}
+
+impl From<CliError> for LoopError {
+    fn from(e: CliError) -> Self {
+        LoopError::Cli(e)
+    }
+}
+
+impl LoopError {
+    /// The error as the CLI reports it; a kept frame that does not replay names the statistics
+    /// file in `out` it was kept from.
+    fn into_cli(self, out: &Path) -> CliError {
+        match self {
+            LoopError::Sequence(e @ SequenceError::KeptMismatch { .. }) => CliError::Input(format!(
+                "{}: {e}; remove it to render every frame again",
+                out.join("stats.json").display()
+            )),
+            LoopError::Sequence(e) => sequence_error(e, "--frames"),
+            LoopError::Cli(e) => e,
+        }
+    }
+}
+
+/// The header of the run's statistics: every option that decides its images and statistics.
+fn run_info(
+    args: &RenderArgs,
+    sequence: &Sequence,
+    backend: Backend,
+    frames: &FrameSelection,
+    adaptive: AdaptiveSampling,
+    denoise: Option<&str>,
+) -> RunInfo {
+    RunInfo {
+        scene: sequence.template.name.clone(),
+        backend: backend.to_string(),
+        mode: json_name(&args.mode),
+        integration: json_name(&args.integration),
+        integrate_as: json_name(&args.integrate_as),
+        cache_enabled: args.cache == Switch::On,
+        lookahead: args.lookahead == Switch::On,
+        width: args.size.width,
+        height: args.size.height,
+        spp: args.spp,
+        noise_threshold: adaptive.noise_threshold,
+        min_spp: adaptive.is_on().then(|| adaptive.min_spp(args.spp)),
+        physics: sequence.physics,
+        scene_hash: format!("{:016x}", sequence.trajectory.scene_hash),
+        trajectory_frames: sequence.frame_count(),
+        frame_start: frames.start(),
+        frame_end: frames.end(),
+        frame_step: frames.step(),
+        max_depth: (args.mode == RenderMode::Path).then_some(args.max_depth),
+        seed: json_name(&args.seed),
+        reuse: args.reuse == Switch::On,
+        exposure: args.exposure,
+        aovs: args.aov.iter().map(|a| a.name().to_string()).collect(),
+        exr: args.exr,
+        denoise: denoise.map(str::to_string),
+        keep_noisy: args.keep_noisy,
+        shutter: shutter(args, sequence),
+    }
+}
+
+/// The run's shutter: `--shutter`, else the scene's `render.shutter`.
+fn shutter(args: &RenderArgs, sequence: &Sequence) -> f32 {
+    args.shutter.unwrap_or(sequence.shutter)
+}
+
+/// `video.mp4` from the written frames.
+fn encode_video(args: &RenderArgs, frame_paths: &[PathBuf], fps: f64, quiet: bool) -> Result<(), CliError> {
+    let video = args.out.join("video.mp4");
+    dormant::render::encode_video(&args.out, frame_paths, fps, &video).map_err(|e| match e {
+        dormant::render::VideoError::FfmpegMissing => CliError::Input(e.to_string()),
+        e => CliError::Runtime(e.to_string()),
+    })?;
+    if !quiet {
+        println!("wrote {} ({} frames, {fps:.2} fps)", video.display(), frame_paths.len());
+    }
+    Ok(())
+}
+
+/// A value's JSON name (a unit enum's serde name).
+fn json_name(value: &impl serde::Serialize) -> String {
+    match serde_json::to_value(value) {
+        Ok(serde_json::Value::String(s)) => s,
+        Ok(other) => other.to_string(),
+        Err(_) => String::new(),
+    }
+}
+
+/// The line printed before a resumed run renders.
+fn resume_summary(kept: &[FrameRecord], selection: &FrameSelection) -> String {
+    let total = selection.count();
+    match (kept.first(), kept.last()) {
+        (Some(first), Some(last)) if kept.len() as u32 == total => {
+            format!(
+                "resuming: all {total} frames ({}..={}) were finished, none to render",
+                first.frame, last.frame
+            )
+        }
+        (Some(first), Some(last)) => format!(
+            "resuming: {} of {total} frames ({}..={}) kept from the earlier run, {} to render",
+            kept.len(),
+            first.frame,
+            last.frame,
+            total - kept.len() as u32
+        ),
+        _ => format!("resuming: no finished frame to keep, rendering all {total}"),
+    }
+}
