@@ -9,10 +9,10 @@ use super::{CliError, JsonOutput, SceneSource};
 use dormant::scene::limits::MAX_SAMPLES_PER_PIXEL;
 use dormant::sequence::{FrameRange, SequenceSource};
 use dormant_lab::bench::{
-    self, AccelBenchOptions, AdaptiveBenchOptions, IntegrationBenchOptions, PaperBenchOptions, PaperPreset,
-    RainAssets, RenderBenchOptions,
+    self, bench_json, AccelBenchOptions, AdaptiveBenchOptions, IntegrationBenchOptions, RenderBenchOptions,
 };
-use dormant_lab::report::bench_json;
+use dormant_lab::paper::{self, PaperBenchOptions, PaperPreset, RainAssets};
+use dormant_lab::regimes;
 
 #[derive(Debug, Args)]
 pub struct BenchArgs {
@@ -104,7 +104,7 @@ pub struct RegimesArgs {
     pub frame_count: Option<u32>,
     /// Per-frame ray budgets (comma-separated; default: all).
     #[arg(long, value_enum, value_delimiter = ',')]
-    pub budgets: Vec<bench::Budget>,
+    pub budgets: Vec<regimes::Budget>,
     /// Backends to compare (repeat; default: every compiled one).
     #[arg(long)]
     pub backend: Vec<dormant::accel::Backend>,
@@ -288,12 +288,11 @@ fn paper(args: &PaperArgs, threads: Option<usize>, quiet: bool, json: &JsonOutpu
     };
     create_out_dir(&args.out)?;
     let mut log = timed_log("bench paper", quiet);
-    let report = bench::bench_paper(&options, &mut log).map_err(|e| match e.is_input() {
+    let report = paper::bench_paper(&options, &mut log).map_err(|e| match e.is_input() {
         true => CliError::Input(e.to_string()),
         false => CliError::Runtime(e.to_string()),
     })?;
-    let written =
-        dormant_lab::report::write_paper(&report, &args.out).map_err(|e| CliError::Runtime(e.to_string()))?;
+    let written = paper::write_paper(&report, &args.out).map_err(|e| CliError::Runtime(e.to_string()))?;
     json.emit(&bench_json(&report))?;
     print_written(&written, json, quiet);
     Ok(())
@@ -348,19 +347,21 @@ fn regimes(
     let scene =
         dormant::scene::file::SceneFile::load(&args.scene).map_err(|e| CliError::Input(e.to_string()))?;
     let backends = chosen_backends(&args.backend)?;
-    let budgets = if args.budgets.is_empty() { bench::Budget::ALL.to_vec() } else { args.budgets.clone() };
+    let budgets = if args.budgets.is_empty() { regimes::Budget::ALL.to_vec() } else { args.budgets.clone() };
     let (counts, frame_count, sizes) = match args.quick {
-        true => (vec![300, 1200], Some(240), bench::RegimeSizes { preview_frames: 24, production_frames: 1 }),
+        true => {
+            (vec![300, 1200], Some(240), regimes::RegimeSizes { preview_frames: 24, production_frames: 1 })
+        }
         false => (
             args.counts.clone(),
             args.frame_count,
-            bench::RegimeSizes {
+            regimes::RegimeSizes {
                 preview_frames: args.preview_frames,
                 production_frames: args.production_frames,
             },
         ),
     };
-    let options = bench::RegimesOptions {
+    let options = regimes::RegimesOptions {
         scene,
         counts,
         frame_count,
@@ -373,9 +374,8 @@ fn regimes(
     };
     create_out_dir(&args.out)?;
     let mut log = timed_log("bench regimes", quiet);
-    let report = bench::bench_regimes(&options, &mut log)?;
-    let written = dormant_lab::report::write_regimes(&report, &args.out)
-        .map_err(|e| CliError::Runtime(e.to_string()))?;
+    let report = regimes::bench_regimes(&options, &mut log)?;
+    let written = regimes::write_regimes(&report, &args.out).map_err(|e| CliError::Runtime(e.to_string()))?;
     json.emit(&bench_json(&report))?;
     print_written(&written, json, quiet);
     Ok(())

@@ -8,10 +8,8 @@ mod frame_rays;
 #[cfg(feature = "embree")]
 pub mod instances;
 pub mod integration;
-pub mod paper;
 pub mod persistent_tree;
 pub mod physics;
-pub mod regimes;
 pub mod render;
 
 pub use accel::{bench_accel, AccelBenchOptions};
@@ -19,12 +17,20 @@ pub use adaptive::{bench_adaptive, AdaptiveBenchOptions};
 #[cfg(feature = "embree")]
 pub use instances::{bench_instances, InstancesBenchOptions};
 pub use integration::{bench_integration, IntegrationBenchOptions};
-pub use paper::{bench_paper, PaperBenchOptions, PaperPreset, RainAssets};
 pub use physics::{bench_physics, PhysicsBenchOptions, PhysicsBenchReport};
-pub use regimes::{bench_regimes, Budget, RegimeSizes, RegimesOptions};
 pub use render::{bench_render, RenderBenchOptions};
 
 use std::time::Instant;
+
+/// `report` as JSON with `simd_path`, the BVH SIMD path that ran (`DORMANT_SIMD`): every
+/// benchmark report carries it, whether printed by `--json` or written as a file.
+pub fn bench_json(report: &impl serde::Serialize) -> serde_json::Value {
+    let mut value = serde_json::to_value(report).expect("bench reports serialise");
+    if let Some(map) = value.as_object_mut() {
+        map.insert("simd_path".into(), serde_json::json!(dormant::accel::bvh::SimdPath::current()));
+    }
+    value
+}
 
 /// Embree with `params` (quality per scene, robust mode) on its own device, for benchmarks
 /// that compare its configurations.

@@ -5,9 +5,9 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use super::paper_plot::write_workload_png;
-use super::ReportError;
-use crate::bench::paper::{PaperReport, Verdict, WorkloadReport};
+use super::plot::write_workload_png;
+use super::{PaperReport, Verdict, WorkloadReport};
+use crate::report::ReportError;
 use dormant::residency::{IntegrationForm, IntegrationPolicy, FRACTION_BUCKETS};
 
 /// Writes `paper.json`, `paper.md` and `figures/<workload>.png` into `dir` (created if
@@ -23,7 +23,7 @@ pub fn write_paper(report: &PaperReport, dir: &Path) -> Result<Vec<PathBuf>, Rep
         written.push(path);
     }
     // Through a Value, as `--json` writes it, so both print f32 fields alike.
-    let value = super::bench_json(report);
+    let value = crate::bench::bench_json(report);
     let json = serde_json::to_string_pretty(&value).expect("JSON values serialise");
     let mut md = paper_markdown(report);
     md.push_str(&regime_section(dir)?);

@@ -7,10 +7,10 @@ use std::path::Path;
 
 use plotters::prelude::*;
 
-use super::plot::{count_labels, draw_legend, err, write_png, Area, PlotResult, FONT, STAGES};
-use super::ReportError;
+use super::WorkloadReport;
 use crate::bench::integration::IntegrationBenchReport;
-use crate::bench::paper::WorkloadReport;
+use crate::report::plot::{count_labels, draw_legend, err, write_png, Area, PlotResult, FONT, STAGES};
+use crate::report::ReportError;
 use dormant::residency::{IntegrationForm, IntegrationPolicy, StageTimes, FRACTION_BUCKETS};
 
 const WIDTH: u32 = 1400;

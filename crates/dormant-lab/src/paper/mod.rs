@@ -3,8 +3,13 @@
 //! variant) is simulated once, and the same trajectory is then rendered by every compiled
 //! backend under `never`, `always` and `auto` with the cache on and off
 //! ([`bench_integration`]), and its last frame is measured by [`bench_accel`]. The claims the
-//! paper makes are checked against the measured ratios; `report::write_paper` turns the result
-//! into `paper.json`, `paper.md` and figures.
+//! paper makes are checked against the measured ratios; [`write_paper`] (`report.rs`, figures in
+//! `plot.rs`) turns the result into `paper.json`, `paper.md` and figures.
+
+mod plot;
+mod report;
+
+pub use report::{paper_markdown, write_paper};
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -12,8 +17,8 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use super::accel::{bench_accel, AccelBenchOptions, AccelBenchReport, AccelRatios};
-use super::integration::{
+use crate::bench::accel::{bench_accel, AccelBenchOptions, AccelBenchReport, AccelRatios};
+use crate::bench::integration::{
     bench_integration, IntegrationBenchOptions, IntegrationBenchReport, IntegrationRatios,
 };
 use dormant::accel::Backend;

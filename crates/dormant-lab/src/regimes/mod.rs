@@ -4,13 +4,17 @@
 //! two shaded previews over the whole run, and path-traced production frames on a few
 //! settled frames. Each cell reports settled and whole-run speed-ups of `auto` over `never`
 //! next to its ceiling and the integration form's measured trace penalty
-//! ([`bench_integration`] does the measuring; `report::write_regimes` the table and figure).
+//! ([`bench_integration`] does the measuring; [`write_regimes`] the table and figure).
+
+mod report;
+
+pub use report::{regimes_markdown, write_regimes};
 
 use std::time::Instant;
 
 use serde::Serialize;
 
-use super::integration::{bench_integration, IntegrationBenchOptions, IntegrationRatios};
+use crate::bench::integration::{bench_integration, IntegrationBenchOptions, IntegrationRatios};
 use dormant::accel::Backend;
 use dormant::physics::SimulateOptions;
 use dormant::render::{DirectLighting, Integrator, PathTracer};

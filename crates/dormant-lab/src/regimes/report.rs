@@ -7,9 +7,9 @@ use std::path::{Path, PathBuf};
 
 use plotters::prelude::*;
 
-use super::plot::{draw_legend, err, write_png, Area, PlotResult, FONT};
-use super::ReportError;
-use crate::bench::regimes::{Budget, RegimeCell, RegimesReport};
+use super::{Budget, RegimeCell, RegimesReport};
+use crate::report::plot::{draw_legend, err, write_png, Area, PlotResult, FONT};
+use crate::report::ReportError;
 
 const WIDTH: u32 = 1500;
 const HEIGHT: u32 = 520;
@@ -19,7 +19,7 @@ pub fn write_regimes(report: &RegimesReport, dir: &Path) -> Result<Vec<PathBuf>,
     std::fs::create_dir_all(dir).map_err(|source| ReportError::Write { path: dir.to_path_buf(), source })?;
     let png = dir.join("regimes.png");
     write_png(&png, WIDTH, HEIGHT, |buffer| draw(report, buffer))?;
-    let value = super::bench_json(report);
+    let value = crate::bench::bench_json(report);
     let json = serde_json::to_string_pretty(&value).expect("JSON values serialise");
     let mut written = vec![png];
     for (name, text) in [("regimes.json", json), ("regimes.md", regimes_markdown(report))] {
