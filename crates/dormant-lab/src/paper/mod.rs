@@ -156,10 +156,10 @@ pub struct WorkloadReport {
     pub ratios: WorkloadRatios,
 }
 
-/// Whether a measurement bears a claim out.
+/// How far a measurement bears a claim out.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
-pub enum Verdict {
+pub enum Reproduction {
     Reproduced,
     Partly,
     NotReproduced,
@@ -180,7 +180,7 @@ pub struct ClaimCheck {
     pub measured: f64,
     /// How the verdict is decided.
     pub rule: &'static str,
-    pub verdict: Verdict,
+    pub verdict: Reproduction,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -460,9 +460,9 @@ fn check_claims(w: &WorkloadReport) -> Vec<ClaimCheck> {
             r.partial_hit_90_99_fraction,
             "reproduced within 0.37-0.67, partly at >= 0.2",
             if requests == 0 {
-                Verdict::NoData
+                Reproduction::NoData
             } else if (0.37..=0.67).contains(&r.partial_hit_90_99_fraction) {
-                Verdict::Reproduced
+                Reproduction::Reproduced
             } else {
                 grade(r.partial_hit_90_99_fraction, f64::INFINITY, 0.2)
             },
@@ -471,15 +471,15 @@ fn check_claims(w: &WorkloadReport) -> Vec<ClaimCheck> {
     claims
 }
 
-fn grade(measured: f64, reproduced: f64, partly: f64) -> Verdict {
+fn grade(measured: f64, reproduced: f64, partly: f64) -> Reproduction {
     if measured.is_nan() {
-        Verdict::NoData
+        Reproduction::NoData
     } else if measured >= reproduced {
-        Verdict::Reproduced
+        Reproduction::Reproduced
     } else if measured >= partly {
-        Verdict::Partly
+        Reproduction::Partly
     } else {
-        Verdict::NotReproduced
+        Reproduction::NotReproduced
     }
 }
 

@@ -6,7 +6,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use super::plot::write_workload_png;
-use super::{PaperReport, Verdict, WorkloadReport};
+use super::{PaperReport, Reproduction, WorkloadReport};
 use crate::report::ReportError;
 use dormant::residency::{IntegrationForm, IntegrationPolicy, FRACTION_BUCKETS};
 
@@ -64,12 +64,12 @@ fn regime_section(dir: &Path) -> Result<String, ReportError> {
 /// Where `paper.md` looks for the regime map, under its own directory.
 const REGIMES_DIR: &str = "regimes";
 
-fn verdict(v: Verdict) -> &'static str {
+fn verdict(v: Reproduction) -> &'static str {
     match v {
-        Verdict::Reproduced => "reproduced",
-        Verdict::Partly => "partly",
-        Verdict::NotReproduced => "not reproduced",
-        Verdict::NoData => "no data",
+        Reproduction::Reproduced => "reproduced",
+        Reproduction::Partly => "partly",
+        Reproduction::NotReproduced => "not reproduced",
+        Reproduction::NoData => "no data",
     }
 }
 

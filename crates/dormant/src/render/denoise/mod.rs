@@ -74,7 +74,7 @@ pub struct Denoiser {
     #[cfg_attr(not(feature = "oidn"), allow(dead_code))]
     prefilter: bool,
     #[cfg(feature = "oidn")]
-    device: oidn::Device,
+    device: oidn::OidnDevice,
     #[cfg(not(feature = "oidn"))]
     never: std::convert::Infallible,
 }
@@ -84,7 +84,7 @@ impl Denoiser {
     pub fn new(threads: Option<usize>) -> Result<Self, DenoiseError> {
         #[cfg(feature = "oidn")]
         {
-            Ok(Self { prefilter: false, device: oidn::Device::new(threads)? })
+            Ok(Self { prefilter: false, device: oidn::OidnDevice::new(threads)? })
         }
         #[cfg(not(feature = "oidn"))]
         {

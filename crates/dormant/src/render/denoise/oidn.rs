@@ -43,11 +43,11 @@ fn take_error(device: sys::OIDNDevice) -> Option<(sys::OIDNError, String)> {
 
 /// An OIDN CPU device; released on drop. Raw pointers keep it `!Send` and `!Sync`, which
 /// suits OIDN's per-thread error reporting.
-pub(super) struct Device {
+pub(super) struct OidnDevice {
     raw: sys::OIDNDevice,
 }
 
-impl Drop for Device {
+impl Drop for OidnDevice {
     fn drop(&mut self) {
         // SAFETY: `raw` is a live device this struct holds the only reference to; every filter
         // made from it was released before `filter_rt` returned.
@@ -55,7 +55,7 @@ impl Drop for Device {
     }
 }
 
-impl Device {
+impl OidnDevice {
     /// Creates and commits a CPU device with `threads` worker threads (0: all cores) and no
     /// thread pinning (the renderer's own threads share the cores).
     pub(super) fn new(threads: Option<usize>) -> Result<Self, DenoiseError> {
@@ -65,7 +65,7 @@ impl Device {
             let message = take_error(ptr::null_mut()).map(|(_, m)| m).unwrap_or_default();
             return Err(DenoiseError::NoDevice { message, lib_dir: sys::LIB_DIR.to_string() });
         }
-        let device = Device { raw };
+        let device = OidnDevice { raw };
         let threads = threads.map_or(0, |n| i32::try_from(n).unwrap_or(i32::MAX));
         // SAFETY: `raw` is a live, not yet committed device; the names are NUL-terminated.
         unsafe {
