@@ -5,14 +5,9 @@
 
 mod common;
 
-use std::path::Path;
-use std::process::Command;
-
+use common::cli::{dormant, exits_with, read_json, succeeds};
+use common::scenes;
 use dormant::scene::file::{ColliderKind, SceneFile, Shape};
-
-fn dormant() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_dormant"))
-}
 
 fn compiled_backends() -> Vec<&'static str> {
     if cfg!(feature = "embree") {
@@ -27,18 +22,12 @@ fn quick_paper_run_writes_json_markdown_and_figure() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("paper");
     let also = dir.path().join("also.json");
-    let output = dormant()
-        .args(["bench", "paper", "--quick", "--quiet", "--out"])
-        .arg(&out)
-        .arg("--json")
-        .arg(&also)
-        .output()
-        .unwrap();
-    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
-    let also: serde_json::Value = serde_json::from_slice(&std::fs::read(&also).unwrap()).unwrap();
+    succeeds(
+        dormant().args(["bench", "paper", "--quick", "--quiet", "--out"]).arg(&out).arg("--json").arg(&also),
+    );
+    let also = read_json(&also);
 
-    let json: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.join("paper.json")).unwrap()).unwrap();
+    let json = read_json(&out.join("paper.json"));
     assert_eq!(json, also, "--json writes the same report as paper.json");
     assert_eq!(json["format"], "dormant-paper");
     assert_eq!(json["version"], 1);
@@ -99,33 +88,29 @@ fn paper_with_a_missing_environment_names_the_file_and_writes_nothing() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("paper");
     let missing = dir.path().join("no-such-env.glb");
-    let output = dormant()
-        .args(["bench", "paper", "--quick", "--quiet", "--backend", "bvh", "--env"])
-        .arg(&missing)
-        .arg("--object")
-        .arg(&missing)
-        .arg("--out")
-        .arg(&out)
-        .output()
-        .unwrap();
-    assert_eq!(output.status.code(), Some(2));
-    let stderr = String::from_utf8_lossy(&output.stderr);
+    let stderr = exits_with(
+        dormant()
+            .args(["bench", "paper", "--quick", "--quiet", "--backend", "bvh", "--env"])
+            .arg(&missing)
+            .arg("--object")
+            .arg(&missing)
+            .arg("--out")
+            .arg(&out),
+        2,
+    );
     assert!(stderr.contains("no-such-env.glb") && stderr.contains("--env"), "{stderr}");
     assert!(!out.join("paper.json").exists());
 }
 
 #[test]
 fn paper_env_without_object_is_a_usage_error() {
-    let output =
-        dormant().args(["bench", "paper", "--out", "/tmp/unused", "--env", "x.glb"]).output().unwrap();
-    assert_eq!(output.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&output.stderr).contains("--object"));
+    let stderr = exits_with(dormant().args(["bench", "paper", "--out", "/tmp/unused", "--env", "x.glb"]), 2);
+    assert!(stderr.contains("--object"));
 }
 
 #[test]
 fn compiled_in_atrium_is_the_scene_file() {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/atrium.toml");
-    let on_disk = SceneFile::load(&path).unwrap();
+    let on_disk = scenes::load("atrium");
     let built_in = SceneFile::atrium();
     assert_eq!(built_in.spec(), on_disk.spec());
     assert_eq!(built_in.source_hash(), on_disk.source_hash());
@@ -160,10 +145,8 @@ fn paper_into_an_output_path_that_is_a_file_fails_before_benchmarking() {
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("not-a-dir");
     std::fs::write(&file, b"x").unwrap();
-    let output =
-        dormant().args(["bench", "paper", "--quick", "--out"]).arg(file.join("paper")).output().unwrap();
-    assert_eq!(output.status.code(), Some(1));
-    let stderr = String::from_utf8_lossy(&output.stderr);
+    let stderr =
+        exits_with(dormant().args(["bench", "paper", "--quick", "--out"]).arg(file.join("paper")), 1);
     assert!(stderr.contains("cannot create output directory"), "{stderr}");
     // Not quiet, so a benchmark that had started would have logged its first phase.
     assert!(!stderr.contains("simulating"), "the benchmark ran before the output was checked: {stderr}");

@@ -1,12 +1,14 @@
 //! The physics benchmark's report on the tiny scene.
 
+mod common;
+
+use common::scenes;
 use dormant::physics::SimulateOptions;
-use dormant::scene::file::SceneFile;
 use dormant_lab::bench::{bench_physics as bench, PhysicsBenchOptions};
 
 #[test]
 fn the_bench_measures_both_phases_and_serializes() {
-    let file = SceneFile::load(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/tiny.toml")).unwrap();
+    let file = scenes::load("tiny");
     let options = PhysicsBenchOptions {
         simulate: SimulateOptions { count: None, frames: Some(420) },
         measure_frames: 10,

@@ -1,18 +1,13 @@
 //! `dormant export`: a trajectory's frames as JSON for another renderer
 //! (scripts/compare-cycles.py): every selected frame, a pose per body id, the mesh sources.
 
-use std::process::Command;
+mod common;
 
-use serde_json::Value;
-
-fn dormant() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_dormant"))
-}
+use common::cli::{dormant, read_json, succeeds};
 
 /// `args` run from the repository root; panics unless they succeed.
 fn run(args: &[&std::ffi::OsStr]) {
-    let output = dormant().args(args).current_dir(env!("CARGO_MANIFEST_DIR")).output().unwrap();
-    assert!(output.status.success(), "{args:?}: {}", String::from_utf8_lossy(&output.stderr));
+    succeeds(dormant().args(args).current_dir(env!("CARGO_MANIFEST_DIR")));
 }
 
 #[test]
@@ -36,7 +31,7 @@ fn export_writes_a_pose_per_body_for_every_selected_frame() {
         "--out".as_ref(),
         json.as_ref(),
     ]);
-    let e: Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let e = read_json(&json);
     assert_eq!(e["format"], "dormant-export-1");
     assert_eq!(e["environment"]["builtin"], "ground");
     assert_eq!(e["prototypes"][0]["builtin"], "box");

@@ -1,11 +1,11 @@
 //! The `dormant` binary end to end: the default render, `info`, and bad output paths.
 
-use std::path::Path;
-use std::process::Command;
+mod common;
 
-fn dormant() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_dormant"))
-}
+use std::path::Path;
+
+use common::cli::{dormant, exits_with, read_json, read_stats, simulate_tiny, succeeds};
+use common::scenes;
 
 fn png_is_not_uniform(path: &Path) -> bool {
     let img = image::open(path).unwrap().to_rgb8();
@@ -17,12 +17,7 @@ fn png_is_not_uniform(path: &Path) -> bool {
 fn default_scene_renders_a_non_uniform_png() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("demo");
-    let status = dormant()
-        .args(["render", "--size", "160x90", "--spp", "2", "--quiet", "--out"])
-        .arg(&out)
-        .status()
-        .unwrap();
-    assert!(status.success());
+    succeeds(dormant().args(["render", "--size", "160x90", "--spp", "2", "--quiet", "--out"]).arg(&out));
     let png = out.join("frame_0000.png");
     assert!(png.is_file());
     assert!(png_is_not_uniform(&png));
@@ -37,8 +32,7 @@ fn default_scene_renders_a_non_uniform_png() {
 #[cfg(feature = "embree")]
 #[test]
 fn info_reports_embree_4_library_and_header() {
-    let output = dormant().arg("info").output().unwrap();
-    assert!(output.status.success());
+    let output = succeeds(dormant().arg("info"));
     let info: serde_json::Value = serde_json::from_slice(&output.stdout).unwrap();
     let lib = info["embree"]["library_version"].as_str().unwrap();
     let header = info["embree"]["header_version"].as_str().unwrap();
@@ -52,13 +46,10 @@ fn unwritable_output_directory_fails_cleanly() {
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("not-a-dir");
     std::fs::write(&file, b"").unwrap();
-    let output = dormant()
-        .args(["render", "--size", "8x8", "--spp", "1", "--out"])
-        .arg(file.join("sub"))
-        .output()
-        .unwrap();
-    assert_eq!(output.status.code(), Some(1));
-    let stderr = String::from_utf8_lossy(&output.stderr);
+    let stderr = exits_with(
+        dormant().args(["render", "--size", "8x8", "--spp", "1", "--out"]).arg(file.join("sub")),
+        1,
+    );
     assert!(stderr.contains("not-a-dir"), "{stderr}");
 }
 
@@ -67,9 +58,7 @@ fn failed_frame_write_leaves_no_partial_file() {
     let dir = tempfile::tempdir().unwrap();
     // The frame's path is taken by a directory, so the final rename fails.
     std::fs::create_dir_all(dir.path().join("frame_0000.png")).unwrap();
-    let output =
-        dormant().args(["render", "--size", "8x8", "--spp", "1", "--out"]).arg(dir.path()).output().unwrap();
-    assert_eq!(output.status.code(), Some(1));
+    exits_with(dormant().args(["render", "--size", "8x8", "--spp", "1", "--out"]).arg(dir.path()), 1);
     let names: Vec<String> = std::fs::read_dir(dir.path())
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
@@ -85,18 +74,15 @@ fn usage_errors_exit_2() {
         &["render", "--backend", "optix"],
         &["frobnicate"],
     ] {
-        let output = dormant().args(args).output().unwrap();
-        assert_eq!(output.status.code(), Some(2), "{args:?}: {}", String::from_utf8_lossy(&output.stderr));
+        exits_with(dormant().args(args), 2);
     }
 }
 
 #[test]
 fn trajectory_frames_render_the_same_split_whole_or_from_the_trajectory_alone() {
     let dir = tempfile::tempdir().unwrap();
-    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/tiny.toml");
-    let traj = dir.path().join("tiny.traj");
-    let status = dormant().args(["simulate", "--quiet", "--out"]).arg(&traj).arg(&scene).status().unwrap();
-    assert!(status.success());
+    let scene = scenes::shipped("tiny");
+    let traj = simulate_tiny(dir.path(), &[]);
     let render = |frames: &str, out: &Path, scene_file: Option<&Path>| {
         let mut cmd = dormant();
         cmd.args(["render", "--quiet", "--size", "48x27", "--spp", "2", "--frames", frames, "--trajectory"])
@@ -108,12 +94,7 @@ fn trajectory_frames_render_the_same_split_whole_or_from_the_trajectory_alone() 
             // The trajectory alone, from another directory: the scene is recorded in it.
             None => cmd.current_dir(dir.path()),
         };
-        let output = cmd.output().unwrap();
-        assert!(
-            output.status.success(),
-            "render --frames {frames}: {}",
-            String::from_utf8_lossy(&output.stderr)
-        );
+        succeeds(&mut cmd);
     };
     let (whole, split, alone) =
         (dir.path().join("whole"), dir.path().join("split"), dir.path().join("alone"));
@@ -132,38 +113,25 @@ fn trajectory_frames_render_the_same_split_whole_or_from_the_trajectory_alone() 
 #[test]
 fn trajectory_of_another_scene_is_an_input_error() {
     let dir = tempfile::tempdir().unwrap();
-    let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
-    let traj = dir.path().join("tiny.traj");
-    let status = dormant()
-        .args(["simulate", "--quiet", "--out"])
-        .arg(&traj)
-        .arg(scenes.join("tiny.toml"))
-        .status()
-        .unwrap();
-    assert!(status.success());
-    let output = dormant()
+    let traj = simulate_tiny(dir.path(), &[]);
+    let mut render = dormant();
+    render
         .args(["render", "--trajectory"])
         .arg(&traj)
         .arg("--out")
         .arg(dir.path())
-        .arg(scenes.join("forest-walk.toml"))
-        .output()
-        .unwrap();
-    assert_eq!(output.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&output.stderr).contains("tiny.traj"));
+        .arg(scenes::shipped("forest-walk"));
+    assert!(exits_with(&mut render, 2).contains("tiny.traj"));
 }
 
 #[test]
 fn json_is_a_global_flag_before_or_after_the_command() {
     let dir = tempfile::tempdir().unwrap();
     let (before, after) = (dir.path().join("before.json"), dir.path().join("after.json"));
-    let status = dormant().arg("--json").arg(&before).arg("info").status().unwrap();
-    assert!(status.success());
-    let status = dormant().arg("info").arg("--json").arg(&after).status().unwrap();
-    assert!(status.success());
-    let read = |p: &Path| serde_json::from_slice::<serde_json::Value>(&std::fs::read(p).unwrap()).unwrap();
-    assert_eq!(read(&before), read(&after));
-    assert!(read(&before)["backends"].is_array(), "{:#}", read(&before));
+    succeeds(dormant().arg("--json").arg(&before).arg("info"));
+    succeeds(dormant().arg("info").arg("--json").arg(&after));
+    assert_eq!(read_json(&before), read_json(&after));
+    assert!(read_json(&before)["backends"].is_array(), "{:#}", read_json(&before));
 }
 
 #[test]
@@ -171,23 +139,19 @@ fn render_of_a_trajectory_alone_reports_its_integration_policy() {
     // Bug: `render --trajectory F` without SCENE wrote "integration": null in its JSON although
     // the policy applies.
     let dir = tempfile::tempdir().unwrap();
-    let traj = dir.path().join("tiny.traj");
-    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/tiny.toml");
-    let status = dormant().args(["simulate", "--quiet", "--out"]).arg(&traj).arg(&scene).status().unwrap();
-    assert!(status.success());
+    let traj = simulate_tiny(dir.path(), &[]);
     let json = dir.path().join("render.json");
-    let status = dormant()
-        .args(["render", "--quiet", "--size", "16x9", "--spp", "1", "--frames", "10..11"])
-        .args(["--frame-step", "1", "--integration", "never", "--trajectory"])
-        .arg(&traj)
-        .arg("--out")
-        .arg(dir.path().join("out"))
-        .arg("--json")
-        .arg(&json)
-        .status()
-        .unwrap();
-    assert!(status.success());
-    let report: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    succeeds(
+        dormant()
+            .args(["render", "--quiet", "--size", "16x9", "--spp", "1", "--frames", "10..11"])
+            .args(["--frame-step", "1", "--integration", "never", "--trajectory"])
+            .arg(&traj)
+            .arg("--out")
+            .arg(dir.path().join("out"))
+            .arg("--json")
+            .arg(&json),
+    );
+    let report = read_json(&json);
     assert_eq!(report["integration"], "never", "{report:#}");
     assert_eq!(report["frames"].as_array().map(Vec::len), Some(1));
 }
@@ -196,9 +160,7 @@ fn render_of_a_trajectory_alone_reports_its_integration_policy() {
 fn frame_flags_without_a_sequence_are_input_errors() {
     let dir = tempfile::tempdir().unwrap();
     for flags in [["--frames", "0..2"], ["--frame-step", "2"]] {
-        let output = dormant().arg("render").args(flags).arg("--out").arg(dir.path()).output().unwrap();
-        assert_eq!(output.status.code(), Some(2), "{flags:?}");
-        let stderr = String::from_utf8_lossy(&output.stderr);
+        let stderr = exits_with(dormant().arg("render").args(flags).arg("--out").arg(dir.path()), 2);
         assert!(stderr.contains(flags[0]) && stderr.contains("SCENE"), "{stderr}");
     }
 }
@@ -206,19 +168,17 @@ fn frame_flags_without_a_sequence_are_input_errors() {
 #[test]
 fn static_frames_reuse_the_previous_image_byte_for_byte() {
     let dir = tempfile::tempdir().unwrap();
-    let scene = dir.path().join("settle.toml");
     // Six crates dropped onto the ground: at rest (bit for bit) from about frame 70 on.
-    std::fs::copy(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/settle.toml"), &scene).unwrap();
+    let scene = scenes::copy_data("settle", dir.path());
     let render = |reuse: &str| {
         let out = dir.path().join(format!("reuse-{reuse}"));
-        let status = dormant()
-            .args(["render", "--quiet", "--size", "48x27", "--spp", "2", "--frames", "130..150"])
-            .args(["--aov", "albedo", "--exr", "--seed", "fixed", "--reuse", reuse, "--out"])
-            .arg(&out)
-            .arg(&scene)
-            .status()
-            .unwrap();
-        assert!(status.success());
+        succeeds(
+            dormant()
+                .args(["render", "--quiet", "--size", "48x27", "--spp", "2", "--frames", "130..150"])
+                .args(["--aov", "albedo", "--exr", "--seed", "fixed", "--reuse", reuse, "--out"])
+                .arg(&out)
+                .arg(&scene),
+        );
         out
     };
     let (on, off) = (render("on"), render("off"));
@@ -229,10 +189,7 @@ fn static_frames_reuse_the_previous_image_byte_for_byte() {
             assert_eq!(a, std::fs::read(off.join(&name)).unwrap(), "{name} differs with reuse");
         }
     }
-    let stats = |dir: &Path| -> serde_json::Value {
-        serde_json::from_slice(&std::fs::read(dir.join("stats.json")).unwrap()).unwrap()
-    };
     // Every frame after the first shows the same scene: reused, nothing traced.
-    assert_eq!(stats(&on)["summary"]["totals"]["reused_frames"], 19);
-    assert_eq!(stats(&off)["summary"]["totals"]["reused_frames"], 0);
+    assert_eq!(read_stats(&on)["summary"]["totals"]["reused_frames"], 19);
+    assert_eq!(read_stats(&off)["summary"]["totals"]["reused_frames"], 0);
 }

@@ -1,13 +1,10 @@
 //! `dormant render SCENE` writes stats.json (checked against docs/stats-format.md's schema),
 //! stats.csv (a header and one row per frame) and report.png.
 
-use std::process::Command;
+mod common;
 
+use common::cli::{dormant, read_stats, simulate_tiny, succeeds};
 use serde_json::Value;
-
-fn dormant() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_dormant"))
-}
 
 /// JSON types as the schema names them.
 fn type_name(v: &Value) -> &'static str {
@@ -253,15 +250,15 @@ fn check_csv(text: &str, frames: std::ops::Range<u32>) {
 fn render_writes_stats_csv_and_report_for_a_simulated_scene() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("tiny");
-    let status = dormant()
-        .args(["render", "scenes/tiny.toml", "--size", "64x36", "--spp", "1", "--frames", "0..60", "--quiet"])
-        .arg("--out")
-        .arg(&out)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .status()
-        .unwrap();
-    assert!(status.success());
-    let stats: Value = serde_json::from_slice(&std::fs::read(out.join("stats.json")).unwrap()).unwrap();
+    succeeds(
+        dormant()
+            .args(["render", "scenes/tiny.toml", "--size", "64x36"])
+            .args(["--spp", "1", "--frames", "0..60", "--quiet"])
+            .arg("--out")
+            .arg(&out)
+            .current_dir(env!("CARGO_MANIFEST_DIR")),
+    );
+    let stats = read_stats(&out);
     check_stats(&stats, 0..60, "simulated");
     assert!(stats["frames"].as_array().unwrap().iter().all(|f| f["physics_ms"].is_number()));
     check_csv(&std::fs::read_to_string(out.join("stats.csv")).unwrap(), 0..60);
@@ -271,45 +268,22 @@ fn render_writes_stats_csv_and_report_for_a_simulated_scene() {
     assert!(image.width() > 0 && image.height() > 0);
 }
 
-/// scenes/tiny.toml simulated into `dir/tiny.traj`.
-fn simulate_tiny(dir: &std::path::Path) -> std::path::PathBuf {
-    let traj = dir.join("tiny.traj");
-    let status = dormant()
-        .args(["simulate", "scenes/tiny.toml", "--quiet", "--out"])
-        .arg(&traj)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .status()
-        .unwrap();
-    assert!(status.success());
-    traj
-}
-
 #[test]
 fn replayed_frames_have_no_physics_time() {
     let dir = tempfile::tempdir().unwrap();
-    let traj = simulate_tiny(dir.path());
+    let traj = simulate_tiny(dir.path(), &[]);
     let out = dir.path().join("slice");
-    let status = dormant()
-        .args([
-            "render",
-            "scenes/tiny.toml",
-            "--size",
-            "32x18",
-            "--spp",
-            "1",
-            "--frames",
-            "100..110",
-            "--quiet",
-        ])
-        .arg("--trajectory")
-        .arg(&traj)
-        .arg("--out")
-        .arg(&out)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .status()
-        .unwrap();
-    assert!(status.success());
-    let stats: Value = serde_json::from_slice(&std::fs::read(out.join("stats.json")).unwrap()).unwrap();
+    succeeds(
+        dormant()
+            .args(["render", "scenes/tiny.toml", "--size", "32x18"])
+            .args(["--spp", "1", "--frames", "100..110", "--quiet"])
+            .arg("--trajectory")
+            .arg(&traj)
+            .arg("--out")
+            .arg(&out)
+            .current_dir(env!("CARGO_MANIFEST_DIR")),
+    );
+    let stats = read_stats(&out);
     check_stats(&stats, 100..110, "trajectory");
     assert!(stats["summary"]["totals"]["physics_ms"].is_null());
     check_csv(&std::fs::read_to_string(out.join("stats.csv")).unwrap(), 100..110);
@@ -335,28 +309,17 @@ fn island_event_columns(dir: &std::path::Path) -> Vec<String> {
 #[test]
 fn slices_count_island_events_as_a_whole_run_does() {
     let dir = tempfile::tempdir().unwrap();
-    let traj = simulate_tiny(dir.path());
+    let traj = simulate_tiny(dir.path(), &[]);
     let render = |frames: &str, out: &std::path::Path| {
-        let status = dormant()
-            .args([
-                "render",
-                "--quiet",
-                "--size",
-                "16x9",
-                "--spp",
-                "1",
-                "--frame-step",
-                "3",
-                "--frames",
-                frames,
-            ])
-            .arg("--trajectory")
-            .arg(&traj)
-            .arg("--out")
-            .arg(out)
-            .status()
-            .unwrap();
-        assert!(status.success(), "render --frames {frames}");
+        succeeds(
+            dormant()
+                .args(["render", "--quiet", "--size", "16x9", "--spp", "1"])
+                .args(["--frame-step", "3", "--frames", frames])
+                .arg("--trajectory")
+                .arg(&traj)
+                .arg("--out")
+                .arg(out),
+        );
         island_event_columns(out)
     };
     let whole = render("0..480", &dir.path().join("whole"));
@@ -377,16 +340,15 @@ fn slices_count_island_events_as_a_whole_run_does() {
 fn cache_flags_set_the_budget_the_cache_keeps() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("cache");
-    let status = dormant()
-        .args(["render", "scenes/tiny.toml", "--size", "32x18", "--spp", "1", "--backend", "bvh"])
-        .args(["--integration", "always", "--integrate-as", "baked", "--cache-entries", "1"])
-        .args(["--cache-mib", "1", "--quiet", "--out"])
-        .arg(&out)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .status()
-        .unwrap();
-    assert!(status.success());
-    let stats: Value = serde_json::from_slice(&std::fs::read(out.join("stats.json")).unwrap()).unwrap();
+    succeeds(
+        dormant()
+            .args(["render", "scenes/tiny.toml", "--size", "32x18", "--spp", "1", "--backend", "bvh"])
+            .args(["--integration", "always", "--integrate-as", "baked", "--cache-entries", "1"])
+            .args(["--cache-mib", "1", "--quiet", "--out"])
+            .arg(&out)
+            .current_dir(env!("CARGO_MANIFEST_DIR")),
+    );
+    let stats = read_stats(&out);
     let cache = &stats["summary"]["cache"];
     assert_eq!((cache["budget_entries"].as_u64(), cache["budget_bytes"].as_u64()), (Some(1), Some(1 << 20)));
     assert!(cache["recorded"].as_u64().unwrap() >= 2, "the run must record several scenes: {cache}");
@@ -399,12 +361,7 @@ fn cache_flags_set_the_budget_the_cache_keeps() {
 fn built_in_single_frame_writes_no_stats() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("one");
-    let status = dormant()
-        .args(["render", "--size", "16x9", "--spp", "1", "--quiet", "--out"])
-        .arg(&out)
-        .status()
-        .unwrap();
-    assert!(status.success());
+    succeeds(dormant().args(["render", "--size", "16x9", "--spp", "1", "--quiet", "--out"]).arg(&out));
     assert!(out.join("frame_0000.png").is_file());
     assert!(!out.join("stats.json").exists());
 }

@@ -4,27 +4,27 @@
 
 mod common;
 
-use std::path::Path;
-use std::process::Command;
-
-fn dormant() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_dormant"))
-}
-
-fn read_json(path: &Path) -> serde_json::Value {
-    serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap()
-}
+use common::cli::{dormant, exits_with, read_json, succeeds};
+use common::scenes;
 
 #[test]
 fn verify_default_scene_has_no_mismatches() {
     let dir = tempfile::tempdir().unwrap();
     let json = dir.path().join("verify.json");
-    let status = dormant()
-        .args(["verify", "--size", "160x90", "--surface-rays", "20000", "--shadow-rays", "5000", "--json"])
-        .arg(&json)
-        .status()
-        .unwrap();
-    assert!(status.success());
+    succeeds(
+        dormant()
+            .args([
+                "verify",
+                "--size",
+                "160x90",
+                "--surface-rays",
+                "20000",
+                "--shadow-rays",
+                "5000",
+                "--json",
+            ])
+            .arg(&json),
+    );
     let report = read_json(&json);
     for key in [
         "rays",
@@ -55,7 +55,7 @@ fn verify_default_scene_has_no_mismatches() {
 fn verify_scene_file(name: &str, args: &[&str]) -> serde_json::Value {
     let dir = tempfile::tempdir().unwrap();
     let json = dir.path().join("verify.json");
-    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("scenes/{name}.toml"));
+    let scene = scenes::shipped(name);
     let status = dormant().arg("verify").args(args).arg("--json").arg(&json).arg(&scene).status().unwrap();
     let report = read_json(&json);
     assert!(status.success(), "{report:#}");
@@ -108,12 +108,7 @@ fn verify_assets_far_from_the_origin_has_no_mismatches() {
 fn bench_accel_reports_its_ratios() {
     let dir = tempfile::tempdir().unwrap();
     let json = dir.path().join("accel.json");
-    let status = dormant()
-        .args(["bench", "accel", "--size", "64x36", "--runs", "1", "--json"])
-        .arg(&json)
-        .status()
-        .unwrap();
-    assert!(status.success());
+    succeeds(dormant().args(["bench", "accel", "--size", "64x36", "--runs", "1", "--json"]).arg(&json));
     let report = read_json(&json);
     // The SIMD path that ran (DORMANT_SIMD, else the fastest this CPU runs).
     assert!(["portable", "avx2", "avx512"].contains(&report["simd_path"].as_str().unwrap()), "{report:#}");
@@ -149,15 +144,13 @@ fn bench_accel_reports_its_ratios() {
 fn bench_integration_reports_the_five_ratios_and_every_configuration() {
     let dir = tempfile::tempdir().unwrap();
     let json = dir.path().join("integration.json");
-    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/tiny.toml");
-    let status = dormant()
-        .args(["--quiet", "bench", "integration"])
-        .arg(&scene)
-        .args(["--backend", "bvh", "--size", "16x9", "--frames", "0..120", "--frame-step", "6", "--json"])
-        .arg(&json)
-        .status()
-        .unwrap();
-    assert!(status.success());
+    succeeds(
+        dormant()
+            .args(["--quiet", "bench", "integration"])
+            .arg(scenes::shipped("tiny"))
+            .args(["--backend", "bvh", "--size", "16x9", "--frames", "0..120", "--frame-step", "6", "--json"])
+            .arg(&json),
+    );
     let report = read_json(&json);
     for key in ["run_speedup", "auto_over_best", "rebuild_over_insert", "partial_hit_90_99_fraction"] {
         assert!(report["ratios"][key].as_f64().is_some_and(f64::is_finite), "{key}: {:#}", report["ratios"]);
@@ -180,12 +173,11 @@ fn bench_integration_reports_the_five_ratios_and_every_configuration() {
 fn bench_render_reports_both_backends_and_ratios_per_ray_type() {
     let dir = tempfile::tempdir().unwrap();
     let json = dir.path().join("render.json");
-    let status = dormant()
-        .args(["bench", "render", "--size", "48x27", "--spp", "1", "--runs", "1", "--json"])
-        .arg(&json)
-        .status()
-        .unwrap();
-    assert!(status.success());
+    succeeds(
+        dormant()
+            .args(["bench", "render", "--size", "48x27", "--spp", "1", "--runs", "1", "--json"])
+            .arg(&json),
+    );
     let report = read_json(&json);
     let backends = report["backends"].as_array().unwrap();
     let names: Vec<&str> = backends.iter().map(|b| b["backend"].as_str().unwrap()).collect();
@@ -225,7 +217,7 @@ fn bench_render_embree_robust_is_recorded_with_the_same_camera_rays() {
         if robust {
             cmd.arg("--embree-robust");
         }
-        assert!(cmd.status().unwrap().success());
+        succeeds(&mut cmd);
         read_json(&json)
     };
     let (plain, robust) = (run(false), run(true));
@@ -239,37 +231,36 @@ fn bench_render_embree_robust_is_recorded_with_the_same_camera_rays() {
 
 #[test]
 fn missing_asset_is_an_input_error() {
-    let output = dormant()
-        .args(["verify", "--env", "/nonexistent/env.glb", "--object", "/nonexistent/duck.glb"])
-        .output()
-        .unwrap();
-    assert_eq!(output.status.code(), Some(2));
-    let stderr = String::from_utf8_lossy(&output.stderr);
+    let stderr = exits_with(
+        dormant().args(["verify", "--env", "/nonexistent/env.glb", "--object", "/nonexistent/duck.glb"]),
+        2,
+    );
     assert!(stderr.contains("/nonexistent/env.glb"), "{stderr}");
 }
 
 #[test]
 fn bench_runs_of_zero_are_a_usage_error_naming_the_flag() {
     for bench in ["accel", "render"] {
-        let output = dormant().args(["bench", bench, "--runs", "0"]).output().unwrap();
-        assert_eq!(output.status.code(), Some(2), "{bench}");
-        let stderr = String::from_utf8_lossy(&output.stderr);
+        let stderr = exits_with(dormant().args(["bench", bench, "--runs", "0"]), 2);
         assert!(stderr.contains("--runs"), "{bench}: {stderr}");
     }
 }
 
 #[test]
 fn bench_integration_takes_the_old_range_spelling_and_names_the_flag_in_errors() {
-    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/tiny.toml");
+    let scene = scenes::shipped("tiny");
     for flag in ["--frames", "--range"] {
-        let output = dormant()
-            .args(["--quiet", "bench", "integration"])
-            .arg(&scene)
-            .args(["--backend", "bvh", "--frame-count", "30", flag, "0..40"])
-            .output()
-            .unwrap();
-        assert_eq!(output.status.code(), Some(2), "{flag}");
-        let stderr = String::from_utf8_lossy(&output.stderr);
+        let stderr = exits_with(
+            dormant().args(["--quiet", "bench", "integration"]).arg(&scene).args([
+                "--backend",
+                "bvh",
+                "--frame-count",
+                "30",
+                flag,
+                "0..40",
+            ]),
+            2,
+        );
         assert!(stderr.contains("--frames 0..40: the trajectory has 30 frames"), "{flag}: {stderr}");
     }
 }

@@ -1,11 +1,11 @@
 //! `dormant render SCENE --video`: a clear input error (exit 2) without ffmpeg, and an MP4
 //! next to the frames with it (that half skips when ffmpeg is not installed).
 
+mod common;
+
 use std::process::Command;
 
-fn dormant() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_dormant"))
-}
+use common::cli::{dormant, exits_with, succeeds};
 
 fn ffmpeg_installed() -> bool {
     Command::new("ffmpeg").arg("-version").output().is_ok_and(|o| o.status.success())
@@ -15,16 +15,25 @@ fn ffmpeg_installed() -> bool {
 fn video_without_ffmpeg_is_an_input_error_that_says_how_to_install_it() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("v");
-    let output = dormant()
-        .args(["render", "scenes/tiny.toml", "--size", "16x9", "--spp", "1", "--frames", "0..3", "--video"])
-        .arg("--out")
-        .arg(&out)
-        .env("PATH", dir.path())
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .unwrap();
-    assert_eq!(output.status.code(), Some(2));
-    let stderr = String::from_utf8_lossy(&output.stderr);
+    let stderr = exits_with(
+        dormant()
+            .args([
+                "render",
+                "scenes/tiny.toml",
+                "--size",
+                "16x9",
+                "--spp",
+                "1",
+                "--frames",
+                "0..3",
+                "--video",
+            ])
+            .arg("--out")
+            .arg(&out)
+            .env("PATH", dir.path())
+            .current_dir(env!("CARGO_MANIFEST_DIR")),
+        2,
+    );
     assert!(stderr.contains("ffmpeg") && stderr.contains("apt-get install ffmpeg"), "{stderr}");
     assert!(!out.exists(), "nothing is rendered when the video cannot be made");
 }
@@ -37,14 +46,13 @@ fn video_is_written_next_to_the_frames() {
     }
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("v");
-    let status = dormant()
-        .args(["render", "scenes/tiny.toml", "--size", "33x19", "--spp", "1", "--frames", "0..12"])
-        .args(["--video", "--quiet", "--out"])
-        .arg(&out)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .status()
-        .unwrap();
-    assert!(status.success());
+    succeeds(
+        dormant()
+            .args(["render", "scenes/tiny.toml", "--size", "33x19", "--spp", "1", "--frames", "0..12"])
+            .args(["--video", "--quiet", "--out"])
+            .arg(&out)
+            .current_dir(env!("CARGO_MANIFEST_DIR")),
+    );
     let video = std::fs::metadata(out.join("video.mp4")).unwrap();
     assert!(video.len() > 0);
     let leftovers: Vec<_> = std::fs::read_dir(&out)

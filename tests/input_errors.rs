@@ -3,26 +3,21 @@
 //! output file. One test per row of the table; `the_error_table_names_every_test` keeps the
 //! table and this file in step.
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use std::path::Path;
 use std::process::Command;
 use std::sync::OnceLock;
 
+use common::cli::{dormant, exits_with, simulate_tiny, succeeds};
+use common::repo;
+use common::scenes::{self, BOXES};
 use tempfile::TempDir;
-
-fn dormant() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_dormant"))
-}
-
-fn repo(path: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join(path)
-}
 
 /// Runs `cmd`, expects exit `code` and a message holding every one of `needles`, no panic,
 /// and (when given) an output directory with no file in it; returns stderr.
 fn expect_exit(cmd: &mut Command, code: i32, needles: &[&str], out: Option<&Path>) -> String {
-    let output = cmd.output().unwrap();
-    let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
-    assert_eq!(output.status.code(), Some(code), "{cmd:?}: {stderr}");
+    let stderr = exits_with(cmd, code);
     assert!(!stderr.contains("panicked"), "{cmd:?} panicked: {stderr}");
     for needle in needles {
         assert!(stderr.contains(needle), "{cmd:?}: expected {needle:?} in: {stderr}");
@@ -47,31 +42,13 @@ fn render_scene(dir: &Path, scene: &Path) -> Command {
 // ---------------------------------------------------------------------------------------------
 // Scene files
 
-const SCENE: &str = r#"[scene]
-name = "bad"
-frames = 10
-
-[environment]
-generator = "ground"
-
-[[prototypes]]
-name = "box"
-shape = "box"
-half_extents = [0.25, 0.25, 0.25]
-
-[[spawners]]
-prototypes = ["box"]
-count = 4
-region = { min = [-1.0, 1.0, -1.0], max = [1.0, 1.0, 1.0] }
-"#;
-
-/// `SCENE` with `from` replaced by `to`, written as `dir/bad.toml`, rendered: exit 2 naming
+/// `BOXES` with `from` replaced by `to`, written as `dir/bad.toml`, rendered: exit 2 naming
 /// the file, its line and every one of `needles`.
 fn expect_scene_error(from: &str, to: &str, line: usize, needles: &[&str]) {
-    assert!(SCENE.contains(from), "{from:?}");
+    assert!(BOXES.contains(from), "{from:?}");
     let dir = TempDir::new().unwrap();
     let scene = dir.path().join("bad.toml");
-    std::fs::write(&scene, SCENE.replace(from, to)).unwrap();
+    std::fs::write(&scene, BOXES.replace(from, to)).unwrap();
     let at = format!("bad.toml:{line}");
     let mut all = vec![at.as_str()];
     all.extend_from_slice(needles);
@@ -91,12 +68,7 @@ fn scene_value_of_the_wrong_type_names_the_field() {
 #[test]
 fn scene_value_out_of_range_names_the_field() {
     expect_scene_error("count = 4", "count = 0", 15, &["spawners[0].count", "at least 1"]);
-    expect_scene_error(
-        "[0.25, 0.25, 0.25]",
-        "[0.25, nan, 0.25]",
-        11,
-        &["prototypes[0].half_extents", "finite"],
-    );
+    expect_scene_error("[0.5, 0.5, 0.5]", "[0.5, nan, 0.5]", 11, &["prototypes[0].half_extents", "finite"]);
 }
 
 #[test]
@@ -114,7 +86,7 @@ fn scene_adaptive_sampling_out_of_range_names_the_field() {
     let dir = TempDir::new().unwrap();
     let scene = dir.path().join("bad.toml");
     let render = "[render]\nnoise_threshold = 0.05\nmin_spp = 4\n\n[environment]";
-    std::fs::write(&scene, SCENE.replace("[environment]", render)).unwrap();
+    std::fs::write(&scene, BOXES.replace("[environment]", render)).unwrap();
     let needles = ["render.min_spp 4", "--spp (1)"];
     expect_exit(&mut render_scene(dir.path(), &scene), 2, &needles, Some(&dir.path().join("out")));
 }
@@ -146,7 +118,7 @@ fn scene_huge_count_is_refused_before_allocating() {
 
 #[test]
 fn scene_bodies_beyond_the_machine_are_refused() {
-    let two = SCENE.replace("count = 4", "count = 1500000") + &SCENE[SCENE.find("[[spawners]]").unwrap()..];
+    let two = BOXES.replace("count = 4", "count = 1500000") + &BOXES[BOXES.find("[[spawners]]").unwrap()..];
     let two = two.replace("count = 4", "count = 1500000");
     let dir = TempDir::new().unwrap();
     let scene = dir.path().join("bad.toml");
@@ -156,14 +128,14 @@ fn scene_bodies_beyond_the_machine_are_refused() {
     let grid =
         "[[structures]]\nname = \"g\"\nkind = \"grid\"\nprototype = \"box\"\norigin = [0.0, 0.0, 9.0]\n\
                 counts = [100000, 100000, 100000]\n";
-    std::fs::write(&scene, format!("{SCENE}\n{grid}")).unwrap();
+    std::fs::write(&scene, format!("{BOXES}\n{grid}")).unwrap();
     let needles = ["bad.toml:23", "structures[0].counts", "2000000"];
     expect_exit(&mut render_scene(dir.path(), &scene), 2, &needles, Some(&dir.path().join("out")));
 }
 
 #[test]
 fn scene_image_size_beyond_the_machine_is_refused() {
-    let text = format!("{SCENE}\n[render]\nwidth = 16384\nheight = 16384\n");
+    let text = format!("{BOXES}\n[render]\nwidth = 16384\nheight = 16384\n");
     let dir = TempDir::new().unwrap();
     let scene = dir.path().join("bad.toml");
     std::fs::write(&scene, text).unwrap();
@@ -175,7 +147,7 @@ fn scene_image_size_beyond_the_machine_is_refused() {
 
 #[test]
 fn scene_shutter_outside_zero_to_one_names_the_field() {
-    let last = "region = { min = [-1.0, 1.0, -1.0], max = [1.0, 1.0, 1.0] }";
+    let last = "region = { min = [0.0, 1.0, 0.0], max = [2.0, 1.0, 2.0] }";
     for shutter in ["-0.5", "1.5"] {
         let with = format!("{last}\n\n[render]\nshutter = {shutter}");
         expect_scene_error(last, &with, 19, &["render.shutter", shutter, "from 0 (no motion blur) to 1"]);
@@ -232,7 +204,7 @@ fn expect_gltf_outcome(json: &str, bin: Option<Vec<u8>>, code: i32, needles: &[&
         std::fs::write(dir.path().join("env.bin"), bin).unwrap();
     }
     let scene = dir.path().join("scene.toml");
-    std::fs::write(&scene, SCENE.replace("generator = \"ground\"", "gltf = \"env.gltf\"")).unwrap();
+    std::fs::write(&scene, BOXES.replace("generator = \"ground\"", "gltf = \"env.gltf\"")).unwrap();
     let out = (code != 0).then(|| dir.path().join("out"));
     expect_exit(&mut render_scene(dir.path(), &scene), code, needles, out.as_deref())
 }
@@ -295,15 +267,7 @@ fn tiny_trajectory() -> &'static [u8] {
     static BYTES: OnceLock<Vec<u8>> = OnceLock::new();
     BYTES.get_or_init(|| {
         let dir = TempDir::new().unwrap();
-        let path = dir.path().join("tiny.traj");
-        let status = dormant()
-            .args(["--quiet", "simulate", "--frame-count", "20", "--out"])
-            .arg(&path)
-            .arg(repo("scenes/tiny.toml"))
-            .status()
-            .unwrap();
-        assert!(status.success());
-        std::fs::read(path).unwrap()
+        std::fs::read(simulate_tiny(dir.path(), &["--frame-count", "20"])).unwrap()
     })
 }
 
@@ -344,7 +308,7 @@ fn trajectory_of_another_version_is_refused() {
 
 #[test]
 fn trajectory_of_another_scene_is_refused() {
-    let scene = repo("scenes/monastery-rain.toml");
+    let scene = scenes::shipped("monastery-rain");
     expect_trajectory_error(
         tiny_trajectory(),
         Some(&scene),
@@ -374,7 +338,7 @@ fn expect_usage_error(args: &[&str], needles: &[&str]) {
 
 #[test]
 fn cli_frames_malformed_empty_or_beyond_the_scene() {
-    let tiny = repo("scenes/tiny.toml");
+    let tiny = scenes::shipped("tiny");
     let tiny = tiny.to_str().unwrap();
     expect_usage_error(&["render", tiny, "--frames", "ten"], &["--frames", "ten"]);
     expect_usage_error(&["render", tiny, "--frames", "9..3"], &["--frames", "9..3"]);
@@ -420,7 +384,7 @@ fn cli_aov_unknown() {
 
 #[test]
 fn cli_shutter_outside_zero_to_one() {
-    let tiny = repo("scenes/tiny.toml");
+    let tiny = scenes::shipped("tiny");
     let tiny = tiny.to_str().unwrap();
     let range = "from 0 (no motion blur) to 1";
     expect_usage_error(&["render", tiny, "--shutter", "-0.5"], &["--shutter -0.5", range]);
@@ -452,7 +416,7 @@ fn cli_threads_out_of_range() {
 
 #[test]
 fn cli_counts_beyond_the_machine() {
-    let tiny = repo("scenes/tiny.toml");
+    let tiny = scenes::shipped("tiny");
     let tiny = tiny.to_str().unwrap();
     expect_usage_error(&["simulate", tiny, "--count", "0"], &["--count", "from 1"]);
     expect_usage_error(&["simulate", tiny, "--count", "3000000"], &["--count", "2000000"]);
@@ -490,17 +454,17 @@ fn cli_output_path_not_writable_is_a_runtime_error() {
     cmd.args(["--quiet", "render", "--size", "8x8", "--spp", "1", "--out"]).arg(file.join("sub"));
     expect_exit(&mut cmd, 1, &["not-a-dir"], None);
     let mut cmd = dormant();
-    cmd.args(["--quiet", "simulate", "--out"]).arg(file.join("t.traj")).arg(repo("scenes/tiny.toml"));
+    cmd.args(["--quiet", "simulate", "--out"]).arg(file.join("t.traj")).arg(scenes::shipped("tiny"));
     expect_exit(&mut cmd, 1, &["not-a-dir"], None);
     // A directory that does not exist yet is created, as for `render --out`.
     let traj = dir.path().join("new/dir/t.traj");
-    let status = dormant()
-        .args(["--quiet", "simulate", "--frame-count", "2", "--out"])
-        .arg(&traj)
-        .arg(repo("scenes/tiny.toml"))
-        .status()
-        .unwrap();
-    assert!(status.success() && traj.is_file());
+    succeeds(
+        dormant()
+            .args(["--quiet", "simulate", "--frame-count", "2", "--out"])
+            .arg(&traj)
+            .arg(scenes::shipped("tiny")),
+    );
+    assert!(traj.is_file());
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -3,19 +3,16 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
+use common::scenes;
 use dormant::physics::{simulate, ColliderChoice, SimulateOptions, Simulation};
 use dormant::scene::file::SceneFile;
-
-fn monastery_scene() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/monastery-rain.toml")
-}
 
 #[test]
 fn the_monastery_benchmark_scene_simulates_a_few_objects() {
     let Some(_) = common::shared_assets() else { return };
-    let file = SceneFile::load(monastery_scene()).unwrap();
+    let file = scenes::load("monastery-rain");
     let options = SimulateOptions { count: Some(12), frames: Some(90) };
     let sim = Simulation::new(&options.effective_scene(&file).unwrap()).unwrap();
     let choices = sim.collider_choices();
@@ -29,8 +26,9 @@ fn the_monastery_benchmark_scene_simulates_a_few_objects() {
 #[test]
 fn an_asset_directory_from_the_command_line_overrides_the_scene() {
     let Some(dir) = common::shared_assets() else { return };
-    let file = SceneFile::load_with_assets(monastery_scene(), Some(&dir)).unwrap();
+    let file = SceneFile::load_with_assets(scenes::shipped("monastery-rain"), Some(&dir)).unwrap();
     assert_eq!(file.resolve("duck.glb"), dir.join("duck.glb"));
-    let err = SceneFile::load_with_assets(monastery_scene(), Some(Path::new("/nonexistent"))).unwrap_err();
+    let err = SceneFile::load_with_assets(scenes::shipped("monastery-rain"), Some(Path::new("/nonexistent")))
+        .unwrap_err();
     assert!(err.to_string().contains("environment.gltf"), "{err}");
 }

@@ -1,11 +1,13 @@
 //! The atrium scene, scaled down with a count override so it runs in seconds.
 
+mod common;
+
+use common::scenes;
 use dormant::physics::{simulate, BodyKind, IslandEvent, SimulateOptions};
-use dormant::scene::file::SceneFile;
 
 #[test]
 fn a_scaled_down_atrium_settles_into_sleeping_islands() {
-    let file = SceneFile::load(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/atrium.toml")).unwrap();
+    let file = scenes::load("atrium");
     let options = SimulateOptions { count: Some(160), frames: Some(700) };
     let t = simulate(&file, &options).unwrap();
     assert_eq!(t.bodies.iter().filter(|b| b.kind == BodyKind::Dynamic).count(), 160);

@@ -1,5 +1,8 @@
 //! Island tracking against real Rapier simulations: stacks, piles, pokes and merges.
 
+mod common;
+
+use common::scenes;
 use dormant::physics::{BodyId, BodyKind, BodyState, IslandEvent, IslandId, SimulateOptions, Simulation};
 use dormant::scene::file::SceneFile;
 
@@ -100,7 +103,7 @@ fn piles_that_touch_merge_into_one_island() {
 
 #[test]
 fn event_stream_invariants_hold_on_the_tiny_scene() {
-    let file = SceneFile::load(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/tiny.toml")).unwrap();
+    let file = scenes::load("tiny");
     let trajectory = dormant::physics::simulate(&file, &SimulateOptions::default()).unwrap();
     let mut live: std::collections::BTreeMap<IslandId, Vec<BodyId>> = Default::default();
     let mut owner = vec![None; trajectory.bodies.len()];

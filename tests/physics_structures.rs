@@ -2,8 +2,11 @@
 //! they stay asleep, and whatever hits one (a projectile, a kinematic body, a domino front)
 //! wakes the whole copy, whose debris then settles into new islands.
 
+mod common;
+
 use std::collections::BTreeSet;
 
+use common::scenes;
 use dormant::physics::{
     BodyId, BodyKind, BodyPose, BodyState, IslandEvent, IslandId, SimulateOptions, Simulation,
 };
@@ -260,7 +263,7 @@ fn a_ground_split_into_collider_cells_holds_structures_like_one_mesh() {
 
 #[test]
 fn the_demolition_scene_scaled_down_builds_asleep_and_falls_in_turn() {
-    let file = SceneFile::load(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/demolition.toml")).unwrap();
+    let file = scenes::load("demolition");
     let options = SimulateOptions { count: Some(1500), frames: Some(150) };
     let file = options.effective_scene(&file).unwrap();
     let copies: u32 = file.spec().structures.iter().map(|s| s.copies()).sum();

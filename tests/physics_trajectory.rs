@@ -3,18 +3,20 @@
 //! replaying to the same frames, and rejection of files from another scene, another format
 //! version, or damaged, with errors that name the offset.
 
+mod common;
 mod trajectory_v2;
 
 use std::path::Path;
 use std::sync::OnceLock;
 
+use common::encoding::fnv1a64;
+use common::scenes;
 use dormant::physics::{simulate, BodyState, SimulateOptions, Trajectory, TrajectoryError};
 use dormant::scene::file::SceneFile;
 use proptest::prelude::*;
-use trajectory_v2::fnv1a64;
 
 fn tiny() -> SceneFile {
-    SceneFile::load(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/tiny.toml")).unwrap()
+    scenes::load("tiny")
 }
 
 fn short() -> SimulateOptions {
@@ -160,9 +162,7 @@ fn replayed(t: &Trajectory) -> Vec<trajectory_v2::Frame> {
 /// (`dormant simulate scenes/tiny.toml --count 6 --frames 300`).
 fn old_v2_file() -> &'static [u8] {
     static BYTES: OnceLock<Vec<u8>> = OnceLock::new();
-    BYTES.get_or_init(|| {
-        std::fs::read(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/tiny-v2.traj")).unwrap()
-    })
+    BYTES.get_or_init(|| std::fs::read(common::repo("tests/data/tiny-v2.traj")).unwrap())
 }
 
 #[test]

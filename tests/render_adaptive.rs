@@ -4,41 +4,21 @@
 //! spending fewer samples, it is identical at one and two threads, the statistics report the
 //! effective spp, and a scene file's `[render] noise_threshold` turns it on.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
 
-fn dormant() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_dormant"))
-}
+use std::path::{Path, PathBuf};
+
+use common::cli::{dormant, read_stats, succeeds};
+use common::images::{pixels, relative_mse};
+use common::scenes;
 
 /// Renders the default scene at 160x90 into `out` with `extra` flags, writing EXRs; returns
 /// the `--json` report.
 fn render(out: &Path, extra: &[&str]) -> serde_json::Value {
-    let output = dormant()
-        .args(["--json", "-", "render", "--size", "160x90", "--exr", "--out"])
-        .arg(out)
-        .args(extra)
-        .output()
-        .unwrap();
-    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let output = succeeds(
+        dormant().args(["--json", "-", "render", "--size", "160x90", "--exr", "--out"]).arg(out).args(extra),
+    );
     serde_json::from_slice(&output.stdout).unwrap()
-}
-
-/// An EXR's pixels as RGB triples.
-fn pixels(path: &Path) -> Vec<[f32; 3]> {
-    image::open(path).unwrap().to_rgb32f().pixels().map(|p| p.0).collect()
-}
-
-/// Relative MSE against `reference`: the mean over pixels and channels of
-/// (x - ref)^2 / (ref^2 + 0.01), as in docs/performance.md.
-fn relative_mse(image: &[[f32; 3]], reference: &[[f32; 3]]) -> f64 {
-    let sum: f64 = image
-        .iter()
-        .zip(reference)
-        .flat_map(|(p, q)| (0..3).map(move |c| (f64::from(p[c]), f64::from(q[c]))))
-        .map(|(x, r)| (x - r).powi(2) / (r * r + 0.01))
-        .sum();
-    sum / (3 * image.len()) as f64
 }
 
 fn mean(values: impl Iterator<Item = f64>) -> f64 {
@@ -114,13 +94,12 @@ fn adaptive_sampling_is_identical_at_one_and_two_threads() {
         .iter()
         .map(|threads| {
             let out = dir.path().join(threads);
-            let status = dormant()
-                .args(["--quiet", "--threads", threads, "render", "--size", "96x54", "--spp", "32"])
-                .args(["--noise-threshold", "0.1", "--aov", "spp", "--exr", "--out"])
-                .arg(&out)
-                .status()
-                .unwrap();
-            assert!(status.success());
+            succeeds(
+                dormant()
+                    .args(["--quiet", "--threads", threads, "render", "--size", "96x54", "--spp", "32"])
+                    .args(["--noise-threshold", "0.1", "--aov", "spp", "--exr", "--out"])
+                    .arg(&out),
+            );
             out
         })
         .collect();
@@ -137,22 +116,19 @@ fn adaptive_sampling_is_identical_at_one_and_two_threads() {
 #[test]
 fn scene_file_noise_threshold_turns_adaptive_sampling_on_and_stats_record_it() {
     let dir = tempfile::tempdir().unwrap();
-    let source =
-        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/tiny.toml")).unwrap();
+    let source = std::fs::read_to_string(scenes::shipped("tiny")).unwrap();
     assert!(source.contains("[render]"), "tiny.toml has a [render] table");
     let scene = dir.path().join("tiny.toml");
     std::fs::write(&scene, source.replace("[render]", "[render]\nnoise_threshold = 0.2\nmin_spp = 4"))
         .unwrap();
     let out = dir.path().join("out");
-    let output = dormant()
-        .args(["--quiet", "render", "--frames", "0..1", "--size", "32x18", "--spp", "16", "--out"])
-        .arg(&out)
-        .arg(&scene)
-        .output()
-        .unwrap();
-    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
-    let stats: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.join("stats.json")).unwrap()).unwrap();
+    succeeds(
+        dormant()
+            .args(["--quiet", "render", "--frames", "0..1", "--size", "32x18", "--spp", "16", "--out"])
+            .arg(&out)
+            .arg(&scene),
+    );
+    let stats = read_stats(&out);
     assert_eq!(stats["run"]["noise_threshold"], 0.2);
     assert_eq!(stats["run"]["min_spp"], 4);
     let frame = &stats["frames"][0];

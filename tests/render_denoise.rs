@@ -3,36 +3,20 @@
 //! and a missing Open Image Denoise (a build without the `oidn` feature, or a library without
 //! its CPU device) exits 2 with a message naming what is missing.
 
+mod common;
+
 use std::path::Path;
 use std::process::Command;
 
-fn dormant() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_dormant"))
-}
-
-/// Relative MSE of `image` against `reference` (EXR files): the mean over pixels and
-/// channels of (x - ref)^2 / (ref^2 + 0.01).
+use common::cli::{dormant, exits_with};
 #[cfg(feature = "oidn")]
-fn relative_mse(image: &Path, reference: &Path) -> f64 {
-    let (x, r) = (image::open(image).unwrap().to_rgb32f(), image::open(reference).unwrap().to_rgb32f());
-    assert_eq!(x.dimensions(), r.dimensions());
-    let sum: f64 = x
-        .pixels()
-        .zip(r.pixels())
-        .flat_map(|(p, q)| (0..3).map(move |c| (f64::from(p.0[c]), f64::from(q.0[c]))))
-        .map(|(v, rf)| (v - rf).powi(2) / (rf * rf + 0.01))
-        .sum();
-    sum / (x.len() as f64)
-}
+use common::{cli::succeeds, images::relative_mse_of_files};
 
-/// Renders the default scene at 160x90 into `out` with `extra` flags, writing EXRs.
-fn render(out: &Path, spp: &str, extra: &[&str]) -> std::process::Output {
-    dormant()
-        .args(["render", "--size", "160x90", "--spp", spp, "--exr", "--quiet", "--out"])
-        .arg(out)
-        .args(extra)
-        .output()
-        .unwrap()
+/// `render` of the default scene at 160x90 into `out` with `extra` flags, writing EXRs.
+fn render(out: &Path, spp: &str, extra: &[&str]) -> Command {
+    let mut cmd = dormant();
+    cmd.args(["render", "--size", "160x90", "--spp", spp, "--exr", "--quiet", "--out"]).arg(out).args(extra);
+    cmd
 }
 
 #[cfg(feature = "oidn")]
@@ -40,13 +24,11 @@ fn render(out: &Path, spp: &str, extra: &[&str]) -> std::process::Output {
 fn denoised_image_is_closer_to_the_reference_than_the_noisy_one() {
     let dir = tempfile::tempdir().unwrap();
     let (noisy, reference) = (dir.path().join("noisy"), dir.path().join("reference"));
-    let output = render(&noisy, "16", &["--denoise", "--keep-noisy"]);
-    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
-    let output = render(&reference, "256", &[]);
-    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    succeeds(&mut render(&noisy, "16", &["--denoise", "--keep-noisy"]));
+    succeeds(&mut render(&reference, "256", &[]));
     let reference = reference.join("frame_0000.exr");
-    let denoised = relative_mse(&noisy.join("frame_0000.exr"), &reference);
-    let before = relative_mse(&noisy.join("frame_0000.noisy.exr"), &reference);
+    let denoised = relative_mse_of_files(&noisy.join("frame_0000.exr"), &reference);
+    let before = relative_mse_of_files(&noisy.join("frame_0000.noisy.exr"), &reference);
     assert!(noisy.join("frame_0000.noisy.png").is_file() && noisy.join("frame_0000.png").is_file());
     // Measured 0.0020 against 0.0028: at this size most of the error left is the anti-aliasing
     // noise of 16 samples at edges, which the guides share (docs/performance.md).
@@ -58,18 +40,15 @@ fn denoised_image_is_closer_to_the_reference_than_the_noisy_one() {
 #[test]
 fn keep_noisy_needs_denoise() {
     let dir = tempfile::tempdir().unwrap();
-    let output = render(dir.path(), "1", &["--keep-noisy"]);
-    assert_eq!(output.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&output.stderr).contains("--denoise"));
+    let stderr = exits_with(&mut render(dir.path(), "1", &["--keep-noisy"]), 2);
+    assert!(stderr.contains("--denoise"));
 }
 
 #[cfg(not(feature = "oidn"))]
 #[test]
 fn denoise_without_the_oidn_feature_exits_2_naming_it() {
     let dir = tempfile::tempdir().unwrap();
-    let output = render(dir.path(), "1", &["--denoise"]);
-    assert_eq!(output.status.code(), Some(2));
-    let stderr = String::from_utf8_lossy(&output.stderr);
+    let stderr = exits_with(&mut render(dir.path(), "1", &["--denoise"]), 2);
     assert!(stderr.contains("Open Image Denoise") && stderr.contains("`oidn`"), "{stderr}");
     assert!(stderr.contains("scripts/setup.sh"), "{stderr}");
     assert!(!dir.path().join("frame_0000.png").exists());
@@ -94,14 +73,13 @@ fn denoise_without_the_cpu_device_module_exits_2_naming_it() {
         }
     }
     let out = dir.path().join("out");
-    let output = dormant()
-        .env("LD_LIBRARY_PATH", &partial)
-        .args(["render", "--size", "8x8", "--spp", "1", "--denoise", "--out"])
-        .arg(&out)
-        .output()
-        .unwrap();
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    let stderr = exits_with(
+        dormant()
+            .env("LD_LIBRARY_PATH", &partial)
+            .args(["render", "--size", "8x8", "--spp", "1", "--denoise", "--out"])
+            .arg(&out),
+        2,
+    );
     assert!(stderr.contains("libOpenImageDenoise_device_cpu"), "{stderr}");
 }
 
@@ -111,15 +89,14 @@ fn denoise_without_the_cpu_device_module_exits_2_naming_it() {
 #[test]
 fn bench_adaptive_with_prefiltered_guides_denoises_every_frame_and_says_so() {
     let dir = tempfile::tempdir().unwrap();
-    let output = dormant()
-        .args(["bench", "adaptive", "--size", "64x36", "--reference-spp", "64", "--uniform-spp", "4"])
-        .args(["--thresholds", "0.2", "--adaptive-spp", "16", "--min-spp", "2", "--denoise"])
-        .args(["--denoise-prefilter", "--quiet", "--reference"])
-        .arg(dir.path().join("reference.exr"))
-        .args(["--json", "-"])
-        .output()
-        .unwrap();
-    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let output = succeeds(
+        dormant()
+            .args(["bench", "adaptive", "--size", "64x36", "--reference-spp", "64", "--uniform-spp", "4"])
+            .args(["--thresholds", "0.2", "--adaptive-spp", "16", "--min-spp", "2", "--denoise"])
+            .args(["--denoise-prefilter", "--quiet", "--reference"])
+            .arg(dir.path().join("reference.exr"))
+            .args(["--json", "-"]),
+    );
     let report: serde_json::Value = serde_json::from_slice(&output.stdout).unwrap();
     assert_eq!(report["denoise"], "oidn-prefilter");
     let rows = report["rows"].as_array().unwrap();

@@ -2,59 +2,25 @@
 //! across thread counts, equal images from both backends, and from camera-ray packets and
 //! single rays.
 
-use std::process::Command;
+mod common;
 
+use common::cli::{dormant, succeeds};
+use common::render::{backend, empty_scene, render, BLACK_SKY, NO_SUN, WHITE_SKY};
 use dormant::accel::{self, Backend, Hit, SceneQuery};
 use dormant::geometry::{primitives, Ray};
 use dormant::render::{
-    render_frame, AdaptiveSampling, AmbientOcclusion, DirectLighting, Film, Integrator, PathTracer,
-    RenderScene, RenderSettings,
+    render_frame, AdaptiveSampling, AmbientOcclusion, DirectLighting, Integrator, PathTracer, RenderScene,
+    RenderSettings,
 };
-use dormant::scene::{Body, Camera, Material, Prototype, SceneDescription, Sky, StaticMesh, Sun};
+use dormant::scene::{Body, Camera, Material, Prototype, StaticMesh, Sun};
 use glam::{Affine3A, Vec3};
-
-fn backend() -> Backend {
-    Backend::compiled()[0]
-}
-
-fn render(
-    desc: &SceneDescription,
-    backend: Backend,
-    integrator: &dyn Integrator,
-    size: u32,
-    spp: u32,
-) -> Film {
-    let mut a = accel::create(backend, None).unwrap();
-    let scene = RenderScene::build(desc, a.as_mut()).unwrap();
-    let settings =
-        RenderSettings { width: size, height: size, spp, seed: 0, adaptive: AdaptiveSampling::OFF };
-    render_frame(&scene, a.query().unwrap(), integrator, &settings).unwrap().0
-}
-
-fn empty_scene(camera: Camera, sun: Sun, sky: Sky) -> SceneDescription {
-    SceneDescription {
-        name: "test".into(),
-        materials: Vec::new(),
-        textures: Vec::new(),
-        statics: Vec::new(),
-        prototypes: Vec::new(),
-        bodies: Vec::new(),
-        camera,
-        sun,
-        sky,
-        lights: Vec::new(),
-    }
-}
-
-const NO_SUN: Sun = Sun { direction: Vec3::Y, irradiance: Vec3::ZERO, angular_radius_deg: 0.5 };
 
 #[test]
 fn white_furnace_sphere_reflects_its_albedo_of_the_sky() {
     // A Lambertian sphere of albedo 0.8 under a uniform sky of radiance 1: it is convex, so
     // every reflected ray escapes and the sphere's radiance is exactly 0.8.
     let camera = Camera::pinhole(Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, Vec3::Y, 40.0);
-    let mut desc =
-        empty_scene(camera, NO_SUN, Sky { zenith: Vec3::ONE, horizon: Vec3::ONE, ground: Vec3::ONE });
+    let mut desc = empty_scene(camera, NO_SUN, WHITE_SKY);
     desc.materials.push(Material::lambertian(Vec3::splat(0.8)));
     desc.prototypes.push(Prototype {
         name: "sphere".into(),
@@ -66,6 +32,7 @@ fn white_furnace_sphere_reflects_its_albedo_of_the_sky() {
         &desc,
         backend(),
         &PathTracer { clamp_indirect: f32::INFINITY, ..PathTracer::default() },
+        32,
         32,
         64,
     );
@@ -92,11 +59,10 @@ fn directly_lit_plane_matches_the_closed_form() {
         angular_radius_deg: 0.25,
     };
     let camera = Camera::pinhole(Vec3::new(0.0, 5.0, 0.0), Vec3::ZERO, Vec3::Z, 30.0);
-    let black = Sky { zenith: Vec3::ZERO, horizon: Vec3::ZERO, ground: Vec3::ZERO };
-    let mut desc = empty_scene(camera, sun, black);
+    let mut desc = empty_scene(camera, sun, BLACK_SKY);
     desc.materials.push(Material::lambertian(Vec3::splat(0.5)));
     desc.statics.push(StaticMesh { mesh: primitives::ground_plane(100.0, 0.0, 1), material: 0 });
-    let film = render(&desc, backend(), &PathTracer::default(), 16, 16);
+    let film = render(&desc, backend(), &PathTracer::default(), 16, 16, 16);
     let expected = 0.5 / std::f32::consts::PI * 2.0 * elevation.sin();
     for p in &film.pixels {
         assert!((p.x - expected).abs() < 0.01 * expected, "pixel {p}, expected {expected}");
@@ -108,8 +74,8 @@ fn directly_lit_plane_matches_the_closed_form() {
 fn embree_and_bvh_images_agree_within_float_noise() {
     let desc = dormant::scene::default_scene();
     let pt = PathTracer::default();
-    let a = render(&desc, Backend::Embree, &pt, 64, 8);
-    let b = render(&desc, Backend::Bvh, &pt, 64, 8);
+    let a = render(&desc, Backend::Embree, &pt, 64, 64, 8);
+    let b = render(&desc, Backend::Bvh, &pt, 64, 64, 8);
     let n = a.pixels.len() as f32;
     let mse: f32 =
         a.pixels.iter().zip(&b.pixels).map(|(x, y)| (*x - *y).length_squared() / 3.0).sum::<f32>() / n;
@@ -122,12 +88,11 @@ fn png_is_byte_identical_with_one_and_two_threads() {
     let mut pngs = Vec::new();
     for threads in ["1", "2"] {
         let out = dir.path().join(threads);
-        let status = Command::new(env!("CARGO_BIN_EXE_dormant"))
-            .args(["--threads", threads, "render", "--size", "64x40", "--spp", "4", "--quiet", "--out"])
-            .arg(&out)
-            .status()
-            .unwrap();
-        assert!(status.success());
+        succeeds(
+            dormant()
+                .args(["--threads", threads, "render", "--size", "64x40", "--spp", "4", "--quiet", "--out"])
+                .arg(&out),
+        );
         pngs.push(std::fs::read(out.join("frame_0000.png")).unwrap());
     }
     assert!(pngs[0] == pngs[1], "images differ between 1 and 2 threads");

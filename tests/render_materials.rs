@@ -6,14 +6,12 @@
 mod common;
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
-use dormant::accel::{self, Backend};
+use common::cli::{dormant, exits_with, succeeds};
+use common::encoding::base64;
+use common::render::{backend, empty_scene, render, BLACK_SKY, NO_SUN, WHITE_SKY};
 use dormant::geometry::{primitives, Ray};
-use dormant::render::{
-    render_frame, AdaptiveSampling, DirectLighting, Film, Integrator, PathTracer, PinholeCamera, RenderScene,
-    RenderSettings,
-};
+use dormant::render::{DirectLighting, PathTracer, PinholeCamera};
 use dormant::scene::file::SceneFile;
 use dormant::scene::gltf::{load_gltf, load_gltf_mesh};
 use dormant::scene::SceneAssets;
@@ -21,30 +19,9 @@ use dormant::scene::{Body, Camera, Light, Material, SceneDescription, Sky, Stati
 use glam::{Affine3A, Vec3};
 use serde_json::json;
 
-const NO_SUN: Sun = Sun { direction: Vec3::Y, irradiance: Vec3::ZERO, angular_radius_deg: 0.5 };
-const WHITE_SKY: Sky = Sky { zenith: Vec3::ONE, horizon: Vec3::ONE, ground: Vec3::ONE };
-const BLACK_SKY: Sky = Sky { zenith: Vec3::ZERO, horizon: Vec3::ZERO, ground: Vec3::ZERO };
-
-fn render(desc: &SceneDescription, integrator: &dyn Integrator, width: u32, height: u32, spp: u32) -> Film {
-    let mut a = accel::create(Backend::compiled()[0], None).unwrap();
-    let scene = RenderScene::build(desc, a.as_mut()).unwrap();
-    let settings = RenderSettings { width, height, spp, seed: 0, adaptive: AdaptiveSampling::OFF };
-    render_frame(&scene, a.query().unwrap(), integrator, &settings).unwrap().0
-}
-
+/// A scene with nothing in it yet, seen by `camera` under `sky` and no sun.
 fn scene(camera: Camera, sky: Sky) -> SceneDescription {
-    SceneDescription {
-        name: "materials".into(),
-        materials: Vec::new(),
-        textures: Vec::new(),
-        statics: Vec::new(),
-        prototypes: Vec::new(),
-        bodies: Vec::new(),
-        camera,
-        sun: NO_SUN,
-        sky,
-        lights: Vec::new(),
-    }
+    empty_scene(camera, NO_SUN, sky)
 }
 
 /// Looking straight down at the origin from `height`, a little off centre: a pixel centre
@@ -170,7 +147,7 @@ fn textured_quad_repeats_its_checker_beyond_the_unit_square() {
     let camera = top_down(4.0, 24.0);
     // Lambertian preview under a uniform white sky: every pixel is the base colour itself.
     let size = 64;
-    let film = render(&quad_scene(&path, camera, WHITE_SKY), &DirectLighting, size, size, 1);
+    let film = render(&quad_scene(&path, camera, WHITE_SKY), backend(), &DirectLighting, size, size, 1);
     let mut checked = 0;
     for y in 0..size {
         for x in 0..size {
@@ -208,7 +185,7 @@ fn emissive_quad_shows_its_emission() {
         |doc| doc["extensionsUsed"] = json!(["KHR_materials_emissive_strength"]),
     );
     let desc = quad_scene(&path, top_down(4.0, 20.0), BLACK_SKY);
-    let film = render(&desc, &PathTracer::default(), 8, 8, 4);
+    let film = render(&desc, backend(), &PathTracer::default(), 8, 8, 4);
     for p in &film.pixels {
         assert!((*p - Vec3::new(2.0, 1.0, 0.5)).abs().max_element() < 1e-3, "{p}");
     }
@@ -223,23 +200,23 @@ fn missing_texture_is_magenta_with_a_warning_not_a_panic() {
     let asset = load_gltf(&path).unwrap();
     assert_eq!(asset.textures.len(), 1);
     assert_eq!(asset.textures[0].texels, vec![[255, 0, 255, 255]]);
-    let film = render(&quad_scene(&path, top_down(4.0, 20.0), WHITE_SKY), &DirectLighting, 8, 8, 1);
+    let film =
+        render(&quad_scene(&path, top_down(4.0, 20.0), WHITE_SKY), backend(), &DirectLighting, 8, 8, 1);
     for p in &film.pixels {
         assert!((*p - Vec3::new(1.0, 0.0, 1.0)).abs().max_element() < 1e-3, "{p}");
     }
     // The command line says so on stderr and still renders.
     let out = dir.path().join("out");
-    let output = Command::new(env!("CARGO_BIN_EXE_dormant"))
-        .args(["render", "--size", "16x16", "--spp", "1", "--count", "1", "--env"])
-        .arg(&path)
-        .arg("--object")
-        .arg(&path)
-        .arg("--out")
-        .arg(&out)
-        .output()
-        .unwrap();
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert!(output.status.success(), "{stderr}");
+    let stderr = exits_with(
+        dormant()
+            .args(["render", "--size", "16x16", "--spp", "1", "--count", "1", "--env"])
+            .arg(&path)
+            .arg("--object")
+            .arg(&path)
+            .arg("--out")
+            .arg(&out),
+        0,
+    );
     assert!(stderr.contains("images[0]") && stderr.contains("magenta"), "{stderr}");
     assert!(stderr.contains("KHR_texture_transform"), "{stderr}");
     assert!(out.join("frame_0000.png").is_file());
@@ -328,7 +305,7 @@ fn duck_in_a_scene_file_renders_with_its_texture_not_the_palette() {
         angular_radius_deg: 1.0,
     };
     let start = std::time::Instant::now();
-    let film = render(&desc, &PathTracer::default(), 96, 96, 16);
+    let film = render(&desc, backend(), &PathTracer::default(), 96, 96, 16);
     eprintln!("duck 96x96 at 16 spp: {:.3} s", start.elapsed().as_secs_f64());
     // The central quarter of the image is mostly duck.
     let mut sum = Vec3::ZERO;
@@ -353,7 +330,7 @@ fn point_light_lit_plane_matches_the_closed_form() {
     desc.statics.push(StaticMesh { mesh: primitives::ground_plane(100.0, 0.0, 1), material: 0 });
     desc.lights.push(Light::Point { position: light, intensity: Vec3::splat(intensity) });
     let size = 24;
-    let film = render(&desc, &PathTracer::default(), size, size, 1);
+    let film = render(&desc, backend(), &PathTracer::default(), size, size, 1);
     for y in 0..size {
         for x in 0..size {
             let p = plane_point(&camera, size, x, y);
@@ -385,7 +362,7 @@ fn spot_light_lights_its_cone_only() {
         cos_outer,
     });
     let size = 32;
-    let film = render(&desc, &PathTracer::default(), size, size, 1);
+    let film = render(&desc, backend(), &PathTracer::default(), size, size, 1);
     let (mut inside, mut outside) = (0, 0);
     for y in 0..size {
         for x in 0..size {
@@ -450,7 +427,7 @@ fn floor_under_an_emissive_ceiling_reflects_albedo_times_radiance() {
     desc.materials.push(Material { emissive: Vec3::new(2.0, 1.0, 0.5), ..Material::lambertian(Vec3::ZERO) });
     desc.statics.push(StaticMesh { mesh: primitives::ground_plane(100.0, 0.0, 1), material: 0 });
     desc.statics.push(StaticMesh { mesh: primitives::ground_plane(100.0, 1.0, 1), material: 1 });
-    let film = render(&desc, &PathTracer::default(), 16, 16, 16);
+    let film = render(&desc, backend(), &PathTracer::default(), 16, 16, 16);
     let mean = film.pixels.iter().sum::<Vec3>() / film.pixels.len() as f32;
     let expected = Vec3::new(1.0, 0.5, 0.25);
     assert!((mean - expected).abs().max_element() < 0.01, "mean {mean}, expected {expected}");
@@ -464,7 +441,7 @@ fn thin_lens_keeps_the_focus_plane_sharp_and_blurs_the_rest() {
     let size = 48;
     // Fraction of pixels that show a pure checker colour (red or blue within 2%).
     let pure = |camera: Camera| {
-        let film = render(&quad_scene(&path, camera, WHITE_SKY), &DirectLighting, size, size, 32);
+        let film = render(&quad_scene(&path, camera, WHITE_SKY), backend(), &DirectLighting, size, size, 32);
         let is_pure =
             |p: &Vec3| (*p - Vec3::X).abs().max_element() < 0.02 || (*p - Vec3::Z).abs().max_element() < 0.02;
         film.pixels.iter().filter(|p| is_pure(p)).count() as f32 / film.pixels.len() as f32
@@ -504,9 +481,9 @@ fn aov_passes_record_albedo_normal_and_depth() {
     let camera = top_down(4.0, 24.0);
     let desc = quad_scene(&path, camera, BLACK_SKY);
     let size = 32;
-    let albedo = render(&desc, &AovIntegrator(Aov::Albedo), size, size, 1);
-    let normal = render(&desc, &AovIntegrator(Aov::Normal), size, size, 1);
-    let depth = render(&desc, &AovIntegrator(Aov::Depth), size, size, 1);
+    let albedo = render(&desc, backend(), &AovIntegrator(Aov::Albedo), size, size, 1);
+    let normal = render(&desc, backend(), &AovIntegrator(Aov::Normal), size, size, 1);
+    let depth = render(&desc, backend(), &AovIntegrator(Aov::Depth), size, size, 1);
     for y in 0..size {
         for x in 0..size {
             let i = (y * size + x) as usize;
@@ -527,23 +504,22 @@ fn aov_passes_record_albedo_normal_and_depth() {
     }
     // The command line writes each pass next to the frame.
     let out = dir.path().join("out");
-    let status = Command::new(env!("CARGO_BIN_EXE_dormant"))
-        .args([
-            "render",
-            "--size",
-            "16x16",
-            "--spp",
-            "1",
-            "--quiet",
-            "--exr",
-            "--aov",
-            "albedo,normal,depth",
-            "--out",
-        ])
-        .arg(&out)
-        .status()
-        .unwrap();
-    assert!(status.success());
+    succeeds(
+        dormant()
+            .args([
+                "render",
+                "--size",
+                "16x16",
+                "--spp",
+                "1",
+                "--quiet",
+                "--exr",
+                "--aov",
+                "albedo,normal,depth",
+            ])
+            .arg("--out")
+            .arg(&out),
+    );
     for name in ["albedo", "normal", "depth"] {
         for ext in ["png", "exr"] {
             assert!(out.join(format!("frame_0000.{name}.{ext}")).is_file(), "{name}.{ext}");
@@ -617,36 +593,17 @@ fn textured_primitive_without_uvs_warns_and_renders() {
     let path = textured_quad(dir.path(), "checker.png", |doc| {
         doc["meshes"][0]["primitives"][0]["attributes"] = json!({ "POSITION": 0, "NORMAL": 1 });
     });
-    let output = Command::new(env!("CARGO_BIN_EXE_dormant"))
-        .args(["render", "--size", "8x8", "--spp", "1", "--count", "1", "--env"])
-        .arg(&path)
-        .arg("--object")
-        .arg(&path)
-        .arg("--out")
-        .arg(dir.path().join("out"))
-        .output()
-        .unwrap();
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert!(output.status.success(), "{stderr}");
+    let stderr = exits_with(
+        dormant()
+            .args(["render", "--size", "8x8", "--spp", "1", "--count", "1", "--env"])
+            .arg(&path)
+            .arg("--object")
+            .arg(&path)
+            .arg("--out")
+            .arg(dir.path().join("out")),
+        0,
+    );
     assert!(stderr.contains("meshes[0].primitives[0]") && stderr.contains("TEXCOORD_0"), "{stderr}");
-}
-
-/// Standard base64 with padding (for data URIs).
-fn base64(bytes: &[u8]) -> String {
-    const ABC: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::new();
-    for chunk in bytes.chunks(3) {
-        let b = [chunk[0], *chunk.get(1).unwrap_or(&0), *chunk.get(2).unwrap_or(&0)];
-        let n = (b[0] as u32) << 16 | (b[1] as u32) << 8 | b[2] as u32;
-        for k in 0..4 {
-            if k <= chunk.len() {
-                out.push(ABC[(n >> (18 - 6 * k) & 63) as usize] as char);
-            } else {
-                out.push('=');
-            }
-        }
-    }
-    out
 }
 
 #[test]

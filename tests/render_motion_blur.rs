@@ -6,9 +6,10 @@
 //! and a blue crate at rest (in other rows and columns of the image), under an overhead sun
 //! against a constant sky.
 
-use std::path::Path;
-use std::process::Command;
+mod common;
 
+use common::cli::dormant;
+use common::scenes;
 use dormant::accel::Backend;
 use dormant::physics::SimulateOptions;
 use dormant::render::{DirectLighting, Film};
@@ -21,8 +22,11 @@ const SIZE: (u32, u32) = (320, 180);
 const SPP: u32 = 64;
 
 fn motion_scene() -> Sequence {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/motion.toml");
-    let source = SequenceSource::scene(SceneFile::load(path).unwrap(), SimulateOptions::default(), None);
+    let source = SequenceSource::scene(
+        SceneFile::load(scenes::data("motion")).unwrap(),
+        SimulateOptions::default(),
+        None,
+    );
     Sequence::load(source, &mut |_| {}).unwrap()
 }
 
@@ -221,10 +225,9 @@ fn verify_with_shutter_reports_no_mismatches() {
         eprintln!("skipped: Embree is not compiled in");
         return;
     }
-    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/motion.toml");
-    let out = Command::new(env!("CARGO_BIN_EXE_dormant"))
+    let out = dormant()
         .args(["--threads", "2", "verify"])
-        .arg(&scene)
+        .arg(scenes::data("motion"))
         .args(["--shutter", "1", "--check-frames", "5", "--surface-rays", "20000", "--json"])
         .output()
         .unwrap();

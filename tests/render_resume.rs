@@ -3,20 +3,16 @@
 //! resumed static stretch copies the kept frames' files, and the statistics of another
 //! configuration, or records the replay does not reach, are refused.
 
+mod common;
+
 use std::ffi::OsString;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::path::Path;
+use std::process::{Output, Stdio};
 use std::time::{Duration, Instant};
 
+use common::cli::{dormant, exits_with, read_json, read_stats, succeeds};
+use common::scenes;
 use serde_json::Value;
-
-fn dormant() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_dormant"))
-}
-
-fn scene(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name)
-}
 
 /// A slice of the tiny scene, every sixth frame (40 frames), islands integrated (baked, so the
 /// geometry cache serves their wakes), an albedo pass and EXRs: every output kind, and about
@@ -30,18 +26,12 @@ fn tiny_run(out: &Path) -> Vec<OsString> {
             .map(OsString::from)
             .collect();
     args.push(out.into());
-    args.push(scene("tiny.toml").into());
+    args.push(scenes::shipped("tiny").into());
     args
 }
 
 fn run(args: &[OsString], extra: &[&str]) -> Output {
-    let output = dormant().args(args).args(extra).output().unwrap();
-    assert!(output.status.success(), "{extra:?}: {}", String::from_utf8_lossy(&output.stderr));
-    output
-}
-
-fn stats(dir: &Path) -> Value {
-    serde_json::from_slice(&std::fs::read(dir.join("stats.json")).unwrap()).unwrap()
+    succeeds(dormant().args(args).args(extra))
 }
 
 fn frame_count(dir: &Path) -> usize {
@@ -91,7 +81,7 @@ fn assert_same_outputs(whole: &Path, resumed: &Path) {
         }
     }
     assert!(compared > 0);
-    let (a, b) = (without_timings(&stats(whole)), without_timings(&stats(resumed)));
+    let (a, b) = (without_timings(&read_stats(whole)), without_timings(&read_stats(resumed)));
     let (frames_a, frames_b) = (a["frames"].as_array().unwrap(), b["frames"].as_array().unwrap());
     assert_eq!(frames_a.len(), frames_b.len());
     for (fa, fb) in frames_a.iter().zip(frames_b) {
@@ -131,10 +121,10 @@ fn killed_render_resumes_to_the_files_of_an_uninterrupted_run() {
     run(&tiny_run(&whole), &[]);
     let total = frame_count(&whole);
     assert_eq!(total, 40);
-    assert!(stats(&whole)["summary"]["totals"]["islands_reactivated"].as_u64().unwrap() > 0);
+    assert!(read_stats(&whole)["summary"]["totals"]["islands_reactivated"].as_u64().unwrap() > 0);
 
     kill_after(&tiny_run(&killed), &killed, 4);
-    let recorded = stats(&killed)["frames"].as_array().unwrap().len();
+    let recorded = read_stats(&killed)["frames"].as_array().unwrap().len();
     let written = frame_count(&killed);
     assert!(recorded >= 4 && written < total, "killed with {written} of {total} frames written");
 
@@ -142,7 +132,7 @@ fn killed_render_resumes_to_the_files_of_an_uninterrupted_run() {
     let mut args = tiny_run(&killed);
     args.splice(0..0, [OsString::from("--json"), report.clone().into()]);
     run(&args, &["--resume"]);
-    let report: Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+    let report = read_json(&report);
     let kept = report["kept_frames"].as_u64().unwrap() as usize;
     assert_eq!(kept, recorded, "the frames stats.json recorded are kept");
     assert_eq!(report["frames"].as_array().unwrap().len(), total - kept, "only the rest is rendered");
@@ -152,9 +142,8 @@ fn killed_render_resumes_to_the_files_of_an_uninterrupted_run() {
 #[test]
 fn resumed_static_frames_copy_the_kept_frames_files() {
     let dir = tempfile::tempdir().unwrap();
-    let scene = dir.path().join("settle.toml");
     // Six crates dropped onto the ground: at rest (bit for bit) from about frame 70 on.
-    std::fs::copy(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/settle.toml"), &scene).unwrap();
+    let scene = scenes::copy_data("settle", dir.path());
     let settle_run = |out: &Path| -> Vec<OsString> {
         let args = ["--quiet", "render", "--size", "48x27", "--spp", "2", "--frames", "50..100"];
         let mut args: Vec<OsString> = args
@@ -169,7 +158,7 @@ fn resumed_static_frames_copy_the_kept_frames_files() {
     run(&settle_run(&whole), &[]);
     // A kill as it can land: the statistics hold frame `first_missing`, but one of its files
     // (the EXR) and every later frame are not written yet. It reuses a kept frame's image.
-    let frames = stats(&whole)["frames"].as_array().unwrap().clone();
+    let frames = read_stats(&whole)["frames"].as_array().unwrap().clone();
     let reused = |f: &Value| f["reused"].as_bool().unwrap();
     let first_missing =
         frames.windows(2).find(|w| reused(&w[0]) && reused(&w[1])).unwrap()[1]["frame"].as_u64().unwrap();
@@ -184,7 +173,7 @@ fn resumed_static_frames_copy_the_kept_frames_files() {
     }
     run(&settle_run(&cut), &["--resume"]);
     assert_same_outputs(&whole, &cut);
-    assert!(stats(&cut)["summary"]["totals"]["reused_frames"].as_u64().unwrap() > 2);
+    assert!(read_stats(&cut)["summary"]["totals"]["reused_frames"].as_u64().unwrap() > 2);
 }
 
 fn copy_dir(from: &Path, to: &Path) {
@@ -203,7 +192,7 @@ fn resume_refuses_the_statistics_of_another_configuration() {
         ["--quiet", "render", "--size", "32x18", "--spp", spp, "--frames", "100..110", "--resume", "--out"]
             .iter()
             .map(OsString::from)
-            .chain([out.clone().into(), scene("tiny.toml").into()])
+            .chain([out.clone().into(), scenes::shipped("tiny").into()])
             .collect()
     };
     // Nothing to resume in a new directory: every frame renders.
@@ -211,9 +200,7 @@ fn resume_refuses_the_statistics_of_another_configuration() {
     assert_eq!(frame_count(&out), 10);
     let before = std::fs::read(out.join("stats.json")).unwrap();
     let frame = std::fs::read(out.join("frame_0105.png")).unwrap();
-    let output = dormant().args(short("4")).output().unwrap();
-    assert_eq!(output.status.code(), Some(2));
-    let stderr = String::from_utf8_lossy(&output.stderr);
+    let stderr = exits_with(dormant().args(short("4")), 2);
     assert!(stderr.contains("stats.json") && stderr.contains("spp 2 there, 4 now"), "{stderr}");
     assert_eq!(std::fs::read(out.join("stats.json")).unwrap(), before, "stats.json was touched");
     assert_eq!(std::fs::read(out.join("frame_0105.png")).unwrap(), frame, "a frame was touched");
@@ -222,14 +209,11 @@ fn resume_refuses_the_statistics_of_another_configuration() {
     let instances = edited["frames"][2]["instances"].as_u64().unwrap();
     edited["frames"][2]["instances"] = (instances + 1).into();
     std::fs::write(out.join("stats.json"), serde_json::to_vec(&edited).unwrap()).unwrap();
-    let output = dormant().args(short("2")).output().unwrap();
-    assert_eq!(output.status.code(), Some(2));
-    let stderr = String::from_utf8_lossy(&output.stderr);
+    let stderr = exits_with(dormant().args(short("2")), 2);
     assert!(
         stderr.contains("stats.json") && stderr.contains("frame 102") && stderr.contains("instances"),
         "{stderr}"
     );
     // --resume needs a sequence.
-    let output = dormant().args(["render", "--resume", "--out"]).arg(&out).output().unwrap();
-    assert_eq!(output.status.code(), Some(2));
+    exits_with(dormant().args(["render", "--resume", "--out"]).arg(&out), 2);
 }

@@ -1,13 +1,14 @@
 //! Describing simulated frames for rendering.
 
-use std::path::Path;
+mod common;
 
+use common::scenes;
 use dormant::scene::file::SceneFile;
 use dormant::scene::SceneAssets;
 
 /// `scenes/forest-walk.toml` rendered through the camera called `camera`.
 fn forest_walk(camera: &str) -> SceneFile {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/forest-walk.toml");
+    let path = scenes::shipped("forest-walk");
     let text = std::fs::read_to_string(&path).unwrap();
     let chosen = "camera = \"high\"";
     assert!(text.contains(chosen), "forest-walk.toml chooses its camera with {chosen}");
@@ -36,8 +37,7 @@ fn fixed_camera_stays_put() {
 fn scene_file_sky_reaches_the_description() {
     use dormant::scene::Sky;
     use glam::Vec3;
-    let base =
-        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/tiny.toml")).unwrap();
+    let base = std::fs::read_to_string(scenes::shipped("tiny")).unwrap();
     let sky_of = |extra: &str| {
         let file = SceneFile::parse("scenes/tiny.toml", format!("{base}\n{extra}")).unwrap();
         SceneAssets::load(&file).unwrap().describe(0.0).sky

@@ -6,8 +6,9 @@
 //!   restored from the geometry cache, gives the same hits as a from-scratch build of the same
 //!   island set.
 
-use std::path::Path;
+mod common;
 
+use common::scenes;
 use dormant::accel::{self, load_scene, Backend, LoadedObjectMap};
 use dormant::geometry::{primitives, Ray};
 use dormant::physics::{
@@ -17,7 +18,6 @@ use dormant::residency::{
     CacheBudget, IntegrationForm, IntegrationPolicy, IntegrationSettings, ManagerOptions, ReactivationPath,
     ReactivationStrategy, SceneManager,
 };
-use dormant::scene::file::SceneFile;
 use dormant::scene::{Body, Camera, Material, Prototype, SceneDescription, Sky, StaticMesh, Sun};
 use dormant::sequence::{FrameRange, FrameRenderer, SeedMode, Sequence, SequenceError, SequenceSource};
 use dormant_lab::crosscheck::{camera_rays, compare, surface_rays, MappedQuery, VerifyReport};
@@ -69,8 +69,7 @@ fn assert_agrees(report: &VerifyReport, what: &str) {
 
 /// `scenes/tiny.toml`, simulated.
 fn tiny() -> Sequence {
-    let file = SceneFile::load(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/tiny.toml")).unwrap();
-    let source = SequenceSource::scene(file, SimulateOptions::default(), None);
+    let source = SequenceSource::scene(scenes::load("tiny"), SimulateOptions::default(), None);
     Sequence::load(source, &mut |_| {}).unwrap()
 }
 

@@ -1,38 +1,21 @@
 //! Bad scene input: every error names the file and the field (and the line when the field
 //! is written), and none panics.
 
-mod scene_errors;
+mod common;
 
+use common::scene_errors::{expect_error, parse};
+use common::scenes::{self, BOXES};
 use dormant::scene::file::{SceneError, SceneFile, Shape};
-use scene_errors::{expect_error, parse};
-
-const GOOD: &str = r#"[scene]
-name = "t"
-frames = 10
-
-[environment]
-generator = "ground"
-
-[[prototypes]]
-name = "box"
-shape = "box"
-half_extents = [0.5, 0.5, 0.5]
-
-[[spawners]]
-prototypes = ["box"]
-count = 4
-region = { min = [0.0, 1.0, 0.0], max = [2.0, 1.0, 2.0] }
-"#;
 
 #[test]
 fn the_good_scene_parses() {
-    let file = parse(GOOD).unwrap();
+    let file = parse(BOXES).unwrap();
     assert_eq!(file.spec().spawners[0].count, 4);
 }
 
 #[test]
 fn references_resolve_to_indices() {
-    let text = GOOD
+    let text = BOXES
         .replace(
             "[[spawners]]",
             "[[prototypes]]\nname = \"ball\"\nshape = \"sphere\"\nradius = 0.25\n\n[[spawners]]",
@@ -52,43 +35,43 @@ fn references_resolve_to_indices() {
 
 #[test]
 fn malformed_toml_names_the_line() {
-    let text = GOOD.replace("frames = 10", "frames = = 10");
+    let text = BOXES.replace("frames = 10", "frames = = 10");
     let err = expect_error(&text, "frames", Some(3));
     assert!(matches!(err, SceneError::Syntax { .. }));
 }
 
 #[test]
 fn unknown_keys_are_rejected() {
-    let text = GOOD.replace("count = 4", "count = 4\ncolour = \"red\"");
+    let text = BOXES.replace("count = 4", "count = 4\ncolour = \"red\"");
     let err = expect_error(&text, "colour", Some(16));
     assert!(matches!(err, SceneError::Syntax { .. }));
-    let text = GOOD.replace("[environment]", "[environmnet]");
+    let text = BOXES.replace("[environment]", "[environmnet]");
     parse(&text).unwrap_err();
 }
 
 #[test]
 fn nan_and_infinite_values_are_rejected() {
-    let text = GOOD.replace("frames = 10", "frames = 10\n[physics]\ntimestep = nan");
+    let text = BOXES.replace("frames = 10", "frames = 10\n[physics]\ntimestep = nan");
     expect_error(&text, "physics.timestep", Some(5));
-    let text = GOOD.replace("[0.5, 0.5, 0.5]", "[0.5, inf, 0.5]");
+    let text = BOXES.replace("[0.5, 0.5, 0.5]", "[0.5, inf, 0.5]");
     expect_error(&text, "prototypes[0].half_extents", Some(11));
-    let text = GOOD.replace("max = [2.0, 1.0, 2.0]", "max = [2.0, -inf, 2.0]");
+    let text = BOXES.replace("max = [2.0, 1.0, 2.0]", "max = [2.0, -inf, 2.0]");
     expect_error(&text, "spawners[0].region.max", Some(16));
 }
 
 #[test]
 fn zero_and_negative_counts_are_rejected() {
-    let err = expect_error(&GOOD.replace("count = 4", "count = 0"), "spawners[0].count", Some(15));
+    let err = expect_error(&BOXES.replace("count = 4", "count = 0"), "spawners[0].count", Some(15));
     assert!(matches!(err, SceneError::Invalid { .. }));
-    expect_error(&GOOD.replace("count = 4", "count = -3"), "count", Some(15));
-    expect_error(&GOOD.replace("frames = 10", "frames = 0"), "scene.frames", Some(3));
-    expect_error(&GOOD.replace("[0.5, 0.5, 0.5]", "[0.5, -0.5, 0.5]"), "half_extents", Some(11));
+    expect_error(&BOXES.replace("count = 4", "count = -3"), "count", Some(15));
+    expect_error(&BOXES.replace("frames = 10", "frames = 0"), "scene.frames", Some(3));
+    expect_error(&BOXES.replace("[0.5, 0.5, 0.5]", "[0.5, -0.5, 0.5]"), "half_extents", Some(11));
 }
 
 #[test]
 fn dangling_references_are_rejected() {
     expect_error(
-        &GOOD.replace("prototypes = [\"box\"]", "prototypes = [\"crate\"]"),
+        &BOXES.replace("prototypes = [\"box\"]", "prototypes = [\"crate\"]"),
         "spawners[0].prototypes[0]",
         Some(14),
     );
@@ -99,7 +82,7 @@ fn missing_files_are_named() {
     let err = SceneFile::load("/nonexistent/scene.toml").unwrap_err();
     assert!(matches!(err, SceneError::Io { .. }));
     assert!(err.to_string().contains("/nonexistent/scene.toml"));
-    let text = GOOD.replace("generator = \"ground\"", "gltf = \"missing.glb\"");
+    let text = BOXES.replace("generator = \"ground\"", "gltf = \"missing.glb\"");
     expect_error(&text, "environment.gltf", Some(6));
 }
 
@@ -107,7 +90,7 @@ fn missing_files_are_named() {
 fn malformed_gltf_is_an_error_naming_file_and_field() {
     let dir = tempfile::tempdir().unwrap();
     std::fs::write(dir.path().join("broken.glb"), b"glTF\x02\x00\x00\x00garbage").unwrap();
-    let text = GOOD.replace("generator = \"ground\"", "gltf = \"broken.glb\"");
+    let text = BOXES.replace("generator = \"ground\"", "gltf = \"broken.glb\"");
     let scene = dir.path().join("scene.toml");
     std::fs::write(&scene, text).unwrap();
     let file = SceneFile::load(&scene).unwrap();
@@ -122,7 +105,7 @@ fn malformed_gltf_is_an_error_naming_file_and_field() {
 
 #[test]
 fn every_shipped_scene_parses() {
-    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes");
+    let dir = common::repo("scenes");
     let mut n = 0;
     for entry in std::fs::read_dir(dir).unwrap() {
         let path = entry.unwrap().path();
@@ -139,7 +122,7 @@ fn every_shipped_scene_parses() {
 
 #[test]
 fn count_override_spreads_over_spawners() {
-    let file = SceneFile::load(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/atrium.toml")).unwrap();
+    let file = scenes::load("atrium");
     let total: u32 = file.spec().spawners.iter().map(|s| s.count).sum();
     assert_eq!(total, 8000, "the default is the paper's experiment");
     let small = file.clone().with_total_count(100).unwrap();
@@ -150,10 +133,10 @@ fn count_override_spreads_over_spawners() {
 
 #[test]
 fn sky_table_is_checked() {
-    let both = format!("{GOOD}\n[sky]\ncolor = [1.0, 1.0, 1.0]\nzenith = [0.1, 0.2, 0.9]\n");
+    let both = format!("{BOXES}\n[sky]\ncolor = [1.0, 1.0, 1.0]\nzenith = [0.1, 0.2, 0.9]\n");
     expect_error(&both, "sky.color", None);
-    let negative = format!("{GOOD}\n[sky]\nhorizon = [0.5, -0.1, 0.5]\n");
+    let negative = format!("{BOXES}\n[sky]\nhorizon = [0.5, -0.1, 0.5]\n");
     expect_error(&negative, "sky.horizon", None);
-    let unknown = format!("{GOOD}\n[sky]\ncolour = [1.0, 1.0, 1.0]\n");
+    let unknown = format!("{BOXES}\n[sky]\ncolour = [1.0, 1.0, 1.0]\n");
     expect_error(&unknown, "colour", None);
 }

@@ -2,11 +2,12 @@
 //! scene files: what they parse into, how `--count` scales them, and bad input, which is an
 //! error naming the file, the line and the field, never a panic.
 
-mod scene_errors;
+mod common;
 
+use common::scene_errors::{expect_error, parse};
+use common::scenes;
 use dormant::scene::file::{ProjectileAim, SceneError, SceneFile, StructureLayout};
 use proptest::prelude::*;
-use scene_errors::{expect_error, parse};
 
 const GOOD: &str = r#"[scene]
 name = "t"
@@ -217,7 +218,7 @@ fn count_override_refuses_arrays_that_grow_into_other_structures() {
 
 #[test]
 fn the_demolition_scene_has_its_regime_and_scales_with_count() {
-    let file = SceneFile::load(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/demolition.toml")).unwrap();
+    let file = scenes::load("demolition");
     let bodies: u64 = file.spec().structures.iter().map(|s| s.body_count()).sum();
     assert!(bodies >= 50_000, "the paper's regime needs at least 50,000 bodies, has {bodies}");
     assert!(file.spec().structures.iter().all(|s| s.copies() > 1));
@@ -225,7 +226,7 @@ fn the_demolition_scene_has_its_regime_and_scales_with_count() {
     let scaled: u64 = small.spec().structures.iter().map(|s| s.body_count()).sum();
     assert!((1500..=2600).contains(&scaled), "--count 2000 gives {scaled} structure bodies");
     // The districts grow away from each other: the regime map's largest count lays out.
-    let file = SceneFile::load(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/demolition.toml")).unwrap();
+    let file = scenes::load("demolition");
     let large = file.with_total_count(300_000).unwrap();
     let scaled: u64 = large.spec().structures.iter().map(|s| s.body_count()).sum();
     assert!((270_000..=330_000).contains(&scaled), "--count 300000 gives {scaled} structure bodies");

@@ -18,6 +18,13 @@ use dormant::scene::gltf::load_gltf_slice;
 use dormant::scene::SceneAssets;
 use dormant::sequence::FrameRange;
 
+// Base64 and the trajectory checksum, shared with the tests' helpers; by path, so that the
+// fuzz targets, which include this file by path, find it too.
+#[path = "../common/encoding.rs"]
+mod encoding;
+
+pub use encoding::base64;
+
 /// Where fuzzed scene files pretend to live: relative asset paths resolve under it, and it
 /// does not exist.
 pub const SCENE_PATH: &str = "/nonexistent/dormant-fuzz/scene.toml";
@@ -59,24 +66,6 @@ pub fn gltf_json(data: &[u8]) -> Result<(), String> {
     load_gltf_slice(text.as_bytes(), Path::new("fuzz.gltf")).map(|_| ()).map_err(|e| e.to_string())
 }
 
-/// Standard base64 with padding.
-pub fn base64(bytes: &[u8]) -> String {
-    const ALPHABET: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::with_capacity(bytes.len().div_ceil(3) * 4);
-    for chunk in bytes.chunks(3) {
-        let b = [chunk[0], *chunk.get(1).unwrap_or(&0), *chunk.get(2).unwrap_or(&0)];
-        let n = (u32::from(b[0]) << 16) | (u32::from(b[1]) << 8) | u32::from(b[2]);
-        for i in 0..4 {
-            if i <= chunk.len() {
-                out.push(ALPHABET[(n >> (18 - 6 * i) & 63) as usize] as char);
-            } else {
-                out.push('=');
-            }
-        }
-    }
-    out
-}
-
 /// A trajectory file's bytes, read as they are and then with their trailing checksum made
 /// right (so that mutations reach past it), as `dormant render --trajectory` reads them: the
 /// frames replayed, island statistics taken, the recorded scene parsed and its hash checked.
@@ -108,9 +97,7 @@ pub fn with_checksum(data: &[u8]) -> Vec<u8> {
     let mut bytes = data.to_vec();
     if bytes.len() >= 20 {
         let end = bytes.len() - 8;
-        let hash = bytes[..end]
-            .iter()
-            .fold(0xcbf2_9ce4_8422_2325_u64, |h, &b| (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3));
+        let hash = encoding::fnv1a64(&bytes[..end]);
         bytes[end..].copy_from_slice(&hash.to_le_bytes());
     }
     bytes

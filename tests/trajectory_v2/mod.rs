@@ -7,10 +7,7 @@
 use dormant::physics::{BodyKind, BodyPose, BodyState, IslandEvent, Trajectory};
 use glam::{Quat, Vec3};
 
-/// FNV-1a 64, the trajectory checksum.
-pub fn fnv1a64(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3))
-}
+use crate::common::encoding::fnv1a64;
 
 /// `t` in format `version` (1 or 2; version 1 has no scene section).
 pub fn write(t: &Trajectory, version: u32) -> Vec<u8> {

@@ -1,9 +1,9 @@
-//! Helpers for the scene-file tests: parse text as `scenes/bad.toml`, and expect an error
-//! that names the file, the field and the line. A test file uses them with
-//! `mod scene_errors;`.
+//! Scene-file errors: parse text as `scenes/bad.toml`, and expect an error that names the
+//! file, the field and the line.
 
 use dormant::scene::file::{SceneError, SceneFile};
 
+/// `text` parsed as the scene file `scenes/bad.toml`.
 pub fn parse(text: &str) -> Result<SceneFile, SceneError> {
     SceneFile::parse("scenes/bad.toml", text)
 }
