@@ -16,7 +16,7 @@ samples per pixel, bounces and threads. Two measurements:
                frame including scene updates, Cycles' sync (BVH build) and path tracing apart.
 
 What the comparison fixes so that both renderers compute the same image (see
-docs/performance.md, "Against Blender Cycles", for what still differs):
+docs/performance.md#against-blender-cycles for what still differs):
   - Y up (glTF, dormant) against Blender's Z up: C = rotation of +90 degrees about X,
     (x, y, z) -> (x, -z, y); the importer applies C to every file, so a body's Blender
     transform is C * pose * scale * C^-1;

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The soak's sampler, checker and plot (issue 16, item 3); standard library only.
+"""The soak's sampler, checker and plot (`make soak`); standard library only.
 
 `run`: renders a trajectory with one backend while sampling the process's resident memory
 (VmRSS in /proc/PID/status) every --interval seconds, with the frame it had reached (read

@@ -1,12 +1,13 @@
 #!/usr/bin/env bash
-# The soak (issue 16, item 3; `make soak`, not in CI): simulates scenes/soak.toml (10,000
-# frames of islands falling asleep and waking, a bounded number of bodies), renders every
-# frame as a low-resolution preview with each backend and each integration form, samples
-# the renderer's resident memory every 0.5 s, and checks that it stays flat after warm-up
-# (growth < 5% from the end of the first 20% of the frames to the end; the scene needs 2,000
-# frames, a sweep of each plough, to fill up) and that the geometry cache stays within its
-# budget (summary.cache in stats.json). Exits non-zero when a check fails. Writes out/soak/: samples.csv, summary.json, rss.svg, and each run's frames and
-# stats.json (the frames are deleted after the run unless SOAK_KEEP_FRAMES=1).
+# The soak (`make soak`, not in CI): simulates scenes/soak.toml (10,000 frames of islands
+# falling asleep and waking, a bounded number of bodies), renders every frame as a
+# low-resolution preview with each backend and each integration form, samples the renderer's
+# resident memory every 0.5 s, and checks that it stays flat after warm-up (growth < 5% from
+# the end of the first 20% of the frames to the end; the scene needs 2,000 frames, a sweep of
+# each plough, to fill up) and that the geometry cache stays within its budget (summary.cache
+# in stats.json). Exits non-zero when a check fails. Writes out/soak/: samples.csv,
+# summary.json, rss.svg, and each run's frames and stats.json (the frames are deleted after
+# the run unless SOAK_KEEP_FRAMES=1).
 #
 # Runs: baked form (every island integrated as it sleeps, the geometry cache on, with a
 # small budget so that it evicts) and resting form (the default), on Embree and on the BVH.

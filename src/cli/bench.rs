@@ -60,7 +60,8 @@ pub enum BenchCommand {
     )]
     Regimes(RegimesArgs),
     /// Embree's top level of N instances as one instance geometry each against one instance
-    /// array, still and moving over the shutter: update, commit and trace (issue 15).
+    /// array, still and moving over the shutter: update, commit and trace (what motion blur
+    /// costs Embree's top level).
     #[cfg(feature = "embree")]
     #[command(after_help = "Examples:\n  dormant bench instances --count 8000 --json out/instances.json")]
     Instances(InstancesArgs),

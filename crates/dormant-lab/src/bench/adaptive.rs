@@ -88,8 +88,8 @@ pub struct AdaptiveBenchReport {
 }
 
 /// Relative MSE of `image` against `reference`: the mean over pixels and RGB channels of
-/// `(x - ref)^2 / (ref^2 + 0.01)` (the metric of docs/performance.md); non-finite pixels count
-/// as black.
+/// `(x - ref)^2 / (ref^2 + 0.01)` (the metric of docs/performance.md#denoising-render---denoise);
+/// non-finite pixels count as black.
 pub fn relative_mse(image: &Film, reference: &Film) -> f64 {
     debug_assert_eq!(image.pixels.len(), reference.pixels.len());
     let floor = f64::from(dormant::render::DARK_FLOOR).powi(2);

@@ -1,6 +1,6 @@
 //! The rays of one rendered frame, recorded as the renderer traced them and traced again bare:
 //! what the frame's tracing alone costs, so `bench render` can say how much of a frame goes
-//! to shading, sampling and bookkeeping (issue 15's "half the frame time spent tracing").
+//! to shading, sampling and bookkeeping (the target: at least half the frame spent tracing).
 //!
 //! Recording wraps the frame's [`SceneQuery`] (a separate, untimed render); the bare trace
 //! replays the same rays through the same queries (camera rays in their packets, bounce rays

@@ -1,9 +1,9 @@
 //! `dormant bench instances`: Embree's top level of N instances of a few prototypes laid out as
-//! one instance geometry per instance (what [`dormant::accel::EmbreeAccel`] does) against one
-//! instance array, each still (one time step), translating over the shutter or translating
-//! and rotating (two time steps, quaternion decompositions). Per layout and motion: the update
-//! (new transforms for every instance), the top-level commit and a trace of the same rays at
-//! random shutter times. Issue 15: what the blurred top level's commit costs, and why.
+//! one instance geometry per instance (what [`dormant::accel::embree::EmbreeAccel`] does)
+//! against one instance array, each still (one time step), translating over the shutter or
+//! translating and rotating (two time steps, quaternion decompositions). Per layout and motion:
+//! the update (new transforms for every instance), the top-level commit and a trace of the
+//! same rays at random shutter times: what the blurred top level's commit costs, and why.
 
 use std::sync::Arc;
 

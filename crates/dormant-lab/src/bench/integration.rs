@@ -7,9 +7,9 @@
 //! Per configuration it keeps every frame's stage times; the ratios compare whole frames
 //! (reactivate + integrate + update + commit + trace), so integration's own costs count
 //! against it. The settled phase is the frames where at least 90% of the dynamic bodies
-//! present are asleep. `never` is a fair baseline: its top level is Embree's LOW-quality
-//! instance BVH (rebuilt only when something moved; see docs/performance.md for the top
-//! level qualities tried) and it commits nothing when nothing moved.
+//! present are asleep. `never` is a fair baseline: it commits nothing when nothing moved, and
+//! its top level on Embree is the HIGH-quality instance BVH, the fastest to build and to trace
+//! of the qualities tried: docs/lab/accelerators.md#2026-11-22-embrees-instance-top-level-built-at-high
 
 use std::collections::BTreeMap;
 use std::time::Instant;
@@ -231,8 +231,8 @@ pub struct IntegrationBenchReport {
     pub rebuild_triangles: usize,
     pub mean_insert_ms: f64,
     /// The BVH's persistent static tree after the run over a fresh build of the same
-    /// triangles, trace time of the primary and of the bounce rays (issue 14's target:
-    /// at most 1.05); `None` without that variant.
+    /// triangles, trace time of the primary and of the bounce rays (the target: at most
+    /// 1.05); `None` without that variant.
     pub persistent_over_fresh_trace: Option<PersistentOverFresh>,
     /// The persistent tree where the run left it in the most pieces, against a fresh build of
     /// the same triangles: the target's real test, since after the run the tree is one
@@ -325,8 +325,8 @@ pub struct StaticVariant {
     pub bounce_trace_ms: f64,
     /// SAH cost of the BVH's static tree (JSON null on Embree), to tell a worse tree from a
     /// noisy timing: after the atrium's run the persistent tree is one rebuilt block with the
-    /// fresh build's cost and leaves, so their trace ratio there is the benchmark's noise
-    /// (docs/performance.md).
+    /// fresh build's cost and leaves, so their trace ratio there is the benchmark's noise:
+    /// docs/lab/persistent-tree.md#2026-12-03-the-tree-after-the-run-is-the-fresh-builds
     pub sah_cost: Option<f32>,
 }
 
@@ -405,9 +405,9 @@ struct BuiltVariant {
 
 /// The BVH's persistent static tree as the run left it, after every insert, removal and
 /// cache restore, restored into an accelerator of its own so that it is traced alone as the
-/// fresh builds are (issue 14: it should trace within 5% of a fresh build of the same
-/// triangles). Its build time is not measured (NaN). Embree's static scene is rebuilt per
-/// island, not kept as one tree, so it has no such variant.
+/// fresh builds are (the target: within 5% of a fresh build of the same triangles). Its
+/// build time is not measured (NaN). Embree's static scene is rebuilt per island, not kept as
+/// one tree, so it has no such variant.
 fn persistent_static_tree(
     manager: &SceneManager,
     options: &IntegrationBenchOptions,

@@ -1,13 +1,12 @@
 //! The BVH's persistent static tree at its most fragmented point of a `bench integration` run,
-//! against a fresh build of the same triangles (issue 14: within 5% of a fresh build).
+//! against a fresh build of the same triangles (the target: within 5% of a fresh build).
 //!
-//! Until session 32 the persistent tree after the atrium's whole run was one rebuilt block, the
-//! fresh build's own tree (`static_variants` in the report): the end of the run said nothing
-//! about how the overlay places blocks. The frame where the tree is made of the most blocks
-//! (one per mesh inserted since the last rebuild or relink, just before a relink merges them)
-//! does: that snapshot is kept while the run goes (O(1) to take; it keeps that version's
-//! blocks in memory to the end of the run) and traced after it against a one-block rebuild of
-//! its own triangles.
+//! The end of a run says nothing about how the overlay places blocks: the last relink may have
+//! merged them all into one rebuilt block, the fresh build's own tree (`static_variants` in the
+//! report). The frame where the tree is made of the most blocks (one per mesh inserted since
+//! the last rebuild or relink, just before a relink merges them) does: that snapshot is kept
+//! while the run goes (O(1) to take; it keeps that version's blocks in memory to the end of
+//! the run) and traced after it against a one-block rebuild of its own triangles.
 
 use serde::Serialize;
 

@@ -117,7 +117,7 @@ pub struct BackendRenderTiming {
     /// The frame's rays traced again without the renderer (runs interleaved with the frames).
     pub bare_frame_rays: BareFrameRays,
     /// The frame's Mrays/s over the bare trace's of the same rays: the share of the frame
-    /// spent tracing (issue 15's target: at least 0.5).
+    /// spent tracing (the target: at least 0.5).
     pub frame_over_bare_rays: f64,
 }
 
@@ -150,7 +150,7 @@ pub struct RenderRatios {
     pub bvh_over_embree_frame_samples: Option<f64>,
     /// Embree's frame with camera-ray packets over the same frame in single rays.
     pub embree_frame_packets_over_single: Option<f64>,
-    /// The same for the BVH (its own packets since 2026-12-02, `accel/bvh/flat/packet.rs`).
+    /// The same for the BVH (its own packets, `accel/bvh/flat/packet.rs`).
     pub bvh_frame_packets_over_single: Option<f64>,
 }
 

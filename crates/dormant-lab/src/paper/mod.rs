@@ -82,8 +82,8 @@ impl PaperPreset {
     }
 
     /// The asset rain. 2,000 objects, not the monastery scene's 8,000: at 8,000 only 19% are
-    /// asleep after 900 frames, so the run would measure the fall, not the settling
-    /// (docs/performance.md).
+    /// asleep after 900 frames, so the run would measure the fall, not the settling:
+    /// docs/lab/integration.md#2026-11-22-the-baked-form-only-atrium-and-monastery-variant
     pub fn rain(self) -> WorkloadSize {
         match self {
             PaperPreset::Full => WorkloadSize {

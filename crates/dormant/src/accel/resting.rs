@@ -17,11 +17,9 @@
 //! - when the level is empty (the first build costs only the waiting instances, which the
 //!   cost model chose to integrate) or holds only ghosts (a rebuild of nothing is free).
 //!
-//! Without it every island event rebuilt the level. On the demolition (80,456 bodies, a few
-//! islands falling asleep and waking in every rendered frame) that cost more than the
-//! per-frame top-level build it replaced: rendering every tenth frame, `auto` resting took
-//! 45.7 ms a frame against `never`'s 41.9 ms (rebuilds 15 ms in the integrate stage and
-//! 15 ms in the reactivate stage of each frame).
+//! Rebuilding at every island event instead cost more than the per-frame top-level build the
+//! level replaces, on scenes where a few islands fall asleep and wake in every frame:
+//! docs/lab/integration.md#2026-12-01-the-resting-form-with-a-scheduled-resting-level
 
 /// Prior cost of a resting-level rebuild per instance, ms: Embree 4.4's HIGH instance build
 /// measured 0.4-0.6 us per instance on the monastery with 8,000 ducks (`bench accel`), 0.25 us

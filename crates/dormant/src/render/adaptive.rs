@@ -7,27 +7,14 @@
 //! thread count or tile order. Also the per-frame summary of the samples spent ([`SppStats`]).
 //!
 //! Why the bound grows with the spread: the image's error (the relative MSE of
-//! docs/performance.md, the mean over pixels of each one's variance of the mean σ²/n) is
-//! least for a given total of samples when each pixel gets n ∝ σ (σ: the relative standard
-//! deviation of one sample), not when every pixel reaches the same error (n ∝ σ², which puts
-//! the samples into the noisiest pixels up to the cap). Stopping once σ²/n ≤ t²·σ gives n ∝ σ.
-//! On the default scene this reached uniform sampling's error with 1.45-1.69x fewer samples
-//! where the equal-error rule needed 1.30-1.38x fewer (docs/performance.md).
-//!
-//! Tried and dropped (same measurement, 480x270, at most 128 spp, min 8):
-//! - pooling σ² over the 3x3 neighbourhood (in rounds over the whole frame, as Cycles filters
-//!   its error), to make the estimate from 8-50 samples less noisy: mean 1.39/1.55/1.59x,
-//!   max 1.38/1.53/1.53x (at uniform 16/32/64 spp's error) against 1.47/1.67/1.67x per pixel.
-//!   The metric is per pixel, and edge pixels' σ differs from their neighbours'.
-//! - other exponents (stop once σ²/n ≤ t²·σ^a): a = 0.75 1.45/1.61/1.56x, a = 1.25
-//!   1.46/1.66/1.68x; a = 1 (the optimum in theory) kept.
-//! - one threshold for the whole frame (after the minimum, the t for which the predicted
-//!   image error equals the threshold²; in rounds over the frame): 1.45/1.69/1.66x, the same,
-//!   but a pixel's noise then depends on the rest of the frame (objects entering a sequence's
-//!   view would change it); recomputing it every round: 1.58x at 64 spp's error.
-//! - checking every 2 or 8 samples instead of 4: within ±0.03x; a minimum of 16: 1.50x at
-//!   32 spp's error (worse); a minimum of 4: 1.66/1.71/1.67x (better at low spp, but a pixel
-//!   judged on 4 samples misses more rare light paths; the default minimum stays 8).
+//! docs/performance.md#denoising-render---denoise, the mean over pixels of each one's variance
+//! of the mean σ²/n) is least for a given total of samples when each pixel gets n ∝ σ (σ: the
+//! relative standard deviation of one sample), not when every pixel reaches the same error
+//! (n ∝ σ², which puts the samples into the noisiest pixels up to the cap). Stopping once
+//! σ²/n ≤ t²·σ gives n ∝ σ: on the default scene it reaches uniform sampling's error with
+//! about 1.7x fewer samples, where the equal-error rule needed 1.3x fewer. Pooling σ over
+//! neighbours, other exponents, one threshold for the frame, and other check intervals and
+//! minimums measured no better: docs/lab/sampling.md#2026-12-02-adaptive-samplings-stopping-rule-n--σ
 
 use glam::Vec3;
 
@@ -39,7 +26,7 @@ pub const CHECK_EVERY: u32 = 4;
 
 /// Radiance below which the error is measured against this absolute value instead of the
 /// pixel's own (dark pixels would otherwise never converge). The same floor as the relative
-/// MSE of docs/performance.md: `(x - ref)^2 / (ref^2 + 0.1^2)`.
+/// MSE of docs/performance.md#denoising-render---denoise: `(x - ref)^2 / (ref^2 + 0.1^2)`.
 pub const DARK_FLOOR: f32 = 0.1;
 
 /// `--noise-threshold` and `--min-spp` (`[render] noise_threshold`, `min_spp`).

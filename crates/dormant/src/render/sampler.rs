@@ -14,20 +14,17 @@
 //! adaptive pixel that stops early relies on. Because every pair gets an independent shuffle,
 //! sample `i` of one pair is unrelated to sample `i` of another: the pairs are independent.
 //!
-//! Replaced (2026-12-02): one Roberts R2 lattice for every pair, decorrelated only by a
-//! per-pair Cranley-Patterson offset. Sample `i` of two pairs were the same lattice point
-//! shifted, so the pairs were strongly correlated and each pixel converged to a seed-dependent
-//! value (an error floor; see docs/performance.md "Adaptive sampling"). Do not go back to a
-//! shared sequence with only per-pair offsets or per-pair scrambling: without a per-pair index
-//! shuffle the pairs stay correlated (Owen scrambling flips the same index bit in both).
+//! Do not go back to one sequence shared by all pairs with only per-pair offsets or per-pair
+//! scrambling: without a per-pair index shuffle the pairs stay correlated (Owen scrambling
+//! flips the same index bit in both), and each pixel converges to a seed-dependent value, an
+//! error floor no sample count removes. The R2 lattice this sampler replaced had that floor:
+//! docs/lab/sampling.md#2026-12-02-adaptive-sampling-with-the-r2-sampler
 //! pbrt-v4's padded Sobol sampler shuffles with a random permutation of `[0, spp)` instead,
 //! which needs the pixel's budget and leaves an early-stopped prefix unstratified.
 //!
-//! Cost: a frame took about 14% longer than with the R2 sampler (docs/performance.md,
-//! "Adaptive sampling"); the dimension-hash table, the pre-reversed Sobol tables and the
-//! per-pixel seeds of the first pairs then halved the sampler's share of a frame (12% -> 6%,
-//! "Shading overhead"). Untried: cheap hash-combined seeds for the three scrambles instead
-//! of full hashes (changes every image; at most about 2% of a frame now).
+//! Cost: the dimension-hash table, the pre-reversed Sobol tables and the per-pixel seeds of the
+//! first pairs keep the sampler at about 6% of a path-traced frame. Cheaper hash-combined
+//! seeds for the three scrambles would change every image for at most about 2% of a frame.
 
 use glam::Vec2;
 

@@ -39,10 +39,10 @@ fn tent_offset(u: Vec2) -> Vec2 {
 const TILE: u32 = 16;
 
 /// Pixel block whose camera rays (one sample each) are traced together as one packet
-/// ([`SceneQuery::intersect_packet`]) before each pixel's integrator continues alone. In
-/// `dormant bench render` (docs/performance.md) Embree traced 4x2 camera packets 1.3-1.6x
-/// (monastery, 8,000 ducks) and 3.1-3.4x (default scene) as fast as single rays; whole
-/// path-traced frames gained about 3% and 10%, as camera rays are one in 4-5 of their rays.
+/// ([`SceneQuery::intersect_packet`]) before each pixel's integrator continues alone: 8 rays,
+/// the AVX2 width. Embree traces 4x2 camera packets 1.3-3.4x as fast as single rays; whole
+/// path-traced frames gain a few percent to 10%, camera rays being one in 4-5 of their rays:
+/// docs/lab/rendering.md#2026-11-22-ray-packets-on-embree-rtcintersect4816-rtcoccluded4816
 const BLOCK: (u32, u32) = (4, 2);
 const BLOCK_PIXELS: usize = (BLOCK.0 * BLOCK.1) as usize;
 

@@ -25,8 +25,7 @@
 //!   `d * bodies`, since the backends rebuild that level on their own schedule, when the
 //!   waiting islands have cost a rebuild: `crate::accel::RestingSchedule`);
 //! - **wake**: nothing at the wake itself: baked islands leave by a detach, resting ones leave
-//!   ghosts that rays skip until the next scheduled rebuild. (Before the schedule, every
-//!   resting wake rebuilt the resting scene, and the model priced that rebuild here.)
+//!   ghosts that rays skip until the next scheduled rebuild.
 //!
 //! Before there are enough samples the model uses priors (below), which the measurements
 //! replace as soon as they exist.
@@ -52,8 +51,9 @@ const PRIOR_SLEEP_FRAMES: f64 = 30.0;
 /// 0.41-0.43 us per instance on 7,920 instances; the BVH 0.44-0.59 us; `dormant bench accel`).
 const PRIOR_REST_MS: (f64, f64) = (0.2, 5e-4);
 /// Prior trace penalties until a probe measured them: a second scene per ray cost 0.98x on
-/// the monastery with 8,000 ducks and on the atrium but 1.07-1.3x on the demolition
-/// (docs/performance.md), so 10%; baking every body about 15%.
+/// the monastery with 8,000 ducks and on the atrium but 1.1-1.3x on the demolition, so 10%;
+/// baking every body about 15%:
+/// docs/lab/integration.md#2026-12-01-the-resting-form-with-a-scheduled-resting-level
 const PRIOR_RESTING_PENALTY: f64 = 0.10;
 const PRIOR_BAKED_PENALTY: f64 = 0.15;
 
@@ -119,10 +119,10 @@ pub enum IntegrationForm {
     /// The island's triangles in world space, in the static scene (one incremental insert).
     Baked,
     /// The island's bodies stay instances, in a resting scene beside the per-frame top level:
-    /// rebuilt on a schedule, traced as a second scene per ray. The default: on
-    /// the monastery with 8,000 ducks it traces 0.98x (Embree) and 0.87-1.0x (BVH) as fast as
-    /// every body instanced in one top level, where baking every body traces 1.7-1.8x slower
-    /// (`dormant bench accel`, docs/performance.md).
+    /// rebuilt on a schedule, traced as a second scene per ray. The default: on the monastery
+    /// with 8,000 ducks it traces 0.98x (Embree) and 0.87-1.0x (BVH) as fast as every body
+    /// instanced in one top level, where baking every body traces 1.7-1.8x slower (`dormant
+    /// bench accel`): docs/lab/accelerators.md#2026-12-01-integration-forms-on-the-same-scene-and-the-ratios-table
     #[default]
     Resting,
 }

@@ -54,13 +54,11 @@ impl BuildParams {
 
     /// More bins: for structures built once and traced a lot. Leaves of up to 8 triangles (two
     /// packets; the SAH counts blocks of four, so a leaf grows past one packet only where that
-    /// pays): since session 24, when they measured builds 8-10% faster than leaves of 4 with
-    /// the same traces (docs/performance.md, "Build"; first measured no better for the trace,
-    /// "Node step and leaves"). Counted in session 27 (cachegrind, monastery with 8,000 ducks,
-    /// 320x180): leaves of 4 ran 1.1% fewer trace instructions and 10% more build ones.
-    /// Blocks of eight (`leaf_block: 8`, a leaf of up to eight triangles costing one test, as
-    /// the AVX2 leaf test takes two packets at once since session 30), counted the same way:
-    /// trace 1.3% more instructions (614.1M against 606.5M), startup 1.3% fewer; not kept.
+    /// pays): builds 8-13% faster than leaves of 4, traces about the same:
+    /// docs/lab/bvh-build.md#2026-12-02-where-the-builds-time-goes-in-a-fresh-process-node-slots-leaves-of-8
+    /// Blocks of eight (`leaf_block: 8`, so that a leaf of up to eight costs one AVX2 test)
+    /// made fewer, fuller leaves that traced slower:
+    /// docs/lab/accelerators.md#2026-12-03-a-leafs-two-packets-in-one-avx2-test-cachegrind
     pub const QUALITY: BuildParams = BuildParams {
         bins: 32,
         max_leaf_size: 8,

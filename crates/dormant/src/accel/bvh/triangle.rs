@@ -76,8 +76,7 @@ pub(crate) struct RayTri {
     ky: Axis,
     kz: Axis,
     /// The origin's coordinates on the axes `kx`, `ky`, `kz`, picked once per ray: glam's
-    /// `Vec3` indexed by a variable is a `match`, and the leaves read these on every call
-    /// (cachegrind, session 27).
+    /// `Vec3` indexed by a variable is a `match`, and the leaves read these on every call.
     org_k: [f32; 3],
     sx: f32,
     sy: f32,
@@ -85,10 +84,9 @@ pub(crate) struct RayTri {
 }
 
 impl RayTri {
-    /// Tried (session 31, cachegrind, 320x180 path-traced frames of the monastery with 8,000
-    /// ducks): the shear's `kx`, `ky` from a six-entry table indexed by `2 * kz` and the sign
-    /// instead of two `% 3` and a swap. Program +6.5M (the constructor fell out of line at one
-    /// call site), +9.2M with `#[inline(always)]`; not kept.
+    /// The watertight test's constants for `ray`. The shear's `kx`, `ky` come from two `% 3`
+    /// and a swap: a six-entry table indexed by `2 * kz` and the sign ran more instructions:
+    /// docs/lab/accelerators.md#2026-12-03-trace-experiments-none-kept-the-gap-to-embree-by-query-cachegrind-callgrind
     pub fn new(ray: &Ray) -> Self {
         let (o, d) = (ray.origin.to_array(), ray.dir.to_array());
         let kz = ray.dir.abs().max_position();
@@ -175,11 +173,10 @@ pub(crate) const NORMAL: usize = 3;
 /// A coordinate axis, 0 to 2: what [`Tri4::row`] reads a packet by without a bounds check.
 ///
 /// The watertight test reads the packet by the ray's axes, which are known only at run time;
-/// checked, that was nine compares and branches per leaf test. Tried in session 29: the
-/// axes as a `u8` enum, whose range the compiler knows: the leaf tests ran 6.2M fewer
-/// instructions (cachegrind, monastery with 8,000 ducks) and the query entries 8.7M more
-/// (making the enum from an index is a `match`). Here the one constructor clamps, and the
-/// compiler drops the clamp where it knows the index is below 3, as in [`RayTri::new`].
+/// checked, that was nine compares and branches per leaf test. The one constructor clamps,
+/// and the compiler drops the clamp where it knows the index is below 3, as in
+/// [`RayTri::new`]. (A `u8` enum, whose range the compiler knows, saved as much in the leaf
+/// tests and cost more where it is made from an index: a `match`.)
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Axis(usize);
 
@@ -357,8 +354,8 @@ impl RayTri {
     /// packet left over goes 4-wide.
     ///
     /// Eight lanes (the AVX2 and AVX-512 paths) test a leaf's two packets in one go: a leaf
-    /// holds up to eight triangles, in 1.66 packets on average (session 29, monastery with
-    /// 8,000 ducks), and the second packet cost a whole test.
+    /// holds up to eight triangles, in 1.66 packets on average on the monastery with 8,000
+    /// ducks, and the second packet cost a whole test.
     #[inline(always)]
     pub fn closest_in<L: TriLanes>(&self, packets: &[Tri4], t_max: f32) -> Option<(usize, TriHit)> {
         // Loops and functions, no closures or iterator adaptors: on the AVX2 path, code left
@@ -416,9 +413,8 @@ impl RayTri {
     ///
     /// The vertices are read by the ray's axes straight from the packet (one load each, the
     /// axis offsets fixed per ray), not shifted on all three axes first and then picked: that
-    /// form stored the nine shifted rows to the stack and read them back by index (cachegrind,
-    /// session 27, monastery with 8,000 ducks: the leaf closures ran 205M instructions before,
-    /// 184M after).
+    /// form stored the nine shifted rows to the stack and read them back by index, about a
+    /// tenth more instructions per leaf test.
     #[inline(always)]
     fn closest_lane<L: TriLanes>(&self, q: &[Tri4], t_max: f32) -> Option<(usize, TriHit)> {
         let (mut mask, t, v, w, det) = match self.test_lanes::<L>(q, t_max) {
@@ -461,7 +457,7 @@ impl RayTri {
         // zero and the largest above. A lane with a NaN edge function may come out either way
         // here (min and max pass NaN on from one operand only), but its `det` is NaN and the
         // lane is never hit, on this path or the one-triangle test's. Four instructions fewer
-        // than three compares per side (session 30: the leaf tests -2.5% on the ducks).
+        // than three compares per side.
         let neg = u.min(v).min(w).lt(zero);
         let pos = u.max(v).max(w).gt(zero);
         let maybe_inside = !(neg & pos);

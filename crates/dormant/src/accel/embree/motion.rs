@@ -26,19 +26,16 @@ pub(super) fn column_major_3x4(xf: &Affine3A) -> [f32; 12] {
 /// turns it to within `a^3/24` of the slerp: at 2e-3 the object's points move by 5e-7 of their
 /// distance `r` from its origin, eight of f32's unit roundoffs. A pure translation (`a = 0`)
 /// lerps exactly.
-///
 /// An instance farther out may turn further ([`lerps_as_matrices`]): its points may then move
 /// by 5e-7 of its translation's magnitude instead, still eight unit roundoffs of it, half of
 /// what the crosscheck allows Embree's own f32 transform (16 roundoffs of the ray origin's and
-/// the translation's magnitude; docs/crosscheck.md). On the atrium at shutter 0.5 (five frames
-/// sampled over the fall, 28k motions) 9% of the moving instances' motions are pure
-/// translations, 51% turn by less than 1e-4 rad, 10% by 1e-4 to 1e-3, 4% by 1e-3 to 2e-3, 27%
-/// by more (docs/performance.md, "Motion blur").
+/// the translation's magnitude; docs/crosscheck.md). On the atrium about three quarters of the
+/// moving instances' motions over the shutter turn by less than 2e-3 rad.
 ///
-/// Tried (session 24): the instances that turn further as matrices at more time steps (the
-/// slerp's poses at `1 + ceil(a / LERP_MAX_ANGLE)` times, up to 16, so that no segment turns
-/// by more than this): Embree's multi-segment builder made the atrium's blurred commit 3.2x
-/// slower (20.4-21.5 against 6.6-6.7 ms a frame; blur on / off 2.97-3.06 against 1.53-1.57),
+/// Beyond the angle, quaternions at two time steps: the instances that turn further as
+/// matrices at more time steps (up to 16, no segment turning by more than this) made Embree's
+/// blurred commit 3x slower:
+/// docs/lab/motion-blur.md#2026-12-02-the-angle-scaled-by-the-instances-distance-from-the-origin
 /// tracing unchanged. Two time steps, quaternions beyond the angle, stay.
 const LERP_MAX_ANGLE: f32 = 2e-3;
 

@@ -374,11 +374,11 @@ impl InstanceGeometry {
     ///
     /// A rotating instance gets quaternion decompositions, which Embree slerps; bounding that
     /// motion costs Embree a root search per box corner and axis at every commit (13 us an
-    /// instance for a pure translation, 65 us rotating, under load; `dormant bench
-    /// instances`). An instance that barely turns for its size and place
-    /// ([`lerps_as_matrices`]) gets two matrices instead, which Embree lerps and bounds in
-    /// closed form: on the atrium most moving bodies barely turn within the shutter
-    /// (docs/performance.md, "Motion blur").
+    /// instance for a pure translation, 65 us rotating, in `dormant bench instances`). An
+    /// instance that barely turns for its size and place ([`lerps_as_matrices`]) gets two
+    /// matrices instead, which Embree lerps and bounds in closed form; on the atrium most
+    /// moving bodies barely turn within the shutter:
+    /// docs/lab/motion-blur.md#2026-12-02-where-the-blurred-commit-goes-barely-turning-instances-as-matrices
     pub fn set_motion(&mut self, motion: &InstanceMotion) -> Result<(), EmbreeError> {
         if !motion.is_finite() {
             return Err(EmbreeError::NonFiniteTransform);

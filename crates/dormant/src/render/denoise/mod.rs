@@ -95,8 +95,8 @@ impl Denoiser {
 
     /// With `on`, [`Denoiser::denoise`] first denoises the albedo and normal guides (OIDN's
     /// prefiltering, Cycles' "Accurate" prefilter) and then filters the image with `cleanAux`:
-    /// OIDN's recommendation for final frames, at three filter runs instead of one (measured in
-    /// docs/performance.md).
+    /// OIDN's recommendation for final frames, at three filter runs instead of one (measured:
+    /// docs/performance.md#denoising-render---denoise).
     pub fn prefilter(mut self, on: bool) -> Self {
         self.prefilter = on;
         self

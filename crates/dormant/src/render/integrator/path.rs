@@ -235,11 +235,10 @@ impl PathTracerFrame<'_> {
     }
 
     /// The sun: a direction in its disc, MIS against BSDF sampling. Shadow rays stay single
-    /// rays: in `dormant bench render`, sun shadow rays of neighbouring pixels traced as Embree
-    /// packets ran 0.9-1.1x as fast as single rays on the monastery at 2x2-8x1 (1.2-1.5x at
-    /// 4x4; 1.6-3.8x on the small default scene), and packing them would mean shading a whole
-    /// pixel block's first vertex before any of its shadow rays (docs/performance.md, "Ray
-    /// packets").
+    /// rays: as Embree packets of neighbouring pixels they paid on the monastery only in 4x4
+    /// blocks, and packing them would mean shading a whole pixel block's first vertex before
+    /// any of its shadow rays:
+    /// docs/lab/rendering.md#2026-11-22-ray-packets-on-embree-rtcintersect4816-rtcoccluded4816
     ///
     /// Like every light sample here, the shadow ray goes first and the BSDF is evaluated only
     /// when it arrives (a blocked sample needs no BSDF value); [`Bsdf::reflects`] keeps the

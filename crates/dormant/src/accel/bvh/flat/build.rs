@@ -147,11 +147,10 @@ pub(crate) fn build_with(
 /// split, left subtree before right) with child indices relative to its root at 0; above it,
 /// the split node's box and its two halves, built at once.
 ///
-/// Until session 24 (2026-12) the nodes went into one array of `2n - 1` slots, a disjoint
-/// region per subtree sized for the worst case (leaves of one primitive), and were copied out
-/// depth-first at the end: 8 MB for the monastery's 124,706 triangles, of which its 72,589
-/// nodes used 29%, spread so that every page was touched (13% of a whole scene load's page
-/// faults; docs/performance.md, "Build").
+/// Subtrees build into arrays of their own, placed once at the end, not into one array of
+/// `2n - 1` slots sized for the worst case: that array was mostly unused, yet spread so that
+/// every page of it was touched (8 MB for the monastery, a good share of a scene load's page
+/// faults): docs/lab/bvh-build.md#2026-12-02-where-the-builds-time-goes-in-a-fresh-process-node-slots-leaves-of-8
 enum Subtree {
     Nodes(Vec<Node>),
     Split(Aabb, Box<(Subtree, Subtree)>),
@@ -331,15 +330,12 @@ fn split_at(prims: &[PrimRef], mid: usize) -> (usize, RangeBounds, RangeBounds) 
 /// every centroid coincides. All three axes are binned in one pass over the range.
 fn best_split(ctx: &Ctx, prims: &[PrimRef], b: &Box3, cb: &Box3) -> Option<(f32, usize, usize, Binning)> {
     // Small ranges need few bins: clearing and sweeping them would cost more than binning.
-    // Embree's rule, 4 + n / 20 (up to `bins`): since session 25, when it measured the
-    // monastery's tree 0.72-0.78x the build time of the former 4 + n / 2, with `sah_cost`
-    // 29.581 against 29.500 (+0.3%) and the same trace in `bench accel` (docs/performance.md,
-    // "Build"). Measured then (one thread, in-process medians, SAH): n / 2 45.6 ms, 29.500;
-    // n / 4 44.4, 29.457; n / 8 42.5, 29.543; n / 12 38-41, 29.578; n / 20 33-35, 29.581;
-    // n / 32 33-34, 29.879; n / 64 38-40, 30.114; 4 bins everywhere 34-35, 32.93. (Before
-    // block counting and the build's second pass, n / 20 had measured slower than n / 2.)
-    // Also tried: an exact sweep over the sorted centroids of ranges up to 16 (every binned
-    // split is one of those): lower SAH, but slower than binning them.
+    // Embree's rule, 4 + n / 20 (up to `bins`), builds the monastery's tree in 0.72-0.78x the
+    // time of 4 + n / 2 for 0.3% more SAH cost and the same trace. Other divisors and 4 bins
+    // everywhere measured slower or worse:
+    // docs/lab/bvh-build.md#2026-12-02-embrees-bin-count-one-sse2-conversion-triangles-stored-once
+    // An exact sweep over the sorted centroids of small ranges found lower SAH costs but built
+    // slower than binning them: docs/lab/bvh-build.md#2026-12-02-second-pass-branch-build2
     let nb = ctx.p.bins.min(4 + prims.len() / 20);
     if prims.len() == 2 {
         return best_split_pair(ctx, prims, b, cb);
@@ -450,9 +446,9 @@ impl<const N: usize> Bins<N> {
             self.merge(&b);
             return;
         }
-        // Tried: two sets of bins filled side by side (even and odd primitives, merged at the
-        // end) so that neighbours falling in the same bins do not wait for each other's stores:
-        // no faster (48-49 against 49-50 ms of CPU for the monastery's tree).
+        // Two sets of bins filled side by side (even and odd primitives, merged at the end), so
+        // that neighbours in the same bins do not wait for each other's stores, built no faster
+        // than one: docs/lab/bvh-build.md#2026-12-02-second-pass-branch-build2
         for pr in prims {
             self.add_one(pr, binning);
         }
@@ -492,9 +488,9 @@ fn median_split(prims: &mut [PrimRef], cb: &Box3) -> usize {
 /// (every element is tested once, and counted on its side then). Branch-free (Lomuto: each
 /// element swaps with the first right one, which moves on when it went left): which side an
 /// element goes is close to random, and a branch on it mispredicted about half the time.
-/// Tried (session 25): both sides' bounds kept in registers and updated through selects
-/// instead of indexing the pair by the side: 7-12% slower builds (twice the min/max work for
-/// store forwarding that was not the bottleneck).
+/// Both sides' bounds are indexed by the side: kept in registers and updated through selects
+/// instead, they doubled the min/max work and built slower:
+/// docs/lab/bvh-build.md#2026-12-02-embrees-bin-count-one-sse2-conversion-triangles-stored-once
 fn partition(prims: &mut [PrimRef], left: impl Fn(&Box3) -> bool) -> (usize, RangeBounds, RangeBounds) {
     let mut sides = [RangeBounds::EMPTY; 2];
     let mut k = 0;

@@ -32,8 +32,7 @@ pub(crate) struct MeshBvh {
     pub tris: Vec<Tri>,
     /// Leaf order: binary leaf range `first..first + count` holds triangles
     /// `tris[order[first..first + count]]` ([`Self::leaf_tris`]). Kept instead of a copy of
-    /// `tris` in that order (session 25: 44 bytes less per triangle, and one pass over them
-    /// less per build).
+    /// `tris` in that order: 44 bytes less per triangle, and one pass over them less per build.
     order: Vec<u32>,
     /// Each binary leaf's triangles in packets of four, in leaf order.
     pub packets: Vec<Tri4>,
@@ -75,23 +74,10 @@ impl MeshBvh {
     /// The leaf closures here and in [`Self::occluded_from`] stay out of line (a mesh is
     /// traversed from two places in one query, the static tree's blocks and the instances),
     /// so their tests run inside [`Kernel::leaf`], which compiles them for the path (without
-    /// it they were legacy SSE, the x86-64 baseline). Tried
-    /// 2026-12-02: leaf tests as types with `#[inline(always)]` visits, inlined into the
-    /// AVX2 entry: single-thread AO renders of the monastery with 8,000 ducks took the same
-    /// CPU time (7.00-7.03 s against 7.00-7.10 s, three runs each), and the same types for the
-    /// packet queries were slower (4x2 camera packets 5.5-6.9 against 8.2 Mrays/s). Counted
-    /// (session 28, cachegrind, monastery with 8,000 ducks): the leaf closures inlined into the
-    /// entry (`#[inline(always)]` on them), 0.7% more instructions than the calls they save
-    /// (the ray's box constants are reloaded from the stack either way, and `Iter::any` of the
-    /// any-hit leaf then stayed out of line as baseline SSE); the whole traversal inside
-    /// `Kernel::leaf` instead (one out-of-line traversal per mesh query, leaves inlined into
-    /// it), 0.3% more. Session 31: the two single-ray leaves as visitor types (`visit`
-    /// `#[inline(always)]`, no closure), the AVX2 test behind an out-of-line `#[target_feature]`
-    /// function and the hit bookkeeping in the traversal: 1.9% more (1,381.3M against
-    /// 1,355.4M). The same types with the AVX-512 test inlined whole (32 vector registers, to
-    /// keep the ray's constants): the AVX-512 entry's dispatch closure, now too large, stayed
-    /// out of line compiled for the x86-64 baseline, and renders took twice as long (valgrind
-    /// cannot run AVX-512, so that path can only be timed).
+    /// it they are legacy SSE, the x86-64 baseline). Inlining the leaf tests (as closures,
+    /// as visitor types, or the whole traversal inside `Kernel::leaf`) was tried several ways
+    /// and never paid; with AVX-512 it pushed the entry out of line and doubled render times:
+    /// docs/lab/accelerators.md#2026-12-04-where-the-accelerator-targets-end-target-by-target
     #[inline(always)]
     pub fn intersect_from<K: Kernel>(
         &self,

@@ -6,21 +6,12 @@
 //! done (any-hit). Each lane gets the hit a single ray would (up to ties between surfaces at
 //! the same distance, which the visiting order decides).
 //!
-//! Why per-lane box tests and not one box against eight lanes (Wald's packets): the node
-//! step's kernel stays the one every SIMD path already has and is tested on, and each lane
-//! keeps its own set of children, so a leaf is tested only by the lanes that reach it. (The
-//! first reason given here, that the trace is load-latency bound, did not survive counting:
-//! the BVH misses the caches as often as Embree and runs twice its instructions,
-//! docs/performance.md, session 27.)
-//!
-//! Tried and not kept (session 28, cachegrind, 320x180 path-traced frames): one conservative
-//! interval test per node for the whole packet (each lane's origin and inverse direction
-//! bounded per axis, the four corner products of each plane; lanes pointing both ways on an
-//! axis fell back to these per-lane tests), every child it entered given all the lanes. The
-//! default scene's packet queries ran 35.3M instructions against 23.5M (the bounds are made
-//! again at every traversal: static blocks, levels, each instance entered, each a few nodes
-//! deep), and the ducks' 1,800M against 1,480M in all: without each lane's own box tests
-//! every lane reached every leaf the packet did, and the triangle tests alone rose by 192M.
+//! Each lane keeps its own box tests rather than one box against eight lanes (Wald's packets):
+//! the node step's kernel stays the one every SIMD path already has and is tested on, and a
+//! leaf is tested only by the lanes that reach it. One conservative test of the whole packet
+//! per node was tried: without each lane's own tests every lane reached every leaf the packet
+//! did, and it ran more instructions, not fewer:
+//! docs/lab/accelerators.md#2026-12-03-redundant-box-tests-and-stack-round-trips-removed-cachegrind
 
 use glam::Vec4;
 
@@ -187,18 +178,12 @@ impl Wide {
     /// into each child's lanes (byte = child, bit = lane); each child's distance is the
     /// nearest over its lanes (misses at infinity).
     ///
-    /// The first version looped over each lane's hit children (a branch per lane and child,
-    /// two arrays updated in memory): slower than single rays on the monastery (4x2 camera
-    /// packets 0.94x, shadow 0.76x), against 1.33x and 1.14x with the transpose.
-    ///
-    /// Pushing here, not in the caller: returning the sorted children (an array of eight
-    /// entries and a count) for the caller to push cost the packets 3-5% of their gain on the
-    /// monastery (4x2 camera packets 1.28-1.30x single rays against 1.32-1.34x; three runs).
-    ///
-    /// Each lane's kernel ray is prepared here, per node (broadcasts from the packet: loads, as
-    /// reading it prepared would be), not once per traversal into an array: that array, 1.8
-    /// KiB, was built aside and copied with `memcpy` at every traversal, 3.6% of a BVH
-    /// path-traced frame of the monastery with 8,000 ducks (most of it at instance entries).
+    /// Pushing here, not in the caller, and each lane's kernel ray prepared here per node
+    /// (broadcasts from the packet) rather than once per traversal into an array: returning
+    /// the sorted children to the caller cost 3-5% of the packets' gain, and that array was
+    /// copied with `memcpy` at every traversal, instance entries included. A loop over each
+    /// lane's hit children instead of the transpose made packets slower than single rays:
+    /// docs/lab/rendering.md#2026-12-02-bvh-packets
     #[inline(always)]
     fn enter_children<K: Kernel>(
         &self,

@@ -3,24 +3,12 @@
 //! instance levels, and the binary reference walk of the tests). It owns the traversal's only
 //! `unsafe`.
 //!
-//! Performance notes (measured, so nobody retries them blind). Setup: CPU time (`perf stat -e
-//! task-clock`) of `dormant --threads 1 render --backend bvh --mode ao --env monastery.glb
-//! --object duck.glb --count 1000 --size 640x360 --spp 16`, 8 runs of each binary alternating,
-//! 2 shared cores:
-//! - This type against the two hand-written stacks it replaced: 1.00x (median of runs and
-//!   best run); images byte-identical.
-//! - Zeroed storage (a plain `[(0, 0.0); N]`, no `unsafe` at all): 1.21x the CPU time, every
-//!   run. The memset is 1 KiB per binary traversal and 3 KiB per 4-wide one, and a ray runs
-//!   one traversal per block subtree and per instance it enters, most of them short.
-//! - The entries in a separate local borrowed by the stack, so that the length stays in a
-//!   register (with the length in the same object, the compiler reloads it around every push:
-//!   the wide traversal's assembly shows it): tried together with the child-order changes of
-//!   2026-12-02 (docs/performance.md, "Node step and leaves"), no gain measured. Counted
-//!   (session 29, cachegrind, 320x180 path-traced frames): 0.4% fewer trace instructions on
-//!   the default scene, but 1.1% more and 10% more simulated mispredictions on the monastery
-//!   with 8,000 ducks.
-//! - `get_unchecked` in [`TraversalStack::pop_within`] (dropping the bounds check on the
-//!   pop): 0.99x median, 1.00x best run, within noise; not worth a second `unsafe`.
+//! The storage is left uninitialised: a ray runs one traversal per block subtree and per
+//! instance it enters, most of them short, and zeroing 1-3 KiB for each cost 1.21x the CPU
+//! time of an AO render. The length lives in the stack object, so the compiler reloads it
+//! around pushes; keeping it in a register (the entries in a separate local) and dropping the
+//! pop's bounds check were tried and did not pay:
+//! docs/lab/accelerators.md#2026-12-01-one-traversal-stack-type-its-storage-left-uninitialised
 
 use std::mem::MaybeUninit;
 

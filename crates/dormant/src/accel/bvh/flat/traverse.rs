@@ -65,8 +65,7 @@ impl BoxRay {
 /// `true` to stop (any-hit). Returns whether `leaf` stopped the traversal.
 ///
 /// Rays traverse the [`super::Wide`] copies; this binary walk is the reference the wide
-/// traversal is tested against (the persistent tree's overlay used it until 2026-12: walking
-/// its 22 binary levels cost that tree a measurable share of its trace).
+/// traversal is tested against.
 #[cfg(test)]
 pub(crate) fn traverse<F>(nodes: &[Node], root: u32, ray: &BoxRay, t_max: &mut f32, mut leaf: F) -> bool
 where

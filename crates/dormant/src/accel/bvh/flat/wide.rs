@@ -10,7 +10,8 @@
 //! leaves at their 4-triangle packets ([`crate::accel::bvh::triangle::Tri4`]), instance levels
 //! at their items.
 //!
-//! Width measured (docs/performance.md, Accelerators): 8 against the former 4-wide glam nodes.
+//! Width 8 measured against the former 4-wide nodes:
+//! docs/lab/accelerators.md#2026-12-02-simd-paths-8-wide-nodes-four-triangle-leaves-avx2-avx-512-portable
 
 use super::stack::TraversalStack;
 use super::{BoxRay, FlatBvh, Node, STACK_SIZE};
@@ -45,12 +46,10 @@ pub(crate) enum Start {
     /// The ray enters the node only if it enters its box (a tree's root).
     Test(u32),
     /// The caller has entered the node's box already, or one around it: the static tree's
-    /// overlay leaf that names a block subtree has that subtree's box, and testing it again
-    /// cost a scalar box test per block entered (cachegrind: docs/performance.md, session
-    /// 28). An instance's prototype is entered once its level has tested the instance's
-    /// world box: its object-space box is tighter, but testing it turned away too few rays
-    /// to pay (session 29: 0.5% fewer program instructions and 4.6% fewer simulated
-    /// mispredictions on a frame of the monastery with 8,000 ducks without it).
+    /// overlay leaf that names a block subtree has that subtree's box, so testing it again
+    /// would only repeat a box test per block entered. An instance's prototype is entered once
+    /// its level has tested the instance's world box: its object-space box is tighter, but
+    /// testing it too turned away too few rays to pay.
     Entered(u32),
 }
 
@@ -179,18 +178,15 @@ impl Wide {
     ///
     /// `NEAREST_FIRST` ([`CLOSEST_HIT`]): each node's hit children are visited nearer first.
     /// Otherwise ([`ANY_HIT`], for queries whose `leaf` stops at the first hit) they are
-    /// visited in slot order, unsorted, as Embree's `occluded` does. Counted (session 29,
-    /// cachegrind, 320x180 frames of the monastery with 8,000 ducks): 4.2% fewer program
-    /// instructions path-traced (trace -7.8%), 2.9% fewer trace instructions in AO, fewer
-    /// simulated mispredictions, images byte-identical; timed, single-thread path-traced
-    /// renders 5.34 s against 5.57 s (median of four, alternating), AO and a cache-resident
-    /// scene within noise. Timed alone in 2026-12-02, before the kernel and stack changes
-    /// since, it was neutral to 3% slower.
+    /// visited in slot order, unsorted, as Embree's `occluded` does: a query that stops at
+    /// any hit gains nothing from the order, and skipping the sort saves instructions and
+    /// mispredictions (measured:
+    /// docs/lab/accelerators.md#2026-12-03-box-rows-folded-into-the-subtraction-any-hit-unsorted-instances-entered-once-cachegrind).
     ///
     /// `leaf` is called from one place only: a closure called once is inlined into the query's
     /// `#[target_feature]` entry (`simd::dispatch!`), and with it the kernel of nested
-    /// traversals (instances, blocks); called from two places it stayed out of line and every
-    /// intrinsic in it became a call (seen in the first build of this file).
+    /// traversals (instances, blocks); called from two places it stays out of line and every
+    /// intrinsic in it becomes a call.
     #[inline(always)]
     pub fn traverse<K: Kernel, F, const NEAREST_FIRST: bool>(
         &self,
@@ -246,8 +242,7 @@ impl Wide {
         let node = root.node();
         // The common case first (a tree's root, an instance's prototype, a block subtree):
         // `root` has a wide node of its own, and the pending list is neither zeroed nor walked
-        // (cachegrind, session 27: zeroing it was 8.8M instructions of a render of the
-        // monastery with 8,000 ducks).
+        // (zeroing it at every traversal was a measurable share of the trace's instructions).
         let Some(&(x, count)) = self.map.get(node as usize) else {
             return;
         };
@@ -298,44 +293,12 @@ impl Wide {
     /// hit children sorted farthest first, all but the nearest pushed, the nearest taken next
     /// (`NEAREST_FIRST`), or the first in slot order taken and the others pushed.
     ///
-    /// Tried and not kept (docs/performance.md, "Node step and leaves"): fast paths for one hit
-    /// (no sort, no push) and two (one compare) with three or more pushed and sorted on the
-    /// stack, together with the leaf children's stack codes stored in the node (no branch on
-    /// `count`): 1.05x the CPU time on a cache-resident scene, no gain on the monastery;
-    /// any-hit queries visiting children in slot order: 1.03x and 0.99-1.0x then, kept in
-    /// session 29 when counted ([`Self::traverse`]). Prefetching the four cache lines of each
-    /// pushed interior child (2026-12-02, `bench render` on the monastery, BVH over Embree in
-    /// one process, two runs each): bounce 0.585-0.589 against 0.572-0.578, camera 0.685-0.696
-    /// against 0.695-0.718: noise. The one-hit fast path alone, counted (session 27,
-    /// cachegrind, 320x180 path-traced frames): 1.6% fewer trace instructions on the monastery
-    /// with 8,000 ducks, 0.4% on the default scene, with 0.7% / 15% more simulated
-    /// mispredictions: not kept; counted again in session 29 on its kernel, 0.6% fewer program
-    /// instructions on the ducks with 4.8% more simulated mispredictions, 0.1% and 17% on the
-    /// default scene. Each hit child inserted into place on the stack (Embree's way; no buffer
-    /// copied there): 0.1% fewer instructions, 11% more branches, 5% more mispredictions.
-    /// Pushing the farther children with one bounds check and one length update (session 28,
-    /// same count): a slice copy 2.1% more trace instructions, a fixed copy of all eight
-    /// entries 13% more (the pairs are copied field by field). Any-hit pops without the `t <=
-    /// t_max` test (an any-hit query's `t_max` never falls; session 29): 0.3% fewer program
-    /// instructions on the ducks, 8% more simulated mispredictions. Any-hit taking the nearest
-    /// hit child next (a running minimum with selects, the others pushed as found; session 31):
-    /// 1.0% more program instructions on the ducks (1,368.7M against 1,355.4M), 0.1% fewer on
-    /// the default scene.
-    ///
-    /// Octant order (session 33; Ylitie, Karras and Laine 2017; docs/performance.md, "Session
-    /// 33"): the collapse put each child in the slot of the corner it lies towards from its
-    /// parent's centre, and a closest-hit ray took the nearest hit child next by a running
-    /// minimum with selects and pushed the others in its direction's octant order, no sort.
-    /// Counted (callgrind, 320x180 path-traced frame of the ducks, whose closest single rays
-    /// are bounces): closest-hit queries -3.8% for 1% more node visits, program -0.8%, images
-    /// byte-identical. Timed (`bench accel`, five pairs): bounces level (median 265 ms against
-    /// 268), but **primary rays slower in every pair** (median 241 ms against 210): the
-    /// count had no single primary rays in it (the renderer traces camera rays in packets),
-    /// yet counted with the camera rays traced singly they also ran 4.5% fewer closest-hit
-    /// instructions and 10% fewer simulated mispredictions: the counts do not explain the
-    /// time here, so time any retry. Not kept; the code is in /work/meas/s33/octant.diff.
-    /// Every child in octant order (the paper's way) walked 11.6% more nodes on the bounces;
-    /// the nearest next with the others in slot order, 4.8%.
+    /// The sort and the pushes are most of a node's instructions, yet every way tried to cut
+    /// them (fast paths for one or two hit children, children inserted into place on the
+    /// stack or pushed in one copy, prefetching pushed children, octant child order) counted
+    /// or timed no better. Octant order counted fewer instructions and timed slower on primary
+    /// rays, so time a retry as well as counting it. Each variant and its measurements:
+    /// docs/lab/accelerators.md#2026-12-04-where-the-accelerator-targets-end-target-by-target
     #[inline(always)]
     fn traverse8<K: Kernel, F, const NEAREST_FIRST: bool>(
         &self,

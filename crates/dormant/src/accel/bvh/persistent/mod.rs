@@ -421,15 +421,11 @@ impl StaticBvh {
     /// block (0 when there was nothing to merge), or `None` when it fell back to a full rebuild
     /// (the overlay came out deeper than [`MAX_OVERLAY_HEIGHT`]).
     ///
-    /// (Merging everything into one block, as a full rebuild does, traces a little faster but
-    /// makes every later removal a full rebuild: on the 8,000-body atrium, where islands keep
-    /// waking, the BVH backend then spent most of its frame time rebuilding. Keeping every
-    /// island's block instead, in an overlay made by insertion (before session 32), left the
-    /// tree after the atrium's run tracing bounce rays up to 1.2x slower than a fresh build of
-    /// the same triangles: each of some 500 small, overlapping blocks is entered separately.
-    /// Merging only what never wakes keeps both: 1.01-1.03x. Merging only when a cost estimate
-    /// said it pays merged early, then stopped, and left a tree slower than either
-    /// (docs/performance.md).)
+    /// Merging only what never wakes keeps the best of both: merging everything, as a full
+    /// rebuild does, makes every later removal a full rebuild, and keeping every island's
+    /// block leaves hundreds of small, overlapping blocks that rays enter one at a time.
+    /// Merging only when a cost estimate said it pays left a tree slower than either:
+    /// docs/lab/persistent-tree.md#2026-12-02-the-persistent-static-tree-after-the-atriums-run
     pub fn relink(&mut self) -> Option<usize> {
         self.state.root.as_ref()?;
         self.relink_blocks(self.live_blocks())

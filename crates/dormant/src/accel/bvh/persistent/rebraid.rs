@@ -8,27 +8,15 @@
 //! Why: a ray walks each block subtree it enters to the end before the next, so a subtree of
 //! the environment that encloses an island (the floor and walls around a pile) is walked
 //! behind the island by rays aimed at it. Overlays made by inserting blocks one at a time
-//! (`insert.rs`, still what [`super::StaticBvh::insert`] does) kept such subtrees whole: at the
-//! atrium's most fragmented point (frame 693, 301 block subtrees) the tree traced 1.33-1.50x
-//! a fresh build of its triangles on primary rays and 1.07-1.24x on bounces. Re-braided
-//! (session 32, one run each, timed): 1.12 / 1.24 over the same 301 subtrees unopened; opened
-//! largest first into 2x as many pieces 0.88 / 1.05, 4x 0.98 / 1.02, 16x 0.94 / 1.14.
+//! (`insert.rs`, still what [`super::StaticBvh::insert`] does) kept such subtrees whole: at
+//! its most fragmented, such a tree traced up to 1.5x a fresh build of its triangles.
 //!
-//! Which pieces: counted per ray at each variant's most fragmented point (wide nodes, leaves,
-//! block traversals started and leaf packets, against the fresh build's), the whole blocks
-//! unopened walked 21% more wide nodes on primary rays and tested 17% more leaves on bounces;
-//! opened into four pieces per block, largest first (2,028 pieces), or only where a piece is
-//! larger than the second-largest block (526-572 pieces), every count came within 4% of the
-//! fresh build's. The second opens the environment down to the size of the islands around it
-//! and leaves the islands whole, in about a quarter of the pieces. Its threshold was then
-//! counted at one peak (frame 1302, 148 blocks): pieces opened down to the second-largest
-//! block's area (202 pieces) left bounce rays starting 4% more traversals than the fresh build
-//! and visiting 2% more wide nodes; down to a quarter of it (314 pieces, kept), 4% fewer
-//! traversals and 6% fewer nodes, leaves and packets within 2%; a tenth (522, the budget
-//! binding) tested 7% more packets; four times it (170), 10% more nodes. A commit over the
-//! atrium's run took 2.3-2.5 ms on average with the kept threshold and 1.9-2.3 ms with the
-//! first, against 1.7-1.8 ms for the one-by-one insertion in the same session.
-//! docs/performance.md ("Session 32") has the tables.
+//! Which pieces: the largest first, while a piece is larger than a quarter of the
+//! second-largest block (the largest island, where the largest block is the environment),
+//! within a budget of four per block. So the environment opens down to the size of the islands
+//! around it and the islands stay whole. Coarser thresholds left rays walking more nodes than
+//! in a fresh build; finer ones tested more leaves and made every commit dearer:
+//! docs/lab/persistent-tree.md#2026-12-03-the-overlay-re-braided-at-every-commit
 
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;

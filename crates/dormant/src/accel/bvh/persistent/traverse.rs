@@ -150,15 +150,12 @@ impl StaticSnapshot {
 
 /// The overlay of one version as a flat tree: interior nodes are overlay nodes, each leaf
 /// names one block subtree (`refs[first]`). Rays traverse its 8-wide copy, as they do the
-/// blocks: after an atrium run the overlay has about 2,600 nodes over 1,300 block subtrees,
-/// 22 levels deep, and walking it one binary node at a time cost the persistent tree a
-/// measurable share of its trace against a fresh build (docs/performance.md).
+/// blocks: an overlay can be thousands of nodes and twenty levels deep, too deep to walk one
+/// binary node at a time.
 ///
-/// Tried (session 31): blocks of up to 1,024 nodes copied into the view node for node, leaves
-/// naming their packets, so that rays start no traversal per small block. At the atrium's
-/// most fragmented point (300 pieces) the persistent tree traced the same against a fresh build
-/// (primary 1.35-1.46, bounce 1.18-1.23, against 1.33-1.43 and 1.07-1.20), and inserts cost
-/// 2.3 ms against 1.8-1.9 (this view is made at every change); not kept.
+/// Small blocks copied into the view node for node, so that rays start no traversal per
+/// block, traced no better and made every change dearer:
+/// docs/lab/persistent-tree.md#2026-12-03-the-tree-at-its-most-fragmented
 #[derive(Debug, Default)]
 pub(crate) struct View {
     pub bvh: FlatBvh,

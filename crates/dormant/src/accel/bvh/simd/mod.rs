@@ -84,10 +84,9 @@ impl SimdPath {
     }
 
     /// The default: AVX2 where the CPU runs it, else portable. AVX-512 is never the default:
-    /// measured slower than AVX2 on the AVX-512 machine (render time of an AO frame of the
-    /// monastery with 8,000 ducks, interleaved: avx2 0.84-0.88x main's, avx512 0.91-0.95x,
-    /// portable 0.91-0.94x; docs/performance.md, Accelerators), since its 8-wide kernel only
-    /// differs in the compare going to a mask register.
+    /// its 8-wide kernel differs only in the compare going to a mask register, and it measured
+    /// slower than AVX2 on the project's AVX-512 machine:
+    /// docs/lab/accelerators.md#2026-12-02-simd-paths-8-wide-nodes-four-triangle-leaves-avx2-avx-512-portable
     pub fn best() -> SimdPath {
         if SimdPath::Avx2.is_supported() {
             SimdPath::Avx2
@@ -197,8 +196,8 @@ pub(crate) trait Kernel: Copy {
     /// Runs `f` compiled for this path: a leaf's triangle tests. The leaf closures stay out of
     /// line (a mesh is traversed from two places in one query), so without this they are
     /// compiled for the x86-64 baseline: legacy SSE, where every operation that keeps its
-    /// input costs a register copy (cachegrind, session 27, monastery with 8,000 ducks: the
-    /// leaf tests ran 184M instructions in SSE, 162M compiled for AVX2).
+    /// input costs a register copy (compiled for AVX2 the leaf tests run about 12% fewer
+    /// instructions).
     fn leaf<R>(self, f: impl FnOnce() -> R) -> R;
     /// [`RayTri::closest_in`] on a leaf's `packets`, as many at once as this path's registers
     /// hold: one on the portable path, two on AVX2 and AVX-512.
@@ -313,7 +312,7 @@ pub(crate) use dispatch;
 /// The integer parts of `x`'s lanes, each in `0..2^31`: the BVH builder's bin of a primitive on
 /// each axis. On x86-64 one SSE2 conversion for the three lanes ([`x86::truncate3`]); Rust's
 /// `as` casts saturate, which costs about a dozen instructions per lane and made the
-/// monastery's tree 5% slower to build (session 25). Elsewhere the casts.
+/// monastery's tree about 5% slower to build. Elsewhere the casts.
 #[inline(always)]
 pub(crate) fn truncate3(x: Vec3A) -> [usize; 3] {
     debug_assert!(x.cmpge(Vec3A::ZERO).all() && x.cmplt(Vec3A::splat(2_147_483_648.0)).all());

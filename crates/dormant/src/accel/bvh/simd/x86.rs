@@ -68,50 +68,20 @@ fn prepare(r: &BoxRay8) -> RayM256 {
 }
 
 /// Near and far distances of the eight boxes: the values [`super::Portable`] computes, so
-/// every path enters the same children.
+/// every path enters the same children in the same order.
 ///
-/// Each plane's distance is `(org - plane) * -inv`, which equals the portable path's
-/// `(plane - org) * inv` up to the sign of a zero (negation is exact and rounding is
-/// symmetric), and no comparison tells `-0` from `+0`: the same children are entered in the
-/// same order, and the images are byte-identical. Written this way round, the box row is
-/// the subtraction's second operand and loads into it: six loads fewer per node, and six
-/// registers free (cachegrind, session 29, 320x180 path-traced frames: trace instructions
-/// -2.9% on the monastery with 8,000 ducks, -0.6% on the default scene). The portable path
-/// keeps `(plane - org) * inv`: in legacy SSE the origin must be copied before each
-/// subtraction, and the same change cost it 3% more program instructions.
+/// Each plane's distance is `(org - plane) * -inv`: the portable path's `(plane - org) * inv`
+/// up to the sign of a zero (negation is exact, rounding symmetric, and no comparison tells
+/// `-0` from `+0`). This way round the box row's load folds into the subtraction: six loads
+/// fewer per node (the portable path keeps its form: legacy SSE would copy the origin first).
+/// The reductions are shallow trees, two and three dependent steps after the slabs instead of
+/// three and four, which a single ray's latency-bound traversal pays at every node. `min` and
+/// `max` are associative and scaling by `S > 0` commutes with `min`, so only a NaN lane (a ray
+/// in a box's plane) may differ, and [`super::Portable`] reduces the same way.
 ///
-/// The ray's constants are still reloaded from the stack at every node in the AVX2 build:
-/// every `ymm` register is caller-saved and a leaf test is a call, so they are spilled, and
-/// the compiler reloads them at each use. Reloading them after each leaf instead (from a copy
-/// behind `std::hint::black_box`) took those six loads out of the node loop but cost more at
-/// each traversal (the copy) and each leaf than it saved: +0.6% trace instructions on the
-/// ducks, +5.9% on the default scene (session 29). Not kept.
-///
-/// Tried and not kept (2026-12-02, docs/performance.md, "Node step and leaves"): one FMA per
-/// plane (`b * inv - org * inv`, with an absolute error bound `8u max |org * inv|` folded into
-/// per-ray near and far constants to stay conservative, since the product cancels for planes
-/// near the origin), alone and with each axis's near and far plane picked once per ray by the
-/// direction's sign (Embree's octant order: no min/max per node, 6 FMAs and 6 min/max in
-/// all). Single-thread AO renders: 0.98-1.03x main's CPU time on the monastery with 8,000
-/// ducks, 1.02-1.03x on a cache-resident scene (64 ducks): the node step's arithmetic is not
-/// what bounds the trace here, and the per-ray constants (12 registers instead of 7) cost
-/// every instance entry. The code is in /work/meas/s22/octonly.diff. Counted (session 28,
-/// cachegrind, 320x180 path-traced frame of the monastery with 8,000 ducks): the octant order
-/// alone, bit-identical (each axis's near and far row offsets kept in the kernel ray, no FMA),
-/// ran 5.5% more trace instructions (779.9M against 739.5M): the six offsets do not stay in
-/// registers either, so each node reloads them from the stack as it reloads the ray's six
-/// vectors, and the min/max it saves are fewer than those loads.
-///
-/// The near and far reductions are written as shallow trees (session 34): `near = max(max(nx,
-/// ny), max(nz, t_min))` and `far = min(min(fx, fy) * S, min(fz * S, t_max))`, two and three
-/// dependent steps after the slabs instead of three and four. The values are the same
-/// (`max`/`min` are associative on numbers, and scaling by `S > 0` commutes with `min` in
-/// floating point, rounding being monotone); only a NaN lane (a ray lying in a box's plane)
-/// can come out differently, and [`super::Portable`] is written the same way, so the paths
-/// still agree. A single ray's traversal is latency-bound (each node's address waits for the
-/// previous node's test), so this shows in time, not in counts: `bench accel` in four pairs,
-/// `bvh_over_embree_trace` 1.30, 1.39, 1.35, 1.36 against 1.41, 1.41, 1.39, 1.55 before
-/// (lower in every pair; docs/performance.md, "Session 34").
+/// Tried and not kept (FMA planes, Embree's per-ray octant planes, the ray's constants
+/// reloaded per leaf instead of per node):
+/// docs/lab/accelerators.md#2026-12-04-where-the-accelerator-targets-end-target-by-target
 #[inline(always)]
 fn near_far(r: &RayM256, b: &Boxes8, t_max: f32) -> (__m256, __m256) {
     // SAFETY: as in `prepare` (AVX only). `Boxes8` is `repr(C, align(32))` and each row is

@@ -4,32 +4,13 @@
 //! back with the inverse transpose.
 //!
 //! Closest hits trace the three structures one after the other, each up to the nearest hit so
-//! far. The order was measured (resting over all-instanced CPU time of 1280x720 primary rays and
-//! their bounces, best of 5-8 interleaved runs, two invocations each; monastery + 8,000 ducks
-//! with the last 1% awake / the built-in default scene):
-//! - static tree, resting level, top level (kept since 2026-12): 1.007-1.009 / 0.978-0.997;
-//! - top level first, then static and resting: 1.022-1.024;
-//! - a root over the three (their root boxes in order of entry distance, skipping those beyond
-//!   the nearest hit): 1.013-1.022; the static root contains the camera, so it always comes
-//!   first and the root only adds box tests;
-//! - resting level, top level, static tree: 0.921-0.931 / 1.011-1.016;
-//! - resting level, static tree, top level: 0.926-0.938 / 0.950-0.967. Rays meet the bodies
-//!   before the floor behind them, and the floor then needs no search. Kept until the atrium
-//!   (bodies in piles inside a large environment, where most rays end on the environment)
-//!   measured a resting trace penalty of 1.43-1.51 with it in `bench integration`, against
-//!   1.03 static first; the demolition 0.94-1.03 against 0.95. Static first costs the ducks a
-//!   few percent and no scene a lot.
-//!
-//! Without resting instances the resting level is empty and rays trace the static tree and
-//! then the top level, as before. Any-hit queries keep that order (static first).
-//!
-//! Tried (session 31, cachegrind, 320x180 path-traced frames): the instance levels first for a
-//! ray whose origin lies in a child box of a level's root (a ray starting among the bodies),
-//! the static tree first otherwise. Closest queries ran 3.7% fewer instructions on the
-//! monastery with 8,000 ducks, any-hit queries 12% more (its sun and sky shadow rays end on
-//! the roof, which static first finds at once), and the test cost every scene: program +26.7M
-//! (ducks), +19.5M (default scene), +16.7M (monastery with one duck); not kept. For closest
-//! queries alone that is about -7M on the ducks against +3M on the other two.
+//! far: the static tree, the resting level, then the top level. Static first, because in
+//! scenes of piles inside a large environment most rays end on the environment; resting first
+//! gains a few percent where bodies stand in front of the floor but cost piles up to 1.5x.
+//! Without resting instances the resting level is empty. Any-hit queries trace the static tree
+//! first too. The other orders measured, a root over the three, and the instance levels first
+//! for rays that start among the bodies:
+//! docs/lab/accelerators.md#2026-12-01-how-rays-meet-the-resting-level-the-bvhs-order-embrees-skipped-top-level
 
 use std::sync::Arc;
 
@@ -50,11 +31,9 @@ use crate::geometry::{Aabb, InstanceMotion, Ray};
 /// Instances per rayon task when a level's bounds and items are made in parallel.
 const PAR_CHUNK: usize = 1024;
 
-/// One instance as traversal needs it: what a ray reads to enter it, in one cache line.
-///
-/// Measured 2026-12-02 (session 26): this record was 144 bytes (the inverse as an
-/// `Affine3A`, the normal matrix and the motion inline), three cache lines per instance a ray
-/// entered (docs/performance.md, "Session 26: counted instead of timed").
+/// One instance as traversal needs it: what a ray reads to enter it, in one cache line (with
+/// the inverse as an `Affine3A`, the normal matrix and the motion inline it took three):
+/// docs/lab/accelerators.md#2026-12-02-counted-instead-of-timed-cachegrind-instance-records-child-codes
 #[derive(Clone, Debug)]
 #[repr(C, align(64))]
 pub(crate) struct TopItem {
@@ -104,11 +83,10 @@ pub(crate) fn build_top(instances: &[TopInstance], params: BuildParams) -> Top {
         .with_min_len(PAR_CHUNK)
         .map(|(_, blas, xf, _, motion)| match motion {
             Some(m) => m.bounds(&blas.bounds()),
-            // The moved root box, as Embree bounds an instance. Tried (session 30, cachegrind,
-            // 320x180 path-traced frame of the monastery with 8,000 ducks): the union of the
-            // root's eight children's boxes, each moved, tighter for a rotated duck: trace
-            // -1.1% (600.1M against 606.5M) for +9.5M instructions building the level's
-            // bounds (2% of the startup, paid again at every frame's top level); not kept.
+            // The moved root box, as Embree bounds an instance. The union of the root's
+            // children's boxes, each moved, is tighter for a rotated body, but building it costs
+            // every frame's top level more than the trace gains:
+            // docs/lab/accelerators.md#2026-12-03-a-leafs-two-packets-in-one-avx2-test-cachegrind
             None => blas.bounds().transformed(xf),
         })
         .collect();
@@ -182,13 +160,10 @@ impl Top {
                 for (item, motion) in self.live(first, count) {
                     let oray = object_ray(ray, item, motion);
                     let mut best = None;
-                    // Tried (2026-12-02): the `RayTri` made at the first leaf reached, so that an
-                    // instance entered without reaching a leaf skips its setup: single-thread AO
-                    // renders of the monastery with 8,000 ducks 7.12-7.15 s against 7.02-7.14 s.
-                    // Counted (session 28, cachegrind, the same scene at 320x180, a `OnceCell` made
-                    // at the first leaf): 0.45% fewer program instructions, 4% more simulated
-                    // mispredictions, and the leaf tests moved into the entries: not kept (the
-                    // code: /work/meas/s28/lazy-raytri.diff).
+                    // The `RayTri` is made on entry: made at the first leaf reached instead, so
+                    // that an instance left without reaching a leaf skips it, it timed as noise
+                    // and counted more mispredictions:
+                    // docs/lab/accelerators.md#2026-12-03-redundant-box-tests-and-stack-round-trips-removed-cachegrind
                     if item.blas.intersect_from(
                         k,
                         Start::Entered(0),

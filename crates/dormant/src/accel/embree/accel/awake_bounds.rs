@@ -2,12 +2,11 @@
 //! use, so that rays that cannot meet an awake body skip the top level without a call into
 //! Embree.
 //!
-//! One box around all of them was the first version. It skips little when the awake bodies
-//! are spread out: on the demolition (80,456 bodies, 2% awake in several collapsing
-//! structures far apart) the box spans the scene and nearly every ray traced the top level
-//! too (trace 1.36x `never`'s). Grid cells, up to [`MAX_BOXES`], bound each group inside it
-//! (trace 1.1-1.35x, the lockstep bench being noisy). With 16 cells and no test of the box
-//! around all first, the 16 tests per ray cost as much as they saved.
+//! A ray is tested against the box around all of them first, then against grid cells, up to
+//! [`MAX_BOXES`], each bounding the instances inside it: one box alone skips little when the
+//! awake bodies are spread out (a few collapsing structures far apart span the scene), and
+//! more cells, or no box around all first, cost rays as much as they save:
+//! docs/lab/accelerators.md#2026-12-01-how-rays-meet-the-resting-level-the-bvhs-order-embrees-skipped-top-level
 
 use glam::{UVec3, Vec3, Vec3A};
 

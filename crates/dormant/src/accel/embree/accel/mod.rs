@@ -57,9 +57,8 @@ pub struct EmbreeBuildParams {
     /// Each static mesh's own BVH under the two-level builder.
     pub static_mesh: BuildQuality,
     /// The top level over instances: rebuilt at every commit where an instance changed. HIGH
-    /// is both the fastest to build and to trace here: on the atrium's 8,000 instances LOW,
-    /// MEDIUM and HIGH measured 13.6, 10.8 and 7.9 ms per commit and 40.1, 36.1 and 31.5 ms
-    /// for 640x360 primary rays (Embree 4.4, 2 threads).
+    /// is both the fastest to build and to trace here (against LOW and MEDIUM, on the atrium's
+    /// 8,000 instances): docs/lab/accelerators.md#2026-11-22-embrees-instance-top-level-built-at-high
     pub top_level: BuildQuality,
     /// Every scene with `RTC_SCENE_FLAG_ROBUST`: conservative box tests and a watertight
     /// triangle test, the guarantees the pure-Rust BVH always gives. Off by default, as in
@@ -394,15 +393,11 @@ impl Accelerator for EmbreeAccel {
     fn commit(&mut self) -> Result<CommitReport, AccelError> {
         let resting = self.commit_resting(false)?;
         let top_changed = self.top.is_dirty();
-        // With moving instances the top level is a motion-blur BVH (docs/performance.md,
-        // "Motion blur"). Most of its cost is Embree bounding each quaternion (slerped)
-        // instance by a root search, so barely turning instances get matrices instead
-        // (`InstanceGeometry::set_motion`). Tried and not kept: building it at MEDIUM or LOW
-        // instead of HIGH (196 and 214 ms a commit against 191 ms at HIGH, blur-off 48-51 ms,
-        // in the same lockstep); one instance array (RTC_GEOMETRY_TYPE_INSTANCE_ARRAY) for all
-        // instances instead of a geometry each, measured by `dormant bench instances`: the
-        // blurred commit is the same (the same root search per instance), only the still one
-        // and the update are a few ms cheaper at 8,000 instances.
+        // With moving instances the top level is a motion-blur BVH. Most of its cost is Embree
+        // bounding each quaternion (slerped) instance by a root search, so barely turning
+        // instances get matrices instead (`InstanceGeometry::set_motion`). Building it at
+        // MEDIUM or LOW, or as one instance array, did not make the blurred commit cheaper:
+        // docs/lab/motion-blur.md#2026-12-02-where-the-blurred-commit-goes-barely-turning-instances-as-matrices
         let t = Instant::now();
         self.top.commit()?;
         let instances = self.top_instances();

@@ -4,23 +4,10 @@
 //! the top level when the ray cannot meet its bounds before that hit; packets do the same per
 //! lane, and the top level's packet is skipped when no lane needs it.
 //!
-//! Measured alternatives (monastery + 8,000 ducks; the last 1% of the bodies awake, the rest
-//! resting; 1280x720 primary rays and their diffuse bounces; CPU time of all threads, best of
-//! 5 runs interleaved with the all-instanced scene; resting over all-instanced, two or three
-//! invocations each):
-//! - resting scene, then the top level for every ray (the first version): single rays
-//!   1.007-1.028, primary rays in packets of 8: 1.146-1.199;
-//! - the top level first, then the resting scene up to the awake hit: single rays 1.029-1.034;
-//! - the resting scene built DYNAMIC, or at MEDIUM or LOW instead of HIGH: no change (single
-//!   1.013-1.017, packets 1.156-1.158);
-//! - the top level skipped when a ray misses its bounds ([`AwakeBounds`], this file): single
-//!   rays 0.973-1.009; packets 1.069-1.099 with the lane arrays at 16, 1.041-1.057 with them at
-//!   the packet's width (the per-lane test is most of what is left: without it, 1.003);
-//! - a test of the box around all of a packet's segments before the per-lane tests: 1.030-1.060,
-//!   no gain, not kept;
-//! - the awake 1% spread over the pile (every 100th body) instead of one island, so the top
-//!   level's bounds span the pile: single rays 1.036-1.065, packets 1.118-1.129, with or
-//!   without the bounds test (the top level's traversal itself).
+//! Skipping the top level by its bounds ([`AwakeBounds`]) brought the resting form's camera
+//! packets from about 1.15x to 1.05x the all-instanced scene's trace. The other orders, the
+//! resting scene at other qualities and a box test of whole packets did not pay:
+//! docs/lab/accelerators.md#2026-12-01-how-rays-meet-the-resting-level-the-bvhs-order-embrees-skipped-top-level
 //!
 //! [`AwakeBounds`]: super::awake_bounds::AwakeBounds
 
