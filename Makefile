@@ -17,12 +17,14 @@ demo: build
 	$(RELEASE_BIN) render --out out/demo
 
 # The whole workspace's tests in release mode (the BVH on the fastest SIMD path this CPU
-# runs; tests/bvh_props.rs checks every path), the BVH's tests and `dormant verify` again on
+# runs; accel/tests/bvh_props.rs checks every path), the accelerator property tests and
+# `dormant verify` again on
 # the portable path (DORMANT_SIMD, docs/performance.md#simd-paths), then the pure-Rust build
 # without Embree.
 test: setup
 	$(CARGO) test --release --workspace
-	DORMANT_SIMD=portable $(CARGO) test --release --test bvh_props --test accel_resting --test cli_verify_bench -- --skip bench_
+	DORMANT_SIMD=portable $(CARGO) test --release -p dormant --lib accel::tests
+	DORMANT_SIMD=portable $(CARGO) test --release --test cli_verify_bench -- --skip bench_
 	$(MAKE) test-no-embree
 
 test-no-embree:

@@ -22,6 +22,8 @@ mod load;
 mod object_map;
 mod resting;
 mod snapshot;
+#[cfg(test)]
+mod tests;
 
 pub use backend::{create, Backend};
 pub use hit::{Hit, HitObject};

@@ -14,7 +14,7 @@
 //! - `persistent`: the static tree with incremental insertion/removal and O(1) snapshots;
 //! - `two_level`: instances, the top level, the resting level, and the
 //!   [`crate::accel::Accelerator`] impl;
-//! - [`testing`] (hidden): the internals the property tests check.
+//! - `testing` (tests only): the internals the property tests in `accel/tests/` check.
 //!
 //! SIMD: each query runs as one function compiled for its path (`simd::dispatch!`): the box test
 //! of the 8-wide nodes uses `std::arch` AVX2 or AVX-512 intrinsics, or glam's `Vec4` on the
@@ -29,7 +29,8 @@ mod flat;
 mod params;
 mod persistent;
 pub mod simd;
-pub mod testing;
+#[cfg(test)]
+pub(crate) mod testing;
 mod triangle;
 mod two_level;
 

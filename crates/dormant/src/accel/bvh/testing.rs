@@ -1,26 +1,24 @@
-//! BVH internals the property tests (`tests/bvh_props.rs`, `tests/bvh_common/`) reach into:
-//! not part of dormant's API, hidden from its documentation (`#[doc(hidden)]` on the module
-//! rather than a cargo feature, so that `cargo test` builds the library as `cargo build`
-//! does and the two never rebuild it in turn).
-#![doc(hidden)]
+//! Test-only views of the BVH's internals for the accelerator's property tests
+//! (`accel/tests/`): the watertight triangle and leaf tests as references, and the flat builder
+//! on bare boxes. Compiled only for tests.
 
 use glam::Vec3;
 
 use super::simd::{dispatch, Kernel, SimdPath};
 use super::triangle::{RayTri, Tri, Tri4};
-use super::{BuildParams, BvhAccel, StaticBvh};
+use super::BuildParams;
 use crate::geometry::{Aabb, Ray};
 
 /// `(t, u, v)` of `ray` hitting triangle `p` by the backend's own watertight test, within the
 /// ray's interval: the exact reference for static geometry.
-pub fn watertight_hit(ray: &Ray, p: &[Vec3; 3]) -> Option<(f32, f32, f32)> {
+pub(crate) fn watertight_hit(ray: &Ray, p: &[Vec3; 3]) -> Option<(f32, f32, f32)> {
     RayTri::new(ray).intersect(p, ray.t_max).map(|h| (h.t, h.u, h.v))
 }
 
 /// A leaf's test on `tris` (packed into packets of four as the BVH packs a leaf) on the SIMD
 /// path `path` (which this CPU must run): the closest triangle hit within the ray's interval,
 /// as `(index in tris, t, u, v)`, and whether the any-hit test found one.
-pub fn watertight_hit_leaf(
+pub(crate) fn watertight_hit_leaf(
     ray: &Ray,
     tris: &[[Vec3; 3]],
     path: SimdPath,
@@ -38,36 +36,24 @@ pub fn watertight_hit_leaf(
     })
 }
 
-/// Checks the persistent tree's invariants (O(n)): overlay bounds, masks and heights match
-/// their children, every live mesh's triangles are reachable exactly once, nothing else is,
-/// and the traversal view matches the tree.
-pub fn check_static_tree(tree: &StaticBvh) -> Result<(), String> {
-    tree.check_invariants()
-}
-
-/// [`check_static_tree`] on the committed static tree of `accel`.
-pub fn check_static_tree_of(accel: &BvhAccel) -> Result<(), String> {
-    accel.static_tree().check_invariants()
-}
-
 /// A binned-SAH tree over boxes as [`build_tree`] returns it: each node's bounds, its first
 /// child (interior) or first primitive (leaf), and its primitive count (0 for interior nodes),
 /// plus the primitive order the leaves index.
 #[derive(Clone, Debug, PartialEq)]
-pub struct BuiltTree {
+pub(crate) struct BuiltTree {
     pub nodes: Vec<(Aabb, u32, u32)>,
     pub order: Vec<u32>,
 }
 
 /// The flat BVH builder on `bounds` (each finite and non-empty), in the current rayon pool.
-pub fn build_tree(bounds: &[Aabb], params: BuildParams) -> BuiltTree {
+pub(crate) fn build_tree(bounds: &[Aabb], params: BuildParams) -> BuiltTree {
     let (bvh, order) = super::flat::build(bounds, params);
     BuiltTree { nodes: bvh.nodes.iter().map(|n| (n.aabb(), n.first, n.count)).collect(), order }
 }
 
 /// Checks a [`BuiltTree`] over `bounds`: interior nodes are the union of their adjacent
 /// children, leaves contain their primitives' boxes, and every primitive is in one leaf.
-pub fn check_built_tree(tree: &BuiltTree, bounds: &[Aabb]) -> Result<(), String> {
+pub(crate) fn check_built_tree(tree: &BuiltTree, bounds: &[Aabb]) -> Result<(), String> {
     let mut seen = vec![false; bounds.len()];
     let mut order_seen = vec![false; bounds.len()];
     for &o in &tree.order {

@@ -46,7 +46,9 @@ impl MeshBvh {
         Self { bvh, wide, tris, order, packets }
     }
 
-    /// The triangles of the binary leaf range `first..first + count`, in leaf order.
+    /// The triangles of the binary leaf range `first..first + count`, in leaf order (the
+    /// tests' reference traversal and the invariant check; rays use the packets).
+    #[cfg(test)]
     pub fn leaf_tris(&self, first: u32, count: u32) -> impl Iterator<Item = &Tri> + '_ {
         self.order[first as usize..(first + count) as usize].iter().map(|&i| &self.tris[i as usize])
     }

@@ -1,5 +1,5 @@
-//! The persistent tree's invariant check, which the property tests run after every change
-//! (through [`crate::accel::bvh::testing`]).
+//! The persistent tree's invariant check, which the property tests (`accel/tests/`) run after
+//! every change. Compiled only for tests.
 
 use std::collections::HashMap;
 

@@ -40,6 +40,7 @@
 //! Mesh bookkeeping (id -> block) is an `Arc<HashMap>` cloned on first write after a snapshot,
 //! so that part of a change is O(number of static meshes), once per commit.
 
+#[cfg(test)]
 mod check;
 mod insert;
 mod rebraid;

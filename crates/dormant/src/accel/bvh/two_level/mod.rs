@@ -123,7 +123,8 @@ impl BvhAccel {
         }
     }
 
-    /// The committed static tree, for the invariant check of [`crate::accel::bvh::testing`].
+    /// The committed static tree, for the property tests' invariant check.
+    #[cfg(test)]
     pub(crate) fn static_tree(&self) -> &StaticBvh {
         &self.statics
     }

@@ -1,33 +1,34 @@
-//! Shared helpers of the BVH tests (and `accel_resting`): random geometry, an f64 brute-force
+//! Shared helpers of the accelerator tests: random geometry, an f64 brute-force
 //! reference, and a hit comparison that tolerates ties and rays grazing an edge.
-#![allow(dead_code)]
 
-use dormant::accel::bvh::testing::watertight_hit;
-use dormant::accel::{Hit, HitObject};
-use dormant::geometry::{Ray, TriangleMesh};
-use glam::{DVec3, Vec3};
+pub(super) use crate::accel::bvh::testing::{
+    build_tree, check_built_tree, watertight_hit, watertight_hit_leaf, BuiltTree,
+};
+use crate::accel::{Hit, HitObject};
+use crate::geometry::{Ray, TriangleMesh};
+use glam::Vec3;
 use proptest::prelude::*;
 
 /// A triangle of the reference scene, in world space.
 #[derive(Clone, Copy, Debug)]
-pub struct RefTri {
+pub(super) struct RefTri {
     pub object: HitObject,
     pub prim: u32,
     pub p: [Vec3; 3],
 }
 
-pub fn ref_tris(object: HitObject, mesh: &TriangleMesh) -> Vec<RefTri> {
+pub(super) fn ref_tris(object: HitObject, mesh: &TriangleMesh) -> Vec<RefTri> {
     (0..mesh.triangle_count()).map(|i| RefTri { object, prim: i as u32, p: mesh.triangle(i) }).collect()
 }
 
 /// The backend's own f32 watertight test: the reference for static geometry, where the BVH
 /// must find exactly what brute force over the same test finds.
-pub fn exact_hit(ray: &Ray, p: &[Vec3; 3]) -> Option<(f64, f64, f64)> {
+pub(super) fn exact_hit(ray: &Ray, p: &[Vec3; 3]) -> Option<(f64, f64, f64)> {
     watertight_hit(ray, p).map(|(t, u, v)| (f64::from(t), f64::from(u), f64::from(v)))
 }
 
 /// Möller-Trumbore in f64: `(t, u, v)` within the ray's interval, both sides.
-pub fn ref_hit(ray: &Ray, p: &[Vec3; 3]) -> Option<(f64, f64, f64)> {
+pub(super) fn ref_hit(ray: &Ray, p: &[Vec3; 3]) -> Option<(f64, f64, f64)> {
     let [p0, p1, p2] = p.map(|v| v.as_dvec3());
     if !(p0.is_finite() && p1.is_finite() && p2.is_finite()) {
         return None;
@@ -84,7 +85,7 @@ fn edge_distance(ray: &Ray, p: &[Vec3; 3]) -> f64 {
 /// triangle test when `rel` is below 1e-4 (then `t` must agree to `rel`), else with the f64
 /// reference (transformed instances: f32 rounding differs, so `rel` is looser). Ties (several triangles at the same `t`) accept any of them; hits and misses of
 /// rays grazing an edge (closer than `1e-4` barycentric) are accepted either way.
-pub fn check_hit(ray: &Ray, got: Option<Hit>, tris: &[RefTri], rel: f64) -> Result<(), String> {
+pub(super) fn check_hit(ray: &Ray, got: Option<Hit>, tris: &[RefTri], rel: f64) -> Result<(), String> {
     const EDGE: f64 = 1e-4;
     let tol = |t: f64| rel * t.abs().max(1.0);
     let reference = if rel < 1e-4 { exact_hit } else { ref_hit };
@@ -148,7 +149,7 @@ pub fn check_hit(ray: &Ray, got: Option<Hit>, tris: &[RefTri], rel: f64) -> Resu
     Ok(())
 }
 
-pub fn check_any(ray: &Ray, got: bool, tris: &[RefTri]) -> Result<(), String> {
+pub(super) fn check_any(ray: &Ray, got: bool, tris: &[RefTri]) -> Result<(), String> {
     let solid = tris.iter().any(|r| ref_hit(ray, &r.p).is_some() && edge_distance(ray, &r.p) > 1e-4);
     let any = tris.iter().any(|r| ref_hit(ray, &r.p).is_some());
     if solid && !got {
@@ -160,12 +161,12 @@ pub fn check_any(ray: &Ray, got: bool, tris: &[RefTri]) -> Result<(), String> {
     Ok(())
 }
 
-pub fn vec3(range: f32) -> impl Strategy<Value = Vec3> {
+pub(super) fn vec3(range: f32) -> impl Strategy<Value = Vec3> {
     (-range..range, -range..range, -range..range).prop_map(|(x, y, z)| Vec3::new(x, y, z))
 }
 
 /// A soup of `n` triangles of size up to `size` around `center`, as one indexed mesh.
-pub fn soup(
+pub(super) fn soup(
     center: Vec3,
     spread: f32,
     size: f32,
@@ -184,7 +185,7 @@ pub fn soup(
 }
 
 /// A xorshift generator of numbers in `[0, 1)`, deterministic from `seed`.
-pub fn unit_rng(seed: u64) -> impl FnMut() -> f32 {
+pub(super) fn unit_rng(seed: u64) -> impl FnMut() -> f32 {
     let mut s = seed | 1;
     move || {
         s ^= s << 13;
@@ -195,7 +196,7 @@ pub fn unit_rng(seed: u64) -> impl FnMut() -> f32 {
 }
 
 /// Rays aimed at triangle centroids (so most hit) plus fully random ones.
-pub fn rays_for(meshes: &[&TriangleMesh], seed: u64, count: usize, range: f32) -> Vec<Ray> {
+pub(super) fn rays_for(meshes: &[&TriangleMesh], seed: u64, count: usize, range: f32) -> Vec<Ray> {
     let mut next = unit_rng(seed);
     let targets: Vec<Vec3> = meshes
         .iter()
@@ -222,12 +223,8 @@ pub fn rays_for(meshes: &[&TriangleMesh], seed: u64, count: usize, range: f32) -
         .collect()
 }
 
-pub fn dvec(v: Vec3) -> DVec3 {
-    v.as_dvec3()
-}
-
 /// A deterministic cluster of `n` triangles around `c`.
-pub fn cluster(c: Vec3, n: usize, seed: u64) -> TriangleMesh {
+pub(super) fn cluster(c: Vec3, n: usize, seed: u64) -> TriangleMesh {
     let mut s = seed | 1;
     let mut next = || {
         s = s.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);

@@ -8,13 +8,11 @@
 //! ghosts in the resting level (forced by `compact_resting`), the commit reports, and random
 //! sequences of all of these (property tests).
 
-mod bvh_common;
-
-use bvh_common::cluster;
-use dormant::accel::{
+use super::common::cluster;
+use crate::accel::{
     self, Accelerator, Backend, CommitReport, Hit, HitObject, InstanceId, PrototypeId, SceneQuery, StaticId,
 };
-use dormant::geometry::{primitives, Ray, TriangleMesh};
+use crate::geometry::{primitives, Ray, TriangleMesh};
 use glam::{Affine3A, Quat, Vec3};
 use proptest::prelude::*;
 

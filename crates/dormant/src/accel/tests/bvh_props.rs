@@ -2,12 +2,10 @@
 //! SIMD path this CPU runs (each scene is checked once per path, and the paths must agree hit
 //! for hit).
 
-mod bvh_common;
-
-use bvh_common::*;
-use dormant::accel::bvh::{testing, BuildParams, BvhAccel, SimdPath, StaticBvh};
-use dormant::accel::{create, AccelError, Accelerator, Backend, HitObject, SceneQuery, StaticId};
-use dormant::geometry::{Ray, TriangleMesh};
+use super::common::*;
+use crate::accel::bvh::{BuildParams, BvhAccel, SimdPath, StaticBvh};
+use crate::accel::{create, AccelError, Accelerator, Backend, HitObject, SceneQuery, StaticId};
+use crate::geometry::{Ray, TriangleMesh};
 use glam::{Affine3A, Quat, Vec3};
 use proptest::prelude::*;
 
@@ -103,7 +101,7 @@ proptest! {
                 prop_assert!(tree.remove(id));
                 live[k] = false;
             }
-            testing::check_static_tree(&tree).map_err(TestCaseError::fail)?;
+            tree.check_invariants().map_err(TestCaseError::fail)?;
             let mut meshes: Vec<(StaticId, &TriangleMesh)> = vec![(StaticId(100), &base)];
             meshes.extend((0..islands.len()).filter(|&k| live[k]).map(|k| (StaticId(k as u32), &islands[k])));
             let mut fresh = StaticBvh::new(BuildParams::QUALITY);
@@ -164,7 +162,7 @@ proptest! {
             }
             let update = tree.apply(&removes, &adds).unwrap();
             prop_assert!(!update.rebuilt && !update.relinked);
-            testing::check_static_tree(&tree).map_err(TestCaseError::fail)?;
+            tree.check_invariants().map_err(TestCaseError::fail)?;
             let snap = tree.snapshot();
             let usable = |m: &TriangleMesh| (0..m.triangle_count()).any(|i| m.triangle_is_valid(i));
             let blocks = 1 + (0..islands.len()).filter(|&k| live[k] && usable(&islands[k])).count();
@@ -226,7 +224,7 @@ proptest! {
                 }
             }
             accel.commit().unwrap();
-            testing::check_static_tree_of(&accel).map_err(TestCaseError::fail)?;
+            accel.static_tree().check_invariants().map_err(TestCaseError::fail)?;
             let tris: Vec<RefTri> = live.iter().flat_map(|(id, m)| ref_tris(HitObject::Static(*id), m)).collect();
             let all: Vec<&TriangleMesh> = [&base_a, &base_b].into_iter().chain(islands.iter()).collect();
             let rays = rays_for(&all, seed, 48, 12.0);
@@ -260,7 +258,7 @@ proptest! {
             }
             let update = tree.apply(&[], &[(id, m)]).unwrap();
             prop_assert!(update.relinked);
-            testing::check_static_tree(&tree).map_err(TestCaseError::fail)?;
+            tree.check_invariants().map_err(TestCaseError::fail)?;
             live.push((id, m));
         }
         for (k, (_, n, permanent)) in islands.iter().enumerate() {
@@ -274,7 +272,7 @@ proptest! {
             check_scene(&tree.snapshot(), &rays, &tris, 1e-5)?;
             prop_assert!(tree.remove(StaticId(remove)));
             live.retain(|(id, _)| *id != StaticId(remove));
-            testing::check_static_tree(&tree).map_err(TestCaseError::fail)?;
+            tree.check_invariants().map_err(TestCaseError::fail)?;
         }
         let tris: Vec<RefTri> = live.iter().flat_map(|(id, m)| ref_tris(HitObject::Static(*id), m)).collect();
         check_scene(&tree.snapshot(), &rays, &tris, 1e-5)?;
@@ -296,11 +294,11 @@ proptest! {
         for (i, m) in extra.iter().enumerate() {
             tree.insert(StaticId(i as u32 + 1), m).unwrap();
         }
-        testing::check_static_tree(&tree).map_err(TestCaseError::fail)?;
+        tree.check_invariants().map_err(TestCaseError::fail)?;
         let mid = tree.snapshot();
         tree.remove(StaticId(0));
         tree.remove(StaticId(1));
-        testing::check_static_tree(&tree).map_err(TestCaseError::fail)?;
+        tree.check_invariants().map_err(TestCaseError::fail)?;
         let after: Vec<_> = rays.iter().map(|r| old.intersect(r)).collect();
         prop_assert_eq!(&before, &after);
         prop_assert!(old.contains(StaticId(0)) && !tree.contains(StaticId(0)));
@@ -345,7 +343,7 @@ proptest! {
             placed.push((accel.add_instance(pids[p], m).unwrap(), p, m));
         }
         accel.commit().unwrap();
-        let check = |accel: &BvhAccel, placed: &[(dormant::accel::InstanceId, usize, Affine3A)]| -> Result<(), TestCaseError> {
+        let check = |accel: &BvhAccel, placed: &[(crate::accel::InstanceId, usize, Affine3A)]| -> Result<(), TestCaseError> {
             let baked: Vec<TriangleMesh> = placed.iter().map(|(_, p, m)| protos[*p].transformed(m)).collect();
             let mut tris = ref_tris(HitObject::Static(gid), &ground);
             for ((id, _, _), b) in placed.iter().zip(&baked) {
@@ -410,7 +408,7 @@ proptest! {
         ray.t_max = t_max;
         let mut expected: Option<(usize, f32, f32, f32)> = None;
         for (i, p) in tris.iter().enumerate() {
-            if let Some((t, u, v)) = testing::watertight_hit(&ray, p) {
+            if let Some((t, u, v)) = watertight_hit(&ray, p) {
                 if expected.is_none_or(|e| t < e.1) {
                     expected = Some((i, t, u, v));
                 }
@@ -420,7 +418,7 @@ proptest! {
         for path in SimdPath::supported() {
             // Packets of four, tested one (portable) or two (AVX2, AVX-512) at a time: bit for
             // bit the same triangle, t and barycentrics.
-            let (got, occluded) = testing::watertight_hit_leaf(&ray, &tris, path);
+            let (got, occluded) = watertight_hit_leaf(&ray, &tris, path);
             prop_assert_eq!(bits(got), bits(expected), "{:?}", path);
             prop_assert_eq!(occluded, expected.is_some(), "{:?}", path);
         }
@@ -488,9 +486,9 @@ fn degenerate_and_non_finite_input_never_panics() {
     assert_eq!(report.built_triangles, 2 * valid + 1);
     let q = accel.query().unwrap();
     let hit = q.intersect(&Ray::new(Vec3::new(0.2, 0.2, 5.0), -Vec3::Z)).unwrap();
-    assert_eq!(hit.object, dormant::accel::HitObject::Instance(dormant::accel::InstanceId(0)));
+    assert_eq!(hit.object, crate::accel::HitObject::Instance(crate::accel::InstanceId(0)));
     let hit = q.intersect(&Ray::new(Vec3::new(0.2, 0.2, 0.5), -Vec3::Z)).unwrap();
-    assert_eq!(hit.object, dormant::accel::HitObject::Static(s));
+    assert_eq!(hit.object, crate::accel::HitObject::Static(s));
     for ray in [
         Ray::new(Vec3::splat(nan), Vec3::Z),
         Ray::new(Vec3::ZERO, Vec3::splat(nan)),
@@ -514,7 +512,7 @@ fn queries_need_a_commit() {
     let mut accel = create(Backend::Bvh, None).unwrap();
     assert_eq!(accel.backend(), Backend::Bvh);
     assert!(accel.query().is_ok(), "an empty, unchanged scene can be queried");
-    let ground = dormant::geometry::primitives::ground_plane(5.0, 0.0, 4);
+    let ground = crate::geometry::primitives::ground_plane(5.0, 0.0, 4);
     let id = accel.add_static(&ground).unwrap();
     assert!(matches!(accel.query(), Err(AccelError::NotCommitted)));
     accel.commit().unwrap();
@@ -524,7 +522,7 @@ fn queries_need_a_commit() {
     assert_eq!(hit.object, HitObject::Static(id));
     assert!((hit.ng.y.abs() - 1.0).abs() < 1e-6);
     // A later island is inserted, not rebuilt, and removed again.
-    let island = dormant::geometry::primitives::cuboid(Vec3::splat(0.1));
+    let island = crate::geometry::primitives::cuboid(Vec3::splat(0.1));
     let island = island.transformed(&Affine3A::from_translation(Vec3::new(0.1, 0.5, 0.3)));
     let iid = accel.add_static(&island).unwrap();
     accel.commit().unwrap();

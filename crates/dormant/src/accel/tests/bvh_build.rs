@@ -2,13 +2,10 @@
 //! depend on the thread count (the cross-check and the tests rely on reproducible trees), and
 //! a tree built in parallel must still answer every ray as brute force does.
 
-mod bvh_common;
-
-use bvh_common::*;
-use dormant::accel::bvh::testing::{build_tree, check_built_tree, BuiltTree};
-use dormant::accel::bvh::{BuildParams, BvhAccel};
-use dormant::accel::{Accelerator, HitObject};
-use dormant::geometry::Aabb;
+use super::common::*;
+use crate::accel::bvh::{BuildParams, BvhAccel};
+use crate::accel::{Accelerator, HitObject};
+use crate::geometry::Aabb;
 use glam::Vec3;
 use proptest::prelude::*;
 
