@@ -17,10 +17,9 @@ demo: build
 	$(RELEASE_BIN) render --out out/demo
 
 # The whole workspace's tests in release mode (the BVH on the fastest SIMD path this CPU
-# runs; accel/tests/bvh_props.rs checks every path), the accelerator property tests and
-# `dormant verify` again on
-# the portable path (DORMANT_SIMD, docs/performance.md#simd-paths), then the pure-Rust build
-# without Embree.
+# runs; the library's accel/tests/bvh_props.rs checks every path), the accelerator property
+# tests and `dormant verify` again on the portable path (DORMANT_SIMD,
+# docs/performance.md#simd-paths), then the pure-Rust build without Embree.
 test: setup
 	$(CARGO) test --release --workspace
 	DORMANT_SIMD=portable $(CARGO) test --release -p dormant --lib accel::tests
