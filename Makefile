@@ -4,7 +4,7 @@
 CARGO ?= cargo
 RELEASE_BIN := target/release/dormant
 
-.PHONY: setup build demo test test-no-embree lint fmt bench soak slurm-check fuzz compare-cycles clean
+.PHONY: setup build demo test test-no-embree lint arch-check fmt bench soak slurm-check fuzz compare-cycles clean
 
 setup:
 	bash scripts/setup.sh
@@ -54,7 +54,13 @@ compare-cycles: build
 	$(BPY_VENV)/bin/python -c "import bpy" 2>/dev/null || $(BPY_VENV)/bin/pip install -q bpy==$(BPY_VERSION)
 	$(BPY_VENV)/bin/python scripts/compare-cycles.py --threads $(COMPARE_THREADS) $(COMPARE_ARGS)
 
-lint:
+# The module arrows inside each crate: no import cycle, nothing imported against the layer order
+# (geometry < scene < physics < accel < {render, residency} < sequence; Cargo enforces the crates'
+# own arrows: dormant < dormant-lab < dormant-cli). See scripts/arch-check.py.
+arch-check:
+	python3 scripts/arch-check.py
+
+lint: arch-check
 	$(CARGO) fmt --all --check
 	$(CARGO) clippy --workspace --all-targets -- -D warnings
 	$(CARGO) clippy -p dormant -p dormant-lab -p dormant-cli --no-default-features --all-targets -- -D warnings

@@ -1,9 +1,7 @@
-//! [`Backend`]: the accelerator implementations, and [`create`], which makes one.
+//! [`Backend`]: the accelerator implementations a build can have.
 
 use std::fmt;
 use std::str::FromStr;
-
-use super::{AccelError, Accelerator};
 
 /// The accelerator implementations dormant can be built with.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
@@ -52,20 +50,5 @@ impl FromStr for Backend {
             .copied()
             .find(|b| b.name() == s)
             .ok_or_else(|| format!("unknown backend '{s}' (expected one of: embree, bvh)"))
-    }
-}
-
-/// Creates an empty accelerator of the given backend. `threads` bounds the backend's own
-/// worker pool (Embree's TBB); `None` lets it use every core.
-pub fn create(backend: Backend, threads: Option<usize>) -> Result<Box<dyn Accelerator>, AccelError> {
-    match backend {
-        #[cfg(feature = "embree")]
-        Backend::Embree => Ok(Box::new(super::embree::EmbreeAccel::new(threads)?)),
-        #[cfg(not(feature = "embree"))]
-        Backend::Embree => {
-            let _ = threads;
-            Err(AccelError::BackendUnavailable("embree"))
-        }
-        Backend::Bvh => Ok(Box::new(super::bvh::BvhAccel::new(threads))),
     }
 }

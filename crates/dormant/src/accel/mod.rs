@@ -25,7 +25,7 @@ mod snapshot;
 #[cfg(test)]
 mod tests;
 
-pub use backend::{create, Backend};
+pub use backend::Backend;
 pub use hit::{Hit, HitObject};
 pub use load::{load_scene, LoadedScene};
 pub(crate) use object_map::mesh_triangle;
@@ -35,6 +35,21 @@ pub use snapshot::StaticSceneSnapshot;
 use glam::Affine3A;
 
 use crate::geometry::{InstanceMotion, MeshError, Ray, TriangleMesh};
+
+/// Creates an empty accelerator of the given backend. `threads` bounds the backend's own
+/// worker pool (Embree's TBB); `None` lets it use every core.
+pub fn create(backend: Backend, threads: Option<usize>) -> Result<Box<dyn Accelerator>, AccelError> {
+    match backend {
+        #[cfg(feature = "embree")]
+        Backend::Embree => Ok(Box::new(embree::EmbreeAccel::new(threads)?)),
+        #[cfg(not(feature = "embree"))]
+        Backend::Embree => {
+            let _ = threads;
+            Err(AccelError::BackendUnavailable("embree"))
+        }
+        Backend::Bvh => Ok(Box::new(bvh::BvhAccel::new(threads))),
+    }
+}
 pub(crate) use resting::{RestingCounts, RestingSchedule};
 
 /// Identifies a prototype mesh registered with [`Accelerator::add_prototype`].

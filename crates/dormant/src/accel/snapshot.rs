@@ -3,7 +3,6 @@
 use std::any::Any;
 use std::sync::Arc;
 
-use super::bvh::{BvhAccel, StaticSnapshot};
 use super::Backend;
 
 /// What a backend keeps in a snapshot.
@@ -37,19 +36,6 @@ impl StaticSceneSnapshot {
 
     pub(crate) fn payload<T: 'static>(&self) -> Option<&T> {
         self.payload.as_any().downcast_ref()
-    }
-
-    /// The BVH backend's persistent static tree this snapshot holds (`None` for another
-    /// backend's): its shape, for measurements of how it fragments.
-    pub fn bvh_tree(&self) -> Option<&StaticSnapshot> {
-        self.payload()
-    }
-
-    /// The BVH tree's live triangles rebuilt into one block, as a fresh build of the same
-    /// scene makes it (`None` for another backend's snapshot).
-    pub fn bvh_rebuilt(&self) -> Option<StaticSceneSnapshot> {
-        let tree = self.bvh_tree()?.rebuilt(BvhAccel::MESH_PARAMS);
-        Some(Self::new(Backend::Bvh, tree))
     }
 }
 

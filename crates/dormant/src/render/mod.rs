@@ -9,6 +9,7 @@ mod camera;
 pub mod denoise;
 mod emitters;
 mod film;
+mod image_file;
 mod image_size;
 mod integrator;
 mod render_scene;
@@ -24,7 +25,7 @@ pub use camera::PinholeCamera;
 pub use denoise::{DenoiseError, Denoiser};
 pub(crate) use emitters::Emitters;
 pub use film::Film;
-pub use film::{write_aov_png_atomic, write_exr_atomic, write_png_atomic};
+pub use image_file::{write_aov_png_atomic, write_exr_atomic, write_png_atomic};
 pub use image_size::ImageSize;
 pub use integrator::{
     AmbientOcclusion, DirectLighting, FrameContext, FrameIntegrator, Integrator, PathTracer,

@@ -224,3 +224,43 @@ impl Sequence {
         Ok(())
     }
 }
+
+impl Sequence {
+    /// Brings `manager` through `kept` (the frame `frame`) as the earlier run did, without
+    /// tracing; `reused`: whether this run reuses the previous image here. Fails when the
+    /// replay does not reach the state that run recorded.
+    pub(super) fn replay_kept(
+        &self,
+        manager: &mut SceneManager,
+        frame: &ReplayFrame<'_>,
+        renderer: &FrameRenderer<'_>,
+        kept: &KeptFrame,
+        reused: bool,
+    ) -> Result<(), SequenceError> {
+        let mismatch = |what: &'static str, recorded: String, replayed: String| SequenceError::KeptMismatch {
+            frame: frame.index,
+            what,
+            recorded,
+            replayed,
+        };
+        if kept.reused != reused {
+            return Err(mismatch("reused", kept.reused.to_string(), reused.to_string()));
+        }
+        if reused {
+            return Ok(());
+        }
+        self.aim_probes(manager, frame, renderer);
+        manager.prepare_decided(frame, &kept.decisions)?;
+        let stats: &FrameStats = manager.record_trace(kept.trace_ms, kept.rays);
+        for (what, recorded, replayed) in [
+            ("instances", kept.instances, stats.instances),
+            ("integrated_islands", kept.integrated_islands, stats.integrated_islands),
+            ("sleeping_islands", kept.sleeping_islands, stats.sleeping_islands),
+        ] {
+            if recorded != replayed {
+                return Err(mismatch(what, recorded.to_string(), replayed.to_string()));
+            }
+        }
+        Ok(())
+    }
+}

@@ -100,3 +100,6 @@ impl Default for BuildParams {
         Self::BALANCED
     }
 }
+
+/// Items per rayon task when building (copying triangles, their boxes, primitive references).
+pub(crate) const PAR_CHUNK: usize = 16 * 1024;

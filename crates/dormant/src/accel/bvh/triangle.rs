@@ -49,7 +49,7 @@ pub(crate) fn extract(mesh: &TriangleMesh, geom: u32) -> (Vec<Tri>, usize) {
         mesh.triangle_is_valid(i) && mesh.triangle(i).iter().all(|p| p.abs().max_element() < MAX_COORD)
     };
     let tri = |i: usize| Tri { p: mesh.triangle(i), geom, prim: i as u32 };
-    let chunk = super::flat::PAR_CHUNK;
+    let chunk = super::params::PAR_CHUNK;
     let kept = (0..n).into_par_iter().with_min_len(chunk).filter(|&i| usable(i)).count();
     let tris: Vec<Tri> = if kept == n {
         (0..n).into_par_iter().with_min_len(chunk).map(tri).collect()

@@ -22,15 +22,14 @@ pub(crate) use packet::{each_bit, Lanes, RayPacket, PACKET};
 pub(crate) use sah::{sah_cost, subtree_cost};
 #[cfg(test)]
 pub(crate) use traverse::traverse;
-pub(crate) use traverse::{interval_is_valid, BoxRay, FAR_SCALE, STACK_SIZE};
+pub(crate) use traverse::{interval_is_valid, BoxRay, STACK_SIZE};
 pub(crate) use wide::{Start, Wide, ANY_HIT, CLOSEST_HIT};
 
 use glam::Vec3;
 
 use crate::geometry::Aabb;
 
-/// Items per rayon task when building (copying triangles, their boxes, primitive references).
-pub(crate) const PAR_CHUNK: usize = 16 * 1024;
+pub(crate) use super::params::PAR_CHUNK;
 
 /// One BVH node: bounds plus either a child index (interior) or a primitive range (leaf).
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -6,14 +6,12 @@
 use glam::{Vec3, Vec3A};
 
 use super::Node;
+use crate::accel::bvh::simd::FAR_SCALE;
 use crate::geometry::Ray;
 
 /// Traversal stack entries; deeper than any tree the builder makes (its depth is bounded by
 /// the object-median fallback).
 pub(crate) const STACK_SIZE: usize = 128;
-
-/// `1 + 2 * gamma(3)`: widens the far slab distance to absorb rounding (pbrt 4, section 6.8).
-pub(crate) const FAR_SCALE: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
 
 /// Whether the ray's `[t_min, t_max]` is a usable interval (false for NaN bounds).
 #[inline]

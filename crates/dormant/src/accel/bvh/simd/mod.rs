@@ -19,11 +19,14 @@ use std::sync::atomic::{AtomicU8, Ordering};
 use glam::{Vec3A, Vec4};
 use serde::Serialize;
 
-use super::flat::FAR_SCALE;
 use super::triangle::{RayTri, Tri4, TriHit};
 
 #[cfg(target_arch = "x86_64")]
 pub(crate) use x86::{Avx2, Avx512};
+
+/// `1 + 2 * gamma(3)`: widens the far slab distance of every box test (the 8-wide kernels and
+/// the binary traversal) to absorb rounding (pbrt 4, section 6.8).
+pub(crate) const FAR_SCALE: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
 
 /// The environment variable that selects a path.
 pub const SIMD_ENV: &str = "DORMANT_SIMD";

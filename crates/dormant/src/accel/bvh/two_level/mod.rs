@@ -475,3 +475,19 @@ impl Accelerator for BvhAccel {
         Some(self.statics.sah_cost())
     }
 }
+
+/// The BVH's view into the snapshots it takes.
+impl StaticSceneSnapshot {
+    /// The BVH backend's persistent static tree this snapshot holds (`None` for another
+    /// backend's): its shape, for measurements of how it fragments.
+    pub fn bvh_tree(&self) -> Option<&StaticSnapshot> {
+        self.payload()
+    }
+
+    /// The BVH tree's live triangles rebuilt into one block, as a fresh build of the same
+    /// scene makes it (`None` for another backend's snapshot).
+    pub fn bvh_rebuilt(&self) -> Option<StaticSceneSnapshot> {
+        let tree = self.bvh_tree()?.rebuilt(BvhAccel::MESH_PARAMS);
+        Some(Self::new(Backend::Bvh, tree))
+    }
+}

@@ -1,0 +1,323 @@
+#!/usr/bin/env python3
+"""The architecture check (`make arch-check`): fails on an import cycle between modules or an
+import against the layer order. Cargo enforces the arrows between the workspace's crates; this
+checks the arrows inside each crate.
+
+- Layers: each crate's top-level modules have a layer (LAYERS below). A module may import
+  modules of lower layers only; two modules of one layer may not import each other (render and
+  residency, for instance, do not know each other).
+- Cycles: at every level of the module tree, the sibling modules under one parent (a file, or
+  a folder taken as a whole) must not import each other in a circle. A module may use what its
+  parent declares; a name its parent re-exports counts as an import of the module that
+  defines it.
+
+Imports are read from the source text: `use` trees and `crate::`/`super::`/`self::` paths in
+code (comments and string literals stripped), and paths through child modules a file declares.
+Usage: scripts/arch-check.py [--graph]  (--graph prints every module edge found)."""
+
+import os
+import re
+import sys
+from collections import defaultdict
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+# Per crate: its source folder, root file, and the layer of each top-level module (lowest
+# first). A top-level module missing here is an error, so a new domain gets a place on purpose.
+CRATES = {
+    "dormant": ("crates/dormant/src", "lib.rs", {
+        "atomic_file": 0, "rng": 0, "geometry": 0,
+        "scene": 1,
+        "physics": 2,
+        "accel": 3,
+        "render": 4, "residency": 4,
+        "sequence": 5,
+    }),
+    "dormant-lab": ("crates/dormant-lab/src", "lib.rs", {
+        "report": 0, "crosscheck": 0,
+        "bench": 1,
+        "paper": 2, "regimes": 2,
+    }),
+    "dormant-cli": ("src", "main.rs", {
+        "report": 0,
+        "cli": 1,
+    }),
+}
+
+
+def strip_comments_and_strings(text):
+    """Source without comments, string and char literals (replaced by spaces)."""
+    out, i, n = [], 0, len(text)
+    while i < n:
+        c = text[i]
+        if text.startswith("//", i):
+            j = text.find("\n", i)
+            i = n if j < 0 else j
+        elif text.startswith("/*", i):
+            depth, i = 1, i + 2
+            while i < n and depth:
+                if text.startswith("/*", i):
+                    depth, i = depth + 1, i + 2
+                elif text.startswith("*/", i):
+                    depth, i = depth - 1, i + 2
+                else:
+                    i += 1
+        elif c == "r" and re.match(r'r#*"', text[i:i + 8]) and (i == 0 or not (text[i - 1].isalnum() or text[i - 1] == "_")):
+            hashes = re.match(r'r(#*)"', text[i:]).group(1)
+            end = text.find('"' + hashes, i + 2 + len(hashes))
+            i = n if end < 0 else end + 1 + len(hashes)
+            out.append(" ")
+        elif c == '"':
+            i += 1
+            while i < n and text[i] != '"':
+                i += 2 if text[i] == "\\" else 1
+            i += 1
+            out.append(" ")
+        elif c == "'" and re.match(r"'(\\.|[^\\'])'", text[i:i + 4] + "    "):
+            m = re.match(r"'(\\x..|\\u\{[0-9a-fA-F]+\}|\\.|[^\\'])'", text[i:])
+            i += len(m.group(0)) if m else 1
+            out.append(" ")
+        else:
+            out.append(c)
+            i += 1
+    return "".join(out)
+
+
+class Crate:
+    def __init__(self, name, src, root_file, layers):
+        self.name, self.src, self.layers = name, os.path.join(ROOT, src), layers
+        self.files = {}  # module path tuple -> file
+        self.children = defaultdict(set)  # module -> declared child names
+        self.text = {}
+        self._collect(os.path.join(self.src, root_file), ())
+        self.reexports = {m: self._reexports(m) for m in self.files}
+
+    def _collect(self, path, module):
+        self.files[module] = path
+        text = without_test_blocks(strip_comments_and_strings(open(path, encoding="utf-8").read()))
+        self.text[module] = text
+        here = os.path.dirname(path)
+        is_dir_module = os.path.basename(path) in ("mod.rs", "lib.rs", "main.rs")
+        for m in re.finditer(r"(?m)^\s*((?:#\[[^\]]*\]\s*)*)(?:pub(?:\([^)]*\))?\s+)?mod\s+(\w+)\s*;", text):
+            if "cfg(test)" in m.group(1):
+                continue  # test-only modules are not part of the architecture
+            child = m.group(2)
+            base = here if is_dir_module else os.path.join(here, os.path.splitext(os.path.basename(path))[0])
+            for candidate in (os.path.join(base, child + ".rs"), os.path.join(base, child, "mod.rs")):
+                if os.path.isfile(candidate):
+                    self.children[module].add(child)
+                    self._collect(candidate, module + (child,))
+                    break
+            else:
+                raise SystemExit(f"arch-check: {path}: `mod {child};` has no file")
+
+    def use_paths(self, module):
+        """Every path the module's `use` items name, as segment lists (leaf names included)."""
+        paths = []
+        for m in re.finditer(r"\buse\s+([^;]+);", self.text[module]):
+            paths.extend(expand_use_tree(m.group(1).strip()))
+        return paths
+
+    def _reexports(self, module):
+        """Names the module re-exports (`pub use` / `pub(...) use`) -> the path they come from."""
+        out = {}
+        for m in re.finditer(r"\bpub(?:\([^)]*\))?\s+use\s+([^;]+);", self.text[module]):
+            for path in expand_use_tree(m.group(1).strip()):
+                alias = path[-1]
+                if " as " in alias:
+                    path[-1], alias = [s.strip() for s in alias.split(" as ")]
+                if alias != "*":
+                    out[alias] = path
+        return out
+
+    def resolve(self, module, path, depth=0):
+        """The module a path used in `module` refers to (following re-exports), or None when it
+        leaves the crate (another crate, the standard library) or names the module itself."""
+        segs = list(path)
+        if not segs:
+            return None
+        if segs[0] == "crate":
+            base, segs = (), segs[1:]
+        elif segs[0] in ("super", "self"):
+            base = module
+            while segs and segs[0] in ("super", "self"):
+                if segs[0] == "super":
+                    base = base[:-1]
+                segs = segs[1:]
+        elif segs[0] in self.children[module]:
+            base = module
+        else:
+            return None
+        target = base
+        for i, s in enumerate(segs):
+            if s in self.children[target]:
+                target = target + (s,)
+                continue
+            # An item of `target`: if `target` re-exports it, the defining module counts.
+            if depth < 8 and s in self.reexports.get(target, {}):
+                resolved = self.resolve(target, self.reexports[target][s] + segs[i + 1:], depth + 1)
+                if resolved is not None:
+                    return resolved
+            break
+        return target
+
+    def edges(self):
+        """(from module, to module) for every import inside the crate."""
+        found = set()
+        for module, text in self.text.items():
+            paths = self.use_paths(module)
+            code = re.sub(r"\buse\s+[^;]+;", " ", text)
+            for m in re.finditer(r"\b((?:crate|super|self)(?:\s*::\s*\w+)+)", code):
+                paths.append([s.strip() for s in m.group(1).split("::")])
+            for child in self.children[module]:
+                for m in re.finditer(r"(?<![\w:])" + child + r"((?:\s*::\s*\w+)+)", code):
+                    paths.append([child] + [s.strip() for s in m.group(1).split("::")[1:]])
+            for path in paths:
+                target = self.resolve(module, path)
+                if target is not None and target != module:
+                    found.add((module, target))
+        return found
+
+
+def without_test_blocks(text):
+    """`text` without its `#[cfg(test)]` inline modules and items (tests are not part of the
+    architecture)."""
+    while True:
+        m = re.search(r"#\[cfg\(test\)\]\s*(?:pub(?:\([^)]*\))?\s+)?(?:mod|fn|impl|use)\b[^{;]*([{;])", text)
+        if not m:
+            return text
+        end = m.end()
+        if m.group(1) == "{":
+            depth = 1
+            while end < len(text) and depth:
+                depth += (text[end] == "{") - (text[end] == "}")
+                end += 1
+        text = text[:m.start()] + text[end:]
+
+
+def expand_use_tree(tree):
+    """`a::{b, c::{d, e as f}}` -> [[a, b], [a, c, d], [a, c, e as f]]."""
+    tree = re.sub(r"\s+", " ", tree).strip()
+    if tree.startswith("::"):
+        tree = tree[2:]
+    brace = tree.find("{")
+    if brace < 0:
+        return [[s.strip() for s in tree.split("::")]]
+    prefix = [s.strip() for s in tree[:brace].rstrip(":").split("::") if s.strip()]
+    inner, depth, parts, start = tree[brace + 1:tree.rfind("}")], 0, [], 0
+    for i, c in enumerate(inner):
+        depth += (c == "{") - (c == "}")
+        if c == "," and depth == 0:
+            parts.append(inner[start:i])
+            start = i + 1
+    parts.append(inner[start:])
+    out = []
+    for p in parts:
+        p = p.strip()
+        if not p:
+            continue
+        if p == "self":
+            out.append(prefix[:])
+        else:
+            out.extend(prefix + sub for sub in expand_use_tree(p))
+    return out
+
+
+def sccs(nodes, adjacency):
+    """Strongly connected components (Tarjan), iteratively."""
+    index, low, on_stack, stack, result, counter = {}, {}, set(), [], [], [0]
+    for root in nodes:
+        if root in index:
+            continue
+        work = [(root, iter(sorted(adjacency.get(root, ()))))]
+        index[root] = low[root] = counter[0]
+        counter[0] += 1
+        stack.append(root)
+        on_stack.add(root)
+        while work:
+            node, it = work[-1]
+            advanced = False
+            for nxt in it:
+                if nxt not in index:
+                    index[nxt] = low[nxt] = counter[0]
+                    counter[0] += 1
+                    stack.append(nxt)
+                    on_stack.add(nxt)
+                    work.append((nxt, iter(sorted(adjacency.get(nxt, ())))))
+                    advanced = True
+                    break
+                if nxt in on_stack:
+                    low[node] = min(low[node], index[nxt])
+            if advanced:
+                continue
+            work.pop()
+            if work:
+                low[work[-1][0]] = min(low[work[-1][0]], low[node])
+            if low[node] == index[node]:
+                component = []
+                while True:
+                    w = stack.pop()
+                    on_stack.discard(w)
+                    component.append(w)
+                    if w == node:
+                        break
+                result.append(component)
+    return result
+
+
+def name(module):
+    return "::".join(module) or "(root)"
+
+
+def check(crate, show_graph):
+    problems = []
+    edges = crate.edges()
+    for top in crate.children[()]:
+        if top not in crate.layers:
+            problems.append(f"{crate.name}: top-level module `{top}` has no layer in scripts/arch-check.py")
+    for a, b in sorted(edges):
+        if show_graph:
+            print(f"{crate.name}: {name(a)} -> {name(b)}")
+        if not a or not b or a[0] == b[0]:
+            continue
+        la, lb = crate.layers.get(a[0]), crate.layers.get(b[0])
+        if la is not None and lb is not None and lb >= la:
+            what = "an upward arrow" if lb > la else "an arrow within one layer"
+            problems.append(f"{crate.name}: {name(a)} imports {name(b)}: {what} ({a[0]} is layer {la}, {b[0]} layer {lb})")
+    # Cycles among siblings, at every parent.
+    for parent in list(crate.files):
+        kids = sorted(crate.children[parent])
+        if len(kids) < 2:
+            continue
+        depth = len(parent)
+        adjacency = defaultdict(set)
+        for a, b in edges:
+            if len(a) > depth and len(b) > depth and a[:depth] == parent and b[:depth] == parent and a[depth] != b[depth]:
+                adjacency[a[depth]].add(b[depth])
+        for component in sccs(kids, adjacency):
+            if len(component) > 1:
+                where = name(parent)
+                ties = [f"{name(a)} -> {name(b)}" for a, b in sorted(edges)
+                        if len(a) > depth and len(b) > depth and a[:depth] == parent and b[:depth] == parent
+                        and a[depth] in component and b[depth] in component and a[depth] != b[depth]]
+                problems.append(f"{crate.name}: import cycle among the modules of {where}: "
+                                f"{', '.join(sorted(component))} ({'; '.join(ties)})")
+    return problems, len(edges), len(crate.files)
+
+
+def main():
+    show_graph = "--graph" in sys.argv[1:]
+    problems, summary = [], []
+    for crate_name, (src, root_file, layers) in CRATES.items():
+        crate = Crate(crate_name, src, root_file, layers)
+        found, edge_count, modules = check(crate, show_graph)
+        problems.extend(found)
+        summary.append(f"{crate_name}: {modules} modules, {edge_count} arrows")
+    for p in problems:
+        print("arch-check:", p)
+    print("arch-check:", "; ".join(summary), f"; {len(problems)} problem(s)")
+    sys.exit(1 if problems else 0)
+
+
+if __name__ == "__main__":
+    main()
