@@ -16,7 +16,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> io::Result<()> {
 /// Writes what `contents` writes to `path` atomically, through a buffer: for large files
 /// written again and again (a long run's statistics), building them in memory first grows
 /// the heap with every write (the soak measured +1.4 MB per 1,000 frames).
-pub fn write_atomic_with(
+pub(crate) fn write_atomic_with(
     path: &Path,
     contents: impl FnOnce(&mut dyn Write) -> io::Result<()>,
 ) -> io::Result<()> {
@@ -44,7 +44,7 @@ fn temporary_name(name: &str, pid: u32) -> String {
 
 /// Removes the temporaries in `dir` that other processes left while writing a file `keep`
 /// accepts the name of (a killed run's); returns how many. Temporaries of this process stay.
-pub fn remove_stale_temporaries(dir: &Path, keep: impl Fn(&str) -> bool) -> io::Result<usize> {
+pub(crate) fn remove_stale_temporaries(dir: &Path, keep: impl Fn(&str) -> bool) -> io::Result<usize> {
     let mut removed = 0;
     for entry in fs::read_dir(dir)? {
         let entry = entry?;

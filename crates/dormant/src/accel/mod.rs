@@ -29,7 +29,8 @@ pub use backend::Backend;
 pub use hit::{Hit, HitObject};
 pub use load::{load_scene, LoadedScene};
 pub(crate) use object_map::mesh_triangle;
-pub use object_map::{normal_matrix, HitTriangle, LoadedObjectMap, MeshRef, ObjectMap, ResolvedHit};
+pub(crate) use object_map::normal_matrix;
+pub use object_map::{HitTriangle, LoadedObjectMap, MeshRef, ObjectMap, ResolvedHit};
 pub use snapshot::StaticSceneSnapshot;
 
 use glam::Affine3A;
@@ -108,18 +109,18 @@ pub(crate) fn check_motion(
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct CommitReport {
     /// Triangles the commit (re)built into acceleration structures.
-    pub built_triangles: usize,
+    pub(crate) built_triangles: usize,
     /// Instances in the top level after the commit.
     pub instances: usize,
     /// Triangles skipped because they were degenerate or not finite.
     pub skipped_triangles: usize,
     /// Whether the resting level was rebuilt.
-    pub resting_rebuilt: bool,
+    pub(crate) resting_rebuilt: bool,
     /// Resting instances in the resting level after the commit.
     pub resting_instances: usize,
     /// Resting instances still in the top level after the commit, waiting for the next
     /// rebuild of the resting level.
-    pub resting_waiting: usize,
+    pub(crate) resting_waiting: usize,
 }
 
 /// Closest-hit and any-hit queries on a committed scene. Safe to call from many threads.

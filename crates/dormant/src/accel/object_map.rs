@@ -48,7 +48,7 @@ pub struct ResolvedHit {
     /// The body, for hits on bodies (instanced or baked).
     pub body: Option<BodyId>,
     /// Object-to-world transform for normals (identity for static meshes).
-    pub normal_matrix: Mat3,
+    pub(crate) normal_matrix: Mat3,
     /// Whether the hit was on an integrated body (baked, or in the resting scene): the debug
     /// view colours it.
     pub integrated: bool,
@@ -77,7 +77,7 @@ pub(crate) fn mesh_triangle(mesh: &TriangleMesh, prim: u32) -> Option<[Vec3; 3]>
 }
 
 /// The normal matrix of an object-to-world transform.
-pub fn normal_matrix(transform: &Affine3A) -> Mat3 {
+pub(crate) fn normal_matrix(transform: &Affine3A) -> Mat3 {
     Mat3::from(transform.matrix3).inverse().transpose()
 }
 

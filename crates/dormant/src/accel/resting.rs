@@ -41,9 +41,9 @@ pub(crate) struct RestingCounts {
     /// Resting instances in the level.
     pub live: usize,
     /// Copies in the level that rays skip (their instances woke, moved or were removed).
-    pub ghosts: usize,
+    pub(crate) ghosts: usize,
     /// Resting instances still in the top level, waiting for the next rebuild.
-    pub waiting: usize,
+    pub(crate) waiting: usize,
 }
 
 /// Decides when to rebuild a resting level (see the module documentation).
@@ -64,14 +64,14 @@ impl Default for RestingSchedule {
 impl RestingSchedule {
     /// A top-level build over `instances` took `ms`; `waiting` of them wait for the resting
     /// level and are charged their share.
-    pub fn record_top_build(&mut self, instances: usize, waiting: usize, ms: f64) {
+    pub(crate) fn record_top_build(&mut self, instances: usize, waiting: usize, ms: f64) {
         if instances > 0 && waiting > 0 {
             self.waited_ms += ms * waiting.min(instances) as f64 / instances as f64;
         }
     }
 
     /// A rebuild of the resting level over `instances` took `ms`.
-    pub fn record_rebuild(&mut self, instances: usize, ms: f64) {
+    pub(crate) fn record_rebuild(&mut self, instances: usize, ms: f64) {
         self.waited_ms = 0.0;
         if instances > 0 {
             let per = ms / instances as f64;
@@ -80,13 +80,13 @@ impl RestingSchedule {
     }
 
     /// The predicted cost of rebuilding the level for `counts`, ms.
-    pub fn predicted_rebuild_ms(&self, counts: RestingCounts) -> f64 {
+    pub(crate) fn predicted_rebuild_ms(&self, counts: RestingCounts) -> f64 {
         self.rebuild_ms_per_instance * (counts.live + counts.waiting) as f64
     }
 
     /// Whether the level should be rebuilt now, with `awake` instances in the top level
     /// beside the waiting ones.
-    pub fn rebuild_due(&self, counts: RestingCounts, awake: usize) -> bool {
+    pub(crate) fn rebuild_due(&self, counts: RestingCounts, awake: usize) -> bool {
         if counts.waiting == 0 && counts.ghosts == 0 {
             return false;
         }

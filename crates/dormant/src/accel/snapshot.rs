@@ -30,7 +30,7 @@ impl StaticSceneSnapshot {
 
     /// Memory only this snapshot keeps alive: shared structure is not counted, so the value
     /// grows as the live scene moves away from the snapshot.
-    pub fn unique_bytes(&self) -> usize {
+    pub(crate) fn unique_bytes(&self) -> usize {
         self.payload.unique_bytes()
     }
 

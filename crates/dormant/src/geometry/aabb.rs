@@ -15,19 +15,20 @@ impl Default for Aabb {
 }
 
 impl Aabb {
-    pub const EMPTY: Aabb = Aabb { min: Vec3::splat(f32::INFINITY), max: Vec3::splat(f32::NEG_INFINITY) };
+    pub(crate) const EMPTY: Aabb =
+        Aabb { min: Vec3::splat(f32::INFINITY), max: Vec3::splat(f32::NEG_INFINITY) };
 
-    pub fn from_points(points: impl IntoIterator<Item = Vec3>) -> Self {
+    pub(crate) fn from_points(points: impl IntoIterator<Item = Vec3>) -> Self {
         points.into_iter().fold(Self::EMPTY, |b, p| b.grow(p))
     }
 
     #[must_use]
-    pub fn grow(self, p: Vec3) -> Self {
+    pub(crate) fn grow(self, p: Vec3) -> Self {
         Self { min: self.min.min(p), max: self.max.max(p) }
     }
 
     #[must_use]
-    pub fn union(self, o: Aabb) -> Self {
+    pub(crate) fn union(self, o: Aabb) -> Self {
         Self { min: self.min.min(o.min), max: self.max.max(o.max) }
     }
 
@@ -48,7 +49,7 @@ impl Aabb {
     }
 
     /// Surface area, the SAH's measure; 0 for the empty box.
-    pub fn surface_area(&self) -> f32 {
+    pub(crate) fn surface_area(&self) -> f32 {
         let e = self.extent();
         2.0 * (e.x * e.y + e.y * e.z + e.z * e.x)
     }

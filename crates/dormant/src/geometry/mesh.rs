@@ -23,10 +23,10 @@ pub enum MeshError {
 pub struct TriangleMesh {
     pub positions: Vec<Vec3>,
     pub indices: Vec<[u32; 3]>,
-    pub normals: Option<Vec<Vec3>>,
-    pub uvs: Option<Vec<Vec2>>,
+    pub(crate) normals: Option<Vec<Vec3>>,
+    pub(crate) uvs: Option<Vec<Vec2>>,
     /// Per triangle: material slot, added to the owning object's material index.
-    pub material_ids: Option<Vec<u32>>,
+    pub(crate) material_ids: Option<Vec<u32>>,
 }
 
 impl TriangleMesh {
@@ -35,12 +35,12 @@ impl TriangleMesh {
     }
 
     /// Triangle `prim`'s material slot (0 when the mesh has no per-triangle materials).
-    pub fn material_slot(&self, prim: usize) -> u32 {
+    pub(crate) fn material_slot(&self, prim: usize) -> u32 {
         self.material_ids.as_ref().and_then(|ids| ids.get(prim).copied()).unwrap_or(0)
     }
 
     /// The largest material slot any triangle uses.
-    pub fn max_material_slot(&self) -> u32 {
+    pub(crate) fn max_material_slot(&self) -> u32 {
         self.material_ids.as_ref().and_then(|ids| ids.iter().copied().max()).unwrap_or(0)
     }
 

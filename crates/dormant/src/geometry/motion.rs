@@ -21,7 +21,7 @@ impl RigidTransform {
     }
 
     /// `a` at `s = 0`, `b` at `s = 1`: translation lerped, rotation slerped (shorter arc).
-    pub fn interpolate(a: &Self, b: &Self, s: f32) -> Self {
+    pub(crate) fn interpolate(a: &Self, b: &Self, s: f32) -> Self {
         Self {
             rotation: a.rotation.slerp(b.rotation, s).normalize(),
             translation: a.translation.lerp(b.translation, s),
@@ -52,7 +52,7 @@ impl InstanceMotion {
     }
 
     /// The rotation's normal matrix at `time` (a rotation is its own inverse transpose).
-    pub fn normal_matrix_at(&self, time: f32) -> Mat3 {
+    pub(crate) fn normal_matrix_at(&self, time: f32) -> Mat3 {
         Mat3::from_quat(self.at(time).rotation)
     }
 
@@ -63,7 +63,7 @@ impl InstanceMotion {
     /// The angle (radians) the rotation turns through from open to close: 0 for a pure
     /// translation. From the sine of the half angle, which stays precise for tiny angles
     /// (the cosine, the quaternions' dot product, rounds to 1 below about 7e-4).
-    pub fn rotation_angle(&self) -> f32 {
+    pub(crate) fn rotation_angle(&self) -> f32 {
         if self.open.rotation == self.close.rotation {
             return 0.0;
         }

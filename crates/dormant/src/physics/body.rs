@@ -22,7 +22,7 @@ impl BodyPose {
     }
 
     /// The pose as a rigid transform (for motion blur's interpolation).
-    pub fn rigid(&self) -> RigidTransform {
+    pub(crate) fn rigid(&self) -> RigidTransform {
         RigidTransform { rotation: self.rotation, translation: self.translation }
     }
 }

@@ -24,12 +24,12 @@ pub enum ColliderChoice {
 #[derive(Clone)]
 pub(crate) struct PrototypeShape {
     pub shape: SharedShape,
-    pub choice: ColliderChoice,
-    pub density: f32,
-    pub friction: f32,
-    pub restitution: f32,
+    pub(crate) choice: ColliderChoice,
+    pub(crate) density: f32,
+    pub(crate) friction: f32,
+    pub(crate) restitution: f32,
     /// Radius of a sphere about the local origin that contains the shape.
-    pub bounding_radius: f32,
+    pub(crate) bounding_radius: f32,
 }
 
 pub(crate) fn prototype_shape(file: &SceneFile, index: usize) -> Result<PrototypeShape, PhysicsError> {

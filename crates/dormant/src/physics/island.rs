@@ -103,9 +103,9 @@ fn add_run(groups: &mut BTreeMap<u64, Vec<BodyId>>, key: u64, members: Vec<BodyI
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
 pub struct IslandCounters {
     pub updates: u64,
-    pub islands_slept: u64,
+    pub(crate) islands_slept: u64,
     pub islands_woke: u64,
-    pub bodies_slept: u64,
+    pub(crate) bodies_slept: u64,
 }
 
 /// Keeps the set of sleeping islands and emits events as it changes.

@@ -19,7 +19,7 @@ impl KinematicPath {
     }
 
     /// The pose at `time` seconds: clamped to the first/last key, or wrapped when looped.
-    pub fn pose_at(&self, time: f32) -> BodyPose {
+    pub(crate) fn pose_at(&self, time: f32) -> BodyPose {
         let first = self.keys[0];
         let last = self.keys[self.keys.len() - 1];
         let t = if self.looped && last.time > first.time {

@@ -23,4 +23,5 @@ pub use island::{IslandCounters, IslandEvent, IslandId, IslandTracker, SleepObse
 pub use options::SimulateOptions;
 pub use simulation::{simulate, simulate_observed, SimulatedFrame, Simulation, SimulationCounters};
 pub use stats::IslandStats;
-pub use trajectory::{RecordedScene, Replay, ReplayFrame, Trajectory, TrajectoryError, TrajectoryFrame};
+pub(crate) use trajectory::Replay;
+pub use trajectory::{RecordedScene, ReplayFrame, Trajectory, TrajectoryError, TrajectoryFrame};

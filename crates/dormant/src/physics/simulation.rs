@@ -34,11 +34,11 @@ use crate::scene::file::{environment_mesh, DisturbanceDef, DisturbanceKind, Scen
 pub struct SimulationCounters {
     pub frames: u64,
     pub rapier_steps: u64,
-    pub spawned: u64,
-    pub removed_below_kill_plane: u64,
-    pub disturbances: u64,
-    pub setup_seconds: f64,
-    pub spawn_seconds: f64,
+    pub(crate) spawned: u64,
+    pub(crate) removed_below_kill_plane: u64,
+    pub(crate) disturbances: u64,
+    pub(crate) setup_seconds: f64,
+    pub(crate) spawn_seconds: f64,
     pub step_seconds: f64,
     pub islands_seconds: f64,
 }
@@ -406,7 +406,7 @@ pub struct SimulatedFrame {
     /// Frames the whole run simulates.
     pub frames: u32,
     /// Wall-clock milliseconds of this frame's physics step.
-    pub step_ms: f64,
+    pub(crate) step_ms: f64,
 }
 
 /// Simulates `file` with `options` and records every frame.

@@ -16,7 +16,7 @@ pub(crate) struct SpawnOrder {
     pub frame: u32,
     pub prototype: u32,
     pub pose: BodyPose,
-    pub velocity: Vec3,
+    pub(crate) velocity: Vec3,
     /// The structure copy (numbered over all structures) the body belongs to: it enters the
     /// world asleep.
     pub structure: Option<u32>,

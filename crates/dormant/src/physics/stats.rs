@@ -15,17 +15,17 @@ pub struct IslandStats {
     pub islands_woken: u64,
     /// Islands asleep after the last frame.
     pub islands_asleep_at_end: u64,
-    pub size_min: u64,
+    pub(crate) size_min: u64,
     pub size_max: u64,
     pub size_mean: f64,
-    pub size_median: u64,
+    pub(crate) size_median: u64,
     /// Sizes of the islands asleep at the end, largest first.
-    pub sizes_at_end: Vec<u64>,
+    pub(crate) sizes_at_end: Vec<u64>,
     /// Mean frames an island slept before waking (islands that woke).
-    pub mean_sleep_frames_woken: f64,
+    pub(crate) mean_sleep_frames_woken: f64,
     /// Mean frames asleep over all islands, those still asleep counted to the last frame.
     pub mean_sleep_frames_all: f64,
-    pub mean_sleep_seconds_all: f64,
+    pub(crate) mean_sleep_seconds_all: f64,
     pub dynamic_bodies_at_end: u64,
     pub asleep_bodies_at_end: u64,
     pub asleep_fraction_at_end: f64,

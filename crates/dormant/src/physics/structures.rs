@@ -51,7 +51,7 @@ impl StructureSet {
     }
 
     /// Copies that have not woken since they were built.
-    pub fn intact_count(&self) -> usize {
+    pub(crate) fn intact_count(&self) -> usize {
         self.intact.iter().filter(|bodies| !bodies.is_empty()).count()
     }
 
@@ -64,7 +64,7 @@ impl StructureSet {
 
     /// Wakes every intact copy with an awake body (all of its bodies, strongly, as Rapier
     /// wakes an island) and drops their contact filter; `handles` maps body ids to Rapier.
-    pub fn wake_touched(&mut self, world: &mut PhysicsWorld, handles: &[Option<RigidBodyHandle>]) {
+    pub(crate) fn wake_touched(&mut self, world: &mut PhysicsWorld, handles: &[Option<RigidBodyHandle>]) {
         if self.intact.is_empty() {
             return;
         }

@@ -22,7 +22,7 @@ use super::RenderError;
 use crate::scene::limits::MAX_SAMPLES_PER_PIXEL;
 
 /// After the minimum, a pixel's error is checked every this many samples.
-pub const CHECK_EVERY: u32 = 4;
+pub(crate) const CHECK_EVERY: u32 = 4;
 
 /// Radiance below which the error is measured against this absolute value instead of the
 /// pixel's own (dark pixels would otherwise never converge). The same floor as the relative
@@ -43,7 +43,7 @@ pub struct AdaptiveSampling {
 /// The minimum when none is given: like Cycles' automatic minimum, the square root of the
 /// sample count, here at least 8 (a variance from fewer samples misses too much), at most
 /// `spp`.
-pub fn default_min_spp(spp: u32) -> u32 {
+pub(crate) fn default_min_spp(spp: u32) -> u32 {
     ((spp as f64).sqrt().ceil() as u32).max(8).min(spp)
 }
 
@@ -103,7 +103,7 @@ impl Stopping {
 /// `sum`, their squares to `squares`: per channel the sample variance over the squared mean
 /// plus [`DARK_FLOOR`] squared; the root of the mean over the channels. Non-finite samples
 /// give NaN; fewer than 2 samples infinity.
-pub fn relative_spread(n: u32, sum: Vec3, squares: Vec3) -> f32 {
+pub(crate) fn relative_spread(n: u32, sum: Vec3, squares: Vec3) -> f32 {
     if n < 2 {
         return f32::INFINITY;
     }
@@ -117,7 +117,7 @@ pub fn relative_spread(n: u32, sum: Vec3, squares: Vec3) -> f32 {
 /// Estimated relative standard error of a pixel's mean after `n >= 2` samples summing to
 /// `sum`, their squares to `squares`: [`relative_spread`] over √n. Its square estimates the
 /// pixel's contribution to the relative MSE. Non-finite samples give NaN.
-pub fn relative_error(n: u32, sum: Vec3, squares: Vec3) -> f32 {
+pub(crate) fn relative_error(n: u32, sum: Vec3, squares: Vec3) -> f32 {
     relative_spread(n, sum, squares) / (n as f32).sqrt()
 }
 

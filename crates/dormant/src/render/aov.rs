@@ -43,7 +43,7 @@ impl Aov {
 }
 
 /// AOV passes of a frame, each with what it records.
-pub type AovPasses = Vec<(Aov, Film)>;
+pub(crate) type AovPasses = Vec<(Aov, Film)>;
 
 /// A frame's image with `integrator` and its `aovs` passes, in order. The passes see the
 /// image's camera samples: with adaptive sampling, each pixel as many as the image gave it.

@@ -63,13 +63,13 @@ impl Frame {
     /// Cosine-weighted direction in the hemisphere around the axis; pdf `cos / pi`. Unit to
     /// within 1e-6 without normalising (an orthonormal basis and `sin^2 + cos^2 = 1` to within
     /// [`sincos_turn`]'s error; `sampled_directions_are_unit` checks it).
-    pub fn cosine(&self, u: Vec2) -> Vec3 {
+    pub(crate) fn cosine(&self, u: Vec2) -> Vec3 {
         self.around(u.x.sqrt(), (1.0 - u.x).max(0.0).sqrt(), u.y)
     }
 
     /// Uniform direction within the cone of half-angle `acos(cos_max)` around the axis; unit
     /// to within 1e-6, as [`Self::cosine`].
-    pub fn cone(&self, cos_max: f32, u: Vec2) -> Vec3 {
+    pub(crate) fn cone(&self, cos_max: f32, u: Vec2) -> Vec3 {
         let cos = 1.0 - u.x * (1.0 - cos_max);
         let sin = (1.0 - cos * cos).max(0.0).sqrt();
         self.around(sin, cos, u.y)
@@ -89,10 +89,10 @@ pub fn sample_cone(axis: Vec3, cos_max: f32, u: Vec2) -> Vec3 {
 /// A sampled incident direction.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct BsdfSample {
-    pub wi: Vec3,
+    pub(crate) wi: Vec3,
     /// `f * |cos| / pdf`: what the path throughput is multiplied by.
     pub weight: Vec3,
-    pub pdf: f32,
+    pub(crate) pdf: f32,
 }
 
 /// The BSDF at one surface point, seen from one outgoing direction `wo` (a path vertex
@@ -170,7 +170,7 @@ impl Bsdf {
     }
 
     /// `f(wo, wi) * cos(wi)`; zero below the surface.
-    pub fn eval(&self, wi: Vec3) -> Vec3 {
+    pub(crate) fn eval(&self, wi: Vec3) -> Vec3 {
         self.eval_pdf(wi).0
     }
 
@@ -180,7 +180,7 @@ impl Bsdf {
     /// `a2 / (pi t^2)`, its product with the Smith term over `4 (n.wo) (n.wi)` one quotient, the
     /// specular pdf another, and Smith's `lambda` of `wi` the last (results differ from the
     /// term-by-term quotients at the last bits).
-    pub fn eval_pdf(&self, wi: Vec3) -> (Vec3, f32) {
+    pub(crate) fn eval_pdf(&self, wi: Vec3) -> (Vec3, f32) {
         let (wo, co, ci) = (self.wo, self.cos_o, self.frame.n.dot(wi));
         if co <= 0.0 || ci <= 0.0 {
             return (Vec3::ZERO, 0.0);
@@ -201,7 +201,7 @@ impl Bsdf {
     /// Whether `wi` and `wo` are both above the shading surface: where [`Self::eval_pdf`] can
     /// be non-zero (zero elsewhere). Light samples test it before their shadow ray and
     /// evaluate the BSDF only when the ray arrives.
-    pub fn reflects(&self, wi: Vec3) -> bool {
+    pub(crate) fn reflects(&self, wi: Vec3) -> bool {
         self.cos_o > 0.0 && self.frame.n.dot(wi) > 0.0
     }
 
@@ -211,7 +211,7 @@ impl Bsdf {
     }
 
     /// Picks a lobe with `u_lobe`, then a direction with `u`.
-    pub fn sample(&self, u: Vec2, u_lobe: f32) -> Option<BsdfSample> {
+    pub(crate) fn sample(&self, u: Vec2, u_lobe: f32) -> Option<BsdfSample> {
         let wo = self.wo;
         if self.cos_o <= 0.0 {
             return None;

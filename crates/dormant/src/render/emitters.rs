@@ -29,7 +29,7 @@ pub(crate) struct EmitterSample {
     pub uv: Vec2,
     pub material: u32,
     /// Probability density per unit area of having chosen `p`.
-    pub pdf_area: f32,
+    pub(crate) pdf_area: f32,
 }
 
 /// The scene's emissive triangles with a cumulative distribution over their power.
@@ -95,7 +95,7 @@ impl Emitters {
 
     /// Whether any prototype of `desc` has an emissive triangle (so its bodies' positions
     /// matter for light sampling).
-    pub fn prototypes_emit(desc: &SceneDescription) -> bool {
+    pub(crate) fn prototypes_emit(desc: &SceneDescription) -> bool {
         desc.prototypes.iter().any(|p| {
             (0..p.mesh.triangle_count()).any(|i| power(desc, p.material + p.mesh.material_slot(i)) > 0.0)
         })
@@ -103,7 +103,7 @@ impl Emitters {
 
     /// Area density with which [`Self::sample`] picks a given point on a surface whose
     /// material has emissive factor `emissive`.
-    pub fn pdf_area(&self, emissive: Vec3) -> f32 {
+    pub(crate) fn pdf_area(&self, emissive: Vec3) -> f32 {
         if self.total > 0.0 {
             luminance(emissive).max(0.0) / self.total
         } else {
@@ -112,7 +112,7 @@ impl Emitters {
     }
 
     /// Picks a triangle with `u_pick` and a uniform point on it with `u`.
-    pub fn sample(&self, u_pick: f32, u: Vec2) -> Option<EmitterSample> {
+    pub(crate) fn sample(&self, u_pick: f32, u: Vec2) -> Option<EmitterSample> {
         let target = u_pick * self.total;
         let i = self.cdf.partition_point(|&c| c <= target).min(self.triangles.len().checked_sub(1)?);
         let t = &self.triangles[i];

@@ -11,14 +11,14 @@ use super::film::srgb_encode;
 use super::{Film, RenderError};
 
 /// Encodes the film as an 8-bit sRGB PNG and writes it atomically.
-pub fn write_png_atomic(film: &Film, exposure: f32, path: &Path) -> Result<(), RenderError> {
+pub(crate) fn write_png_atomic(film: &Film, exposure: f32, path: &Path) -> Result<(), RenderError> {
     write_rgb8_png_atomic(film.width, film.height, film.to_srgb8(exposure), path)
 }
 
 /// Writes an AOV pass as an 8-bit PNG, atomically, without tone mapping: albedo sRGB-encoded,
 /// normals as `0.5 * n + 0.5`, depth as grey from 0 (at the camera) to 1 (the farthest hit;
 /// rays that hit nothing are white too), sample counts as grey from 0 to the frame's most.
-pub fn write_aov_png_atomic(film: &Film, aov: Aov, path: &Path) -> Result<(), RenderError> {
+pub(crate) fn write_aov_png_atomic(film: &Film, aov: Aov, path: &Path) -> Result<(), RenderError> {
     let far = film.pixels.iter().map(|p| p.x).filter(|d| d.is_finite()).fold(0.0f32, f32::max).max(1e-6);
     let byte = |c: f32| (c.clamp(0.0, 1.0) * 255.0 + 0.5) as u8;
     let bytes = film

@@ -18,22 +18,24 @@ mod texture;
 mod tiles;
 mod video;
 
-pub use adaptive::{default_min_spp, relative_error, AdaptiveSampling, SppStats, CHECK_EVERY, DARK_FLOOR};
+pub(crate) use adaptive::{default_min_spp, relative_error, CHECK_EVERY};
+pub use adaptive::{AdaptiveSampling, SppStats, DARK_FLOOR};
 pub use aov::{render_with_aovs, Aov, AovIntegrator};
 pub use bsdf::{sample_cone, sample_cosine};
 pub use camera::PinholeCamera;
 pub use denoise::{DenoiseError, Denoiser};
 pub(crate) use emitters::Emitters;
 pub use film::Film;
-pub use image_file::{write_aov_png_atomic, write_exr_atomic, write_png_atomic};
+pub use image_file::write_exr_atomic;
+pub(crate) use image_file::{write_aov_png_atomic, write_png_atomic};
 pub use image_size::ImageSize;
-pub use integrator::{
-    AmbientOcclusion, DirectLighting, FrameContext, FrameIntegrator, Integrator, PathTracer,
-};
+pub use integrator::{AmbientOcclusion, DirectLighting, Integrator, PathTracer};
+pub(crate) use integrator::{FrameContext, FrameIntegrator};
 pub use render_scene::RenderScene;
 pub(crate) use render_scene::{SurfaceHit, SurfaceKind};
-pub use sampler::PixelSampler;
-pub use tiles::{render_frame, render_frame_counted, RenderSettings, RenderStats};
+pub(crate) use sampler::PixelSampler;
+pub(crate) use tiles::render_frame_counted;
+pub use tiles::{render_frame, RenderSettings, RenderStats};
 pub use video::{encode_video, ffmpeg_available, VideoError};
 
 use std::path::PathBuf;

@@ -42,11 +42,11 @@ pub struct RenderScene<'a> {
 pub(crate) struct SurfaceHit {
     pub p: Vec3,
     pub ng: Vec3,
-    pub ns: Vec3,
+    pub(crate) ns: Vec3,
     /// The triangle's material with its textures applied at the hit's texture coordinates.
     pub material: Material,
     /// Radiance the surface emits (towards either side).
-    pub emission: Vec3,
+    pub(crate) emission: Vec3,
     /// What was hit, for the debug view: the environment, an instanced body or a baked one.
     pub kind: SurfaceKind,
 }

@@ -30,7 +30,7 @@ use glam::Vec2;
 
 /// Samples for one pixel of one frame.
 #[derive(Clone, Copy, Debug)]
-pub struct PixelSampler {
+pub(crate) struct PixelSampler {
     seed: u32,
     /// [`Self::hash_seeds`] of the pairs below [`CACHED_PAIRS`], hashed once per pixel: every
     /// camera sample draws from them (the pixel jitter and the first path vertex's sun, sky
@@ -182,13 +182,13 @@ impl PixelSampler {
     /// [`Self::get_2d`]'s construction (shuffled, Owen-scrambled van der Corput), so independent
     /// of every pair and stratified in `2^k` intervals for any prefix of `2^k`. For the shutter
     /// time; `dim` must not also be a pair's.
-    pub fn get_1d(&self, index: u32, dim: u32) -> f32 {
+    pub(crate) fn get_1d(&self, index: u32, dim: u32) -> f32 {
         let (shuffle, sx, _) = self.seeds(dim);
         unit(low_to_high_permutation(owen_scramble(index, shuffle), sx).reverse_bits())
     }
 
     /// The `index`-th 2D point of dimension pair `dim`, in `[0, 1)^2`.
-    pub fn get_2d(&self, index: u32, dim: u32) -> Vec2 {
+    pub(crate) fn get_2d(&self, index: u32, dim: u32) -> Vec2 {
         let (shuffle, sx, sy) = self.seeds(dim);
         // The shuffled index, bit-reversed: `i = owen_scramble(index, shuffle)` is
         // `r.reverse_bits()`.

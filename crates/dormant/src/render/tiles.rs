@@ -142,7 +142,7 @@ pub fn render_frame(
 /// `samples` (one count per pixel, at most `spp`), pixel `p` gets exactly its first
 /// `samples[p]` samples and adaptive sampling is not applied: the AOV passes of an adaptive
 /// frame see the beauty pass's camera samples.
-pub fn render_frame_counted(
+pub(crate) fn render_frame_counted(
     scene: &RenderScene,
     query: &dyn SceneQuery,
     integrator: &dyn Integrator,

@@ -11,17 +11,17 @@ use crate::physics::{BodyId, BodyPose};
 
 /// One body's triangles within a baked mesh.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct BakedPart {
+pub(crate) struct BakedPart {
     /// First triangle of this body in the baked mesh.
-    pub first_prim: u32,
+    pub(crate) first_prim: u32,
     pub body: BodyId,
     pub prototype: u32,
-    pub normal_matrix: Mat3,
+    pub(crate) normal_matrix: Mat3,
 }
 
 /// An island baked into world space.
 #[derive(Clone, Debug)]
-pub struct BakedIsland {
+pub(crate) struct BakedIsland {
     pub mesh: TriangleMesh,
     /// Ascending by `first_prim`.
     pub parts: Vec<BakedPart>,
@@ -31,7 +31,7 @@ impl BakedIsland {
     /// Transforms each body's prototype mesh by its pose and concatenates them. Only positions
     /// and indices are kept: shading reads normals and UVs from the prototype (see
     /// [`BakedIsland::part_of`]).
-    pub fn bake(bodies: &[(BodyId, u32, BodyPose)], prototypes: &[Arc<TriangleMesh>]) -> BakedIsland {
+    pub(crate) fn bake(bodies: &[(BodyId, u32, BodyPose)], prototypes: &[Arc<TriangleMesh>]) -> BakedIsland {
         let (mut vertices, mut triangles) = (0, 0);
         for (_, proto, _) in bodies {
             vertices += prototypes[*proto as usize].positions.len();
@@ -62,7 +62,7 @@ impl BakedIsland {
     }
 
     /// The body part holding baked triangle `prim`, and the triangle's index in its prototype.
-    pub fn part_of(&self, prim: u32) -> Option<(&BakedPart, u32)> {
+    pub(crate) fn part_of(&self, prim: u32) -> Option<(&BakedPart, u32)> {
         let i = self.parts.partition_point(|p| p.first_prim <= prim).checked_sub(1)?;
         let part = &self.parts[i];
         Some((part, prim - part.first_prim))

@@ -48,8 +48,8 @@ pub struct CacheStats {
     pub partial: u64,
     pub miss: u64,
     pub recorded: u64,
-    pub evicted: u64,
-    pub invalidated: u64,
+    pub(crate) evicted: u64,
+    pub(crate) invalidated: u64,
     /// Requests by fraction of requested islands the served entry held ([`FRACTION_BUCKETS`];
     /// an empty request counts as 100%).
     pub fraction_histogram: [u64; 12],
@@ -58,11 +58,11 @@ pub struct CacheStats {
     pub bytes: usize,
     /// The most entries and bytes held at once so far (measured at every change and whenever
     /// the manager re-measures after a static commit).
-    pub peak_entries: usize,
-    pub peak_bytes: usize,
+    pub(crate) peak_entries: usize,
+    pub(crate) peak_bytes: usize,
     /// The budget ([`CacheBudget`]) that `entries` and `bytes` are kept within.
-    pub budget_entries: usize,
-    pub budget_bytes: usize,
+    pub(crate) budget_entries: usize,
+    pub(crate) budget_bytes: usize,
 }
 
 impl CacheStats {
@@ -102,16 +102,16 @@ struct Entry<S> {
 
 /// An answer to [`GeometryCache::lookup`].
 #[derive(Debug)]
-pub struct CacheHit<'a, S> {
+pub(crate) struct CacheHit<'a, S> {
     pub outcome: CacheOutcome,
     /// The entry's islands (empty for a miss).
-    pub held: &'a BTreeSet<IslandId>,
+    pub(crate) held: &'a BTreeSet<IslandId>,
     /// The saved scene (`None` for a miss).
     pub snapshot: Option<&'a S>,
 }
 
 /// Saved static scenes keyed by their island sets. `S` is the backend's snapshot.
-pub struct GeometryCache<S> {
+pub(crate) struct GeometryCache<S> {
     budget: CacheBudget,
     entries: Vec<Entry<S>>,
     clock: f64,
@@ -167,7 +167,7 @@ impl<S> GeometryCache<S> {
     /// Measures again what each entry keeps alive (it grows as the live scene moves away from
     /// the entry) and evicts until the budget holds; an entry larger than the whole budget
     /// is not kept.
-    pub fn remeasure(&mut self, bytes_of: impl Fn(&S) -> usize) {
+    pub(crate) fn remeasure(&mut self, bytes_of: impl Fn(&S) -> usize) {
         for e in &mut self.entries {
             e.bytes = bytes_of(&e.snapshot);
         }
@@ -195,7 +195,7 @@ impl<S> GeometryCache<S> {
 
     /// The best entry for a static scene holding exactly `request`: an equal set (full hit),
     /// else the largest subset by triangles (partial hit), else a miss. Counts the request.
-    pub fn lookup(&mut self, request: &BTreeSet<IslandId>) -> CacheHit<'_, S> {
+    pub(crate) fn lookup(&mut self, request: &BTreeSet<IslandId>) -> CacheHit<'_, S> {
         self.stats.requests += 1;
         let best = self
             .entries
@@ -230,7 +230,7 @@ impl<S> GeometryCache<S> {
     }
 
     /// Drops every entry that holds `island` (it woke: those scenes are stale).
-    pub fn invalidate(&mut self, island: IslandId) {
+    pub(crate) fn invalidate(&mut self, island: IslandId) {
         let before = self.entries.len();
         self.entries.retain(|e| !e.key.contains(&island));
         self.stats.invalidated += (before - self.entries.len()) as u64;

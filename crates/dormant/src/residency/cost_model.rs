@@ -150,30 +150,30 @@ impl std::fmt::Display for IntegrationForm {
 
 /// The numbers behind one decision.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct CostEstimate {
+pub(crate) struct CostEstimate {
     /// This island's own share of the build, ms (baked: its triangles; resting: its
     /// instances in the rebuilt resting scene); the frame's shared cost is apart.
     pub build_ms: f64,
     /// The cost its wake adds while rendering, ms (resting: a rebuild of the resting scene not
     /// already due that frame; baked: nothing, removal is a detach).
-    pub wake_ms: f64,
+    pub(crate) wake_ms: f64,
     /// Estimated saving per rendered frame while integrated, ms: commit gain minus trace
     /// penalty.
-    pub gain_ms_per_frame: f64,
+    pub(crate) gain_ms_per_frame: f64,
     /// Rendered frames it will still sleep: exact with lookahead, else expected.
-    pub expected_frames: f64,
+    pub(crate) expected_frames: f64,
     /// Whether `expected_frames` is known (lookahead) rather than estimated.
     pub exact: bool,
 }
 
 impl CostEstimate {
     /// The total saving over the frames it sleeps.
-    pub fn gain_ms(&self) -> f64 {
+    pub(crate) fn gain_ms(&self) -> f64 {
         self.gain_ms_per_frame * self.expected_frames
     }
 
     /// Saving minus its own costs (the frame's shared cost is not included).
-    pub fn net_ms(&self) -> f64 {
+    pub(crate) fn net_ms(&self) -> f64 {
         self.gain_ms() - self.build_ms - self.wake_ms
     }
 }
@@ -181,7 +181,7 @@ impl CostEstimate {
 /// Which of one frame's candidates to integrate: those with a positive net saving, if
 /// together they also pay the frame's shared cost `fixed_ms`. Islands one by one would each
 /// pay it, and many small islands that pay off together would be declined.
-pub fn choose_batch(estimates: &[CostEstimate], fixed_ms: f64) -> Vec<bool> {
+pub(crate) fn choose_batch(estimates: &[CostEstimate], fixed_ms: f64) -> Vec<bool> {
     let net: f64 = estimates.iter().map(|e| e.net_ms().max(0.0)).sum();
     let go = net > fixed_ms;
     estimates.iter().map(|e| go && e.net_ms() > 0.0).collect()
@@ -189,30 +189,30 @@ pub fn choose_batch(estimates: &[CostEstimate], fixed_ms: f64) -> Vec<bool> {
 
 /// A sleeping island the manager could integrate this frame.
 #[derive(Clone, Copy, Debug)]
-pub struct Candidate {
+pub(crate) struct Candidate {
     pub bodies: usize,
     pub triangles: usize,
     /// Rendered frames it has slept so far.
-    pub age: u32,
+    pub(crate) age: u32,
     /// Rendered frames it will still sleep, this one included (lookahead); `None`: estimate.
-    pub remaining: Option<u32>,
+    pub(crate) remaining: Option<u32>,
 }
 
 /// The scene the candidates would join.
 #[derive(Clone, Copy, Debug)]
-pub struct Situation {
+pub(crate) struct Situation {
     pub form: IntegrationForm,
     /// Dynamic bodies present this frame (baked penalty is per share of them).
     pub present_bodies: usize,
     /// Instances in the resting scene now.
     pub resting_instances: usize,
     /// Rendered frames left in the run, this one included.
-    pub frames_left: f64,
+    pub(crate) frames_left: f64,
 }
 
 /// The cost model's estimates for one frame (see [`CostModel::outlook`]).
 #[derive(Clone, Debug)]
-pub struct Outlook {
+pub(crate) struct Outlook {
     situation: Situation,
     build_line: (f64, f64),
     rest_line: (f64, f64),
@@ -228,7 +228,7 @@ pub struct Outlook {
 
 impl Outlook {
     /// The estimate for one candidate.
-    pub fn estimate(&self, c: &Candidate) -> CostEstimate {
+    pub(crate) fn estimate(&self, c: &Candidate) -> CostEstimate {
         let sit = &self.situation;
         let frames = match c.remaining {
             Some(n) => f64::from(n),
@@ -255,7 +255,7 @@ impl Outlook {
     /// a saving): a static build's overhead, or, when the resting scene is empty, the second
     /// scene's trace penalty while it stays in use (its rebuilds are scheduled by the backend
     /// and priced per island).
-    pub fn fixed_ms(&self, chosen: &[CostEstimate]) -> f64 {
+    pub(crate) fn fixed_ms(&self, chosen: &[CostEstimate]) -> f64 {
         let sit = &self.situation;
         match sit.form {
             IntegrationForm::Baked => self.build_line.0,
@@ -269,7 +269,7 @@ impl Outlook {
 
     /// Expected further rendered frames of sleep for an island asleep for `age` frames: the
     /// mean of `d - age` over the durations `d > age`, at most the frames left.
-    pub fn expected_frames(&self, age: f64) -> f64 {
+    pub(crate) fn expected_frames(&self, age: f64) -> f64 {
         let first = self.durations.partition_point(|&d| d <= age);
         let n = self.durations.len() - first;
         let expected =
@@ -280,13 +280,13 @@ impl Outlook {
 
 /// Measured trace penalties of the integration forms, as fractions of a frame's trace.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
-pub struct Penalties {
+pub(crate) struct Penalties {
     /// With every present body baked (scaled by the baked share).
     pub baked: f64,
     /// With a non-empty resting scene.
     pub resting: f64,
     /// Probes that measured them.
-    pub probes: u32,
+    pub(crate) probes: u32,
 }
 
 impl Default for Penalties {
@@ -298,20 +298,20 @@ impl Default for Penalties {
 /// What the model has learned so far (for the per-run report).
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 pub struct CostModelState {
-    pub build_ms_intercept: f64,
-    pub build_ms_per_mtriangle: f64,
-    pub rest_ms_intercept: f64,
-    pub rest_ms_per_kinstance: f64,
-    pub commit_ms_per_instance: f64,
-    pub trace_ms_mean: f64,
-    pub penalty: Penalties,
-    pub sleep_samples: usize,
-    pub shadow_islands: u64,
+    pub(crate) build_ms_intercept: f64,
+    pub(crate) build_ms_per_mtriangle: f64,
+    pub(crate) rest_ms_intercept: f64,
+    pub(crate) rest_ms_per_kinstance: f64,
+    pub(crate) commit_ms_per_instance: f64,
+    pub(crate) trace_ms_mean: f64,
+    pub(crate) penalty: Penalties,
+    pub(crate) sleep_samples: usize,
+    pub(crate) shadow_islands: u64,
 }
 
 /// Estimates for the integrate-or-not decision; see the module docs.
 #[derive(Clone, Debug, Default)]
-pub struct CostModel {
+pub(crate) struct CostModel {
     build: LineFit,
     rest: LineFit,
     commit: LineFit,
@@ -335,20 +335,20 @@ impl CostModel {
     }
 
     /// A static build of `triangles` took `ms`.
-    pub fn record_build(&mut self, triangles: usize, ms: f64) {
+    pub(crate) fn record_build(&mut self, triangles: usize, ms: f64) {
         if triangles > 0 {
             self.build.push(triangles as f64, ms);
         }
     }
 
     /// A rebuild of the resting scene with `instances` took `ms`.
-    pub fn record_rest_build(&mut self, instances: usize, ms: f64) {
+    pub(crate) fn record_rest_build(&mut self, instances: usize, ms: f64) {
         self.rest.push(instances as f64, ms);
     }
 
     /// A frame with `instances` in the top level took `commit_ms` to commit (only frames that
     /// rebuilt the top level) and `trace_ms` to trace.
-    pub fn record_frame(&mut self, instances: usize, commit_ms: Option<f64>, trace_ms: f64) {
+    pub(crate) fn record_frame(&mut self, instances: usize, commit_ms: Option<f64>, trace_ms: f64) {
         if let Some(ms) = commit_ms.filter(|_| instances >= MIN_COMMIT_INSTANCES) {
             self.commit.push(instances as f64, ms);
         }
@@ -366,7 +366,7 @@ impl CostModel {
     /// A probe traced the same rays in `before_ms` and, after integrating, in `after_ms`;
     /// `share` is the share of present bodies the integration moved (baked), or 1 (the
     /// resting scene went from empty to in use).
-    pub fn record_probe(&mut self, form: IntegrationForm, before_ms: f64, after_ms: f64, share: f64) {
+    pub(crate) fn record_probe(&mut self, form: IntegrationForm, before_ms: f64, after_ms: f64, share: f64) {
         if !(before_ms > 0.0 && after_ms.is_finite() && share > 0.0) {
             return;
         }
@@ -380,7 +380,7 @@ impl CostModel {
 
     /// An island ended after sleeping `frames` rendered frames; `integrated` says whether it
     /// was (a declined island is a shadow sample).
-    pub fn record_sleep(&mut self, frames: f64, integrated: bool) {
+    pub(crate) fn record_sleep(&mut self, frames: f64, integrated: bool) {
         if self.sleeps.len() == 4 * WINDOW {
             self.sleeps.pop_front();
         }
@@ -409,12 +409,12 @@ impl CostModel {
 
     /// Whether a frame's trace time is known, measured or assumed (the trace penalty is
     /// priced in it).
-    pub fn knows_trace(&self) -> bool {
+    pub(crate) fn knows_trace(&self) -> bool {
         self.trace_ms.is_some()
     }
 
     /// Takes `ms` as a frame's trace until one is measured.
-    pub fn assume_trace(&mut self, ms: f64) {
+    pub(crate) fn assume_trace(&mut self, ms: f64) {
         if self.trace_ms.is_none() && ms.is_finite() && ms > 0.0 {
             self.trace_ms = Some(ms);
             self.trace_assumed = true;
@@ -423,7 +423,7 @@ impl CostModel {
 
     /// The model's current estimates, fixed for one frame's decisions: the fits are computed
     /// once and the sleep durations sorted, so each island's estimate is O(log n).
-    pub fn outlook(&self, situation: Situation, live_ages: impl Iterator<Item = f64>) -> Outlook {
+    pub(crate) fn outlook(&self, situation: Situation, live_ages: impl Iterator<Item = f64>) -> Outlook {
         let mut durations: Vec<f64> = self.sleeps.iter().copied().chain(live_ages).collect();
         durations.sort_by(f64::total_cmp);
         // suffix[i] = sum of durations[i..].

@@ -32,23 +32,23 @@ impl Lookahead {
     }
 
     /// The frame at which `island` wakes, if it does within the trajectory.
-    pub fn wake_frame(&self, island: IslandId) -> Option<u32> {
+    pub(crate) fn wake_frame(&self, island: IslandId) -> Option<u32> {
         self.wakes.get(&island).copied()
     }
 
     /// Rendered frames from `now` (inclusive) before `island` wakes: the frames integrating it
     /// now would serve.
-    pub fn remaining_sleep(&self, island: IslandId, now: u32) -> u32 {
+    pub(crate) fn remaining_sleep(&self, island: IslandId, now: u32) -> u32 {
         self.rendered_in(now, self.wake_frame(island).unwrap_or(u32::MAX))
     }
 
     /// Rendered frames from `now` (inclusive) to the end of the run.
-    pub fn frames_left(&self, now: u32) -> u32 {
+    pub(crate) fn frames_left(&self, now: u32) -> u32 {
         self.rendered_in(now, u32::MAX)
     }
 
     /// Rendered frames in `from..to`.
-    pub fn rendered_in(&self, from: u32, to: u32) -> u32 {
+    pub(crate) fn rendered_in(&self, from: u32, to: u32) -> u32 {
         if to <= from {
             return 0;
         }

@@ -20,7 +20,8 @@ mod policy;
 mod stage_times;
 
 pub use cache::{CacheBudget, CacheOutcome, CacheStats, FRACTION_BUCKETS};
-pub use cost_model::{CostEstimate, CostModelState, IntegrationForm, Penalties};
+pub(crate) use cost_model::{CostEstimate, Penalties};
+pub use cost_model::{CostModelState, IntegrationForm};
 pub use lookahead::Lookahead;
 pub use manager::{
     Decision, FrameStats, ManagerOptions, ReactivationPath, ReactivationStrategy, SceneManager,

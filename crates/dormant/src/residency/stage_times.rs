@@ -24,7 +24,7 @@ pub struct StageTimes {
 }
 
 /// A stage's name (its field in JSON and its CSV column) and how to read it.
-pub type StageColumn = (&'static str, fn(&StageTimes) -> f64);
+pub(crate) type StageColumn = (&'static str, fn(&StageTimes) -> f64);
 
 impl StageTimes {
     /// Every stage, in serialisation order: CSV headers and plots are generated from this.

@@ -33,7 +33,7 @@ pub struct SceneAssets {
     sun: Sun,
     sky: Sky,
     /// Where the environment's mesh came from (first), then every prototype's.
-    pub sources: Vec<MeshSource>,
+    pub(crate) sources: Vec<MeshSource>,
 }
 
 /// Where a scene mesh came from and how it was placed: another renderer can load the same
@@ -44,10 +44,10 @@ pub struct MeshSource {
     /// shape or generator.
     pub gltf: Option<std::path::PathBuf>,
     /// The built-in shape or generator (e.g. `box`, `atrium`) when there is no glTF.
-    pub builtin: Option<String>,
+    pub(crate) builtin: Option<String>,
     /// Uniform scale applied to the file's coordinates (its default scene, node transforms
     /// baked in), then `offset` added.
-    pub scale: f32,
+    pub(crate) scale: f32,
     pub offset: [f32; 3],
 }
 
@@ -293,12 +293,12 @@ impl SceneAssets {
 
     /// The material every triangle of mesh `slot` (as [`Self::fallback_material`]) gets
     /// because its file has no materials; `None` when it has its own.
-    pub fn material_without_file_materials(&self, slot: usize) -> Option<Material> {
+    pub(crate) fn material_without_file_materials(&self, slot: usize) -> Option<Material> {
         self.materials.get(slot).filter(|m| m.is_empty()).map(|_| self.fallback_material(slot))
     }
 
     /// The camera at `time` seconds.
-    pub fn camera_at(&self, time: f32) -> Camera {
+    pub(crate) fn camera_at(&self, time: f32) -> Camera {
         camera_at(self.camera.as_ref(), &self.environment, time)
     }
 }

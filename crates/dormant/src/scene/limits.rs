@@ -10,16 +10,16 @@
 
 /// Dynamic bodies in one scene: spawned objects, structure blocks, projectiles and
 /// key-framed bodies together.
-pub const MAX_BODIES: u64 = 2_000_000;
+pub(crate) const MAX_BODIES: u64 = 2_000_000;
 
 /// Frames in one scene (4.6 hours at 60 frames a second).
-pub const MAX_FRAMES: u32 = 1_000_000;
+pub(crate) const MAX_FRAMES: u32 = 1_000_000;
 
 /// Width or height of an image, in pixels.
-pub const MAX_IMAGE_SIDE: u32 = 16_384;
+pub(crate) const MAX_IMAGE_SIDE: u32 = 16_384;
 
 /// Pixels in one image (8192 x 8192).
-pub const MAX_PIXELS: u64 = 1 << 26;
+pub(crate) const MAX_PIXELS: u64 = 1 << 26;
 
 /// Samples per pixel.
 pub const MAX_SAMPLES_PER_PIXEL: u32 = 65_536;
@@ -32,7 +32,7 @@ pub fn shutter_problem(shutter: f32) -> Option<String> {
 }
 
 /// Why an image size is out of bounds, or `None` when `width` x `height` is allowed.
-pub fn image_size_problem(width: u32, height: u32) -> Option<String> {
+pub(crate) fn image_size_problem(width: u32, height: u32) -> Option<String> {
     if !(1..=MAX_IMAGE_SIDE).contains(&width) || !(1..=MAX_IMAGE_SIDE).contains(&height) {
         return Some(format!("{width}x{height}: width and height must be from 1 to {MAX_IMAGE_SIDE}"));
     }

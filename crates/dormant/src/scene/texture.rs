@@ -28,7 +28,7 @@ pub struct Texture {
 
 impl Texture {
     /// The stand-in for an image that could not be loaded: one opaque magenta texel.
-    pub fn magenta(name: impl Into<String>) -> Self {
+    pub(crate) fn magenta(name: impl Into<String>) -> Self {
         Self {
             name: name.into(),
             width: 1,
@@ -40,7 +40,7 @@ impl Texture {
     }
 
     /// Whether the texel array matches the size (and the size is not zero).
-    pub fn is_consistent(&self) -> bool {
+    pub(crate) fn is_consistent(&self) -> bool {
         self.width > 0 && self.height > 0 && self.texels.len() == self.width as usize * self.height as usize
     }
 

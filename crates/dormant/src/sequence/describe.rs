@@ -6,7 +6,7 @@ use crate::scene::{Body, SceneDescription};
 
 impl Sequence {
     /// The bodies present in `frame`, each at its pose.
-    pub fn bodies_at(&self, frame: &ReplayFrame<'_>) -> Vec<Body> {
+    pub(crate) fn bodies_at(&self, frame: &ReplayFrame<'_>) -> Vec<Body> {
         frame
             .present_bodies()
             .map(|b| Body {

@@ -11,7 +11,7 @@ use super::{FrameSelection, Sequence};
 use crate::scene::{Camera, Light, Material, MeshSource, SceneDescription};
 
 /// Version of the export's layout; bump it when a field changes meaning.
-pub const EXPORT_FORMAT: &str = "dormant-export-1";
+pub(crate) const EXPORT_FORMAT: &str = "dormant-export-1";
 
 /// Everything another renderer needs to rebuild the selected frames of a sequence.
 #[derive(Clone, Debug, Serialize)]
@@ -22,7 +22,7 @@ pub struct SequenceExport {
     pub timestep: f32,
     pub environment: MeshSource,
     /// As [`PrototypeExport::material`], for the environment.
-    pub environment_material: Option<MaterialExport>,
+    pub(crate) environment_material: Option<MaterialExport>,
     pub prototypes: Vec<PrototypeExport>,
     /// Prototype index of every body, by body id (the index into each frame's `poses`).
     pub body_prototypes: Vec<u32>,
@@ -49,11 +49,11 @@ pub struct PrototypeExport {
 #[derive(Clone, Copy, Debug, Serialize)]
 pub struct MaterialExport {
     /// Linear RGB.
-    pub base_color: [f32; 3],
-    pub roughness: f32,
-    pub metallic: f32,
+    pub(crate) base_color: [f32; 3],
+    pub(crate) roughness: f32,
+    pub(crate) metallic: f32,
     /// 1: glTF's F0 of 0.04; 0: no specular layer.
-    pub specular: f32,
+    pub(crate) specular: f32,
     pub emissive: [f32; 3],
 }
 
@@ -99,7 +99,7 @@ pub enum LightExport {
 pub struct CameraExport {
     pub eye: [f32; 3],
     pub target: [f32; 3],
-    pub up: [f32; 3],
+    pub(crate) up: [f32; 3],
     /// Vertical field of view (the image's horizontal one follows from its aspect ratio).
     pub vfov_deg: f32,
     pub aperture_radius: f32,

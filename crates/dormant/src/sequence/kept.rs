@@ -21,5 +21,5 @@ pub struct KeptFrame {
     /// What the scene held after the frame, checked against the replay.
     pub instances: usize,
     pub integrated_islands: usize,
-    pub sleeping_islands: usize,
+    pub(crate) sleeping_islands: usize,
 }

@@ -30,12 +30,14 @@ mod source;
 pub mod stats;
 
 pub use error::SequenceError;
+pub(crate) use export::EXPORT_FORMAT;
 pub use export::{
     CameraExport, FrameExport, LightExport, MaterialExport, PrototypeExport, SequenceExport, SkyExport,
-    SunExport, EXPORT_FORMAT,
+    SunExport,
 };
 pub use kept::KeptFrame;
-pub use render::{FrameHandler, FrameRenderer, RenderedFrame, SeedMode};
-pub use replay::FrameVisitor;
+pub(crate) use render::FrameHandler;
+pub use render::{FrameRenderer, RenderedFrame, SeedMode};
+pub(crate) use replay::FrameVisitor;
 pub use selection::{FrameRange, FrameSelection};
 pub use source::{PhysicsSource, Sequence, SequenceSource};

@@ -102,7 +102,8 @@ impl RenderedFrame {
 
 /// What [`Sequence::render`] calls with each frame it renders or reuses: the frame, its
 /// statistics and the manager (for its cache and cost model so far).
-pub type FrameHandler<'h, E> = dyn FnMut(&RenderedFrame, &FrameStats, &SceneManager) -> Result<(), E> + 'h;
+pub(crate) type FrameHandler<'h, E> =
+    dyn FnMut(&RenderedFrame, &FrameStats, &SceneManager) -> Result<(), E> + 'h;
 
 impl Sequence {
     /// Renders `frame` through `manager`, whose island events up to this frame must have been
@@ -161,7 +162,7 @@ impl Sequence {
     /// Whether frames `a` and `b > a` show the same scene: no body moved, appeared or left in
     /// between (kinematic bodies included), and the camera is where it was. Lights, sky and
     /// materials do not change over a sequence.
-    pub fn unchanged_between(&self, a: u32, b: u32) -> bool {
+    pub(crate) fn unchanged_between(&self, a: u32, b: u32) -> bool {
         let frames = &self.trajectory.frames;
         let still = (a as usize + 1..=b as usize)
             .all(|f| frames.get(f).is_some_and(|f| f.pose_changes.is_empty() && f.state_changes.is_empty()));

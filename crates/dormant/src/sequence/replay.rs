@@ -5,7 +5,7 @@ use crate::physics::ReplayFrame;
 use crate::residency::SceneManager;
 
 /// What [`Sequence::replay`] calls with each selected frame and the scene managers.
-pub type FrameVisitor<'v, E> = dyn FnMut(&ReplayFrame<'_>, &mut [SceneManager]) -> Result<(), E> + 'v;
+pub(crate) type FrameVisitor<'v, E> = dyn FnMut(&ReplayFrame<'_>, &mut [SceneManager]) -> Result<(), E> + 'v;
 
 impl Sequence {
     /// Replays the trajectory from its first frame (every island event must be seen) to the

@@ -58,7 +58,7 @@ impl FrameSelection {
     /// Whether frame `index` comes before the first selected frame and a run of the same step
     /// from frame 0 would render it: a slice's first frame reports the island events since
     /// the last such frame, as that run would, not since frame 0.
-    pub fn skipped_on_grid(&self, index: u32) -> bool {
+    pub(crate) fn skipped_on_grid(&self, index: u32) -> bool {
         match &self.0 {
             Selected::Stepped { start, step, .. } => index < *start && index % step == 0,
             Selected::List(_) => false,

@@ -127,7 +127,7 @@ impl Sequence {
     }
 
     /// Seconds of simulated time at the start of frame `index`.
-    pub fn time_of(&self, index: u32) -> f32 {
+    pub(crate) fn time_of(&self, index: u32) -> f32 {
         index as f32 * self.trajectory.timestep
     }
 

@@ -35,6 +35,8 @@ mod triangle;
 mod two_level;
 
 pub use params::BuildParams;
-pub use persistent::{SnapshotMemory, StaticBvh, StaticSnapshot, StaticUpdate};
-pub use simd::{SimdError, SimdPath, SIMD_ENV};
+pub(crate) use persistent::SnapshotMemory;
+pub use persistent::{StaticBvh, StaticSnapshot, StaticUpdate};
+pub(crate) use simd::SIMD_ENV;
+pub use simd::{SimdError, SimdPath};
 pub use two_level::BvhAccel;

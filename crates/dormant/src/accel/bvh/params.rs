@@ -4,20 +4,20 @@
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BuildParams {
     /// Centroid bins per axis when searching for a split (2..=64).
-    pub bins: usize,
+    pub(crate) bins: usize,
     /// Largest leaf the builder may make; bigger ranges are always split.
-    pub max_leaf_size: usize,
+    pub(crate) max_leaf_size: usize,
     /// SAH cost of visiting an interior node (relative to `intersection_cost`).
-    pub traversal_cost: f32,
+    pub(crate) traversal_cost: f32,
     /// SAH cost of one ray-primitive test.
-    pub intersection_cost: f32,
+    pub(crate) intersection_cost: f32,
     /// Ranges with at least this many primitives build their two halves in parallel.
-    pub parallel_threshold: usize,
+    pub(crate) parallel_threshold: usize,
     /// The SAH counts primitives in blocks of this many (Embree's block counting): triangle
     /// leaves are tested four at a time ([`crate::accel::bvh::triangle::Tri4`]), so a leaf
     /// of four costs what a leaf of one does. 1 for structures whose leaves are tested one
     /// item at a time (the top level).
-    pub leaf_block: usize,
+    pub(crate) leaf_block: usize,
 }
 
 impl BuildParams {
@@ -33,7 +33,7 @@ impl BuildParams {
 
     /// For the top level over instances: one instance per leaf, since entering an instance
     /// (transforming the ray) costs far more than testing its world box.
-    pub const TOP_LEVEL: BuildParams = BuildParams {
+    pub(crate) const TOP_LEVEL: BuildParams = BuildParams {
         bins: 16,
         max_leaf_size: 1,
         traversal_cost: 1.0,
@@ -43,7 +43,7 @@ impl BuildParams {
     };
 
     /// The default for meshes: good trees at moderate cost.
-    pub const BALANCED: BuildParams = BuildParams {
+    pub(crate) const BALANCED: BuildParams = BuildParams {
         bins: 16,
         max_leaf_size: 4,
         traversal_cost: 1.0,

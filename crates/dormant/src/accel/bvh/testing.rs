@@ -41,8 +41,8 @@ pub(crate) fn watertight_hit_leaf(
 /// plus the primitive order the leaves index.
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct BuiltTree {
-    pub nodes: Vec<(Aabb, u32, u32)>,
-    pub order: Vec<u32>,
+    pub(crate) nodes: Vec<(Aabb, u32, u32)>,
+    pub(crate) order: Vec<u32>,
 }
 
 /// The flat BVH builder on `bounds` (each finite and non-empty), in the current rayon pool.

@@ -17,7 +17,7 @@ use crate::geometry::{Ray, TriangleMesh};
 pub(crate) struct Tri {
     pub p: [Vec3; 3],
     /// The mesh it came from (a `StaticId` for static geometry, unused for prototypes).
-    pub geom: u32,
+    pub(crate) geom: u32,
     /// Triangle index within that mesh.
     pub prim: u32,
 }
@@ -164,7 +164,7 @@ pub(crate) struct Tri4 {
     /// bit for bit).
     rows: [[Vec4; 3]; 4],
     /// Index of each lane's triangle in the owner's triangle array.
-    pub idx: [u32; 4],
+    pub(crate) idx: [u32; 4],
 }
 
 /// [`Tri4::row`]'s index of the normals.
@@ -193,7 +193,7 @@ impl Axis {
 
 impl Tri4 {
     /// Packs the triangles `tris[idx[..]]` (1 to 4 of them) into one packet.
-    pub fn pack(tris: &[Tri], idx: &[u32]) -> Self {
+    pub(crate) fn pack(tris: &[Tri], idx: &[u32]) -> Self {
         debug_assert!(!idx.is_empty() && idx.len() <= 4);
         let idx: [u32; 4] = std::array::from_fn(|i| idx[i.min(idx.len() - 1)]);
         let lanes: [&Tri; 4] = idx.map(|i| &tris[i as usize]);
@@ -357,7 +357,7 @@ impl RayTri {
     /// holds up to eight triangles, in 1.66 packets on average on the monastery with 8,000
     /// ducks, and the second packet cost a whole test.
     #[inline(always)]
-    pub fn closest_in<L: TriLanes>(&self, packets: &[Tri4], t_max: f32) -> Option<(usize, TriHit)> {
+    pub(crate) fn closest_in<L: TriLanes>(&self, packets: &[Tri4], t_max: f32) -> Option<(usize, TriHit)> {
         // Loops and functions, no closures or iterator adaptors: on the AVX2 path, code left
         // out of line would make every intrinsic a call.
         let mut t_max = t_max;
@@ -386,7 +386,7 @@ impl RayTri {
     /// Whether any triangle of `packets` is hit with `t_min <= t <= t_max` ([`Self::closest_in`]'s
     /// lanes, without picking the closest).
     #[inline(always)]
-    pub fn occluded_in<L: TriLanes>(&self, packets: &[Tri4], t_max: f32) -> bool {
+    pub(crate) fn occluded_in<L: TriLanes>(&self, packets: &[Tri4], t_max: f32) -> bool {
         let full = packets.len() / L::PACKETS * L::PACKETS;
         let mut p = 0;
         while p < full {

@@ -14,13 +14,13 @@ use super::error::{code_name, EmbreeError};
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, serde::Serialize)]
 pub struct Version {
     pub major: u32,
-    pub minor: u32,
+    pub(crate) minor: u32,
     pub patch: u32,
 }
 
 impl Version {
     /// Decodes Embree's `RTC_VERSION` encoding (`40303` is 4.3.3).
-    pub fn from_encoded(v: u32) -> Self {
+    pub(crate) fn from_encoded(v: u32) -> Self {
         Self { major: v / 10000, minor: v / 100 % 100, patch: v % 100 }
     }
 

@@ -14,7 +14,7 @@ use embree4_sys as sys;
 
 /// A set of geometry ids, as a bit set (ids are dense: instance slots).
 #[derive(Clone, Debug, Default)]
-pub struct GeometrySet {
+pub(crate) struct GeometrySet {
     words: Vec<u64>,
     len: usize,
 }

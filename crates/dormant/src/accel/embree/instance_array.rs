@@ -20,7 +20,7 @@ use super::motion::{column_major_3x4, lerps_as_matrices, quaternion_decompositio
 
 /// One entry of an instance array: the index of its prototype in the array's prototype list
 /// and its placement. `None` is a hole Embree skips (index RTC_INVALID_GEOMETRY_ID).
-pub type ArrayEntry<T> = (Option<u32>, T);
+pub(crate) type ArrayEntry<T> = (Option<u32>, T);
 
 /// Instances of a fixed list of prototypes in one geometry. Hits report the array's geometry id
 /// as the instance id and the entry's index as `inst_prim_id`.
@@ -66,7 +66,7 @@ impl InstanceArrayGeometry {
         Ok(array)
     }
 
-    pub fn is_moving(&self) -> bool {
+    pub(crate) fn is_moving(&self) -> bool {
         self.moving
     }
 

@@ -131,14 +131,14 @@ impl Scene {
         Ok(scene)
     }
 
-    pub fn set_flags(&mut self, flags: SceneFlags) -> Result<(), EmbreeError> {
+    pub(crate) fn set_flags(&mut self, flags: SceneFlags) -> Result<(), EmbreeError> {
         // SAFETY: `raw` is valid and `&mut self` excludes concurrent tracing.
         unsafe { sys::rtcSetSceneFlags(self.raw, flags.raw()) };
         self.dirty = true;
         self.device.check()
     }
 
-    pub fn set_build_quality(&mut self, quality: BuildQuality) -> Result<(), EmbreeError> {
+    pub(crate) fn set_build_quality(&mut self, quality: BuildQuality) -> Result<(), EmbreeError> {
         // SAFETY: as in `set_flags`.
         unsafe { sys::rtcSetSceneBuildQuality(self.raw, quality.raw()) };
         self.dirty = true;
@@ -216,7 +216,7 @@ impl Scene {
 
     /// Commits the owned child scene of instance `id` if it has staged changes; only then is
     /// this scene marked for recommit (an unchanged child leaves it as it is).
-    pub fn commit_child_of(&mut self, id: u32) -> Result<bool, EmbreeError> {
+    pub(crate) fn commit_child_of(&mut self, id: u32) -> Result<bool, EmbreeError> {
         match self.geometries.get_mut(&id) {
             Some(Geometry::Instance(inst)) => {
                 let changed = inst.commit_child()?;
@@ -233,15 +233,15 @@ impl Scene {
     }
 
     /// Ids of the attached geometries, ascending.
-    pub fn geometry_ids(&self) -> impl Iterator<Item = u32> + '_ {
+    pub(crate) fn geometry_ids(&self) -> impl Iterator<Item = u32> + '_ {
         self.geometries.keys().copied()
     }
 
-    pub fn geometry_count(&self) -> usize {
+    pub(crate) fn geometry_count(&self) -> usize {
         self.geometries.len()
     }
 
-    pub fn is_dirty(&self) -> bool {
+    pub(crate) fn is_dirty(&self) -> bool {
         self.dirty
     }
 
@@ -411,7 +411,7 @@ impl InstanceGeometry {
     }
 
     /// Whether the instance has two time steps ([`Self::set_motion`]).
-    pub fn is_moving(&self) -> bool {
+    pub(crate) fn is_moving(&self) -> bool {
         self.moving
     }
 

@@ -64,7 +64,7 @@ impl<'a> SceneView<'a> {
 
     /// The same scene, with every hit inside the instances in `skip` (geometry ids in this
     /// scene) rejected; an empty set is no filter at all.
-    pub fn skipping(self, skip: &'a GeometrySet) -> SceneView<'a> {
+    pub(crate) fn skipping(self, skip: &'a GeometrySet) -> SceneView<'a> {
         SceneView { skip: (!skip.is_empty()).then_some(skip), ..self }
     }
 
@@ -123,7 +123,14 @@ impl<'a> SceneView<'a> {
     }
 
     /// Whether anything lies in `[tnear, tfar]` of a ray at shutter time `time`.
-    pub fn occluded1_at(&self, org: [f32; 3], dir: [f32; 3], tnear: f32, tfar: f32, time: f32) -> bool {
+    pub(crate) fn occluded1_at(
+        &self,
+        org: [f32; 3],
+        dir: [f32; 3],
+        tnear: f32,
+        tfar: f32,
+        time: f32,
+    ) -> bool {
         let mut ray = embree_ray(org, dir, tnear, tfar, time);
         let mut context = self.skip_context();
         let mut args = filter::occluded_args(sys::RTCRayQueryFlags::RTC_RAY_QUERY_FLAG_INCOHERENT);

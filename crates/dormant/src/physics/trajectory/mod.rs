@@ -40,7 +40,8 @@ use super::options::SimulateOptions;
 use crate::scene::file::{SceneError, SceneFile};
 
 pub(crate) use replay::FrameRecorder;
-pub use replay::{Replay, ReplayFrame};
+pub(crate) use replay::Replay;
+pub use replay::ReplayFrame;
 
 const MAGIC: &[u8; 8] = b"DORMTRAJ";
 
@@ -101,10 +102,10 @@ impl RecordedScene {
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct TrajectoryFrame {
     /// Bodies whose state changed, ascending, with their state at the frame's end.
-    pub state_changes: Vec<(BodyId, BodyState)>,
+    pub(crate) state_changes: Vec<(BodyId, BodyState)>,
     /// Bodies awake at the frame's end or fallen asleep during it whose pose differs bit for
     /// bit from their last recorded pose, ascending, with the new pose.
-    pub pose_changes: Vec<(BodyId, BodyPose)>,
+    pub(crate) pose_changes: Vec<(BodyId, BodyPose)>,
     pub events: Vec<IslandEvent>,
 }
 
@@ -124,7 +125,7 @@ pub struct Trajectory {
 }
 
 impl Trajectory {
-    pub const FORMAT_VERSION: u32 = 3;
+    pub(crate) const FORMAT_VERSION: u32 = 3;
 
     /// Encodes the trajectory in the current format; identical trajectories give identical
     /// bytes.

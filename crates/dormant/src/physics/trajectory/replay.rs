@@ -93,7 +93,7 @@ fn pose_bits(p: &BodyPose) -> [u32; 7] {
 }
 
 /// A cursor over a trajectory's frames that keeps every body's current state and pose.
-pub struct Replay<'a> {
+pub(crate) struct Replay<'a> {
     frames: &'a [TrajectoryFrame],
     next: usize,
     table: BodyTable,
@@ -118,7 +118,7 @@ pub struct ReplayFrame<'a> {
 impl ReplayFrame<'_> {
     /// Whether body `b` is in the world this frame: spawned, not removed, at a finite pose.
     /// The one place that decides which bodies a frame shows.
-    pub fn is_present(&self, b: usize) -> bool {
+    pub(crate) fn is_present(&self, b: usize) -> bool {
         self.states[b] != BodyState::Absent && self.poses[b].translation.is_finite()
     }
 

@@ -62,7 +62,7 @@ impl DenoiseError {
 }
 
 /// The OIDN version `scripts/setup.sh` installs.
-pub const OIDN_VERSION: &str = "2.5.1";
+pub(crate) const OIDN_VERSION: &str = "2.5.1";
 
 /// The AOVs the denoiser takes as guides, rendered whenever a frame is denoised.
 pub const GUIDE_AOVS: [Aov; 2] = [Aov::Albedo, Aov::Normal];

@@ -19,7 +19,7 @@ use crate::scene::Light;
 /// What an integrator sees of one frame: the shading data, camera and lights
 /// ([`RenderScene`]) and the committed geometry to trace rays against.
 #[derive(Clone, Copy)]
-pub struct FrameContext<'a> {
+pub(crate) struct FrameContext<'a> {
     pub scene: &'a RenderScene<'a>,
     pub query: &'a dyn SceneQuery,
 }
@@ -41,7 +41,7 @@ pub trait Integrator: Sync {
 }
 
 /// An integrator bound to one frame: computes the radiance arriving along camera rays.
-pub trait FrameIntegrator: Sync {
+pub(crate) trait FrameIntegrator: Sync {
     /// Radiance along camera ray `ray` whose closest hit `first` the caller traced (as
     /// `query.intersect(ray)`, possibly in a packet with neighbouring pixels), for sample
     /// `index` of `sampler`; adds the rays it traced to `rays`, the camera ray included.
@@ -57,18 +57,18 @@ pub trait FrameIntegrator: Sync {
 
 /// Dimension pairs of the pixel sampler, so each decision gets its own stratified points.
 pub(crate) mod dims {
-    pub const PIXEL: u32 = 0;
-    pub const SUN: u32 = 1;
-    pub const SKY: u32 = 2;
+    pub(crate) const PIXEL: u32 = 0;
+    pub(crate) const SUN: u32 = 1;
+    pub(crate) const SKY: u32 = 2;
     /// Path vertices use `BOUNCE + 4 * depth + k`, `k` in 0..4.
-    pub const BOUNCE: u32 = 3;
+    pub(crate) const BOUNCE: u32 = 3;
     /// Emitter sampling at path vertex `depth` uses `EMITTER + 2 * depth + k`, `k` in 0..2
     /// (past every `BOUNCE` pair of the longest path, 64 bounces).
-    pub const EMITTER: u32 = BOUNCE + 4 * 64;
+    pub(crate) const EMITTER: u32 = BOUNCE + 4 * 64;
     /// The point on the camera's lens (depth of field).
-    pub const LENS: u32 = EMITTER + 2 * 64;
+    pub(crate) const LENS: u32 = EMITTER + 2 * 64;
     /// The camera sample's time in the shutter (motion blur; one dimension, `get_1d`).
-    pub const TIME: u32 = LENS + 1;
+    pub(crate) const TIME: u32 = LENS + 1;
 }
 
 /// Light from a punctual light reaching point `p`: the unit direction towards the light, the

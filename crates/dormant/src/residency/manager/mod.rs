@@ -110,10 +110,10 @@ pub struct Decision {
     pub bodies: usize,
     pub triangles: usize,
     /// Rendered frames it has slept so far.
-    pub age: u32,
+    pub(crate) age: u32,
     pub integrate: bool,
     /// `None` under the `never` and `always` policies.
-    pub estimate: Option<CostEstimate>,
+    pub(crate) estimate: Option<CostEstimate>,
 }
 
 /// Per-frame statistics, stage by stage.
@@ -125,28 +125,28 @@ pub struct FrameStats {
     pub stages: StageTimes,
     pub rays: u64,
     /// Whether the frame committed (false: nothing changed since the last frame).
-    pub committed: bool,
+    pub(crate) committed: bool,
     /// Instances in the per-frame top level.
     pub instances: usize,
     /// Integrated islands (baked and resting).
     pub integrated_islands: usize,
-    pub baked_bodies: usize,
+    pub(crate) baked_bodies: usize,
     /// Bodies in the resting scene.
     pub resting_bodies: usize,
-    pub sleeping_islands: usize,
-    pub islands_slept: u32,
+    pub(crate) sleeping_islands: usize,
+    pub(crate) islands_slept: u32,
     pub islands_woke: u32,
     pub islands_integrated: u32,
     pub islands_reactivated: u32,
-    pub instances_added: u32,
-    pub instances_moved: u32,
-    pub instances_removed: u32,
+    pub(crate) instances_added: u32,
+    pub(crate) instances_moved: u32,
+    pub(crate) instances_removed: u32,
     /// Triangles built into the static scene (integration and reactivation).
-    pub built_triangles: usize,
+    pub(crate) built_triangles: usize,
     /// Whether the resting scene was rebuilt.
     pub rest_rebuilt: bool,
     /// Milliseconds of trace-penalty probes (part of the integrate stage).
-    pub probe_ms: f64,
+    pub(crate) probe_ms: f64,
     pub reactivation_path: Option<ReactivationPath>,
     pub cache_full: u64,
     pub cache_partial: u64,
@@ -160,7 +160,7 @@ pub struct FrameStats {
 impl FrameStats {
     /// The statistics of frame `index`, which reuses this frame's image: the same scene
     /// state, no work, no events.
-    pub fn reused_as(&self, index: u32) -> FrameStats {
+    pub(crate) fn reused_as(&self, index: u32) -> FrameStats {
         FrameStats {
             frame: index,
             instances: self.instances,
@@ -282,7 +282,7 @@ impl SceneManager {
     /// Camera rays of the coming frames, for the probes that measure what integration costs
     /// the trace (a small image's worth is enough), and the camera samples of a rendered frame
     /// (pixels times samples per pixel), to estimate a frame's trace before one is measured.
-    pub fn set_probe_rays(&mut self, rays: Vec<Ray>, frame_samples: u64) {
+    pub(crate) fn set_probe_rays(&mut self, rays: Vec<Ray>, frame_samples: u64) {
         self.probe.set_rays(rays, frame_samples);
     }
 
@@ -341,7 +341,7 @@ impl SceneManager {
 
     /// Zeroes the island events counted for the next prepared frame's `islands_slept` and
     /// `islands_woke` (the events themselves stay applied).
-    pub fn forget_event_counts(&mut self) {
+    pub(crate) fn forget_event_counts(&mut self) {
         self.pending_events = (0, 0);
     }
 
@@ -355,7 +355,7 @@ impl SceneManager {
     /// instead of asking the policy: each island decided on, and whether it was integrated
     /// (`render --resume` brings the manager through frames that run finished, so that the
     /// frames after them start from the state it had).
-    pub fn prepare_decided(
+    pub(crate) fn prepare_decided(
         &mut self,
         frame: &ReplayFrame<'_>,
         decisions: &[(IslandId, bool)],

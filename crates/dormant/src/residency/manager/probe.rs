@@ -52,7 +52,7 @@ impl Probe {
     }
 
     /// The probe's camera rays, and how many camera samples a rendered frame takes.
-    pub fn set_rays(&mut self, camera: Vec<Ray>, frame_samples: u64) {
+    pub(crate) fn set_rays(&mut self, camera: Vec<Ray>, frame_samples: u64) {
         self.camera = camera;
         self.frame_samples = frame_samples;
     }
@@ -60,7 +60,7 @@ impl Probe {
     /// A frame's trace time estimated before any was measured: the probe's camera rays (closest
     /// hit) traced on `query`, scaled to the frame's camera samples times
     /// [`RAYS_PER_SAMPLE`]; `None` without rays.
-    pub fn frame_trace_estimate(&self, query: &dyn SceneQuery) -> Option<f64> {
+    pub(crate) fn frame_trace_estimate(&self, query: &dyn SceneQuery) -> Option<f64> {
         if self.camera.is_empty() || self.frame_samples == 0 {
             return None;
         }

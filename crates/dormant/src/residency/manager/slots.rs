@@ -38,9 +38,9 @@ pub(super) struct SleepingIsland {
     pub bodies: Vec<BodyId>,
     pub poses: Vec<BodyPose>,
     /// Rendered-frame counter when it fell asleep.
-    pub slept_at: u32,
+    pub(crate) slept_at: u32,
     /// Whether a decision about it was logged.
-    pub decided: bool,
+    pub(crate) decided: bool,
 }
 
 /// A baked island in the static scene.
@@ -80,7 +80,7 @@ impl StaticOwners {
         self.0.get(id.0 as usize)?.as_ref()
     }
 
-    pub fn retain_environment(&mut self) {
+    pub(crate) fn retain_environment(&mut self) {
         for slot in &mut self.0 {
             if matches!(slot, Some(StaticOwner::Island(_))) {
                 *slot = None;
@@ -95,7 +95,7 @@ impl StaticOwners {
 pub(super) struct InstanceOwner {
     pub body: BodyId,
     pub prototype: u32,
-    pub normal_matrix: Mat3,
+    pub(crate) normal_matrix: Mat3,
     /// The object-to-world transform the accelerator was given.
     pub transform: Affine3A,
     pub resting: bool,
@@ -106,7 +106,7 @@ pub(super) struct InstanceOwner {
 pub(super) struct InstanceOwners(Vec<Option<InstanceOwner>>);
 
 impl InstanceOwners {
-    pub fn set(&mut self, id: InstanceId, owner: Option<InstanceOwner>) {
+    pub(crate) fn set(&mut self, id: InstanceId, owner: Option<InstanceOwner>) {
         let i = id.0 as usize;
         if self.0.len() <= i {
             self.0.resize(i + 1, None);
@@ -118,7 +118,7 @@ impl InstanceOwners {
         self.0.get(id.0 as usize)?.as_ref()
     }
 
-    pub fn get_mut(&mut self, id: InstanceId) -> Option<&mut InstanceOwner> {
+    pub(crate) fn get_mut(&mut self, id: InstanceId) -> Option<&mut InstanceOwner> {
         self.0.get_mut(id.0 as usize)?.as_mut()
     }
 

@@ -27,7 +27,7 @@ impl AssetDir {
         &self.dir
     }
 
-    pub fn is_overridden(&self) -> bool {
+    pub(crate) fn is_overridden(&self) -> bool {
         self.overridden
     }
 

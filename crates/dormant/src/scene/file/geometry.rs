@@ -20,7 +20,7 @@ pub fn environment_mesh(file: &SceneFile) -> Result<TriangleMesh, SceneError> {
 
 /// The environment with its glTF materials, textures and punctual lights (a generator's has
 /// none), in world space.
-pub fn environment_asset(file: &SceneFile) -> Result<GltfAsset, SceneError> {
+pub(crate) fn environment_asset(file: &SceneFile) -> Result<GltfAsset, SceneError> {
     environment(file, true)
 }
 
@@ -63,7 +63,7 @@ pub fn prototype_mesh(file: &SceneFile, index: usize) -> Result<TriangleMesh, Sc
 
 /// Prototype `index` with its glTF materials and textures (primitive shapes have none). Lights
 /// in a prototype's file are dropped: they would have to move with every body.
-pub fn prototype_asset(file: &SceneFile, index: usize) -> Result<GltfAsset, SceneError> {
+pub(crate) fn prototype_asset(file: &SceneFile, index: usize) -> Result<GltfAsset, SceneError> {
     let mut asset = prototype(file, index, true)?;
     if !asset.lights.is_empty() {
         tracing::warn!(
@@ -96,7 +96,7 @@ fn prototype(file: &SceneFile, index: usize, with_materials: bool) -> Result<Glt
 }
 
 /// A built-in environment.
-pub fn generate(kind: GeneratorKind) -> TriangleMesh {
+pub(crate) fn generate(kind: GeneratorKind) -> TriangleMesh {
     match kind {
         GeneratorKind::Ground => primitives::ground_plane(50.0, 0.0, 10),
         GeneratorKind::Atrium => atrium(),

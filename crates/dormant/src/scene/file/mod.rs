@@ -18,13 +18,15 @@ mod structure;
 mod validate;
 
 pub use error::SceneError;
-pub use geometry::{environment_asset, environment_mesh, generate, prototype_asset, prototype_mesh};
+pub(crate) use geometry::{environment_asset, generate, prototype_asset};
+pub use geometry::{environment_mesh, prototype_mesh};
 pub(crate) use parse::fnv1a64;
 pub use parse::SceneFile;
 pub use spec::{
-    CameraDef, CameraKeyframeDef, CameraPlacement, ColliderKind, DisturbanceDef, DisturbanceKind,
-    EnvironmentDef, EnvironmentSource, GeneratorKind, KeyframeDef, KinematicDef, LightDef, LightKind,
-    PhysicsSettings, ProjectileAim, ProjectileDef, PrototypeDef, RegionDef, RenderDef, SceneInfo, SceneSpec,
-    Shape, SkyDef, SpawnPattern, SpawnerDef, StructureArray, StructureDef, StructureLayout,
+    CameraDef, CameraKeyframeDef, CameraPlacement, ColliderKind, EnvironmentDef, EnvironmentSource,
+    GeneratorKind, LightDef, LightKind, PhysicsSettings, ProjectileAim, ProjectileDef, PrototypeDef,
+    RegionDef, RenderDef, SceneInfo, SceneSpec, Shape, SkyDef, SpawnPattern, SpawnerDef, StructureArray,
+    StructureDef, StructureLayout,
 };
+pub(crate) use spec::{DisturbanceDef, DisturbanceKind, KeyframeDef, KinematicDef};
 pub use structure::{Footprint, Launch, StructureBlock};

@@ -46,7 +46,7 @@ impl SceneFile {
     }
 
     /// Like [`Self::parse`] with an asset directory override.
-    pub fn parse_with_assets(
+    pub(crate) fn parse_with_assets(
         path: impl AsRef<Path>,
         text: impl Into<String>,
         assets: Option<&Path>,
@@ -145,7 +145,7 @@ impl SceneFile {
 
     /// The scene simulated for `frames` frames instead of `scene.frames`; the override is
     /// folded into the hash.
-    pub fn with_frames(self, frames: NonZeroU32) -> Self {
+    pub(crate) fn with_frames(self, frames: NonZeroU32) -> Self {
         let frames = frames.get();
         let source_hash = fnv1a64_extend(self.source_hash, b"frames");
         let source_hash = fnv1a64_extend(source_hash, &frames.to_le_bytes());

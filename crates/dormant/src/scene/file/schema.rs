@@ -25,9 +25,9 @@ pub(super) struct SceneToml {
     #[serde(default)]
     pub spawners: Vec<SpawnerToml>,
     #[serde(default)]
-    pub kinematics: Vec<KinematicToml>,
+    pub(crate) kinematics: Vec<KinematicToml>,
     #[serde(default)]
-    pub disturbances: Vec<DisturbanceToml>,
+    pub(crate) disturbances: Vec<DisturbanceToml>,
     #[serde(default)]
     pub structures: Vec<StructureToml>,
     #[serde(default)]
@@ -58,13 +58,13 @@ pub(super) struct SkyToml {
 #[serde(rename = "EnvironmentDef", deny_unknown_fields)]
 pub(super) struct EnvironmentToml {
     pub gltf: Option<String>,
-    pub generator: Option<GeneratorKind>,
+    pub(crate) generator: Option<GeneratorKind>,
     #[serde(default = "one")]
-    pub scale: f32,
+    pub(crate) scale: f32,
     #[serde(default)]
     pub offset: [f32; 3],
     #[serde(default = "default_friction")]
-    pub friction: f32,
+    pub(crate) friction: f32,
     #[serde(default = "one_u32")]
     pub collider_cells: u32,
 }
@@ -77,18 +77,18 @@ pub(super) struct PrototypeToml {
     pub shape: ShapeKind,
     pub half_extents: Option<[f32; 3]>,
     pub radius: Option<f32>,
-    pub half_height: Option<f32>,
+    pub(crate) half_height: Option<f32>,
     pub gltf: Option<String>,
     #[serde(default = "one")]
-    pub scale: f32,
+    pub(crate) scale: f32,
     #[serde(default)]
     pub collider: ColliderKind,
     #[serde(default = "one")]
-    pub density: f32,
+    pub(crate) density: f32,
     #[serde(default = "default_friction")]
-    pub friction: f32,
+    pub(crate) friction: f32,
     #[serde(default)]
-    pub restitution: f32,
+    pub(crate) restitution: f32,
     pub color: Option<[f32; 3]>,
 }
 
@@ -113,20 +113,20 @@ pub(super) struct SpawnerToml {
     #[serde(default)]
     pub pattern: SpawnPattern,
     #[serde(default)]
-    pub position_jitter: f32,
+    pub(crate) position_jitter: f32,
     #[serde(default = "one_u32")]
     pub waves: u32,
     #[serde(default)]
-    pub wave_interval: f32,
+    pub(crate) wave_interval: f32,
     #[serde(default)]
-    pub start_time: f32,
+    pub(crate) start_time: f32,
     pub seed: Option<u64>,
     #[serde(default)]
-    pub initial_velocity: [f32; 3],
+    pub(crate) initial_velocity: [f32; 3],
     #[serde(default)]
-    pub velocity_jitter: f32,
+    pub(crate) velocity_jitter: f32,
     #[serde(default = "yes")]
-    pub random_rotation: bool,
+    pub(crate) random_rotation: bool,
 }
 
 /// `[[kinematics]]`: the prototype by name.
@@ -135,9 +135,9 @@ pub(super) struct SpawnerToml {
 pub(super) struct KinematicToml {
     pub name: String,
     pub prototype: String,
-    pub keyframes: Vec<KeyframeDef>,
+    pub(crate) keyframes: Vec<KeyframeDef>,
     #[serde(default)]
-    pub looped: bool,
+    pub(crate) looped: bool,
 }
 
 /// `[[disturbances]]`: `impulse` or `strength` by `kind`.
@@ -148,8 +148,8 @@ pub(super) struct DisturbanceToml {
     pub kind: DisturbanceTag,
     pub center: [f32; 3],
     pub radius: f32,
-    pub impulse: Option<[f32; 3]>,
-    pub strength: Option<f32>,
+    pub(crate) impulse: Option<[f32; 3]>,
+    pub(crate) strength: Option<f32>,
 }
 
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
@@ -169,7 +169,7 @@ pub(super) struct StructureToml {
     #[serde(default)]
     pub origin: [f32; 3],
     #[serde(default)]
-    pub yaw_degrees: f32,
+    pub(crate) yaw_degrees: f32,
     #[serde(default)]
     pub gap: f32,
     pub layers: Option<u32>,
@@ -207,10 +207,10 @@ pub(super) struct ProjectileToml {
     pub prototype: String,
     pub frame: u32,
     #[serde(default)]
-    pub interval_frames: u32,
+    pub(crate) interval_frames: u32,
     pub position: [f32; 3],
     #[serde(default)]
-    pub velocity: [f32; 3],
+    pub(crate) velocity: [f32; 3],
     pub structure: Option<String>,
     pub count: Option<u32>,
     pub step: Option<[f32; 3]>,
@@ -223,11 +223,11 @@ pub(super) struct ProjectileToml {
 pub(super) struct CameraToml {
     pub name: String,
     pub position: Option<[f32; 3]>,
-    pub look_at: Option<[f32; 3]>,
+    pub(crate) look_at: Option<[f32; 3]>,
     #[serde(default)]
-    pub keyframes: Vec<CameraKeyframeDef>,
+    pub(crate) keyframes: Vec<CameraKeyframeDef>,
     #[serde(default = "default_fov")]
-    pub fov_degrees: f32,
+    pub(crate) fov_degrees: f32,
     #[serde(default)]
     pub aperture_radius: f32,
     pub focus_distance: Option<f32>,
@@ -244,8 +244,8 @@ pub(super) struct LightToml {
     pub color: [f32; 3],
     #[serde(default = "one")]
     pub intensity: f32,
-    pub inner_cone_degrees: Option<f32>,
-    pub outer_cone_degrees: Option<f32>,
+    pub(crate) inner_cone_degrees: Option<f32>,
+    pub(crate) outer_cone_degrees: Option<f32>,
 }
 
 /// `kind = "..."`; its `Debug` name appears in messages (`a Point light needs ...`).
@@ -263,7 +263,7 @@ pub(super) enum LightTag {
 pub(super) struct RenderToml {
     pub width: u32,
     pub height: u32,
-    pub samples_per_pixel: u32,
+    pub(crate) samples_per_pixel: u32,
     pub camera: Option<String>,
     pub frame_step: u32,
     pub noise_threshold: f32,

@@ -14,8 +14,8 @@ pub struct SceneSpec {
     pub environment: EnvironmentDef,
     pub prototypes: Vec<PrototypeDef>,
     pub spawners: Vec<SpawnerDef>,
-    pub kinematics: Vec<KinematicDef>,
-    pub disturbances: Vec<DisturbanceDef>,
+    pub(crate) kinematics: Vec<KinematicDef>,
+    pub(crate) disturbances: Vec<DisturbanceDef>,
     pub structures: Vec<StructureDef>,
     pub projectiles: Vec<ProjectileDef>,
     pub cameras: Vec<CameraDef>,
@@ -61,21 +61,21 @@ pub struct PhysicsSettings {
     pub timestep: f32,
     /// Rapier steps per frame (each of `timestep / substeps` seconds).
     pub substeps: u32,
-    pub gravity: [f32; 3],
+    pub(crate) gravity: [f32; 3],
     /// Sleep when the farthest-point speed stays below this (units per second) ...
-    pub sleep_linear_threshold: f32,
+    pub(crate) sleep_linear_threshold: f32,
     /// ... (collider-less bodies only: radians per second) ...
-    pub sleep_angular_threshold: f32,
+    pub(crate) sleep_angular_threshold: f32,
     /// ... for this many seconds.
-    pub sleep_time: f32,
+    pub(crate) sleep_time: f32,
     /// Bodies whose centre falls below this height leave the world.
-    pub kill_plane_y: f32,
+    pub(crate) kill_plane_y: f32,
     /// Rapier solver iterations per step.
-    pub solver_iterations: u32,
+    pub(crate) solver_iterations: u32,
     /// Velocity damping of dynamic bodies (per second); angular damping lets balls stop
     /// rolling so their islands can fall asleep.
-    pub linear_damping: f32,
-    pub angular_damping: f32,
+    pub(crate) linear_damping: f32,
+    pub(crate) angular_damping: f32,
 }
 
 impl Default for PhysicsSettings {
@@ -101,18 +101,18 @@ impl Default for PhysicsSettings {
 pub struct EnvironmentDef {
     pub source: EnvironmentSource,
     /// Uniform scale applied to the environment (greater than 0).
-    pub scale: f32,
+    pub(crate) scale: f32,
     /// Translation applied after scaling.
     pub offset: [f32; 3],
     /// Friction of the static set (not negative).
-    pub friction: f32,
+    pub(crate) friction: f32,
     /// The static set collides as this many by this many colliders over its XZ bounds (at
     /// least 1, at most [`EnvironmentDef::MAX_COLLIDER_CELLS`]); 1 is one triangle mesh.
     pub collider_cells: u32,
 }
 
 impl EnvironmentDef {
-    pub const MAX_COLLIDER_CELLS: u32 = 256;
+    pub(crate) const MAX_COLLIDER_CELLS: u32 = 256;
 }
 
 /// Where the environment's triangles come from.
@@ -145,11 +145,11 @@ pub struct PrototypeDef {
     pub name: String,
     pub shape: Shape,
     /// Greater than 0.
-    pub density: f32,
+    pub(crate) density: f32,
     /// Not negative.
-    pub friction: f32,
+    pub(crate) friction: f32,
     /// Within [0, 1].
-    pub restitution: f32,
+    pub(crate) restitution: f32,
     /// Linear base colour (within [0, 1]) of a primitive shape; `None`: a palette colour.
     pub color: Option<[f32; 3]>,
 }
@@ -206,20 +206,20 @@ pub struct SpawnerDef {
     pub region: RegionDef,
     pub pattern: SpawnPattern,
     /// `grid`: random offset per axis in `[-jitter, jitter]` units (cells grow to fit it).
-    pub position_jitter: f32,
+    pub(crate) position_jitter: f32,
     /// At least 1 and at most `count`, so no wave is empty.
     pub waves: u32,
     /// Seconds between waves (not negative).
-    pub wave_interval: f32,
+    pub(crate) wave_interval: f32,
     /// Seconds before the first wave (not negative).
-    pub start_time: f32,
+    pub(crate) start_time: f32,
     /// Mixed with the scene seed: the file's, else the spawner's index.
     pub seed: u64,
-    pub initial_velocity: [f32; 3],
+    pub(crate) initial_velocity: [f32; 3],
     /// Uniform random velocity added per axis, in `[-jitter, jitter]`.
-    pub velocity_jitter: f32,
+    pub(crate) velocity_jitter: f32,
     /// Random initial orientation.
-    pub random_rotation: bool,
+    pub(crate) random_rotation: bool,
 }
 
 /// An axis-aligned box in world space.
@@ -244,33 +244,33 @@ pub enum SpawnPattern {
 /// `[[kinematics]]`: a kinematic body following a key-framed path.
 #[derive(Clone, Debug, PartialEq)]
 #[non_exhaustive]
-pub struct KinematicDef {
+pub(crate) struct KinematicDef {
     /// Unique among the kinematic bodies.
     pub name: String,
     /// Shape, as an index into [`SceneSpec::prototypes`] (its density is ignored).
     pub prototype: usize,
     /// At least one key (two when `looped`), times not negative and increasing.
-    pub keyframes: Vec<KeyframeDef>,
+    pub(crate) keyframes: Vec<KeyframeDef>,
     /// Repeat the path after its last key (the last key should equal the first).
-    pub looped: bool,
+    pub(crate) looped: bool,
 }
 
 /// A pose at a time; poses between keys are interpolated linearly (rotation about Y).
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
-pub struct KeyframeDef {
+pub(crate) struct KeyframeDef {
     /// Seconds.
     pub time: f32,
     pub position: [f32; 3],
     /// Heading about +Y in degrees.
     #[serde(default)]
-    pub yaw_degrees: f32,
+    pub(crate) yaw_degrees: f32,
 }
 
 /// `[[disturbances]]`: a scripted impulse or explosion at a frame.
 #[derive(Clone, Debug, PartialEq)]
 #[non_exhaustive]
-pub struct DisturbanceDef {
+pub(crate) struct DisturbanceDef {
     /// Before the file's last frame (a `--frames` override may end the run before it).
     pub frame: u32,
     pub center: [f32; 3],
@@ -280,7 +280,7 @@ pub struct DisturbanceDef {
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum DisturbanceKind {
+pub(crate) enum DisturbanceKind {
     /// The linear impulse given to every dynamic body within `radius`.
     Impulse { impulse: [f32; 3] },
     /// Peak outward velocity change at the centre (greater than 0), falling linearly to 0 at
@@ -304,7 +304,7 @@ pub struct StructureDef {
     /// The first copy's anchor: the centre of its base (dominoes: of the first domino's base).
     pub origin: [f32; 3],
     /// Heading of every copy, and of the array's axes, about +Y.
-    pub yaw_degrees: f32,
+    pub(crate) yaw_degrees: f32,
     /// Space left between neighbouring blocks (not negative).
     pub gap: f32,
     pub array: StructureArray,
@@ -344,11 +344,11 @@ pub struct ProjectileDef {
     /// Frame of the first launch (before the file's last frame).
     pub frame: u32,
     /// Frames between launches.
-    pub interval_frames: u32,
+    pub(crate) interval_frames: u32,
     /// Where the body starts and how fast it moves: in world space, or in each aimed-at copy's
     /// frame.
     pub position: [f32; 3],
-    pub velocity: [f32; 3],
+    pub(crate) velocity: [f32; 3],
     pub aim: ProjectileAim,
 }
 
@@ -370,7 +370,7 @@ pub struct CameraDef {
     pub name: String,
     pub placement: CameraPlacement,
     /// Within (0, 180).
-    pub fov_degrees: f32,
+    pub(crate) fov_degrees: f32,
     /// Lens radius in scene units for depth of field; 0 is a pinhole.
     pub aperture_radius: f32,
     /// Distance in focus (greater than 0); the `look_at` point's distance when absent.
@@ -393,7 +393,7 @@ pub enum CameraPlacement {
 pub struct CameraKeyframeDef {
     pub time: f32,
     pub position: [f32; 3],
-    pub look_at: [f32; 3],
+    pub(crate) look_at: [f32; 3],
 }
 
 /// `[[lights]]`.
@@ -443,7 +443,7 @@ pub enum SkyDef {
 pub struct RenderDef {
     pub width: u32,
     pub height: u32,
-    pub samples_per_pixel: u32,
+    pub(crate) samples_per_pixel: u32,
     /// An index into [`SceneSpec::cameras`]; the first camera when absent (see
     /// [`SceneSpec::render_camera`]).
     pub camera: Option<usize>,

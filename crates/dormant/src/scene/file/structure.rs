@@ -25,7 +25,7 @@ pub struct Launch {
     pub frame: u32,
     pub translation: Vec3,
     pub rotation: Quat,
-    pub velocity: Vec3,
+    pub(crate) velocity: Vec3,
 }
 
 /// The extent of one copy in its own frame, over X and Z (for spacing copies apart).
@@ -115,7 +115,7 @@ impl StructureDef {
     }
 
     /// The box one copy fills in its own frame.
-    pub fn local_bounds(&self) -> Aabb {
+    pub(crate) fn local_bounds(&self) -> Aabb {
         let h = Vec3::from_array(self.half_extents);
         self.local_blocks().into_iter().fold(Aabb::EMPTY, |bounds, (centre, yaw)| {
             let (s, c) = (yaw.sin().abs(), yaw.cos().abs());
@@ -131,7 +131,7 @@ impl StructureDef {
     }
 
     /// The world-space box around copy `copy`.
-    pub fn copy_bounds(&self, copy: u32) -> Aabb {
+    pub(crate) fn copy_bounds(&self, copy: u32) -> Aabb {
         let (anchor, rotation) = self.copy_placement(copy);
         self.local_bounds().transformed(&Affine3A::from_rotation_translation(rotation, anchor))
     }

@@ -40,7 +40,7 @@ use crate::scene::{Light, Material};
 pub struct GltfError {
     pub file: PathBuf,
     /// The glTF element at fault, e.g. `meshes[2].primitives[0]` or `(file)`.
-    pub element: String,
+    pub(crate) element: String,
     pub message: String,
 }
 
@@ -52,7 +52,7 @@ impl GltfError {
 
 /// Extensions whose meaning the importer implements; any other one is ignored with a warning
 /// (or refused when required).
-pub const SUPPORTED_EXTENSIONS: &[&str] = &["KHR_lights_punctual", "KHR_materials_emissive_strength"];
+pub(crate) const SUPPORTED_EXTENSIONS: &[&str] = &["KHR_lights_punctual", "KHR_materials_emissive_strength"];
 
 /// A glTF file as plain data.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -85,7 +85,7 @@ pub struct GltfCamera {
 
 impl GltfAsset {
     /// An asset of bare geometry (no materials, textures or lights).
-    pub fn from_mesh(mesh: TriangleMesh) -> Self {
+    pub(crate) fn from_mesh(mesh: TriangleMesh) -> Self {
         Self { mesh, ..Self::default() }
     }
 

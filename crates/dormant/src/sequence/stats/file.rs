@@ -96,7 +96,7 @@ struct Stored {
 
 /// The frame records of the earlier run whose stats.json is in `dir`, which must have been a
 /// run of `run`'s configuration; `None` when `dir` holds no stats.json.
-pub fn read_kept_frames(dir: &Path, run: &RunInfo) -> Result<Option<Vec<FrameRecord>>, StatsError> {
+pub(crate) fn read_kept_frames(dir: &Path, run: &RunInfo) -> Result<Option<Vec<FrameRecord>>, StatsError> {
     let path = dir.join("stats.json");
     let bytes = match std::fs::read(&path) {
         Ok(bytes) => bytes,

@@ -5,8 +5,10 @@
 mod file;
 mod record;
 
-pub use file::{read_kept_frames, StatsFile};
-pub use record::{median, FrameRecord, RunInfo, RunStats, STATS_FORMAT, STATS_VERSION};
+pub(crate) use file::read_kept_frames;
+pub use file::StatsFile;
+pub use record::{median, FrameRecord, RunInfo, RunStats};
+pub(crate) use record::{STATS_FORMAT, STATS_VERSION};
 
 use std::path::PathBuf;
 

@@ -12,9 +12,9 @@ use crate::residency::{CacheStats, CostModelState, Decision, FrameStats, StageTi
 use crate::sequence::{KeptFrame, PhysicsSource};
 
 /// `format` field of stats.json.
-pub const STATS_FORMAT: &str = "dormant-stats";
+pub(crate) const STATS_FORMAT: &str = "dormant-stats";
 /// `version` field of stats.json; bumped when a field changes meaning or goes away.
-pub const STATS_VERSION: u32 = 2;
+pub(crate) const STATS_VERSION: u32 = 2;
 
 /// One rendered frame.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -33,16 +33,16 @@ pub struct FrameRecord {
     /// runs from before adaptive sampling (read as 0).
     #[serde(flatten, default)]
     pub samples: SppStats,
-    pub committed: bool,
+    pub(crate) committed: bool,
     pub instances: usize,
     pub integrated_islands: usize,
-    pub sleeping_islands: usize,
-    pub baked_bodies: usize,
+    pub(crate) sleeping_islands: usize,
+    pub(crate) baked_bodies: usize,
     pub resting_bodies: usize,
     pub rest_rebuilt: bool,
     /// The previous image again: nothing visible changed, nothing was traced.
     pub reused: bool,
-    pub islands_slept: u32,
+    pub(crate) islands_slept: u32,
     pub islands_woke: u32,
     pub islands_integrated: u32,
     pub islands_reactivated: u32,
@@ -99,13 +99,13 @@ impl FrameRecord {
     }
 
     /// Decisions to integrate, and to decline.
-    pub fn decision_counts(&self) -> (usize, usize) {
+    pub(crate) fn decision_counts(&self) -> (usize, usize) {
         let yes = self.decisions.iter().filter(|d| d.integrate).count();
         (yes, self.decisions.len() - yes)
     }
 
     /// The cost model's estimated net saving summed over this frame's decisions, ms.
-    pub fn estimated_net_ms(&self) -> f64 {
+    pub(crate) fn estimated_net_ms(&self) -> f64 {
         // `+ 0.0` turns an empty sum's -0 into 0.
         self.decisions.iter().filter_map(|d| d.estimate.map(|e| e.net_ms())).sum::<f64>() + 0.0
     }
@@ -168,7 +168,7 @@ pub struct RunInfo {
 
 /// Sums over the run.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
-pub struct Totals {
+pub(crate) struct Totals {
     /// Physics of the whole simulation (every simulated frame, rendered or not), ms; `None`
     /// when replayed from a trajectory.
     pub physics_ms: Option<f64>,
@@ -176,14 +176,14 @@ pub struct Totals {
     pub stages: StageTimes,
     pub frame_ms: f64,
     pub rays: u64,
-    pub islands_slept: u64,
+    pub(crate) islands_slept: u64,
     pub islands_woke: u64,
     pub islands_integrated: u64,
     pub islands_reactivated: u64,
     /// Frames that rebuilt the resting scene.
     pub rest_rebuilds: u64,
     /// Frames that reused the previous image.
-    pub reused_frames: u64,
+    pub(crate) reused_frames: u64,
     pub cache_full: u64,
     pub cache_partial: u64,
     pub cache_miss: u64,
@@ -208,7 +208,7 @@ pub struct CacheSummary {
     #[serde(flatten)]
     pub stats: CacheStats,
     /// Labels of `fraction_histogram`'s buckets, in order.
-    pub fraction_buckets: Vec<&'static str>,
+    pub(crate) fraction_buckets: Vec<&'static str>,
 }
 
 /// The `summary` block of stats.json.
@@ -217,7 +217,7 @@ pub struct Summary {
     pub frames: usize,
     pub first_frame: Option<u32>,
     pub last_frame: Option<u32>,
-    pub totals: Totals,
+    pub(crate) totals: Totals,
     pub median: Medians,
     pub cache: CacheSummary,
     pub cost_model: CostModelState,

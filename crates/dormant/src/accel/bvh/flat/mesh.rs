@@ -27,9 +27,9 @@ pub(crate) struct PrimHit {
 pub(crate) struct MeshBvh {
     pub bvh: FlatBvh,
     /// The 8-wide copy rays traverse; its leaves are ranges of `packets`.
-    pub wide: Wide,
+    pub(crate) wide: Wide,
     /// The triangles as given to [`Self::build`]; packets name them by index here.
-    pub tris: Vec<Tri>,
+    pub(crate) tris: Vec<Tri>,
     /// Leaf order: binary leaf range `first..first + count` holds triangles
     /// `tris[order[first..first + count]]` ([`Self::leaf_tris`]). Kept instead of a copy of
     /// `tris` in that order: 44 bytes less per triangle, and one pass over them less per build.
@@ -49,12 +49,12 @@ impl MeshBvh {
     /// The triangles of the binary leaf range `first..first + count`, in leaf order (the
     /// tests' reference traversal and the invariant check; rays use the packets).
     #[cfg(test)]
-    pub fn leaf_tris(&self, first: u32, count: u32) -> impl Iterator<Item = &Tri> + '_ {
+    pub(crate) fn leaf_tris(&self, first: u32, count: u32) -> impl Iterator<Item = &Tri> + '_ {
         self.order[first as usize..(first + count) as usize].iter().map(|&i| &self.tris[i as usize])
     }
 
     /// Every triangle, in leaf order.
-    pub fn tris_in_leaf_order(&self) -> impl Iterator<Item = &Tri> + '_ {
+    pub(crate) fn tris_in_leaf_order(&self) -> impl Iterator<Item = &Tri> + '_ {
         self.order.iter().map(|&i| &self.tris[i as usize])
     }
 
@@ -62,7 +62,7 @@ impl MeshBvh {
         self.bvh.bounds()
     }
 
-    pub fn memory_bytes(&self) -> usize {
+    pub(crate) fn memory_bytes(&self) -> usize {
         self.bvh.memory_bytes()
             + self.wide.memory_bytes()
             + self.tris.len() * std::mem::size_of::<Tri>()
@@ -81,7 +81,7 @@ impl MeshBvh {
     /// and never paid; with AVX-512 it pushed the entry out of line and doubled render times:
     /// docs/lab/accelerators.md#2026-12-04-where-the-accelerator-targets-end-target-by-target
     #[inline(always)]
-    pub fn intersect_from<K: Kernel>(
+    pub(crate) fn intersect_from<K: Kernel>(
         &self,
         k: K,
         root: Start,
@@ -150,7 +150,7 @@ impl MeshBvh {
 
     /// Whether any triangle of the subtree at `root` is hit within `[t_min, t_max]`.
     #[inline(always)]
-    pub fn occluded_from<K: Kernel>(
+    pub(crate) fn occluded_from<K: Kernel>(
         &self,
         k: K,
         root: Start,
@@ -182,7 +182,7 @@ impl MeshBvh {
     /// [`Self::intersect_from`] for the `lanes` of a packet; returns the lanes that found a
     /// hit (and lowered their `t_max` and `best`).
     #[inline(always)]
-    pub fn intersect_packet_from<K: Kernel>(
+    pub(crate) fn intersect_packet_from<K: Kernel>(
         &self,
         k: K,
         root: Start,
@@ -236,7 +236,7 @@ impl MeshBvh {
     /// [`Self::occluded_from`] for the `lanes` of a packet: the lanes that hit a triangle
     /// within their `[t_min, t_max]`.
     #[inline(always)]
-    pub fn occluded_packet_from<K: Kernel>(
+    pub(crate) fn occluded_packet_from<K: Kernel>(
         &self,
         k: K,
         root: Start,

@@ -46,21 +46,21 @@ pub(crate) struct Node {
 const _: () = assert!(std::mem::size_of::<Node>() == 32);
 
 impl Node {
-    pub fn leaf(b: Aabb, first: u32, count: u32) -> Self {
+    pub(crate) fn leaf(b: Aabb, first: u32, count: u32) -> Self {
         debug_assert!(count > 0);
         Self { min: b.min, first, max: b.max, count }
     }
 
-    pub fn interior(b: Aabb, first_child: u32) -> Self {
+    pub(crate) fn interior(b: Aabb, first_child: u32) -> Self {
         Self { min: b.min, first: first_child, max: b.max, count: 0 }
     }
 
     #[inline(always)]
-    pub fn is_leaf(&self) -> bool {
+    pub(crate) fn is_leaf(&self) -> bool {
         self.count > 0
     }
 
-    pub fn aabb(&self) -> Aabb {
+    pub(crate) fn aabb(&self) -> Aabb {
         Aabb { min: self.min, max: self.max }
     }
 }
@@ -68,7 +68,7 @@ impl Node {
 /// A built tree. Leaves refer to a primitive array its owner keeps in build order.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct FlatBvh {
-    pub nodes: Vec<Node>,
+    pub(crate) nodes: Vec<Node>,
 }
 
 impl FlatBvh {
@@ -80,7 +80,7 @@ impl FlatBvh {
         self.nodes.is_empty()
     }
 
-    pub fn memory_bytes(&self) -> usize {
+    pub(crate) fn memory_bytes(&self) -> usize {
         self.nodes.len() * std::mem::size_of::<Node>()
     }
 }

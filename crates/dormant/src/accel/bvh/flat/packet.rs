@@ -32,8 +32,8 @@ pub(crate) type Lanes = u32;
 /// repeat the last ray; traversals only look at the lanes they are asked for.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct RayPacket {
-    pub bray: [BoxRay; PACKET],
-    pub tray: [RayTri; PACKET],
+    pub(crate) bray: [BoxRay; PACKET],
+    pub(crate) tray: [RayTri; PACKET],
 }
 
 impl RayPacket {
@@ -49,7 +49,7 @@ impl RayPacket {
 
     /// Replaces lane `i` by `ray`.
     #[inline(always)]
-    pub fn set(&mut self, i: usize, ray: &Ray) {
+    pub(crate) fn set(&mut self, i: usize, ray: &Ray) {
         self.bray[i] = BoxRay::new(ray);
         self.tray[i] = RayTri::new(ray);
     }
@@ -101,7 +101,7 @@ impl Wide {
     /// `leaf` is called from one place only, for the reason [`Wide::traverse`] gives.
     #[inline(always)]
     #[allow(clippy::too_many_arguments)] // `traverse`'s seven and the lanes.
-    pub fn traverse_packet<K: Kernel, F>(
+    pub(crate) fn traverse_packet<K: Kernel, F>(
         &self,
         k: K,
         bvh: &FlatBvh,

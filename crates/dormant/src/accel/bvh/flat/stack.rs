@@ -38,7 +38,7 @@ impl<E: Copy, const N: usize> TraversalStack<E, N> {
 
     /// The last entry pushed and not popped yet; `None` once the stack is empty.
     #[inline(always)]
-    pub fn pop(&mut self) -> Option<E> {
+    pub(crate) fn pop(&mut self) -> Option<E> {
         if self.len == 0 {
             return None;
         }
@@ -54,7 +54,7 @@ impl<const N: usize> TraversalStack<(u32, f32), N> {
     /// Pops entries until one was entered at `t <= t_max` (a subtree still in front of the
     /// closest hit found so far) and returns its node; `None` once the stack is empty.
     #[inline(always)]
-    pub fn pop_within(&mut self, t_max: f32) -> Option<u32> {
+    pub(crate) fn pop_within(&mut self, t_max: f32) -> Option<u32> {
         while let Some((node, t)) = self.pop() {
             if t <= t_max {
                 return Some(node);

@@ -25,7 +25,7 @@ pub(crate) struct BoxRay {
     pub org: Vec3A,
     /// `1 / dir`, with zero components replaced by `±1 / f32::MIN_POSITIVE` so that no slab
     /// distance is ever `0 * inf = NaN` (a finite origin on a slab plane gives 0, not NaN).
-    pub inv: Vec3A,
+    pub(crate) inv: Vec3A,
     pub t_min: f32,
 }
 
@@ -44,7 +44,7 @@ impl BoxRay {
 
     /// [`Self::hit`] for a box given by its corners.
     #[inline(always)]
-    pub fn hit_bounds(&self, min: Vec3, max: Vec3, t_max: f32) -> f32 {
+    pub(crate) fn hit_bounds(&self, min: Vec3, max: Vec3, t_max: f32) -> f32 {
         let t0 = (Vec3A::from(min) - self.org) * self.inv;
         let t1 = (Vec3A::from(max) - self.org) * self.inv;
         let near = t0.min(t1).max_element().max(self.t_min);

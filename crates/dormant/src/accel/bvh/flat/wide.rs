@@ -56,7 +56,7 @@ pub(crate) enum Start {
 impl Start {
     /// The binary node the traversal starts at.
     #[inline(always)]
-    pub fn node(self) -> u32 {
+    pub(crate) fn node(self) -> u32 {
         match self {
             Start::Test(n) | Start::Entered(n) => n,
         }
@@ -109,7 +109,7 @@ impl Wide {
         w
     }
 
-    pub fn memory_bytes(&self) -> usize {
+    pub(crate) fn memory_bytes(&self) -> usize {
         self.nodes.len() * std::mem::size_of::<Node8>() + self.map.len() * 8
     }
 
@@ -188,7 +188,7 @@ impl Wide {
     /// traversals (instances, blocks); called from two places it stays out of line and every
     /// intrinsic in it becomes a call.
     #[inline(always)]
-    pub fn traverse<K: Kernel, F, const NEAREST_FIRST: bool>(
+    pub(crate) fn traverse<K: Kernel, F, const NEAREST_FIRST: bool>(
         &self,
         k: K,
         bvh: &FlatBvh,

@@ -48,7 +48,7 @@ mod remove;
 mod stats;
 mod traverse;
 
-pub use stats::SnapshotMemory;
+pub(crate) use stats::SnapshotMemory;
 
 use std::collections::{HashMap, HashSet};
 use std::sync::Arc;
@@ -79,8 +79,8 @@ pub(crate) enum Link {
 /// An overlay node. Never modified after creation.
 #[derive(Debug)]
 pub(crate) struct ONode {
-    pub aabb: Aabb,
-    pub kids: [Link; 2],
+    pub(crate) aabb: Aabb,
+    pub(crate) kids: [Link; 2],
     /// Bit `block.id % 64` is set for every block referenced below: prunes removal walks.
     pub mask: u64,
     /// Overlay levels below and including this node (block references count 0).
@@ -103,7 +103,7 @@ impl ONode {
 }
 
 impl Link {
-    pub fn aabb(&self) -> Aabb {
+    pub(crate) fn aabb(&self) -> Aabb {
         match self {
             Link::Node(n) => n.aabb,
             Link::Ref(b, i) => b.mesh.bvh.nodes[*i as usize].aabb(),
@@ -125,7 +125,7 @@ impl Link {
     }
 
     /// The two children, or `None` for a block leaf.
-    pub fn children(&self) -> Option<[Link; 2]> {
+    pub(crate) fn children(&self) -> Option<[Link; 2]> {
         match self {
             Link::Node(n) => Some(n.kids.clone()),
             Link::Ref(b, i) => {
@@ -147,9 +147,9 @@ impl Link {
 /// What the tree knows about one static mesh.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct MeshEntry {
-    pub block: u32,
+    pub(crate) block: u32,
     /// The block also holds other meshes (a rebuild's block): removal needs a rebuild.
-    pub shared: bool,
+    pub(crate) shared: bool,
     pub triangles: usize,
 }
 
@@ -212,13 +212,13 @@ impl StaticSnapshot {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct StaticUpdate {
     /// Triangles put into new blocks (all live triangles after a rebuild).
-    pub built_triangles: usize,
+    pub(crate) built_triangles: usize,
     /// Triangles skipped as degenerate or not finite.
     pub skipped_triangles: usize,
     /// Whether the update rebuilt the tree from scratch.
     pub rebuilt: bool,
     /// Whether the overlay was rebuilt over the existing blocks ([`StaticBvh::relink`]).
-    pub relinked: bool,
+    pub(crate) relinked: bool,
 }
 
 /// The persistent static BVH. See the module docs for its layout.
@@ -278,13 +278,13 @@ impl StaticBvh {
     /// permanent meshes and the rebuilt base. The caller knows the future (an offline render's
     /// lookahead: the island never wakes). If it is removed after all, that costs a rebuild, as
     /// removing a mesh of the base does.
-    pub fn set_permanent(&mut self, id: StaticId) {
+    pub(crate) fn set_permanent(&mut self, id: StaticId) {
         self.permanent.insert(id);
     }
 
     /// Whether removing `id` needs a rebuild (it shares a block with other meshes) rather
     /// than an unlink and refit.
-    pub fn removal_rebuilds(&self, id: StaticId) -> bool {
+    pub(crate) fn removal_rebuilds(&self, id: StaticId) -> bool {
         self.state.meshes.get(&id).is_some_and(|e| e.shared && e.triangles > 0)
     }
 
@@ -389,7 +389,7 @@ impl StaticBvh {
     }
 
     /// Rebuilds the whole tree into one block from the live meshes' triangles.
-    pub fn rebuild(&mut self) {
+    pub(crate) fn rebuild(&mut self) {
         let tris = self.live_tris();
         self.rebuild_from(tris);
     }
@@ -427,7 +427,7 @@ impl StaticBvh {
     /// block leaves hundreds of small, overlapping blocks that rays enter one at a time.
     /// Merging only when a cost estimate said it pays left a tree slower than either:
     /// docs/lab/persistent-tree.md#2026-12-02-the-persistent-static-tree-after-the-atriums-run
-    pub fn relink(&mut self) -> Option<usize> {
+    pub(crate) fn relink(&mut self) -> Option<usize> {
         self.state.root.as_ref()?;
         self.relink_blocks(self.live_blocks())
     }

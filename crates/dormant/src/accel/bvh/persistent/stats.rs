@@ -25,11 +25,11 @@ pub(crate) fn for_each_block(root: &Link, f: &mut impl FnMut(&Arc<Block>)) {
 
 /// Memory of one snapshot.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct SnapshotMemory {
+pub(crate) struct SnapshotMemory {
     /// Bytes of overlay nodes and blocks reachable from the snapshot.
-    pub total_bytes: usize,
+    pub(crate) total_bytes: usize,
     /// Bytes reachable only through this snapshot: what dropping it would free.
-    pub unique_bytes: usize,
+    pub(crate) unique_bytes: usize,
 }
 
 fn sah_sum(root: &Link, p: &BuildParams) -> f64 {
@@ -63,7 +63,7 @@ impl StaticSnapshot {
     /// every reference to it (tree links and traversal view entries) is held in this
     /// snapshot's unique part. A snapshot of the current version shares everything with the
     /// live tree, so its unique part is 0 until the tree changes.
-    pub fn memory(&self) -> SnapshotMemory {
+    pub(crate) fn memory(&self) -> SnapshotMemory {
         let mut m = SnapshotMemory::default();
         let Some(root) = &self.root else {
             return m;
@@ -115,7 +115,7 @@ impl StaticBvh {
 
     /// SAH cost a full rebuild of the current meshes would have. Builds that tree on the side
     /// (O(n log n)); `self` is unchanged.
-    pub fn rebuilt_sah_cost(&self) -> f32 {
+    pub(crate) fn rebuilt_sah_cost(&self) -> f32 {
         let mesh = MeshBvh::build(self.live_tris(), self.params);
         sah_cost(&mesh.bvh.nodes, &self.params)
     }

@@ -159,8 +159,8 @@ impl StaticSnapshot {
 #[derive(Debug, Default)]
 pub(crate) struct View {
     pub bvh: FlatBvh,
-    pub wide: Wide,
-    pub refs: Vec<(Arc<Block>, u32)>,
+    pub(crate) wide: Wide,
+    pub(crate) refs: Vec<(Arc<Block>, u32)>,
 }
 
 impl View {
@@ -192,7 +192,7 @@ impl View {
         }
     }
 
-    pub fn memory_bytes(&self) -> usize {
+    pub(crate) fn memory_bytes(&self) -> usize {
         self.bvh.memory_bytes()
             + self.wide.memory_bytes()
             + self.refs.len() * std::mem::size_of::<(Arc<Block>, u32)>()

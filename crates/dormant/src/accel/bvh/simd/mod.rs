@@ -29,7 +29,7 @@ pub(crate) use x86::{Avx2, Avx512};
 pub(crate) const FAR_SCALE: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
 
 /// The environment variable that selects a path.
-pub const SIMD_ENV: &str = "DORMANT_SIMD";
+pub(crate) const SIMD_ENV: &str = "DORMANT_SIMD";
 
 /// One SIMD path of the BVH traversal.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -65,7 +65,7 @@ impl SimdPath {
     }
 
     /// Whether this CPU runs the path.
-    pub fn is_supported(self) -> bool {
+    pub(crate) fn is_supported(self) -> bool {
         match self {
             SimdPath::Portable => true,
             #[cfg(target_arch = "x86_64")]
@@ -152,7 +152,7 @@ impl SimdPath {
 
     /// Runs `f` with queries on this thread using `path` (tests iterate over the paths with it).
     /// Panics when the CPU does not support `path` (callers iterate [`Self::supported`]).
-    pub fn with_override<R>(path: SimdPath, f: impl FnOnce() -> R) -> R {
+    pub(crate) fn with_override<R>(path: SimdPath, f: impl FnOnce() -> R) -> R {
         assert!(path.is_supported(), "SIMD path {} is not supported here", path.name());
         let old = OVERRIDE.with(|o| o.replace(Some(path)));
         let r = f();
@@ -172,7 +172,7 @@ thread_local! {
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct BoxRay8 {
     pub org: [f32; 3],
-    pub inv: [f32; 3],
+    pub(crate) inv: [f32; 3],
     pub t_min: f32,
 }
 

@@ -33,7 +33,7 @@ pub(crate) struct Avx512(());
 impl Avx2 {
     /// # Safety
     /// The CPU must support AVX2 and FMA.
-    pub unsafe fn new_unchecked() -> Self {
+    pub(crate) unsafe fn new_unchecked() -> Self {
         Avx2(())
     }
 }
@@ -41,7 +41,7 @@ impl Avx2 {
 impl Avx512 {
     /// # Safety
     /// The CPU must support AVX2, FMA, AVX-512F and AVX-512VL.
-    pub unsafe fn new_unchecked() -> Self {
+    pub(crate) unsafe fn new_unchecked() -> Self {
         Avx512(())
     }
 }

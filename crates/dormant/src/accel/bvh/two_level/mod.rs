@@ -82,7 +82,7 @@ pub struct BvhAccel {
 
 impl BvhAccel {
     /// [`Self::new`]'s parameters for meshes: prototypes and static blocks.
-    pub const MESH_PARAMS: BuildParams = BuildParams::QUALITY;
+    pub(crate) const MESH_PARAMS: BuildParams = BuildParams::QUALITY;
 
     /// An empty scene; `threads` bounds the rayon pool used for builds (`None`: the global pool).
     pub fn new(threads: Option<usize>) -> Self {
@@ -91,7 +91,7 @@ impl BvhAccel {
 
     /// Like [`Self::new`] with explicit parameters for meshes (prototypes and static blocks)
     /// and for the top level.
-    pub fn with_params(mesh: BuildParams, top: BuildParams, threads: Option<usize>) -> Self {
+    pub(crate) fn with_params(mesh: BuildParams, top: BuildParams, threads: Option<usize>) -> Self {
         let pool = threads.and_then(|n| rayon::ThreadPoolBuilder::new().num_threads(n).build().ok());
         Self {
             mesh_params: mesh,

@@ -42,11 +42,11 @@ pub(crate) struct TopItem {
     linear: Mat3,
     /// The forward transform's translation: object origins are `linear * (o - translation)`.
     translation: Vec3,
-    pub blas: Arc<MeshBvh>,
+    pub(crate) blas: Arc<MeshBvh>,
     pub id: u32,
     /// A ghost of the resting level: its instance woke, moved or was removed since the level
     /// was built, and rays skip it (`crate::accel::RestingSchedule`).
-    pub ghost: bool,
+    pub(crate) ghost: bool,
     /// Whether the instance moves over the shutter ([`Top::motion`]; top level only).
     moving: bool,
 }
@@ -65,7 +65,7 @@ pub(crate) type TopInstance = (u32, Arc<MeshBvh>, Affine3A, Affine3A, Option<Ins
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Top {
     pub bvh: FlatBvh,
-    pub wide: Wide,
+    pub(crate) wide: Wide,
     pub items: Vec<TopItem>,
     /// Per item, its motion over the shutter (motion blur): rays see a moving instance where
     /// it is at their time instead of at its transform ([`object_ray`]).
@@ -117,7 +117,7 @@ pub(crate) fn build_top(instances: &[TopInstance], params: BuildParams) -> Top {
 
 impl Top {
     /// Makes instance `id`'s copy a ghost that rays skip; false if it has none here.
-    pub fn ghost(&mut self, id: u32) -> bool {
+    pub(crate) fn ghost(&mut self, id: u32) -> bool {
         match self.leaf_of.get(id as usize).copied().filter(|&i| i != u32::MAX) {
             Some(i) => {
                 self.items[i as usize].ghost = true;

@@ -35,7 +35,7 @@ impl AwakeBounds {
     /// are occupied, 2x2x2) grid over their union, each cell bounding the instances whose
     /// centre lies in it. A non-finite box gives the box around all alone (which the test then
     /// treats as meeting every ray: Embree decides).
-    pub fn around(instances: &[Aabb]) -> Self {
+    pub(crate) fn around(instances: &[Aabb]) -> Self {
         let union = instances.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
         if union.is_empty() {
             return Self::NONE;
@@ -59,7 +59,7 @@ impl AwakeBounds {
     /// Whether `ray` may meet an instance within `[ray.t_min, t_max]` (see
     /// [`AwakeBox::may_hit`]): the box around all, then the boxes inside it.
     #[inline]
-    pub fn may_hit(&self, ray: &Ray, t_max: f32) -> bool {
+    pub(crate) fn may_hit(&self, ray: &Ray, t_max: f32) -> bool {
         self.all.may_hit(ray, t_max)
             && (self.boxes.is_empty() || self.boxes.iter().any(|b| b.may_hit(ray, t_max)))
     }
@@ -108,7 +108,7 @@ impl AwakeBox {
     /// First the box of the ray's segment (when `t_max` is finite: most rays are cut at a hit
     /// in the resting scene), which needs no division, then the slab test.
     #[inline]
-    pub fn may_hit(&self, ray: &Ray, t_max: f32) -> bool {
+    pub(crate) fn may_hit(&self, ray: &Ray, t_max: f32) -> bool {
         let (o, d) = (Vec3A::from(ray.origin), Vec3A::from(ray.dir));
         if self.lo.cmpgt(self.hi).any() {
             return false;
