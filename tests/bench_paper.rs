@@ -7,7 +7,8 @@ mod common;
 
 use common::cli::{dormant, exits_with, read_json, succeeds};
 use common::scenes;
-use dormant::scene::file::{ColliderKind, SceneFile, Shape};
+use dormant::scene::file::spec::{ColliderKind, Shape};
+use dormant::scene::file::SceneFile;
 
 fn compiled_backends() -> Vec<&'static str> {
     if cfg!(feature = "embree") {

@@ -5,7 +5,8 @@ mod common;
 
 use common::scene_errors::{expect_error, parse};
 use common::scenes::{self, BOXES};
-use dormant::scene::file::{SceneError, SceneFile, Shape};
+use dormant::scene::file::spec::Shape;
+use dormant::scene::file::{SceneError, SceneFile};
 
 #[test]
 fn the_good_scene_parses() {

@@ -6,7 +6,8 @@ mod common;
 
 use common::scene_errors::{expect_error, parse};
 use common::scenes;
-use dormant::scene::file::{ProjectileAim, SceneError, SceneFile, StructureLayout};
+use dormant::scene::file::spec::{ProjectileAim, StructureLayout};
+use dormant::scene::file::{SceneError, SceneFile};
 use proptest::prelude::*;
 
 const GOOD: &str = r#"[scene]

@@ -11,5 +11,5 @@ mod ray;
 pub use aabb::Aabb;
 pub use mesh::{MeshError, TriangleMesh};
 pub use motion::{InstanceMotion, RigidTransform};
-pub(crate) use ray::FRAME_TIME;
+pub use ray::FRAME_TIME;
 pub use ray::{offset_origin, Ray};

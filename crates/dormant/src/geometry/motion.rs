@@ -52,7 +52,7 @@ impl InstanceMotion {
     }
 
     /// The rotation's normal matrix at `time` (a rotation is its own inverse transpose).
-    pub(crate) fn normal_matrix_at(&self, time: f32) -> Mat3 {
+    pub fn normal_matrix_at(&self, time: f32) -> Mat3 {
         Mat3::from_quat(self.at(time).rotation)
     }
 

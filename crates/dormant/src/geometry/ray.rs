@@ -16,7 +16,7 @@ pub struct Ray {
 
 /// The time of rays that name none: the middle of the shutter, where a centred shutter puts
 /// the frame's own instant.
-pub(crate) const FRAME_TIME: f32 = 0.5;
+pub const FRAME_TIME: f32 = 0.5;
 
 impl Ray {
     pub fn new(origin: Vec3, dir: Vec3) -> Self {

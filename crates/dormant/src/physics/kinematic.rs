@@ -12,7 +12,7 @@ pub(crate) struct KinematicPath {
 }
 
 impl KinematicPath {
-    pub fn new(keys: &[KeyframeDef], looped: bool) -> Self {
+    pub(crate) fn new(keys: &[KeyframeDef], looped: bool) -> Self {
         debug_assert!(!keys.is_empty());
         debug_assert!(keys.windows(2).all(|w| w[0].time < w[1].time));
         Self { keys: keys.to_vec(), looped }

@@ -14,7 +14,7 @@ mod simulation;
 mod spawn;
 mod stats;
 mod structures;
-mod trajectory;
+pub mod trajectory;
 
 pub use body::{BodyId, BodyInfo, BodyKind, BodyPose, BodyState};
 pub use colliders::ColliderChoice;
@@ -23,5 +23,4 @@ pub use island::{IslandCounters, IslandEvent, IslandId, IslandTracker, SleepObse
 pub use options::SimulateOptions;
 pub use simulation::{simulate, simulate_observed, SimulatedFrame, Simulation, SimulationCounters};
 pub use stats::IslandStats;
-pub(crate) use trajectory::Replay;
-pub use trajectory::{RecordedScene, ReplayFrame, Trajectory, TrajectoryError, TrajectoryFrame};
+pub use trajectory::{ReplayFrame, Trajectory, TrajectoryError};

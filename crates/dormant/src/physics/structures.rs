@@ -36,7 +36,7 @@ pub(crate) struct StructureSet {
 
 impl StructureSet {
     /// The structures among `orders`, whose bodies get ids from `first_id` on in order.
-    pub fn new(orders: &[SpawnOrder], first_id: u32, body_count: usize) -> Self {
+    pub(crate) fn new(orders: &[SpawnOrder], first_id: u32, body_count: usize) -> Self {
         let mut set = StructureSet { member: vec![None; body_count], intact: Vec::new() };
         for (i, order) in orders.iter().enumerate() {
             let Some(copy) = order.structure else { continue };
@@ -57,7 +57,7 @@ impl StructureSet {
 
     /// For a body of an intact copy (asleep where it was built, which Rapier leaves as it is):
     /// the island tracker's group key for its copy, and the pose it was built in.
-    pub fn resting(&self, body: BodyId) -> Option<(u64, BodyPose)> {
+    pub(crate) fn resting(&self, body: BodyId) -> Option<(u64, BodyPose)> {
         let (copy, pose) = self.member.get(body.0 as usize).copied().flatten()?;
         (!self.intact[copy as usize].is_empty()).then_some((STRUCTURE_KEY_BASE + copy as u64, pose))
     }

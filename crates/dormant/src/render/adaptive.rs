@@ -1,6 +1,6 @@
 //! Adaptive sampling: when a pixel has had enough camera samples. Each pixel keeps the sum
 //! and the sum of squares of its samples; after a minimum and then every few samples its
-//! estimated relative error (the standard error of its mean over its value, [`relative_error`])
+//! estimated relative error (the standard error of its mean over its value)
 //! is compared with a bound that depends on the noise threshold and on how much the pixel's
 //! samples spread ([`Stopping::converged`]), and the pixel stops once it is below. The decision
 //! reads only the pixel's own samples, in index order, so the image is the same whatever the
@@ -87,7 +87,7 @@ pub(crate) struct Stopping {
 
 impl Stopping {
     /// Whether a pixel with `n` samples summing to `sum` (squares: `squares`) is done: at a
-    /// check after the minimum, its estimated relative error (σ/√n, [`relative_error`]) is at
+    /// check after the minimum, its estimated relative error (σ/√n) is at
     /// most the threshold times √σ (σ: [`relative_spread`]), i.e. n ≥ σ / threshold².
     pub(crate) fn converged(&self, n: u32, sum: Vec3, squares: Vec3) -> bool {
         if n < self.min || (n - self.min) % CHECK_EVERY != 0 {
@@ -112,13 +112,6 @@ pub(crate) fn relative_spread(n: u32, sum: Vec3, squares: Vec3) -> f32 {
     let variance = ((squares - sum * mean) / (n - 1.0)).max(Vec3::ZERO);
     let relative = variance / (mean * mean + Vec3::splat(DARK_FLOOR * DARK_FLOOR));
     ((relative.x + relative.y + relative.z) / 3.0).sqrt()
-}
-
-/// Estimated relative standard error of a pixel's mean after `n >= 2` samples summing to
-/// `sum`, their squares to `squares`: [`relative_spread`] over √n. Its square estimates the
-/// pixel's contribution to the relative MSE. Non-finite samples give NaN.
-pub(crate) fn relative_error(n: u32, sum: Vec3, squares: Vec3) -> f32 {
-    relative_spread(n, sum, squares) / (n as f32).sqrt()
 }
 
 /// Camera samples per pixel over a frame: the effective spp of adaptive sampling (with it off
@@ -150,6 +143,11 @@ impl SppStats {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The estimated relative standard error of a pixel's mean: the spread over √n.
+    fn relative_error(n: u32, sum: Vec3, squares: Vec3) -> f32 {
+        relative_spread(n, sum, squares) / (n as f32).sqrt()
+    }
 
     #[test]
     fn constant_samples_have_no_error_and_spread_ones_do() {

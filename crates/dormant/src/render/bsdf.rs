@@ -48,7 +48,7 @@ pub(crate) struct Frame {
 }
 
 impl Frame {
-    pub fn new(n: Vec3) -> Self {
+    pub(crate) fn new(n: Vec3) -> Self {
         let (t, b) = basis(n);
         Self { t, b, n }
     }
@@ -137,7 +137,7 @@ fn fresnel(f0: Vec3, cos: f32) -> Vec3 {
 impl Bsdf {
     /// `n` is the unit shading normal on the side the ray came from, `wo` the unit direction
     /// back along the ray.
-    pub fn new(material: &Material, n: Vec3, wo: Vec3) -> Self {
+    pub(crate) fn new(material: &Material, n: Vec3, wo: Vec3) -> Self {
         let metallic = material.metallic.clamp(0.0, 1.0);
         let roughness = material.roughness.clamp(0.03, 1.0);
         let diffuse = material.base_color * (1.0 - metallic);
@@ -206,7 +206,7 @@ impl Bsdf {
     }
 
     /// The shading normal and its basis, for sampling light around it.
-    pub fn frame(&self) -> &Frame {
+    pub(crate) fn frame(&self) -> &Frame {
         &self.frame
     }
 

@@ -48,7 +48,7 @@ fn power(desc: &SceneDescription, m: u32) -> f32 {
 
 impl Emitters {
     /// The emissive triangles of `desc`'s static meshes and of `bodies` (placed prototypes).
-    pub fn build(desc: &SceneDescription, bodies: &[Body]) -> Self {
+    pub(crate) fn build(desc: &SceneDescription, bodies: &[Body]) -> Self {
         let mut e = Emitters::default();
         let mut add = |mesh: &TriangleMesh, material: u32, xf: &Affine3A, prims: &[usize]| {
             for &i in prims {
@@ -89,7 +89,7 @@ impl Emitters {
         e
     }
 
-    pub fn is_empty(&self) -> bool {
+    pub(crate) fn is_empty(&self) -> bool {
         self.triangles.is_empty()
     }
 

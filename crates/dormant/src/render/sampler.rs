@@ -30,7 +30,7 @@ use glam::Vec2;
 
 /// Samples for one pixel of one frame.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct PixelSampler {
+pub struct PixelSampler {
     seed: u32,
     /// [`Self::hash_seeds`] of the pairs below [`CACHED_PAIRS`], hashed once per pixel: every
     /// camera sample draws from them (the pixel jitter and the first path vertex's sun, sky

@@ -68,7 +68,7 @@ impl BakedIsland {
         Some((part, prim - part.first_prim))
     }
 
-    pub fn triangle_count(&self) -> usize {
+    pub(crate) fn triangle_count(&self) -> usize {
         self.mesh.indices.len()
     }
 }

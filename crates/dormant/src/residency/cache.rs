@@ -120,7 +120,7 @@ pub(crate) struct GeometryCache<S> {
 }
 
 impl<S> GeometryCache<S> {
-    pub fn new(budget: CacheBudget) -> Self {
+    pub(crate) fn new(budget: CacheBudget) -> Self {
         let stats = CacheStats {
             budget_entries: budget.entries,
             budget_bytes: budget.bytes,
@@ -129,12 +129,12 @@ impl<S> GeometryCache<S> {
         Self { budget, entries: Vec::new(), clock: 0.0, stats, empty: BTreeSet::new() }
     }
 
-    pub fn stats(&self) -> &CacheStats {
+    pub(crate) fn stats(&self) -> &CacheStats {
         &self.stats
     }
 
     #[cfg(test)]
-    pub fn len(&self) -> usize {
+    pub(crate) fn len(&self) -> usize {
         self.entries.len()
     }
 
@@ -146,7 +146,7 @@ impl<S> GeometryCache<S> {
     /// exists. `bytes_of` measures what each entry keeps alive now (entries share structure
     /// with the live scene, so their sizes change as it moves on); entries are evicted until
     /// the budget holds.
-    pub fn record(
+    pub(crate) fn record(
         &mut self,
         key: &BTreeSet<IslandId>,
         snapshot: S,

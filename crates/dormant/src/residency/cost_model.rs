@@ -330,7 +330,7 @@ pub(crate) struct CostModel {
 }
 
 impl CostModel {
-    pub fn new() -> Self {
+    pub(crate) fn new() -> Self {
         Self::default()
     }
 
@@ -402,7 +402,7 @@ impl CostModel {
 
     /// Estimated ms to build `triangles` into the static scene.
     #[cfg(test)]
-    pub fn build_ms(&self, triangles: usize) -> f64 {
+    pub(crate) fn build_ms(&self, triangles: usize) -> f64 {
         let (a, b) = Self::line(&self.build, PRIOR_BUILD_MS);
         (a + b * triangles as f64).max(0.0)
     }
@@ -454,7 +454,7 @@ impl CostModel {
         self.commit.ratio().unwrap_or(PRIOR_GAIN_MS_PER_INSTANCE) * commit_rate
     }
 
-    pub fn state(&self) -> CostModelState {
+    pub(crate) fn state(&self) -> CostModelState {
         let (a, b) = Self::line(&self.build, PRIOR_BUILD_MS);
         let (c, d) = Self::line(&self.rest, PRIOR_REST_MS);
         CostModelState {

@@ -20,7 +20,6 @@ mod policy;
 mod stage_times;
 
 pub use cache::{CacheBudget, CacheOutcome, CacheStats, FRACTION_BUCKETS};
-pub(crate) use cost_model::{CostEstimate, Penalties};
 pub use cost_model::{CostModelState, IntegrationForm};
 pub use lookahead::Lookahead;
 pub use manager::{

@@ -14,18 +14,18 @@ use crate::scene::texture::Texture;
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Material {
     /// Linear RGB reflectance.
-    pub(crate) base_color: Vec3,
-    pub(crate) roughness: f32,
-    pub(crate) metallic: f32,
+    pub base_color: Vec3,
+    pub roughness: f32,
+    pub metallic: f32,
     /// Strength of the dielectric specular layer (KHR_materials_specular's `specularFactor`):
     /// 1 is glTF's default F0 of 0.04, 0 leaves a pure Lambertian surface.
-    pub(crate) specular: f32,
+    pub specular: f32,
     /// Linear RGB radiance emitted from the front and back (glTF's `emissiveFactor` times
     /// KHR_materials_emissive_strength).
     pub emissive: Vec3,
     pub base_color_texture: Option<u32>,
-    pub(crate) metallic_roughness_texture: Option<u32>,
-    pub(crate) emissive_texture: Option<u32>,
+    pub metallic_roughness_texture: Option<u32>,
+    pub emissive_texture: Option<u32>,
 }
 
 impl Material {
@@ -115,7 +115,7 @@ pub struct Body {
 pub struct Camera {
     pub eye: Vec3,
     pub target: Vec3,
-    pub(crate) up: Vec3,
+    pub up: Vec3,
     /// Vertical field of view in degrees.
     pub vfov_deg: f32,
     /// Radius of the lens in scene units; 0 is a pinhole (everything sharp).

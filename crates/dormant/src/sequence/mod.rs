@@ -20,7 +20,7 @@
 
 mod describe;
 mod error;
-mod export;
+pub mod export;
 mod kept;
 pub mod output;
 mod render;
@@ -30,14 +30,7 @@ mod source;
 pub mod stats;
 
 pub use error::SequenceError;
-pub(crate) use export::EXPORT_FORMAT;
-pub use export::{
-    CameraExport, FrameExport, LightExport, MaterialExport, PrototypeExport, SequenceExport, SkyExport,
-    SunExport,
-};
 pub use kept::KeptFrame;
-pub(crate) use render::FrameHandler;
 pub use render::{FrameRenderer, RenderedFrame, SeedMode};
-pub(crate) use replay::FrameVisitor;
 pub use selection::{FrameRange, FrameSelection};
 pub use source::{PhysicsSource, Sequence, SequenceSource};

@@ -35,8 +35,6 @@ mod triangle;
 mod two_level;
 
 pub use params::BuildParams;
-pub(crate) use persistent::SnapshotMemory;
 pub use persistent::{StaticBvh, StaticSnapshot, StaticUpdate};
-pub(crate) use simd::SIMD_ENV;
 pub use simd::{SimdError, SimdPath};
 pub use two_level::BvhAccel;

@@ -23,12 +23,12 @@ pub(crate) struct Tri {
 }
 
 impl Tri {
-    pub fn bounds(&self) -> crate::geometry::Aabb {
+    pub(crate) fn bounds(&self) -> crate::geometry::Aabb {
         crate::geometry::Aabb::from_points(self.p)
     }
 
     /// Unnormalised geometric normal `(p1 - p0) x (p2 - p0)`.
-    pub fn normal(&self) -> Vec3 {
+    pub(crate) fn normal(&self) -> Vec3 {
         (self.p[1] - self.p[0]).cross(self.p[2] - self.p[0])
     }
 }
@@ -87,7 +87,7 @@ impl RayTri {
     /// The watertight test's constants for `ray`. The shear's `kx`, `ky` come from two `% 3`
     /// and a swap: a six-entry table indexed by `2 * kz` and the sign ran more instructions:
     /// docs/lab/accelerators.md#2026-12-03-trace-experiments-none-kept-the-gap-to-embree-by-query-cachegrind-callgrind
-    pub fn new(ray: &Ray) -> Self {
+    pub(crate) fn new(ray: &Ray) -> Self {
         let (o, d) = (ray.origin.to_array(), ray.dir.to_array());
         let kz = ray.dir.abs().max_position();
         let mut kx = (kz + 1) % 3;
@@ -110,7 +110,7 @@ impl RayTri {
 
     /// Hit with `t_min <= t <= t_max`, if any. Both sides of the triangle are hit.
     #[inline(always)]
-    pub fn intersect(&self, tri: &[Vec3; 3], t_max: f32) -> Option<TriHit> {
+    pub(crate) fn intersect(&self, tri: &[Vec3; 3], t_max: f32) -> Option<TriHit> {
         let (kx, ky, kz) = (self.kx.0, self.ky.0, self.kz.0);
         let a = tri[0] - self.org;
         let b = tri[1] - self.org;
@@ -181,9 +181,9 @@ pub(crate) const NORMAL: usize = 3;
 pub(crate) struct Axis(usize);
 
 impl Axis {
-    pub const X: Axis = Axis(0);
-    pub const Y: Axis = Axis(1);
-    pub const Z: Axis = Axis(2);
+    pub(crate) const X: Axis = Axis(0);
+    pub(crate) const Y: Axis = Axis(1);
+    pub(crate) const Z: Axis = Axis(2);
 
     #[inline(always)]
     fn new(i: usize) -> Self {
@@ -216,7 +216,7 @@ impl Tri4 {
     /// `v` is a constant wherever this is inlined, so its bounds check folds away; `axis` is
     /// the ray's, and is read without one.
     #[inline(always)]
-    pub fn row(&self, v: usize, axis: Axis) -> Vec4 {
+    pub(crate) fn row(&self, v: usize, axis: Axis) -> Vec4 {
         let row = &self.rows[v];
         // SAFETY: `axis.0 < 3`, which `Axis`'s only constructor makes sure of, and `row` has
         // three entries.

@@ -20,7 +20,7 @@ pub(crate) struct GeometrySet {
 }
 
 impl GeometrySet {
-    pub fn insert(&mut self, id: u32) {
+    pub(crate) fn insert(&mut self, id: u32) {
         let (w, bit) = (id as usize / 64, 1u64 << (id % 64));
         if w >= self.words.len() {
             self.words.resize(w + 1, 0);
@@ -31,36 +31,22 @@ impl GeometrySet {
         }
     }
 
-    pub fn remove(&mut self, id: u32) {
-        let (w, bit) = (id as usize / 64, 1u64 << (id % 64));
-        if let Some(word) = self.words.get_mut(w) {
-            if *word & bit != 0 {
-                *word &= !bit;
-                self.len -= 1;
-            }
-        }
-    }
-
-    pub fn contains(&self, id: u32) -> bool {
+    pub(crate) fn contains(&self, id: u32) -> bool {
         self.words.get(id as usize / 64).is_some_and(|w| w & (1u64 << (id % 64)) != 0)
     }
 
-    pub fn len(&self) -> usize {
-        self.len
-    }
-
-    pub fn is_empty(&self) -> bool {
+    pub(crate) fn is_empty(&self) -> bool {
         self.len == 0
     }
 
     /// The ids in the set, ascending.
-    pub fn iter(&self) -> impl Iterator<Item = u32> + '_ {
+    pub(crate) fn iter(&self) -> impl Iterator<Item = u32> + '_ {
         self.words.iter().enumerate().flat_map(|(w, &word)| {
             (0..64u32).filter(move |b| word & (1u64 << b) != 0).map(move |b| w as u32 * 64 + b)
         })
     }
 
-    pub fn clear(&mut self) {
+    pub(crate) fn clear(&mut self) {
         self.words.clear();
         self.len = 0;
     }
@@ -143,12 +129,11 @@ mod tests {
     #[test]
     fn the_set_counts_and_lists_its_ids() {
         let mut s = GeometrySet::default();
+        assert!(s.is_empty());
         for id in [3, 64, 3, 200] {
             s.insert(id);
         }
-        s.remove(7);
-        assert_eq!((s.len(), s.iter().collect::<Vec<_>>()), (3, vec![3, 64, 200]));
-        s.remove(64);
-        assert!(s.contains(3) && !s.contains(64) && s.len() == 2);
+        assert_eq!(s.iter().collect::<Vec<_>>(), vec![3, 64, 200]);
+        assert!(s.contains(3) && s.contains(64) && !s.contains(7) && !s.is_empty());
     }
 }

@@ -66,10 +66,6 @@ impl InstanceArrayGeometry {
         Ok(array)
     }
 
-    pub(crate) fn is_moving(&self) -> bool {
-        self.moving
-    }
-
     /// Replaces every entry of a still array by matrices, and commits the geometry.
     pub fn set_still(&mut self, entries: &[ArrayEntry<Affine3A>]) -> Result<(), EmbreeError> {
         debug_assert!(!self.moving);

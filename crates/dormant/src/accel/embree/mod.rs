@@ -28,7 +28,6 @@ pub use error::EmbreeError;
 pub(crate) use filter::GeometrySet;
 pub use frozen::FrozenScene;
 pub use geometry::TriangleGeometry;
-pub(crate) use instance_array::ArrayEntry;
 pub use instance_array::InstanceArrayGeometry;
 pub use packet::Coherence;
 pub use quality::BuildQuality;

@@ -410,11 +410,6 @@ impl InstanceGeometry {
         self.device.check()
     }
 
-    /// Whether the instance has two time steps ([`Self::set_motion`]).
-    pub(crate) fn is_moving(&self) -> bool {
-        self.moving
-    }
-
     fn child_is_owned(&self) -> bool {
         matches!(self.child, InstanceChild::Owned(_))
     }

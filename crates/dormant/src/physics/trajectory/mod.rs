@@ -40,7 +40,7 @@ use super::options::SimulateOptions;
 use crate::scene::file::{SceneError, SceneFile};
 
 pub(crate) use replay::FrameRecorder;
-pub(crate) use replay::Replay;
+pub use replay::Replay;
 pub use replay::ReplayFrame;
 
 const MAGIC: &[u8; 8] = b"DORMTRAJ";

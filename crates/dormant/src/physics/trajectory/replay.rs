@@ -93,7 +93,7 @@ fn pose_bits(p: &BodyPose) -> [u32; 7] {
 }
 
 /// A cursor over a trajectory's frames that keeps every body's current state and pose.
-pub(crate) struct Replay<'a> {
+pub struct Replay<'a> {
     frames: &'a [TrajectoryFrame],
     next: usize,
     table: BodyTable,

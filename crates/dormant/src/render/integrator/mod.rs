@@ -3,11 +3,8 @@
 //! punctual lights and shadow rays. The integrators themselves: path tracing in `path.rs`,
 //! the direct-light preview and ambient occlusion in `preview.rs` (AOVs are in `render/aov.rs`).
 
-mod path;
-mod preview;
-
-pub use path::PathTracer;
-pub use preview::{AmbientOcclusion, DirectLighting};
+pub(super) mod path;
+pub(super) mod preview;
 
 use glam::Vec3;
 
@@ -19,7 +16,7 @@ use crate::scene::Light;
 /// What an integrator sees of one frame: the shading data, camera and lights
 /// ([`RenderScene`]) and the committed geometry to trace rays against.
 #[derive(Clone, Copy)]
-pub(crate) struct FrameContext<'a> {
+pub struct FrameContext<'a> {
     pub scene: &'a RenderScene<'a>,
     pub query: &'a dyn SceneQuery,
 }
@@ -41,7 +38,7 @@ pub trait Integrator: Sync {
 }
 
 /// An integrator bound to one frame: computes the radiance arriving along camera rays.
-pub(crate) trait FrameIntegrator: Sync {
+pub trait FrameIntegrator: Sync {
     /// Radiance along camera ray `ray` whose closest hit `first` the caller traced (as
     /// `query.intersect(ray)`, possibly in a packet with neighbouring pixels), for sample
     /// `index` of `sampler`; adds the rays it traced to `rays`, the camera ray included.

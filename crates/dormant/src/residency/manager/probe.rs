@@ -47,7 +47,7 @@ pub(super) struct Probe {
 }
 
 impl Probe {
-    pub fn new(sun: Vec3) -> Self {
+    pub(crate) fn new(sun: Vec3) -> Self {
         Self { sun, camera: Vec::new(), shadow: Vec::new(), frame_samples: 0, pending: None, done: [0; 2] }
     }
 
@@ -77,7 +77,7 @@ impl Probe {
 
     /// Before integrating `moved` of `present` bodies in `form` (the resting scene empty or
     /// not): traces the probe on the committed scene if a measurement is due.
-    pub fn start(
+    pub(crate) fn start(
         &mut self,
         form: IntegrationForm,
         moved: usize,
@@ -107,7 +107,7 @@ impl Probe {
 
     /// After the integration was committed: traces the probe again and gives the cost model
     /// the ratio. Returns whether a probe ran.
-    pub fn finish(&mut self, query: &dyn SceneQuery, cost: &mut CostModel) -> bool {
+    pub(crate) fn finish(&mut self, query: &dyn SceneQuery, cost: &mut CostModel) -> bool {
         let Some(p) = self.pending.take() else { return false };
         let after_ms = self.time(query);
         cost.record_probe(p.form, p.before_ms, after_ms, p.share);

@@ -62,7 +62,7 @@ pub(super) enum StaticOwner {
 pub(super) struct StaticOwners(Vec<Option<StaticOwner>>);
 
 impl StaticOwners {
-    pub fn insert(&mut self, id: StaticId, owner: StaticOwner) {
+    pub(crate) fn insert(&mut self, id: StaticId, owner: StaticOwner) {
         let i = id.0 as usize;
         if self.0.len() <= i {
             self.0.resize(i + 1, None);
@@ -70,13 +70,13 @@ impl StaticOwners {
         self.0[i] = Some(owner);
     }
 
-    pub fn remove(&mut self, id: StaticId) {
+    pub(crate) fn remove(&mut self, id: StaticId) {
         if let Some(slot) = self.0.get_mut(id.0 as usize) {
             *slot = None;
         }
     }
 
-    pub fn get(&self, id: StaticId) -> Option<&StaticOwner> {
+    pub(crate) fn get(&self, id: StaticId) -> Option<&StaticOwner> {
         self.0.get(id.0 as usize)?.as_ref()
     }
 
@@ -114,7 +114,7 @@ impl InstanceOwners {
         self.0[i] = owner;
     }
 
-    pub fn get(&self, id: InstanceId) -> Option<&InstanceOwner> {
+    pub(crate) fn get(&self, id: InstanceId) -> Option<&InstanceOwner> {
         self.0.get(id.0 as usize)?.as_ref()
     }
 
@@ -123,7 +123,7 @@ impl InstanceOwners {
     }
 
     /// Instances in the per-frame top level.
-    pub fn awake(&self) -> usize {
+    pub(crate) fn awake(&self) -> usize {
         self.0.iter().flatten().filter(|o| !o.resting).count()
     }
 }

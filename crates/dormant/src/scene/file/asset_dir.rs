@@ -13,7 +13,7 @@ pub(super) struct AssetDir {
 impl AssetDir {
     /// `given` (the override from loading), else `scene_assets` (the file's `scene.assets`,
     /// relative to the scene file), else the scene file's directory.
-    pub fn new(scene_path: &Path, scene_assets: Option<&str>, given: Option<&Path>) -> Self {
+    pub(crate) fn new(scene_path: &Path, scene_assets: Option<&str>, given: Option<&Path>) -> Self {
         let base = scene_path.parent().unwrap_or_else(|| Path::new(""));
         let dir = match (given, scene_assets) {
             (Some(dir), _) => dir.to_path_buf(),
@@ -23,7 +23,7 @@ impl AssetDir {
         Self { dir, overridden: given.is_some() }
     }
 
-    pub fn path(&self) -> &Path {
+    pub(crate) fn path(&self) -> &Path {
         &self.dir
     }
 
@@ -32,7 +32,7 @@ impl AssetDir {
     }
 
     /// `relative` resolved against the directory (absolute paths are kept).
-    pub fn resolve(&self, relative: &str) -> PathBuf {
+    pub(crate) fn resolve(&self, relative: &str) -> PathBuf {
         self.dir.join(relative)
     }
 }

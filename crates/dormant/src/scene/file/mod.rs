@@ -13,20 +13,18 @@ mod location;
 mod parse;
 mod presets;
 mod schema;
-mod spec;
+pub mod spec;
 mod structure;
 mod validate;
 
 pub use error::SceneError;
-pub(crate) use geometry::{environment_asset, generate, prototype_asset};
+pub(crate) use geometry::{environment_asset, prototype_asset};
 pub use geometry::{environment_mesh, prototype_mesh};
 pub(crate) use parse::fnv1a64;
 pub use parse::SceneFile;
-pub use spec::{
-    CameraDef, CameraKeyframeDef, CameraPlacement, ColliderKind, EnvironmentDef, EnvironmentSource,
-    GeneratorKind, LightDef, LightKind, PhysicsSettings, ProjectileAim, ProjectileDef, PrototypeDef,
-    RegionDef, RenderDef, SceneInfo, SceneSpec, Shape, SkyDef, SpawnPattern, SpawnerDef, StructureArray,
-    StructureDef, StructureLayout,
+pub(crate) use spec::{
+    CameraDef, CameraPlacement, ColliderKind, EnvironmentSource, LightDef, LightKind, Shape, SkyDef,
+    SpawnPattern, SpawnerDef, StructureDef,
 };
-pub(crate) use spec::{DisturbanceDef, DisturbanceKind, KeyframeDef, KinematicDef};
+pub(crate) use spec::{DisturbanceDef, DisturbanceKind, KeyframeDef};
 pub use structure::{Footprint, Launch, StructureBlock};

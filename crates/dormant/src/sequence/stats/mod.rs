@@ -8,7 +8,6 @@ mod record;
 pub(crate) use file::read_kept_frames;
 pub use file::StatsFile;
 pub use record::{median, FrameRecord, RunInfo, RunStats};
-pub(crate) use record::{STATS_FORMAT, STATS_VERSION};
 
 use std::path::PathBuf;
 

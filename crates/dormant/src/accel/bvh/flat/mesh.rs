@@ -40,7 +40,7 @@ pub(crate) struct MeshBvh {
 
 impl MeshBvh {
     /// Builds over `tris`, which must all be valid (see [`crate::accel::bvh::triangle::extract`]).
-    pub fn build(tris: Vec<Tri>, params: BuildParams) -> Self {
+    pub(crate) fn build(tris: Vec<Tri>, params: BuildParams) -> Self {
         let (bvh, order) = build_with(tris.len(), |i| tris[i].bounds(), params);
         let (packets, wide) = packets_and_wide(&bvh, &tris, &order);
         Self { bvh, wide, tris, order, packets }
@@ -58,7 +58,7 @@ impl MeshBvh {
         self.order.iter().map(|&i| &self.tris[i as usize])
     }
 
-    pub fn bounds(&self) -> Aabb {
+    pub(crate) fn bounds(&self) -> Aabb {
         self.bvh.bounds()
     }
 

@@ -19,7 +19,7 @@ mod wide;
 pub(crate) use build::{build, build_with};
 pub(crate) use mesh::{MeshBvh, PrimHit};
 pub(crate) use packet::{each_bit, Lanes, RayPacket, PACKET};
-pub(crate) use sah::{sah_cost, subtree_cost};
+pub(crate) use sah::subtree_cost;
 #[cfg(test)]
 pub(crate) use traverse::traverse;
 pub(crate) use traverse::{interval_is_valid, BoxRay, STACK_SIZE};
@@ -72,11 +72,11 @@ pub(crate) struct FlatBvh {
 }
 
 impl FlatBvh {
-    pub fn bounds(&self) -> Aabb {
+    pub(crate) fn bounds(&self) -> Aabb {
         self.nodes.first().map_or(Aabb::EMPTY, Node::aabb)
     }
 
-    pub fn is_empty(&self) -> bool {
+    pub(crate) fn is_empty(&self) -> bool {
         self.nodes.is_empty()
     }
 

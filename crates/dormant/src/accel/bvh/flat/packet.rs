@@ -38,7 +38,7 @@ pub(crate) struct RayPacket {
 
 impl RayPacket {
     /// The packet of `rays` (1 to [`PACKET`] of them) in world or object space.
-    pub fn new(rays: &[Ray]) -> Self {
+    pub(crate) fn new(rays: &[Ray]) -> Self {
         debug_assert!(!rays.is_empty() && rays.len() <= PACKET);
         let ray = |i: usize| &rays[i.min(rays.len() - 1)];
         Self {

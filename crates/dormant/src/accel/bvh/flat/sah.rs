@@ -24,12 +24,3 @@ pub(crate) fn subtree_cost(nodes: &[Node], root: u32, params: &BuildParams) -> f
     }
     sum
 }
-
-/// SAH cost of a whole tree, normalised by its root's area; 0 for an empty tree.
-pub(crate) fn sah_cost(nodes: &[Node], params: &BuildParams) -> f32 {
-    let Some(root) = nodes.first() else {
-        return 0.0;
-    };
-    let root_area = f64::from(root.aabb().surface_area()).max(f64::from(f32::MIN_POSITIVE));
-    (subtree_cost(nodes, 0, params) / root_area) as f32
-}

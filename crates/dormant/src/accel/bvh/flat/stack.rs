@@ -23,13 +23,13 @@ pub(crate) struct TraversalStack<E: Copy, const N: usize> {
 
 impl<E: Copy, const N: usize> TraversalStack<E, N> {
     #[inline(always)]
-    pub fn new() -> Self {
+    pub(crate) fn new() -> Self {
         Self { entries: [const { MaybeUninit::uninit() }; N], len: 0 }
     }
 
     /// Saves an entry.
     #[inline(always)]
-    pub fn push(&mut self, entry: E) {
+    pub(crate) fn push(&mut self, entry: E) {
         debug_assert!(self.len < N, "traversal stack overflow: deeper than {N}");
         // Indexing is bounds-checked: an overflow panics instead of writing past the array.
         self.entries[self.len].write(entry);

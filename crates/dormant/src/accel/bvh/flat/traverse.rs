@@ -30,7 +30,7 @@ pub(crate) struct BoxRay {
 }
 
 impl BoxRay {
-    pub fn new(ray: &Ray) -> Self {
+    pub(crate) fn new(ray: &Ray) -> Self {
         let safe = |d: f32| if d == 0.0 { f32::MIN_POSITIVE.copysign(d) } else { d };
         let dir = Vec3A::new(safe(ray.dir.x), safe(ray.dir.y), safe(ray.dir.z));
         Self { org: ray.origin.into(), inv: dir.recip(), t_min: ray.t_min }
@@ -38,7 +38,7 @@ impl BoxRay {
 
     /// Entry distance into the node's box within `[t_min, t_max]`, or `+inf` on a miss.
     #[inline(always)]
-    pub fn hit(&self, n: &Node, t_max: f32) -> f32 {
+    pub(crate) fn hit(&self, n: &Node, t_max: f32) -> f32 {
         self.hit_bounds(n.min, n.max, t_max)
     }
 

@@ -92,7 +92,7 @@ impl Wide {
     /// Collapses `bvh` (children of every node are gathered by repeatedly opening the largest
     /// interior child until there are eight). `leaf` maps a binary leaf to the item range the
     /// traversal hands out for it.
-    pub fn new(bvh: &FlatBvh, leaf: impl Fn(u32, &Node) -> (u32, u32)) -> Self {
+    pub(crate) fn new(bvh: &FlatBvh, leaf: impl Fn(u32, &Node) -> (u32, u32)) -> Self {
         let mut w = Wide {
             nodes: Vec::with_capacity(bvh.nodes.len() / 6 + 1),
             map: bvh

@@ -48,8 +48,6 @@ mod remove;
 mod stats;
 mod traverse;
 
-pub(crate) use stats::SnapshotMemory;
-
 use std::collections::{HashMap, HashSet};
 use std::sync::Arc;
 
@@ -91,7 +89,7 @@ pub(crate) struct ONode {
 }
 
 impl ONode {
-    pub fn new(kids: [Link; 2], origin: Option<(u32, u32)>) -> Self {
+    pub(crate) fn new(kids: [Link; 2], origin: Option<(u32, u32)>) -> Self {
         Self {
             aabb: kids[0].aabb().union(kids[1].aabb()),
             mask: kids[0].mask() | kids[1].mask(),
@@ -110,14 +108,14 @@ impl Link {
         }
     }
 
-    pub fn mask(&self) -> u64 {
+    pub(crate) fn mask(&self) -> u64 {
         match self {
             Link::Node(n) => n.mask,
             Link::Ref(b, _) => 1u64 << (b.id % 64),
         }
     }
 
-    pub fn height(&self) -> u32 {
+    pub(crate) fn height(&self) -> u32 {
         match self {
             Link::Node(n) => n.height,
             Link::Ref(..) => 0,
@@ -136,7 +134,7 @@ impl Link {
     }
 
     /// The block node this link is (or copies), for rebuilding a parent on a path.
-    pub fn origin(&self) -> Option<(u32, u32)> {
+    pub(crate) fn origin(&self) -> Option<(u32, u32)> {
         match self {
             Link::Node(n) => n.origin,
             Link::Ref(b, i) => Some((b.id, *i)),
@@ -427,14 +425,10 @@ impl StaticBvh {
     /// block leaves hundreds of small, overlapping blocks that rays enter one at a time.
     /// Merging only when a cost estimate said it pays left a tree slower than either:
     /// docs/lab/persistent-tree.md#2026-12-02-the-persistent-static-tree-after-the-atriums-run
-    pub(crate) fn relink(&mut self) -> Option<usize> {
-        self.state.root.as_ref()?;
-        self.relink_blocks(self.live_blocks())
-    }
-
-    /// [`Self::relink`] over `blocks`: every live block, each whole (none of them may hold a
-    /// removed mesh's triangles). Returns the triangles merged, or `None` after a rebuild.
-    fn relink_blocks(&mut self, blocks: Vec<Arc<Block>>) -> Option<usize> {
+    ///
+    /// `blocks`: every live block, each whole (none of them may hold a removed mesh's
+    /// triangles).
+    fn relink(&mut self, blocks: Vec<Arc<Block>>) -> Option<usize> {
         let (merge, keep) = self.mergeable(&blocks);
         let (order, built) = match (merge.len() > 1).then(|| self.merge_blocks(&merge)).flatten() {
             Some(merged) => {
@@ -597,7 +591,7 @@ impl StaticBvh {
         }
         let merged = if over_budget {
             update.relinked = true;
-            self.relink_blocks(blocks)
+            self.relink(blocks)
         } else {
             (!self.braid_or_rebuild(&blocks)).then_some(0)
         };

@@ -16,7 +16,7 @@ pub(crate) enum Removed {
 
 impl Removed {
     /// The new root given the old one.
-    pub fn resolve(self, old: Link) -> Option<Link> {
+    pub(crate) fn resolve(self, old: Link) -> Option<Link> {
         match self {
             Removed::Keep => Some(old),
             Removed::Gone => None,

@@ -4,7 +4,7 @@ use std::collections::{HashMap, HashSet};
 use std::sync::Arc;
 
 use super::{Block, Link, StaticBvh, StaticSnapshot};
-use crate::accel::bvh::flat::{sah_cost, subtree_cost, MeshBvh};
+use crate::accel::bvh::flat::subtree_cost;
 use crate::accel::bvh::BuildParams;
 
 /// Visits every distinct block referenced from `root` once.
@@ -107,16 +107,8 @@ impl StaticSnapshot {
 }
 
 impl StaticBvh {
-    /// SAH cost of the current tree with this tree's build parameters. Compare with
-    /// [`Self::rebuilt_sah_cost`] to judge insertion quality.
+    /// SAH cost of the current tree with this tree's build parameters.
     pub fn sah_cost(&self) -> f32 {
         self.state.sah_cost(&self.params)
-    }
-
-    /// SAH cost a full rebuild of the current meshes would have. Builds that tree on the side
-    /// (O(n log n)); `self` is unchanged.
-    pub(crate) fn rebuilt_sah_cost(&self) -> f32 {
-        let mesh = MeshBvh::build(self.live_tris(), self.params);
-        sah_cost(&mesh.bvh.nodes, &self.params)
     }
 }

@@ -164,7 +164,7 @@ pub(crate) struct View {
 }
 
 impl View {
-    pub fn new(root: Option<&Link>) -> Self {
+    pub(crate) fn new(root: Option<&Link>) -> Self {
         let mut v = View::default();
         if let Some(root) = root {
             v.bvh.nodes.push(Node::interior(Aabb::EMPTY, 0));

@@ -152,6 +152,7 @@ impl SimdPath {
 
     /// Runs `f` with queries on this thread using `path` (tests iterate over the paths with it).
     /// Panics when the CPU does not support `path` (callers iterate [`Self::supported`]).
+    #[cfg(test)]
     pub(crate) fn with_override<R>(path: SimdPath, f: impl FnOnce() -> R) -> R {
         assert!(path.is_supported(), "SIMD path {} is not supported here", path.name());
         let old = OVERRIDE.with(|o| o.replace(Some(path)));

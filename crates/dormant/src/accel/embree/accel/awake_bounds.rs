@@ -28,7 +28,7 @@ pub(super) struct AwakeBounds {
 
 impl AwakeBounds {
     /// Meets nothing.
-    pub const NONE: AwakeBounds = AwakeBounds { all: AwakeBox::NONE, boxes: Vec::new() };
+    pub(crate) const NONE: AwakeBounds = AwakeBounds { all: AwakeBox::NONE, boxes: Vec::new() };
 
     /// The box around the world bounds `instances`, and inside it: each one if there are at
     /// most [`MAX_BOXES`], else the occupied cells of a 4x4x4 (or, if more than [`MAX_BOXES`]
@@ -93,7 +93,7 @@ impl AwakeBox {
 
     /// `b` widened by [`SLACK`] of its size and distance from the origin; `NONE` for an empty
     /// or non-finite box.
-    pub fn new(b: Aabb) -> Self {
+    pub(crate) fn new(b: Aabb) -> Self {
         if b.is_empty() || !b.min.is_finite() || !b.max.is_finite() {
             return Self::NONE;
         }
