@@ -33,6 +33,15 @@ CRATES = {
         "render": 4, "residency": 4,
         "sequence": 5,
     }),
+    "dormant-embree": ("crates/dormant-embree/src", "lib.rs", {
+        "error": 0, "quality": 0, "motion": 0,
+        "device": 1,
+        "filter": 2, "geometry": 2,
+        "view": 3,
+        "frozen": 4, "packet": 4,
+        "instance_array": 5,
+        "scene": 6,
+    }),
     "dormant-lab": ("crates/dormant-lab/src", "lib.rs", {
         "report": 0, "crosscheck": 0,
         "bench": 1,

@@ -172,11 +172,11 @@ proptest! {
 mod embree_wrapper {
     use std::sync::Arc;
 
-    use dormant::accel::embree::{
+    use dormant::geometry::{Ray, FRAME_TIME};
+    use dormant_embree::{
         BuildQuality, Coherence, Device, EmbreeHit, FrozenScene, InstanceGeometry, Scene, SceneFlags,
         TriangleGeometry,
     };
-    use dormant::geometry::Ray;
     use glam::{Affine3A, Vec3};
 
     fn prototype(d: &Device) -> Arc<FrozenScene> {
@@ -211,7 +211,10 @@ mod embree_wrapper {
     fn single(s: &Scene, r: &Ray) -> (Option<EmbreeHit>, bool) {
         let v = s.view().unwrap();
         let (o, d) = (r.origin.to_array(), r.dir.to_array());
-        (v.intersect1(o, d, r.t_min, r.t_max), v.occluded1(o, d, r.t_min, r.t_max))
+        (
+            v.intersect1_at(o, d, r.t_min, r.t_max, FRAME_TIME),
+            v.occluded1_at(o, d, r.t_min, r.t_max, FRAME_TIME),
+        )
     }
 
     fn check<const N: usize>(
@@ -267,7 +270,7 @@ mod embree_wrapper {
         }
         assert!(seen_instances > 0);
         // An all-inactive packet is allowed and reports nothing.
-        assert_eq!(v.intersect8(&[None; 8], Coherence::Coherent), [None; 8]);
-        assert_eq!(v.occluded16(&[None; 16], Coherence::Incoherent), [false; 16]);
+        assert_eq!(v.intersect8(&[None::<Ray>; 8], Coherence::Coherent), [None; 8]);
+        assert_eq!(v.occluded16(&[None::<Ray>; 16], Coherence::Incoherent), [false; 16]);
     }
 }

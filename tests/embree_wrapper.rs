@@ -4,11 +4,12 @@
 
 use std::sync::Arc;
 
-use dormant::accel::embree::{
+use dormant::accel::embree::shutter_poses;
+use dormant::geometry::{InstanceMotion, RigidTransform, FRAME_TIME};
+use dormant_embree::{
     BuildQuality, Device, EmbreeError, Geometry, InstanceArrayGeometry, InstanceGeometry, Scene, SceneFlags,
     TriangleGeometry, Version,
 };
-use dormant::geometry::{InstanceMotion, RigidTransform};
 use glam::{Affine3A, Quat, Vec3};
 
 fn device() -> Device {
@@ -47,15 +48,23 @@ fn known_triangle_hit_has_expected_t_u_v_and_prim() {
     ];
     s.attach(TriangleGeometry::new(&d, &p, &[[0, 1, 2], [3, 4, 5]]).unwrap()).unwrap();
     s.commit().unwrap();
-    let hit = s.view().unwrap().intersect1([5.2, 0.3, -3.0], [0.0, 0.0, 1.0], 0.0, f32::INFINITY).unwrap();
+    let hit = s
+        .view()
+        .unwrap()
+        .intersect1_at([5.2, 0.3, -3.0], [0.0, 0.0, 1.0], 0.0, f32::INFINITY, FRAME_TIME)
+        .unwrap();
     assert_eq!((hit.geom_id, hit.prim_id, hit.inst_id), (0, 1, None));
     assert!((hit.t - 3.0).abs() < 1e-6);
     assert!((hit.u - 0.2).abs() < 1e-5 && (hit.v - 0.3).abs() < 1e-5, "u={} v={}", hit.u, hit.v);
     // Ng = (p1-p0) x (p2-p0) = +z.
     assert!(hit.ng[2] > 0.0);
-    assert!(s.view().unwrap().occluded1([5.2, 0.3, -3.0], [0.0, 0.0, 1.0], 0.0, 10.0));
-    assert!(!s.view().unwrap().occluded1([5.2, 0.3, -3.0], [0.0, 0.0, 1.0], 0.0, 2.9));
-    assert!(s.view().unwrap().intersect1([5.2, 0.3, -3.0], [0.0, 0.0, -1.0], 0.0, f32::INFINITY).is_none());
+    assert!(s.view().unwrap().occluded1_at([5.2, 0.3, -3.0], [0.0, 0.0, 1.0], 0.0, 10.0, FRAME_TIME));
+    assert!(!s.view().unwrap().occluded1_at([5.2, 0.3, -3.0], [0.0, 0.0, 1.0], 0.0, 2.9, FRAME_TIME));
+    assert!(s
+        .view()
+        .unwrap()
+        .intersect1_at([5.2, 0.3, -3.0], [0.0, 0.0, -1.0], 0.0, f32::INFINITY, FRAME_TIME)
+        .is_none());
 }
 
 #[test]
@@ -69,8 +78,11 @@ fn instanced_hit_reports_instance_id() {
     top.attach_by_id(InstanceGeometry::new(&d, &proto, &Affine3A::IDENTITY).unwrap(), 3).unwrap();
     top.attach_by_id(InstanceGeometry::new(&d, &proto, &xf).unwrap(), 7).unwrap();
     top.commit().unwrap();
-    let hit =
-        top.view().unwrap().intersect1([10.25, 0.25, 1.0], [0.0, 0.0, -1.0], 0.0, f32::INFINITY).unwrap();
+    let hit = top
+        .view()
+        .unwrap()
+        .intersect1_at([10.25, 0.25, 1.0], [0.0, 0.0, -1.0], 0.0, f32::INFINITY, FRAME_TIME)
+        .unwrap();
     assert_eq!((hit.inst_id, hit.geom_id, hit.prim_id), (Some(7), 0, 0));
     assert!((hit.t - 1.0).abs() < 1e-6);
 }
@@ -94,16 +106,16 @@ fn detach_reattach_and_recommit() {
     let id = s.attach(unit_triangle(&d)).unwrap();
     s.commit().unwrap();
     let ray = ([0.25, 0.25, 1.0], [0.0, 0.0, -1.0]);
-    assert!(s.view().unwrap().intersect1(ray.0, ray.1, 0.0, f32::INFINITY).is_some());
+    assert!(s.view().unwrap().intersect1_at(ray.0, ray.1, 0.0, f32::INFINITY, FRAME_TIME).is_some());
 
     let geometry = s.detach(id).unwrap();
     assert!(s.view().is_none());
     s.commit().unwrap();
-    assert!(s.view().unwrap().intersect1(ray.0, ray.1, 0.0, f32::INFINITY).is_none());
+    assert!(s.view().unwrap().intersect1_at(ray.0, ray.1, 0.0, f32::INFINITY, FRAME_TIME).is_none());
 
     s.attach_by_id(geometry, 42).unwrap();
     s.commit().unwrap();
-    let hit = s.view().unwrap().intersect1(ray.0, ray.1, 0.0, f32::INFINITY).unwrap();
+    let hit = s.view().unwrap().intersect1_at(ray.0, ray.1, 0.0, f32::INFINITY, FRAME_TIME).unwrap();
     assert_eq!(hit.geom_id, 42);
 }
 
@@ -117,7 +129,7 @@ fn one_geometry_in_two_scenes() {
     a.commit().unwrap();
     b.commit().unwrap();
     for s in [&a, &b] {
-        assert!(s.view().unwrap().occluded1([0.25, 0.25, 1.0], [0.0, 0.0, -1.0], 0.0, 2.0));
+        assert!(s.view().unwrap().occluded1_at([0.25, 0.25, 1.0], [0.0, 0.0, -1.0], 0.0, 2.0, FRAME_TIME));
     }
 }
 
@@ -131,7 +143,11 @@ fn shared_buffers_are_traced() {
     let mut s = scene(&d);
     s.attach(g).unwrap();
     s.commit().unwrap();
-    let hit = s.view().unwrap().intersect1([0.5, 0.25, -2.0], [0.0, 0.0, 1.0], 0.0, f32::INFINITY).unwrap();
+    let hit = s
+        .view()
+        .unwrap()
+        .intersect1_at([0.5, 0.25, -2.0], [0.0, 0.0, 1.0], 0.0, f32::INFINITY, FRAME_TIME)
+        .unwrap();
     assert!((hit.t - 2.0).abs() < 1e-6);
 }
 
@@ -167,13 +183,13 @@ fn owned_child_scene_changes_reach_the_parent() {
     top.attach_by_id(InstanceGeometry::owning(&d, child, &Affine3A::IDENTITY).unwrap(), 0).unwrap();
     top.commit().unwrap();
     let ray = ([0.25, 0.25, 1.0], [0.0, 0.0, -1.0]);
-    assert!(top.view().unwrap().intersect1(ray.0, ray.1, 0.0, f32::INFINITY).is_none());
+    assert!(top.view().unwrap().intersect1_at(ray.0, ray.1, 0.0, f32::INFINITY, FRAME_TIME).is_none());
 
     let inst = top.instance_mut(0).unwrap();
     inst.child_mut().unwrap().attach_by_id(unit_triangle(&d), 5).unwrap();
     assert!(top.view().is_none(), "changing the child stages a change in the parent");
     top.commit().unwrap();
-    let hit = top.view().unwrap().intersect1(ray.0, ray.1, 0.0, f32::INFINITY).unwrap();
+    let hit = top.view().unwrap().intersect1_at(ray.0, ray.1, 0.0, f32::INFINITY, FRAME_TIME).unwrap();
     assert_eq!((hit.inst_id, hit.geom_id), (Some(0), 5));
 }
 
@@ -189,7 +205,11 @@ fn instance_transform_updates_and_rejects_nan() {
     let moved = Affine3A::from_rotation_translation(Quat::from_rotation_z(0.3), Vec3::new(0.0, 0.0, -4.0));
     top.instance_mut(0).unwrap().set_transform(&moved).unwrap();
     top.commit().unwrap();
-    let hit = top.view().unwrap().intersect1([0.1, 0.3, 1.0], [0.0, 0.0, -1.0], 0.0, f32::INFINITY).unwrap();
+    let hit = top
+        .view()
+        .unwrap()
+        .intersect1_at([0.1, 0.3, 1.0], [0.0, 0.0, -1.0], 0.0, f32::INFINITY, FRAME_TIME)
+        .unwrap();
     assert!((hit.t - 5.0).abs() < 1e-5);
     let nan = Affine3A::from_translation(Vec3::new(f32::NAN, 0.0, 0.0));
     assert_eq!(top.instance_mut(0).unwrap().set_transform(&nan), Err(EmbreeError::NonFiniteTransform));
@@ -197,7 +217,7 @@ fn instance_transform_updates_and_rejects_nan() {
 }
 
 /// A square at z = 1 in object space, so a wrong scale of the instance moves it.
-fn raised_square(device: &Device) -> Arc<dormant::accel::embree::FrozenScene> {
+fn raised_square(device: &Device) -> Arc<dormant_embree::FrozenScene> {
     let p = [
         Vec3::new(-2.0, -2.0, 1.0),
         Vec3::new(2.0, -2.0, 1.0),
@@ -222,13 +242,15 @@ fn expected_t(motion: &InstanceMotion, time: f32, org: Vec3) -> f32 {
 /// [`expected_t`] gives.
 fn traced_over_the_shutter(
     d: &Device,
-    proto: &Arc<dormant::accel::embree::FrozenScene>,
+    proto: &Arc<dormant_embree::FrozenScene>,
     motion: &InstanceMotion,
     org: Vec3,
 ) -> Vec<(f32, f32, f32)> {
     let mut top = scene(d);
     top.attach_by_id(InstanceGeometry::new(d, proto, &Affine3A::IDENTITY).unwrap(), 0).unwrap();
-    top.instance_mut(0).unwrap().set_motion(motion).unwrap();
+    let instance = top.instance_mut(0).unwrap();
+    let poses = shutter_poses(motion, instance.child_radius());
+    instance.set_motion(&poses).unwrap();
     top.commit().unwrap();
     let view = top.view().unwrap();
     [0.0, 0.25, 0.5, 0.75, 1.0]
@@ -291,7 +313,7 @@ fn instance_array_places_each_entry_and_skips_holes() {
     let proto = raised_square(&d);
     let at = |x: f32| RigidTransform { rotation: Quat::IDENTITY, translation: Vec3::new(x, 0.0, -2.0) };
     let xs = [0.0, 10.0, 20.0];
-    let down = |view: &dormant::accel::embree::SceneView, x: f32, time: f32| {
+    let down = |view: &dormant_embree::SceneView, x: f32, time: f32| {
         view.intersect1_at([x, 0.5, 5.0], [0.0, 0.0, -1.0], 0.0, f32::INFINITY, time)
     };
     let mut still = scene(&d);
@@ -317,7 +339,8 @@ fn instance_array_places_each_entry_and_skips_holes() {
                 translation: Vec3::new(x, 0.0, -4.0),
             },
         };
-        let entries: Vec<_> = xs.iter().map(|&x| (Some(0), motion(x))).collect();
+        let entries: Vec<_> =
+            xs.iter().map(|&x| (Some(0), shutter_poses(&motion(x), proto.radius()))).collect();
         array.set_moving(&entries).unwrap();
         moving.attach_by_id(array, 0).unwrap();
         moving.commit().unwrap();

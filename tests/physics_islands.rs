@@ -36,7 +36,7 @@ fn run_until_all_asleep(sim: &mut Simulation, max_frames: u32) -> Vec<IslandEven
 
 /// Live islands ordered by their first body.
 fn live_islands(sim: &Simulation) -> Vec<(IslandId, Vec<BodyId>)> {
-    let mut islands: Vec<_> = sim.tracker().islands().map(|(id, b)| (id, b.to_vec())).collect();
+    let mut islands: Vec<_> = sim.islands().map(|(id, b)| (id, b.to_vec())).collect();
     islands.sort_by_key(|(_, bodies)| bodies[0]);
     islands
 }
@@ -75,7 +75,7 @@ fn two_separate_piles_are_two_islands_and_a_poke_wakes_exactly_one() {
     assert_eq!(record.events, vec![IslandEvent::Woke { island: left.0 }]);
     for b in &right.1 {
         assert_eq!(sim.state(*b), BodyState::Asleep);
-        assert_eq!(sim.tracker().island_of(*b), Some(right.0), "the other pile keeps its id");
+        assert_eq!(sim.island_of(*b), Some(right.0), "the other pile keeps its id");
     }
 }
 

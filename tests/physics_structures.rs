@@ -90,7 +90,7 @@ fn structures_are_built_asleep_as_one_island_per_copy() {
     assert_eq!(islands.len(), 3, "{:?}", record.events);
     for (tower, (island, bodies, poses)) in islands.iter().enumerate() {
         assert_eq!(bodies, &tower_bodies(tower as u32));
-        assert_eq!(sim.tracker().island_of(bodies[0]), Some(*island));
+        assert_eq!(sim.island_of(bodies[0]), Some(*island));
         for (body, pose) in bodies.iter().zip(poses) {
             assert_eq!(sim.pose(*body), Some(*pose), "the recorded pose is Rapier's");
         }
@@ -113,7 +113,7 @@ fn an_untouched_structure_stays_asleep_for_the_whole_run() {
     for (island, bodies, poses) in &built[1..] {
         for (body, pose) in bodies.iter().zip(poses) {
             assert_eq!(sim.state(*body), BodyState::Asleep);
-            assert_eq!(sim.tracker().island_of(*body), Some(*island));
+            assert_eq!(sim.island_of(*body), Some(*island));
             assert_eq!(sim.pose(*body), Some(*pose), "not a jitter");
         }
     }
@@ -157,10 +157,9 @@ fn a_fallen_structure_settles_into_new_islands() {
     }
     let (present, asleep) = sim.dynamic_counts();
     assert_eq!(present, asleep, "everything has settled");
-    let debris: BTreeSet<IslandId> =
-        tower_bodies(0).iter().map(|b| sim.tracker().island_of(*b).unwrap()).collect();
+    let debris: BTreeSet<IslandId> = tower_bodies(0).iter().map(|b| sim.island_of(*b).unwrap()).collect();
     assert!(!debris.contains(&built[0].0), "the debris is in new islands: {debris:?}");
-    assert!(sim.tracker().counters().islands_woke >= 1);
+    assert!(sim.island_counters().islands_woke >= 1);
 }
 
 #[test]

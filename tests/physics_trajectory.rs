@@ -11,7 +11,8 @@ use std::sync::OnceLock;
 
 use common::encoding::fnv1a64;
 use common::scenes;
-use dormant::physics::{simulate, BodyState, SimulateOptions, Trajectory, TrajectoryError};
+use dormant::physics::trajectory::{Trajectory, TrajectoryError};
+use dormant::physics::{simulate, BodyState, SimulateOptions};
 use dormant::scene::file::SceneFile;
 use proptest::prelude::*;
 

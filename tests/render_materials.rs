@@ -529,7 +529,7 @@ fn aov_passes_record_albedo_normal_and_depth() {
 
 #[test]
 fn gltf_punctual_lights_and_sampler_wrap_modes_are_imported() {
-    use dormant::scene::Wrap;
+    use dormant::scene::texture::Wrap;
     let dir = tempfile::tempdir().unwrap();
     write_checker(dir.path());
     let path = textured_quad(dir.path(), "checker.png", |doc| {

@@ -11,8 +11,9 @@ mod common;
 use common::scenes;
 use dormant::accel::{self, load_scene, Backend, LoadedObjectMap};
 use dormant::geometry::{primitives, Ray};
+use dormant::physics::trajectory::ReplayFrame;
 use dormant::physics::{
-    BodyId, BodyInfo, BodyKind, BodyPose, BodyState, IslandEvent, IslandId, ReplayFrame, SimulateOptions,
+    BodyId, BodyInfo, BodyKind, BodyPose, BodyState, IslandEvent, IslandId, SimulateOptions,
 };
 use dormant::residency::{
     CacheBudget, IntegrationForm, IntegrationPolicy, IntegrationSettings, ManagerOptions, ReactivationPath,

@@ -500,7 +500,7 @@ fn adaptive(
     }
     let denoiser = match args.denoise {
         true => Some(
-            dormant::render::Denoiser::new(threads)
+            dormant::render::denoise::Denoiser::new(threads)
                 .map_err(|e| CliError::Input(e.to_string()))?
                 .prefilter(args.denoise_prefilter),
         ),

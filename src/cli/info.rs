@@ -52,7 +52,7 @@ impl InfoReport {
 
 #[cfg(feature = "embree")]
 fn embree_info(threads: Option<usize>) -> Result<Option<EmbreeInfo>, CliError> {
-    use dormant::accel::embree::{Device, Version};
+    use dormant_embree::{Device, Version};
     let device = Device::new(threads).map_err(|e| CliError::Runtime(e.to_string()))?;
     Ok(Some(EmbreeInfo {
         library_version: device.library_version().to_string(),
@@ -69,10 +69,11 @@ fn embree_info(_threads: Option<usize>) -> Result<Option<EmbreeInfo>, CliError> 
 
 /// The OIDN version from a CPU device; `None` without the `oidn` feature.
 fn oidn_info(threads: Option<usize>) -> Result<Option<OidnInfo>, CliError> {
-    let Some(library_dir) = dormant::render::Denoiser::library_dir() else {
+    let Some(library_dir) = dormant::render::denoise::Denoiser::library_dir() else {
         return Ok(None);
     };
-    let device = dormant::render::Denoiser::new(threads).map_err(|e| CliError::Runtime(e.to_string()))?;
+    let device =
+        dormant::render::denoise::Denoiser::new(threads).map_err(|e| CliError::Runtime(e.to_string()))?;
     Ok(Some(OidnInfo { library_version: device.version(), library_dir }))
 }
 

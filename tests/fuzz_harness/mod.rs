@@ -11,7 +11,7 @@
 
 use std::path::Path;
 
-use dormant::physics::Trajectory;
+use dormant::physics::trajectory::Trajectory;
 use dormant::render::ImageSize;
 use dormant::scene::file::SceneFile;
 use dormant::scene::gltf::load_gltf_slice;

@@ -4,7 +4,9 @@
 //! its end or fallen asleep during it), `replay` rebuilds every frame the way the old
 //! replay did.
 
-use dormant::physics::{BodyKind, BodyPose, BodyState, IslandEvent, Trajectory};
+use dormant::physics::{BodyKind, BodyPose, BodyState, IslandEvent};
+
+use dormant::physics::trajectory::Trajectory;
 use glam::{Quat, Vec3};
 
 use crate::common::encoding::fnv1a64;

@@ -4,6 +4,7 @@
 
 mod frame_output;
 mod sequence;
+mod video;
 
 use std::path::{Path, PathBuf};
 
@@ -13,9 +14,11 @@ use indicatif::ProgressBar;
 use super::CliError;
 use dormant::accel::{self, Backend};
 use dormant::physics::SimulateOptions;
+use dormant::render;
+use dormant::render::denoise::{DenoiseError, Denoiser};
 use dormant::render::{
-    self, AdaptiveSampling, AmbientOcclusion, Aov, DenoiseError, Denoiser, DirectLighting, ImageSize,
-    Integrator, PathTracer, RenderScene, RenderSettings,
+    AdaptiveSampling, AmbientOcclusion, Aov, DirectLighting, ImageSize, Integrator, PathTracer, RenderScene,
+    RenderSettings,
 };
 use dormant::residency::{CacheBudget, IntegrationForm, IntegrationPolicy};
 use dormant::scene::file::SceneFile;
@@ -307,8 +310,8 @@ fn check_flags(args: &RenderArgs) -> Result<(), CliError> {
                 "--video needs a SCENE file or --trajectory (a sequence of frames)".into(),
             ));
         }
-        if !render::ffmpeg_available() {
-            return Err(CliError::Input(render::VideoError::FfmpegMissing.to_string()));
+        if !video::ffmpeg_available() {
+            return Err(CliError::Input(video::VideoError::FfmpegMissing.to_string()));
         }
     }
     Ok(())

@@ -7,7 +7,8 @@ use super::frame_output::{output_error, FrameOutput};
 use super::{adaptive_sampling, aov_passes, sequence_error, RenderArgs, RenderJob, RenderMode, Switch};
 use crate::cli::CliError;
 use dormant::accel::Backend;
-use dormant::render::{AdaptiveSampling, Denoiser, RenderStats};
+use dormant::render::denoise::Denoiser;
+use dormant::render::{AdaptiveSampling, RenderStats};
 use dormant::residency::{CacheBudget, IntegrationSettings, SceneManager};
 use dormant::sequence::output;
 use dormant::sequence::stats::{FrameRecord, RunInfo, StatsFile};
@@ -241,8 +242,8 @@ fn shutter(args: &RenderArgs, sequence: &Sequence) -> f32 {
 /// `video.mp4` from the written frames.
 fn encode_video(args: &RenderArgs, frame_paths: &[PathBuf], fps: f64, quiet: bool) -> Result<(), CliError> {
     let video = args.out.join("video.mp4");
-    dormant::render::encode_video(&args.out, frame_paths, fps, &video).map_err(|e| match e {
-        dormant::render::VideoError::FfmpegMissing => CliError::Input(e.to_string()),
+    super::video::encode_video(&args.out, frame_paths, fps, &video).map_err(|e| match e {
+        super::video::VideoError::FfmpegMissing => CliError::Input(e.to_string()),
         e => CliError::Runtime(e.to_string()),
     })?;
     if !quiet {

@@ -10,9 +10,10 @@ use std::path::PathBuf;
 use serde::Serialize;
 
 use dormant::accel::{self, Backend};
+use dormant::render::denoise::Denoiser;
 use dormant::render::{
-    render_frame, render_with_aovs, AdaptiveSampling, Aov, Denoiser, Film, PathTracer, RenderError,
-    RenderScene, RenderSettings,
+    render_frame, render_with_aovs, AdaptiveSampling, Aov, Film, PathTracer, RenderError, RenderScene,
+    RenderSettings,
 };
 use dormant::scene::SceneDescription;
 

@@ -12,13 +12,14 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::timed;
-use dormant::accel::embree::{
-    BuildQuality, Device, EmbreeError, FrozenScene, InstanceArrayGeometry, InstanceGeometry, Scene,
-    SceneFlags, TriangleGeometry,
-};
+use dormant::accel::embree::{lerps_as_matrices, shutter_poses};
 use dormant::geometry::{primitives, InstanceMotion, RigidTransform, TriangleMesh};
 use dormant::rng::SplitMix64;
 use dormant::sequence::stats::median;
+use dormant_embree::{
+    BuildQuality, Device, EmbreeError, FrozenScene, InstanceArrayGeometry, InstanceGeometry, Scene,
+    SceneFlags, ShutterPoses, TriangleGeometry,
+};
 
 pub struct InstancesBenchOptions {
     pub count: usize,
@@ -130,6 +131,20 @@ impl TopLevel {
         Ok(Self { scene, layout, motion, prototypes: prototypes.to_vec(), count })
     }
 
+    /// An array's motions as Embree takes them: matrices when every entry barely turns for
+    /// its prototype's size ([`lerps_as_matrices`]), else rigid poses for all (an array holds
+    /// one format).
+    fn array_poses(&self, entries: &[(Option<u32>, InstanceMotion)]) -> Vec<(Option<u32>, ShutterPoses)> {
+        let radius =
+            |p: Option<u32>| p.and_then(|p| self.prototypes.get(p as usize)).map_or(0.0, |s| s.radius());
+        let matrices = entries.iter().all(|&(p, ref m)| lerps_as_matrices(m, radius(p)));
+        let poses = |m: &InstanceMotion| match matrices {
+            true => ShutterPoses::Matrices([m.open.to_affine(), m.close.to_affine()]),
+            false => ShutterPoses::Rigid([m.open, m.close].map(|t| (t.rotation, t.translation))),
+        };
+        entries.iter().map(|(p, m)| (*p, poses(m))).collect()
+    }
+
     /// New transforms for every instance (update `run`).
     fn update(&mut self, run: u32) -> Result<(), EmbreeError> {
         let n = self.prototypes.len();
@@ -140,7 +155,10 @@ impl TopLevel {
                     let g = self.scene.instance_mut(i as u32)?;
                     match motion {
                         Motion::Still => g.set_transform(&m.open.to_affine())?,
-                        _ => g.set_motion(&m)?,
+                        _ => {
+                            let poses = shutter_poses(&m, g.child_radius());
+                            g.set_motion(&poses)?
+                        }
                     }
                 }
             }
@@ -150,7 +168,8 @@ impl TopLevel {
             }
             (InstanceLayout::Array, _) => {
                 let entries: Vec<_> = placements.map(|(p, m)| (Some(p), m)).collect();
-                self.scene.instance_array_mut(0)?.set_moving(&entries)?;
+                let poses = self.array_poses(&entries);
+                self.scene.instance_array_mut(0)?.set_moving(&poses)?;
             }
         }
         Ok(())

@@ -434,7 +434,8 @@ fn variant_factories(options: &IntegrationBenchOptions) -> Vec<(String, Factory)
     match options.backend {
         #[cfg(feature = "embree")]
         Backend::Embree => {
-            use dormant::accel::embree::{BuildQuality, Device, EmbreeAccel, EmbreeBuildParams};
+            use dormant::accel::embree::{EmbreeAccel, EmbreeBuildParams};
+            use dormant_embree::{BuildQuality, Device};
             let with = |params: EmbreeBuildParams| -> Factory {
                 Box::new(move || Ok(Box::new(EmbreeAccel::with_device(Device::new(threads)?, params)?)))
             };

@@ -39,7 +39,8 @@ pub(crate) fn embree_with(
     params: dormant::accel::embree::EmbreeBuildParams,
     threads: Option<usize>,
 ) -> Result<Box<dyn dormant::accel::Accelerator>, dormant::accel::AccelError> {
-    use dormant::accel::embree::{Device, EmbreeAccel};
+    use dormant::accel::embree::EmbreeAccel;
+    use dormant_embree::Device;
     Ok(Box::new(EmbreeAccel::with_device(Device::new(threads)?, params)?))
 }
 

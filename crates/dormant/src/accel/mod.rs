@@ -87,7 +87,7 @@ pub enum AccelError {
     RestingUnsupported(Backend),
     #[cfg(feature = "embree")]
     #[error(transparent)]
-    Embree(#[from] embree::EmbreeError),
+    Embree(#[from] dormant_embree::EmbreeError),
 }
 
 /// Whether instance `id` (declared resting or not) may take `motion`

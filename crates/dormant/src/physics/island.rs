@@ -39,7 +39,7 @@ impl IslandEvent {
 /// body sleeps; sleeping bodies with equal keys in one update form one island. Keys only need
 /// to be consistent within one update (Rapier's island ids are not stable across steps).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SleepObservation {
+pub(crate) struct SleepObservation {
     pub body: BodyId,
     pub group: Option<u64>,
     pub pose: BodyPose,
@@ -110,7 +110,7 @@ pub struct IslandCounters {
 
 /// Keeps the set of sleeping islands and emits events as it changes.
 #[derive(Clone, Debug, Default)]
-pub struct IslandTracker {
+pub(crate) struct IslandTracker {
     next_id: u64,
     islands: BTreeMap<IslandId, Vec<BodyId>>,
     island_of: Vec<Option<IslandId>>,

@@ -20,7 +20,7 @@ use super::body::{
     BodyState,
 };
 use super::colliders::{environment_shapes, prototype_shape, ColliderChoice, PrototypeShape};
-use super::island::{IslandTracker, SleepObservation};
+use super::island::{IslandCounters, IslandId, IslandTracker, SleepObservation};
 use super::kinematic::KinematicPath;
 use super::options::SimulateOptions;
 use super::spawn::{spawn_schedule, SpawnOrder};
@@ -174,8 +174,19 @@ impl Simulation {
         Some(from_rapier_pose(self.world.bodies[handle].position()))
     }
 
-    pub fn tracker(&self) -> &IslandTracker {
-        &self.tracker
+    /// The sleeping island `body` belongs to, if it sleeps.
+    pub fn island_of(&self, body: BodyId) -> Option<IslandId> {
+        self.tracker.island_of(body)
+    }
+
+    /// The sleeping islands and their bodies.
+    pub fn islands(&self) -> impl Iterator<Item = (IslandId, &[BodyId])> {
+        self.tracker.islands()
+    }
+
+    /// How many islands slept and woke so far.
+    pub fn island_counters(&self) -> &IslandCounters {
+        self.tracker.counters()
     }
 
     pub fn counters(&self) -> &SimulationCounters {

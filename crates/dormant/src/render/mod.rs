@@ -16,13 +16,11 @@ mod render_scene;
 mod sampler;
 mod texture;
 mod tiles;
-mod video;
 
 pub use adaptive::{AdaptiveSampling, SppStats, DARK_FLOOR};
 pub use aov::{render_with_aovs, Aov, AovIntegrator};
 pub use bsdf::{sample_cone, sample_cosine};
 pub use camera::PinholeCamera;
-pub use denoise::{DenoiseError, Denoiser};
 pub(crate) use emitters::Emitters;
 pub use film::Film;
 pub use image_file::write_exr_atomic;
@@ -36,7 +34,6 @@ pub(crate) use render_scene::{SurfaceHit, SurfaceKind};
 pub use sampler::PixelSampler;
 pub(crate) use tiles::render_frame_counted;
 pub use tiles::{render_frame, RenderSettings, RenderStats};
-pub use video::{encode_video, ffmpeg_available, VideoError};
 
 use std::path::PathBuf;
 

@@ -5,7 +5,7 @@ use std::sync::OnceLock;
 
 use glam::{Vec2, Vec4};
 
-use crate::scene::{Texture, Wrap};
+use crate::scene::texture::{Texture, Wrap};
 
 /// sRGB-encoded byte -> linear value.
 fn srgb_table() -> &'static [f32; 256] {

@@ -14,4 +14,4 @@ pub use assets::{MeshSource, SceneAssets};
 pub use builtin::default_scene;
 pub use description::{Body, Camera, Light, Material, Prototype, SceneDescription, Sky, StaticMesh, Sun};
 pub use pile::asset_pile;
-pub use texture::{Texture, Wrap};
+pub(crate) use texture::Texture;

@@ -1,7 +1,7 @@
 //! Frames of a sequence as plain scene descriptions.
 
 use super::Sequence;
-use crate::physics::ReplayFrame;
+use crate::physics::trajectory::ReplayFrame;
 use crate::scene::{Body, SceneDescription};
 
 impl Sequence {

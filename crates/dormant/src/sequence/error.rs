@@ -3,7 +3,8 @@
 use std::path::PathBuf;
 
 use crate::accel::AccelError;
-use crate::physics::{PhysicsError, TrajectoryError};
+use crate::physics::trajectory::TrajectoryError;
+use crate::physics::PhysicsError;
 use crate::render::RenderError;
 use crate::scene::file::SceneError;
 

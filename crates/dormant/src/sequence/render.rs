@@ -3,7 +3,7 @@
 //! manager's cost model.
 
 use super::{FrameSelection, KeptFrame, Sequence, SequenceError};
-use crate::physics::ReplayFrame;
+use crate::physics::trajectory::ReplayFrame;
 use crate::render::{
     render_with_aovs, AdaptiveSampling, Aov, Emitters, Film, Integrator, PinholeCamera, RenderError,
     RenderScene, RenderSettings, RenderStats,

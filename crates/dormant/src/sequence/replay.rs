@@ -1,7 +1,7 @@
 //! The one replay loop: every frame of a trajectory, in order, up to the last selected one.
 
 use super::{FrameSelection, Sequence};
-use crate::physics::ReplayFrame;
+use crate::physics::trajectory::ReplayFrame;
 use crate::residency::SceneManager;
 
 /// What [`Sequence::replay`] calls with each selected frame and the scene managers.

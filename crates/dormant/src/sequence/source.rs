@@ -10,7 +10,11 @@ use super::SequenceError;
 use crate::accel::{self, Backend};
 use std::sync::Arc;
 
-use crate::physics::{self, SimulateOptions, SimulatedFrame, Trajectory, TrajectoryError};
+use crate::physics;
+
+use crate::physics::{SimulateOptions, SimulatedFrame};
+
+use crate::physics::trajectory::{Trajectory, TrajectoryError};
 use crate::render::AdaptiveSampling;
 use crate::residency::{IntegrationSettings, Lookahead, ManagerOptions, SceneManager};
 use crate::scene::file::SceneFile;

@@ -142,7 +142,8 @@ type Variant = (Backend, String, Box<AccelFactory>);
 fn embree_variants(threads: Option<usize>) -> Vec<Variant> {
     #[cfg(feature = "embree")]
     {
-        use dormant::accel::embree::{BuildQuality, EmbreeBuildParams};
+        use dormant::accel::embree::EmbreeBuildParams;
+        use dormant_embree::BuildQuality;
         let at = |name: String, params: EmbreeBuildParams| -> Variant {
             (Backend::Embree, name, Box::new(move || super::embree_with(params, threads)))
         };

@@ -1,22 +1,11 @@
-//! How instance transforms reach Embree: the FLOAT3X4 column-major matrix layout, the
-//! quaternion decomposition of a rigid transform, and when a moving instance's two poses may
-//! go as matrices (lerped) instead of decompositions (slerped). Used by single instances
-//! ([`super::InstanceGeometry`]) and instance arrays alike.
+//! When a moving instance's two poses go to Embree as matrices (lerped, bounded in closed
+//! form) rather than rigid poses (slerped, bounded by a root search at every commit): dormant's
+//! policy over the wrapper's [`ShutterPoses`].
 
-use embree4_sys as sys;
-use glam::{Affine3A, Vec3};
+use dormant_embree::ShutterPoses;
+use glam::Vec3;
 
-use crate::geometry::{InstanceMotion, RigidTransform};
-
-/// Embree's FLOAT3X4_COLUMN_MAJOR layout of an affine transform.
-pub(super) fn column_major_3x4(xf: &Affine3A) -> [f32; 12] {
-    let m = xf.matrix3;
-    let t = xf.translation;
-    [
-        m.x_axis.x, m.x_axis.y, m.x_axis.z, m.y_axis.x, m.y_axis.y, m.y_axis.z, m.z_axis.x, m.z_axis.y,
-        m.z_axis.z, t.x, t.y, t.z,
-    ]
-}
+use crate::geometry::InstanceMotion;
 
 /// The largest rotation over the shutter (radians) for which a moving instance is given to
 /// Embree as two matrices, which it lerps, rather than two quaternion decompositions, which it
@@ -26,6 +15,7 @@ pub(super) fn column_major_3x4(xf: &Affine3A) -> [f32; 12] {
 /// turns it to within `a^3/24` of the slerp: at 2e-3 the object's points move by 5e-7 of their
 /// distance `r` from its origin, eight of f32's unit roundoffs. A pure translation (`a = 0`)
 /// lerps exactly.
+///
 /// An instance farther out may turn further ([`lerps_as_matrices`]): its points may then move
 /// by 5e-7 of its translation's magnitude instead, still eight unit roundoffs of it, half of
 /// what the crosscheck allows Embree's own f32 transform (16 roundoffs of the ray origin's and
@@ -44,7 +34,7 @@ const LERP_MAX_ANGLE: f32 = 2e-3;
 /// turns by at most [`LERP_MAX_ANGLE`] times `sqrt(max(reach, radius) / radius)`, `reach` a
 /// lower bound on its translation's largest coordinate over the shutter. The lerp then moves
 /// its points by at most 5e-7 `max(reach, radius)`.
-pub(super) fn lerps_as_matrices(motion: &InstanceMotion, radius: f32) -> bool {
+pub fn lerps_as_matrices(motion: &InstanceMotion, radius: f32) -> bool {
     let angle = motion.rotation_angle();
     if angle <= LERP_MAX_ANGLE {
         return true;
@@ -65,22 +55,13 @@ pub(super) fn lerps_as_matrices(motion: &InstanceMotion, radius: f32) -> bool {
     angle * angle * radius <= LERP_MAX_ANGLE * LERP_MAX_ANGLE * reach.max(radius)
 }
 
-/// Embree's decomposition of a rigid transform: unit scale, no skew or shift, the rotation as
-/// a quaternion (`r` the real part) and the translation.
-pub(super) fn quaternion_decomposition(t: &RigidTransform) -> sys::RTCQuaternionDecomposition {
-    let (q, p) = (t.rotation, t.translation);
-    sys::RTCQuaternionDecomposition {
-        scale_x: 1.0,
-        scale_y: 1.0,
-        scale_z: 1.0,
-        quaternion_r: q.w,
-        quaternion_i: q.x,
-        quaternion_j: q.y,
-        quaternion_k: q.z,
-        translation_x: p.x,
-        translation_y: p.y,
-        translation_z: p.z,
-        ..Default::default()
+/// `motion` as Embree takes it for an instance whose points lie within `radius` of its origin:
+/// two matrices when it [lerps as matrices](lerps_as_matrices), else two rigid poses.
+pub fn shutter_poses(motion: &InstanceMotion, radius: f32) -> ShutterPoses {
+    if lerps_as_matrices(motion, radius) {
+        ShutterPoses::Matrices([motion.open.to_affine(), motion.close.to_affine()])
+    } else {
+        ShutterPoses::Rigid([motion.open, motion.close].map(|t| (t.rotation, t.translation)))
     }
 }
 

@@ -10,7 +10,8 @@ use super::slots::{InstanceOwner, Integrated, Placement, StaticOwner};
 use super::{ms, Decision, FrameStats, SceneManager};
 use crate::accel::normal_matrix;
 use crate::accel::AccelError;
-use crate::physics::{IslandId, ReplayFrame};
+use crate::physics::trajectory::ReplayFrame;
+use crate::physics::IslandId;
 use crate::residency::baked::BakedIsland;
 use crate::residency::cost_model::{
     choose_batch, Candidate, CostEstimate, IntegrationForm, Outlook, Situation,

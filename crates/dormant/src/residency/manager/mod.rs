@@ -39,7 +39,8 @@ use super::stage_times::StageTimes;
 use crate::accel::{mesh_triangle, HitTriangle, MeshRef, ObjectMap, ResolvedHit};
 use crate::accel::{AccelError, Accelerator, HitObject, PrototypeId, SceneQuery, StaticSceneSnapshot};
 use crate::geometry::{Ray, TriangleMesh};
-use crate::physics::{BodyId, BodyInfo, IslandEvent, IslandId, ReplayFrame};
+use crate::physics::trajectory::ReplayFrame;
+use crate::physics::{BodyId, BodyInfo, IslandEvent, IslandId};
 use crate::scene::SceneDescription;
 use probe::Probe;
 use slots::{

@@ -5,7 +5,8 @@ use super::slots::{InstanceOwner, Placement};
 use super::{FrameStats, SceneManager};
 use crate::accel::normal_matrix;
 use crate::accel::AccelError;
-use crate::physics::{BodyId, ReplayFrame};
+use crate::physics::trajectory::ReplayFrame;
+use crate::physics::BodyId;
 
 impl SceneManager {
     /// Instances follow the frame: added, moved or removed. Returns whether any changed.

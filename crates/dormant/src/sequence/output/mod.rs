@@ -14,7 +14,8 @@ pub use writer::{FrameWriter, WrittenFrame};
 use std::path::PathBuf;
 
 use super::stats::StatsError;
-use crate::render::{DenoiseError, RenderError};
+use crate::render::denoise::DenoiseError;
+use crate::render::RenderError;
 
 /// Failures writing a frame's files or reading what an earlier run left.
 #[derive(Debug, thiserror::Error)]

@@ -5,7 +5,8 @@ use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 
 use super::{OutputError, OutputLayout};
-use crate::render::{write_aov_png_atomic, write_exr_atomic, write_png_atomic, Aov, Denoiser, Film};
+use crate::render::denoise::Denoiser;
+use crate::render::{write_aov_png_atomic, write_exr_atomic, write_png_atomic, Aov, Film};
 use crate::sequence::RenderedFrame;
 
 /// Writes each frame's files as its [`OutputLayout`] names them.

@@ -171,7 +171,7 @@ impl TriangleGeometry {
 
     /// Lets argument filters see hits on this geometry (rtcSetGeometryEnableFilterFunctionFromArguments):
     /// what [`super::SceneView::skipping`] needs of the meshes inside the instances it skips.
-    pub(crate) fn with_argument_filter(self) -> Result<Self, EmbreeError> {
+    pub fn with_argument_filter(self) -> Result<Self, EmbreeError> {
         // SAFETY: `raw` is valid; the geometry is recommitted below, before it is attached.
         unsafe { sys::rtcSetGeometryEnableFilterFunctionFromArguments(self.raw, true) };
         self.commit()

@@ -8,7 +8,6 @@ use embree4_sys as sys;
 use glam::Vec3;
 
 use super::filter::{self, GeometrySet, SkipContext};
-use crate::geometry::FRAME_TIME;
 
 /// A closest hit as Embree reports it. For an instanced hit, `ng` is in the instanced
 /// object's space and `inst_id` names the instance geometry in the top scene.
@@ -64,18 +63,13 @@ impl<'a> SceneView<'a> {
 
     /// The same scene, with every hit inside the instances in `skip` (geometry ids in this
     /// scene) rejected; an empty set is no filter at all.
-    pub(crate) fn skipping(self, skip: &'a GeometrySet) -> SceneView<'a> {
+    pub fn skipping(self, skip: &'a GeometrySet) -> SceneView<'a> {
         SceneView { skip: (!skip.is_empty()).then_some(skip), ..self }
     }
 
     /// The query context that carries the skipped set, if any.
     pub(super) fn skip_context(&self) -> Option<SkipContext<'a>> {
         self.skip.map(SkipContext::new)
-    }
-
-    /// Closest hit in `[tnear, tfar]` (rtcIntersect1), at shutter time 0.5.
-    pub fn intersect1(&self, org: [f32; 3], dir: [f32; 3], tnear: f32, tfar: f32) -> Option<EmbreeHit> {
-        self.intersect1_at(org, dir, tnear, tfar, FRAME_TIME)
     }
 
     /// Closest hit in `[tnear, tfar]` of a ray at shutter time `time` (motion blur).
@@ -117,20 +111,8 @@ impl<'a> SceneView<'a> {
         })
     }
 
-    /// Whether anything lies in `[tnear, tfar]` (rtcOccluded1), at shutter time 0.5.
-    pub fn occluded1(&self, org: [f32; 3], dir: [f32; 3], tnear: f32, tfar: f32) -> bool {
-        self.occluded1_at(org, dir, tnear, tfar, FRAME_TIME)
-    }
-
     /// Whether anything lies in `[tnear, tfar]` of a ray at shutter time `time`.
-    pub(crate) fn occluded1_at(
-        &self,
-        org: [f32; 3],
-        dir: [f32; 3],
-        tnear: f32,
-        tfar: f32,
-        time: f32,
-    ) -> bool {
+    pub fn occluded1_at(&self, org: [f32; 3], dir: [f32; 3], tnear: f32, tfar: f32, time: f32) -> bool {
         let mut ray = embree_ray(org, dir, tnear, tfar, time);
         let mut context = self.skip_context();
         let mut args = filter::occluded_args(sys::RTCRayQueryFlags::RTC_RAY_QUERY_FLAG_INCOHERENT);
@@ -142,14 +124,11 @@ impl<'a> SceneView<'a> {
         ray.tfar == f32::NEG_INFINITY
     }
 
-    /// World bounds of the committed scene.
-    pub fn bounds(&self) -> crate::geometry::Aabb {
+    /// World bounds of the committed scene: its lower and upper corners.
+    pub fn bounds(&self) -> (Vec3, Vec3) {
         let mut b = sys::RTCBounds::default();
         // SAFETY: the scene is committed; `b` is a valid output struct.
         unsafe { sys::rtcGetSceneBounds(self.raw, &mut b) };
-        crate::geometry::Aabb {
-            min: Vec3::new(b.lower_x, b.lower_y, b.lower_z),
-            max: Vec3::new(b.upper_x, b.upper_y, b.upper_z),
-        }
+        (Vec3::new(b.lower_x, b.lower_y, b.lower_z), Vec3::new(b.upper_x, b.upper_y, b.upper_z))
     }
 }

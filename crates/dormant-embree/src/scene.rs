@@ -10,14 +10,12 @@ use std::sync::Arc;
 use embree4_sys as sys;
 use glam::Affine3A;
 
-use crate::geometry::InstanceMotion;
-
 use super::device::Device;
 use super::error::EmbreeError;
 use super::frozen::FrozenScene;
 use super::geometry::TriangleGeometry;
 use super::instance_array::InstanceArrayGeometry;
-use super::motion::{column_major_3x4, lerps_as_matrices, quaternion_decomposition};
+use super::motion::{column_major_3x4, quaternion_decomposition, ShutterPoses};
 use super::quality::BuildQuality;
 use super::view::SceneView;
 
@@ -131,14 +129,14 @@ impl Scene {
         Ok(scene)
     }
 
-    pub(crate) fn set_flags(&mut self, flags: SceneFlags) -> Result<(), EmbreeError> {
+    pub fn set_flags(&mut self, flags: SceneFlags) -> Result<(), EmbreeError> {
         // SAFETY: `raw` is valid and `&mut self` excludes concurrent tracing.
         unsafe { sys::rtcSetSceneFlags(self.raw, flags.raw()) };
         self.dirty = true;
         self.device.check()
     }
 
-    pub(crate) fn set_build_quality(&mut self, quality: BuildQuality) -> Result<(), EmbreeError> {
+    pub fn set_build_quality(&mut self, quality: BuildQuality) -> Result<(), EmbreeError> {
         // SAFETY: as in `set_flags`.
         unsafe { sys::rtcSetSceneBuildQuality(self.raw, quality.raw()) };
         self.dirty = true;
@@ -216,7 +214,7 @@ impl Scene {
 
     /// Commits the owned child scene of instance `id` if it has staged changes; only then is
     /// this scene marked for recommit (an unchanged child leaves it as it is).
-    pub(crate) fn commit_child_of(&mut self, id: u32) -> Result<bool, EmbreeError> {
+    pub fn commit_child_of(&mut self, id: u32) -> Result<bool, EmbreeError> {
         match self.geometries.get_mut(&id) {
             Some(Geometry::Instance(inst)) => {
                 let changed = inst.commit_child()?;
@@ -233,15 +231,15 @@ impl Scene {
     }
 
     /// Ids of the attached geometries, ascending.
-    pub(crate) fn geometry_ids(&self) -> impl Iterator<Item = u32> + '_ {
+    pub fn geometry_ids(&self) -> impl Iterator<Item = u32> + '_ {
         self.geometries.keys().copied()
     }
 
-    pub(crate) fn geometry_count(&self) -> usize {
+    pub fn geometry_count(&self) -> usize {
         self.geometries.len()
     }
 
-    pub(crate) fn is_dirty(&self) -> bool {
+    pub fn is_dirty(&self) -> bool {
         self.dirty
     }
 
@@ -271,7 +269,7 @@ impl Scene {
         self.commit()?;
         let bounds = self.view().map(|v| v.bounds());
         // The farthest corner of the bounds (an empty scene's are infinite: no radius).
-        let radius = bounds.map_or(f32::INFINITY, |b| b.min.abs().max(b.max.abs()).length());
+        let radius = bounds.map_or(f32::INFINITY, |(min, max)| min.abs().max(max.abs()).length());
         Ok(Arc::new(FrozenScene::new(self.raw, radius, Box::new(self))))
     }
 }
@@ -367,20 +365,12 @@ impl InstanceGeometry {
         self.device.check()
     }
 
-    /// Makes the instance move over the shutter: two time steps, at `motion.open` (ray time 0)
-    /// and `motion.close` (time 1), which Embree interpolates like [`InstanceMotion::at`]. A
-    /// scene holding a geometry with several time steps builds a motion-blur BVH over it.
-    /// Through a parent scene, use [`Scene::instance_mut`].
-    ///
-    /// A rotating instance gets quaternion decompositions, which Embree slerps; bounding that
-    /// motion costs Embree a root search per box corner and axis at every commit (13 us an
-    /// instance for a pure translation, 65 us rotating, in `dormant bench instances`). An
-    /// instance that barely turns for its size and place ([`lerps_as_matrices`]) gets two
-    /// matrices instead, which Embree lerps and bounds in closed form; on the atrium most
-    /// moving bodies barely turn within the shutter:
-    /// docs/lab/motion-blur.md#2026-12-02-where-the-blurred-commit-goes-barely-turning-instances-as-matrices
-    pub fn set_motion(&mut self, motion: &InstanceMotion) -> Result<(), EmbreeError> {
-        if !motion.is_finite() {
+    /// Makes the instance move over the shutter: two time steps, `poses[0]` at ray time 0 and
+    /// `poses[1]` at time 1, which Embree interpolates. A scene holding a geometry with several
+    /// time steps builds a motion-blur BVH over it. Through a parent scene, use
+    /// [`Scene::instance_mut`].
+    pub fn set_motion(&mut self, poses: &ShutterPoses) -> Result<(), EmbreeError> {
+        if !poses.is_finite() {
             return Err(EmbreeError::NonFiniteTransform);
         }
         // SAFETY: `raw` is a valid instance geometry; time steps 0 and 1 exist once the count
@@ -389,19 +379,19 @@ impl InstanceGeometry {
         // meanwhile (see `set_transform`).
         unsafe {
             sys::rtcSetGeometryTimeStepCount(self.raw, 2);
-            if lerps_as_matrices(motion, self.child_radius()) {
-                for (step, t) in [&motion.open, &motion.close].into_iter().enumerate() {
-                    let m = column_major_3x4(&t.to_affine());
-                    let format = sys::RTCFormat::RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR;
-                    sys::rtcSetGeometryTransform(self.raw, step as u32, format, m.as_ptr().cast());
+            match poses {
+                ShutterPoses::Matrices(matrices) => {
+                    for (step, t) in matrices.iter().enumerate() {
+                        let m = column_major_3x4(t);
+                        let format = sys::RTCFormat::RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR;
+                        sys::rtcSetGeometryTransform(self.raw, step as u32, format, m.as_ptr().cast());
+                    }
                 }
-            } else {
-                for (step, t) in [&motion.open, &motion.close].into_iter().enumerate() {
-                    sys::rtcSetGeometryTransformQuaternion(
-                        self.raw,
-                        step as u32,
-                        &quaternion_decomposition(t),
-                    );
+                ShutterPoses::Rigid(rigid) => {
+                    for (step, &pose) in rigid.iter().enumerate() {
+                        let q = quaternion_decomposition(pose);
+                        sys::rtcSetGeometryTransformQuaternion(self.raw, step as u32, &q);
+                    }
                 }
             }
             sys::rtcCommitGeometry(self.raw);
@@ -415,8 +405,8 @@ impl InstanceGeometry {
     }
 
     /// How far the child's points lie from its origin at most ([`FrozenScene`]); infinite for
-    /// an owned scene, which may change.
-    fn child_radius(&self) -> f32 {
+    /// an owned scene, which may change: how far a turn of the instance moves them.
+    pub fn child_radius(&self) -> f32 {
         match &self.child {
             InstanceChild::Shared(frozen) => frozen.radius(),
             InstanceChild::Owned(_) => f32::INFINITY,

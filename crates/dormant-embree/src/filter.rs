@@ -14,13 +14,13 @@ use embree4_sys as sys;
 
 /// A set of geometry ids, as a bit set (ids are dense: instance slots).
 #[derive(Clone, Debug, Default)]
-pub(crate) struct GeometrySet {
+pub struct GeometrySet {
     words: Vec<u64>,
     len: usize,
 }
 
 impl GeometrySet {
-    pub(crate) fn insert(&mut self, id: u32) {
+    pub fn insert(&mut self, id: u32) {
         let (w, bit) = (id as usize / 64, 1u64 << (id % 64));
         if w >= self.words.len() {
             self.words.resize(w + 1, 0);
@@ -31,22 +31,22 @@ impl GeometrySet {
         }
     }
 
-    pub(crate) fn contains(&self, id: u32) -> bool {
+    pub fn contains(&self, id: u32) -> bool {
         self.words.get(id as usize / 64).is_some_and(|w| w & (1u64 << (id % 64)) != 0)
     }
 
-    pub(crate) fn is_empty(&self) -> bool {
+    pub fn is_empty(&self) -> bool {
         self.len == 0
     }
 
     /// The ids in the set, ascending.
-    pub(crate) fn iter(&self) -> impl Iterator<Item = u32> + '_ {
+    pub fn iter(&self) -> impl Iterator<Item = u32> + '_ {
         self.words.iter().enumerate().flat_map(|(w, &word)| {
             (0..64u32).filter(move |b| word & (1u64 << b) != 0).map(move |b| w as u32 * 64 + b)
         })
     }
 
-    pub(crate) fn clear(&mut self) {
+    pub fn clear(&mut self) {
         self.words.clear();
         self.len = 0;
     }

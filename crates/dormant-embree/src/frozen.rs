@@ -33,7 +33,9 @@ impl FrozenScene {
         Self { raw, radius, _owner: owner }
     }
 
-    pub(super) fn radius(&self) -> f32 {
+    /// An upper bound on the distance of the scene's points from its origin: how far a turn of
+    /// an instance of it moves them.
+    pub fn radius(&self) -> f32 {
         self.radius
     }
 

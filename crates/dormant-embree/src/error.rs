@@ -21,6 +21,9 @@ pub enum EmbreeError {
     NotAnInstance { id: u32 },
     #[error("transform is not finite")]
     NonFiniteTransform,
+    /// An instance array's moving entries mix matrices and rigid poses.
+    #[error("an instance array's poses must all be matrices or all be rigid")]
+    MixedPoses,
     #[error("{what} has {count} elements, more than Embree's 32-bit indices allow")]
     TooLarge { what: &'static str, count: usize },
 }

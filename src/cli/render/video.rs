@@ -13,7 +13,7 @@ const FFMPEG_HINT: &str =
                                macOS: `brew install ffmpeg`) or leave out --video";
 
 #[derive(Debug, thiserror::Error)]
-pub enum VideoError {
+pub(super) enum VideoError {
     #[error("--video needs ffmpeg, which was not found on PATH: {FFMPEG_HINT}")]
     FfmpegMissing,
     #[error("no frames to encode")]
@@ -25,7 +25,7 @@ pub enum VideoError {
 }
 
 /// Whether `ffmpeg -version` runs.
-pub fn ffmpeg_available() -> bool {
+pub(super) fn ffmpeg_available() -> bool {
     Command::new("ffmpeg")
         .arg("-version")
         .stdin(Stdio::null())
@@ -36,7 +36,7 @@ pub fn ffmpeg_available() -> bool {
 }
 
 /// Encodes `frames` (PNG files in `dir`, in order) at `fps` into `out`.
-pub fn encode_video(dir: &Path, frames: &[PathBuf], fps: f64, out: &Path) -> Result<(), VideoError> {
+pub(super) fn encode_video(dir: &Path, frames: &[PathBuf], fps: f64, out: &Path) -> Result<(), VideoError> {
     if frames.is_empty() {
         return Err(VideoError::NoFrames);
     }

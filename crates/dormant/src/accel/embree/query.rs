@@ -16,9 +16,9 @@ use std::array;
 use glam::{Mat3, Vec3};
 
 use super::{EmbreeAccel, STATIC_SLOT};
-use crate::accel::embree::{Coherence, EmbreeHit, SceneView};
 use crate::accel::{Hit, HitObject, InstanceId, SceneQuery, StaticId};
 use crate::geometry::Ray;
+use dormant_embree::{Coherence, EmbreeHit, PacketRay, SceneView};
 
 /// Widest packet: rays are traced in chunks of this many.
 const LANES: usize = 16;
@@ -229,4 +229,27 @@ fn blocked(view: SceneView<'_>, lanes: &[Option<Ray>; LANES], n: usize) -> [bool
 /// The first `N` lanes.
 fn prefix<const N: usize>(lanes: &[Option<Ray>; LANES]) -> [Option<Ray>; N] {
     array::from_fn(|i| lanes[i])
+}
+
+/// Rays as the wrapper's packet queries read them.
+impl PacketRay for Ray {
+    #[inline]
+    fn origin(&self) -> Vec3 {
+        self.origin
+    }
+
+    #[inline]
+    fn direction(&self) -> Vec3 {
+        self.dir
+    }
+
+    #[inline]
+    fn interval(&self) -> (f32, f32) {
+        (self.t_min, self.t_max)
+    }
+
+    #[inline]
+    fn time(&self) -> f32 {
+        self.time
+    }
 }

@@ -9,26 +9,24 @@
 use std::sync::Arc;
 
 use embree4_sys as sys;
-use glam::Affine3A;
-
-use crate::geometry::InstanceMotion;
+use glam::{Affine3A, Quat, Vec3};
 
 use super::device::Device;
 use super::error::EmbreeError;
 use super::frozen::FrozenScene;
-use super::motion::{column_major_3x4, lerps_as_matrices, quaternion_decomposition};
+use super::motion::{column_major_3x4, quaternion_decomposition, ShutterPoses};
 
 /// One entry of an instance array: the index of its prototype in the array's prototype list
 /// and its placement. `None` is a hole Embree skips (index RTC_INVALID_GEOMETRY_ID).
-pub(crate) type ArrayEntry<T> = (Option<u32>, T);
+pub type ArrayEntry<T> = (Option<u32>, T);
 
 /// Instances of a fixed list of prototypes in one geometry. Hits report the array's geometry id
 /// as the instance id and the entry's index as `inst_prim_id`.
 pub struct InstanceArrayGeometry {
     pub(crate) raw: sys::RTCGeometry,
     device: Device,
-    /// The instanced scenes, kept alive while Embree holds them (and read for their radius).
-    prototypes: Vec<Arc<FrozenScene>>,
+    /// The instanced scenes, kept alive while Embree holds them.
+    _prototypes: Vec<Arc<FrozenScene>>,
     /// Two time steps (quaternion decompositions) rather than one (3x4 matrices).
     moving: bool,
 }
@@ -53,7 +51,7 @@ impl InstanceArrayGeometry {
             sys::rtcNewGeometry(device.inner.raw, sys::RTCGeometryType::RTC_GEOMETRY_TYPE_INSTANCE_ARRAY)
         };
         device.check()?;
-        let array = Self { raw, device: device.clone(), prototypes: prototypes.to_vec(), moving };
+        let array = Self { raw, device: device.clone(), _prototypes: prototypes.to_vec(), moving };
         let mut scenes: Vec<sys::RTCScene> = prototypes.iter().map(|p| p.raw()).collect();
         // SAFETY: `raw` is a valid instance array; Embree copies the scene handles (retaining
         // each) and `prototypes` keeps them alive too. The time step count is set before any
@@ -79,28 +77,27 @@ impl InstanceArrayGeometry {
         )
     }
 
-    /// Replaces every entry of a moving array by its motion over the shutter (at ray times 0
-    /// and 1: matrices when every entry barely turns, else quaternion decompositions, slerped
-    /// by Embree), and commits the geometry.
-    pub fn set_moving(&mut self, entries: &[ArrayEntry<InstanceMotion>]) -> Result<(), EmbreeError> {
+    /// Replaces every entry of a moving array by its poses over the shutter (at ray times 0 and
+    /// 1), and commits the geometry. An array holds one format: every entry's poses are
+    /// matrices, or every entry's are rigid ([`EmbreeError::MixedPoses`] otherwise).
+    pub fn set_moving(&mut self, entries: &[ArrayEntry<ShutterPoses>]) -> Result<(), EmbreeError> {
         debug_assert!(self.moving);
         if entries.iter().any(|(_, m)| !m.is_finite()) {
             return Err(EmbreeError::NonFiniteTransform);
         }
-        let radius =
-            |p: Option<u32>| p.and_then(|p| self.prototypes.get(p as usize)).map_or(0.0, |s| s.radius());
-        if entries.iter().all(|&(p, ref m)| lerps_as_matrices(m, radius(p))) {
-            // Matrices lerp exactly like the translation and are bounded in closed form (see
-            // `InstanceGeometry::set_motion`).
-            let open: Vec<_> = entries.iter().map(|(_, m)| column_major_3x4(&m.open.to_affine())).collect();
-            let close: Vec<_> = entries.iter().map(|(_, m)| column_major_3x4(&m.close.to_affine())).collect();
+        let prototypes = || entries.iter().map(|e| e.0);
+        if let Some(matrices) = entries.iter().map(|(_, m)| as_matrices(m)).collect::<Option<Vec<_>>>() {
+            let open: Vec<_> = matrices.iter().map(|m| column_major_3x4(&m[0])).collect();
+            let close: Vec<_> = matrices.iter().map(|m| column_major_3x4(&m[1])).collect();
             let format = sys::RTCFormat::RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR;
-            return self.write(entries.iter().map(|e| e.0), &[(&open, format), (&close, format)]);
+            return self.write(prototypes(), &[(&open, format), (&close, format)]);
         }
-        let open: Vec<_> = entries.iter().map(|(_, m)| quaternion_decomposition(&m.open)).collect();
-        let close: Vec<_> = entries.iter().map(|(_, m)| quaternion_decomposition(&m.close)).collect();
+        let rigid = entries.iter().map(|(_, m)| as_rigid(m)).collect::<Option<Vec<_>>>();
+        let rigid = rigid.ok_or(EmbreeError::MixedPoses)?;
+        let open: Vec<_> = rigid.iter().map(|p| quaternion_decomposition(p[0])).collect();
+        let close: Vec<_> = rigid.iter().map(|p| quaternion_decomposition(p[1])).collect();
         let format = sys::RTCFormat::RTC_FORMAT_QUATERNION_DECOMPOSITION;
-        self.write(entries.iter().map(|e| e.0), &[(&open, format), (&close, format)])
+        self.write(prototypes(), &[(&open, format), (&close, format)])
     }
 
     /// New Embree-owned buffers: the scene index of each entry and one transform buffer per
@@ -148,5 +145,19 @@ impl InstanceArrayGeometry {
             sys::rtcCommitGeometry(self.raw);
         }
         self.device.check()
+    }
+}
+
+fn as_matrices(poses: &ShutterPoses) -> Option<[Affine3A; 2]> {
+    match poses {
+        ShutterPoses::Matrices(m) => Some(*m),
+        ShutterPoses::Rigid(_) => None,
+    }
+}
+
+fn as_rigid(poses: &ShutterPoses) -> Option<[(Quat, Vec3); 2]> {
+    match poses {
+        ShutterPoses::Rigid(r) => Some(*r),
+        ShutterPoses::Matrices(_) => None,
     }
 }

@@ -14,7 +14,7 @@ use super::error::{code_name, EmbreeError};
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, serde::Serialize)]
 pub struct Version {
     pub major: u32,
-    pub(crate) minor: u32,
+    pub minor: u32,
     pub patch: u32,
 }
 

@@ -8,7 +8,7 @@ use embree4_sys as sys;
 
 use super::filter::{intersect_args, occluded_args};
 use super::view::{EmbreeHit, SceneView};
-use crate::geometry::Ray;
+use glam::Vec3;
 
 /// Embree's hint on how alike a packet's rays are (`RTC_RAY_QUERY_FLAG_COHERENT` /
 /// `..._INCOHERENT`): it may pick its traversal by it; results do not depend on it.
@@ -28,6 +28,17 @@ impl Coherence {
     }
 }
 
+/// A ray as the packet queries read it; the caller's ray type implements it.
+pub trait PacketRay {
+    fn origin(&self) -> Vec3;
+    /// Not necessarily normalised; hit distances are in its units.
+    fn direction(&self) -> Vec3;
+    /// The interval `[t_min, t_max]` hits may lie in.
+    fn interval(&self) -> (f32, f32);
+    /// The shutter time, from 0 (open) to 1 (close).
+    fn time(&self) -> f32;
+}
+
 /// Embree wants a packet, and its valid mask, aligned to the packet's byte width: 16 bytes
 /// for 4 rays, 32 for 8, 64 for 16 (rtcIntersect4(3)). 64 serves every width.
 #[repr(C, align(64))]
@@ -40,7 +51,7 @@ const _: () = {
 };
 
 /// The valid mask Embree reads: -1 for an active lane, 0 for an inactive one.
-fn valid_mask<const N: usize>(rays: &[Option<Ray>; N]) -> Aligned<[i32; N]> {
+fn valid_mask<R, const N: usize>(rays: &[Option<R>; N]) -> Aligned<[i32; N]> {
     Aligned(array::from_fn(|i| if rays[i].is_some() { -1 } else { 0 }))
 }
 
@@ -51,10 +62,11 @@ macro_rules! fill_rays {
         for (i, ray) in $rays.iter().enumerate() {
             let Some(r) = ray else { continue };
             let p = &mut $packet;
-            (p.org_x[i], p.org_y[i], p.org_z[i]) = (r.origin.x, r.origin.y, r.origin.z);
-            (p.dir_x[i], p.dir_y[i], p.dir_z[i]) = (r.dir.x, r.dir.y, r.dir.z);
-            (p.tnear[i], p.tfar[i]) = (r.t_min, r.t_max);
-            p.time[i] = r.time;
+            let (o, d) = (r.origin(), r.direction());
+            (p.org_x[i], p.org_y[i], p.org_z[i]) = (o.x, o.y, o.z);
+            (p.dir_x[i], p.dir_y[i], p.dir_z[i]) = (d.x, d.y, d.z);
+            (p.tnear[i], p.tfar[i]) = r.interval();
+            p.time[i] = r.time();
             p.mask[i] = u32::MAX;
         }
     };
@@ -66,10 +78,10 @@ macro_rules! packet_queries {
         impl SceneView<'_> {
             #[doc = concat!("Closest hits of a packet of ", $n, " rays (rtcIntersect", $n, "); `None` lanes")]
             /// are inactive and come back `None`. Lane `i` of the result is what
-            /// [`SceneView::intersect1`] gives for `rays[i]`.
-            pub fn $intersect(
+            /// [`SceneView::intersect1_at`] gives for `rays[i]`.
+            pub fn $intersect<R: PacketRay>(
                 &self,
-                rays: &[Option<Ray>; $n],
+                rays: &[Option<R>; $n],
                 coherence: Coherence,
             ) -> [Option<EmbreeHit>; $n] {
                 let valid = valid_mask(rays);
@@ -104,9 +116,13 @@ macro_rules! packet_queries {
             }
 
             #[doc = concat!("Occlusion of a packet of ", $n, " rays (rtcOccluded", $n, "); `None` lanes")]
-            /// are inactive and come back `false`. Lane `i` is what [`SceneView::occluded1`]
+            /// are inactive and come back `false`. Lane `i` is what [`SceneView::occluded1_at`]
             /// gives for `rays[i]`.
-            pub fn $occluded(&self, rays: &[Option<Ray>; $n], coherence: Coherence) -> [bool; $n] {
+            pub fn $occluded<R: PacketRay>(
+                &self,
+                rays: &[Option<R>; $n],
+                coherence: Coherence,
+            ) -> [bool; $n] {
                 let valid = valid_mask(rays);
                 let mut packet = Aligned(<$ray>::default());
                 fill_rays!(packet.0, rays);
