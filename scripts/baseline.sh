@@ -7,7 +7,8 @@
 #   scripts/baseline.sh compare A B        # exits 1 on any difference, naming each
 #
 # Recorded: stills of the built-in scene (path traced with albedo/normal/depth AOVs and EXR,
-# shaded, ambient occlusion) on both backends; scenes/tiny.toml sequences with
+# shaded, ambient occlusion) and, with ../shared/assets beside the checkout, of an asset pile,
+# on both backends; scenes/tiny.toml sequences with
 # `--integration always` in both integration forms and with motion blur (decisions that do not
 # depend on measured times), on both backends; its trajectory and export; `dormant verify` on
 # the default scene and on simulated tiny.toml frames. Compared: every image and trajectory
@@ -38,6 +39,15 @@ record() {
         "$bin" render "$tiny" "${small[@]}" --spp 2 --backend "$backend" --frames 0..64 --frame-step 8 \
             --integration always --shutter 0.5 --out "tiny-blur-$backend"
     done
+    local assets
+    assets=$(cd "$(dirname "$tiny")/../.." && pwd)/shared/assets
+    if [ -f "$assets/monastery.glb" ]; then
+        # An asset pile (glTF import, materials, the pile's placement) on both backends.
+        for backend in embree bvh; do
+            "$bin" render "${small[@]}" --spp 2 --backend "$backend" --env "$assets/monastery.glb" \
+                --object "$assets/duck.glb" --count 200 --out "pile-$backend"
+        done
+    fi
     "$bin" simulate "$tiny" --quiet --out "tiny.traj" --json "tiny-simulate.json"
     "$bin" export --quiet --trajectory "tiny.traj" --frames 0..48 --frame-step 8 --out "tiny-export.json"
     "$bin" verify --quiet --threads 2 --json "verify-default.json"

@@ -65,11 +65,26 @@ pub(super) fn run(
         report.merge(r);
         counts = [counts[0] + n[0], counts[1] + n[1], counts[2] + n[2]];
     }
-    let [camera_rays, surface_rays, shadow_rays] = counts;
     let desc = &descs[0].0;
+    let json = report_json(&desc.name, &frames, shutter, counts, &report);
+    json_out.emit(&json)?;
+    if !quiet && !json_out.is_requested() {
+        println!("{}", summary(&desc.name, counts, &report));
+    }
+    if report.mismatches > 0 {
+        return Err(CliError::Runtime(format!(
+            "{} of {} rays differ between Embree and the BVH (see the JSON report's examples)",
+            report.mismatches, report.rays
+        )));
+    }
+    Ok(())
+}
 
-    let json = serde_json::json!({
-        "scene": desc.name,
+/// The `--json` report: the rays checked by kind and the verdicts.
+fn report_json(scene: &str, frames: &[u32], shutter: f32, counts: [usize; 3], report: &VerifyReport) -> serde_json::Value {
+    let [camera_rays, surface_rays, shadow_rays] = counts;
+    serde_json::json!({
+        "scene": scene,
         "reference": Backend::Embree,
         "candidate": Backend::Bvh,
         "frames": frames,
@@ -88,30 +103,25 @@ pub(super) fn run(
         "max_t_err_over_bound": report.max_t_err_over_bound,
         "max_t_rel_err": report.max_t_rel_err,
         "examples": report.examples,
-    });
-    json_out.emit(&json)?;
-    if !quiet && !json_out.is_requested() {
-        println!(
-            "verify {}: {} rays ({} camera, {} surface, {} shadow): {} hits, {} misses, {} ties, {} mismatches, max t error {:.2} of the bound",
-            desc.name,
-            report.rays,
-            camera_rays,
-            surface_rays,
-            shadow_rays,
-            report.hits,
-            report.misses,
-            report.ties,
-            report.mismatches,
-            report.max_t_err_over_bound
-        );
-    }
-    if report.mismatches > 0 {
-        return Err(CliError::Runtime(format!(
-            "{} of {} rays differ between Embree and the BVH (see the JSON report's examples)",
-            report.mismatches, report.rays
-        )));
-    }
-    Ok(())
+    })
+}
+
+/// The line printed after a check.
+fn summary(scene: &str, counts: [usize; 3], report: &VerifyReport) -> String {
+    let [camera_rays, surface_rays, shadow_rays] = counts;
+    format!(
+        "verify {}: {} rays ({} camera, {} surface, {} shadow): {} hits, {} misses, {} ties, {} mismatches, max t error {:.2} of the bound",
+        scene,
+        report.rays,
+        camera_rays,
+        surface_rays,
+        shadow_rays,
+        report.hits,
+        report.misses,
+        report.ties,
+        report.mismatches,
+        report.max_t_err_over_bound
+    )
 }
 
 /// Loads a checked frame into Embree and the BVH (its moving bodies as motion instances) and

@@ -33,36 +33,14 @@ pub fn asset_pile(env: &Path, object: &Path, count: usize, seed: u64) -> Result<
     let floor = env_bounds.min.y;
     let centre = env_bounds.center();
 
-    let mut rng = SplitMix64::new(seed);
-    let mut bodies = Vec::with_capacity(count);
-    // Smallest base side whose pyramid holds `count` objects.
-    let mut base = 1usize;
-    while (1..=base).map(|n| n * n).sum::<usize>() < count {
-        base += 1;
-    }
-    'layers: for layer in 0..base {
-        let side = base - layer;
-        let half = (side as f32 - 1.0) * 0.5;
-        for i in 0..side {
-            for j in 0..side {
-                if bodies.len() == count {
-                    break 'layers;
-                }
-                let at = Vec3::new(
-                    centre.x + (i as f32 - half) * spacing,
-                    floor + (layer as f32 + 0.5) * spacing,
-                    centre.z + (j as f32 - half) * spacing,
-                );
-                // Re-centre the object on its bounds, then scale, turn and place it.
-                let transform = Affine3A::from_scale_rotation_translation(
-                    Vec3::splat(scale),
-                    Quat::from_rotation_y(rng.unit() * std::f32::consts::TAU),
-                    at,
-                ) * Affine3A::from_translation(-obj_bounds.center());
-                bodies.push(Body { prototype: 0, transform });
-            }
-        }
-    }
+    let base = pyramid_base(count);
+    let bottom = Vec3::new(centre.x, floor, centre.z);
+    // Re-centre the object on its bounds, then scale, turn and place it.
+    let recentre = Affine3A::from_translation(-obj_bounds.center());
+    let place = |(at, turn)| Affine3A::from_scale_rotation_translation(Vec3::splat(scale), turn, at) * recentre;
+    let bodies = pyramid(count, base, spacing, bottom, seed)
+        .map(|p| Body { prototype: 0, transform: place(p) })
+        .collect();
 
     let extent = env_bounds.extent();
     let name = |p: &Path| p.file_stem().map_or_else(|| "asset".into(), |s| s.to_string_lossy().into_owned());
@@ -87,6 +65,33 @@ pub fn asset_pile(env: &Path, object: &Path, count: usize, seed: u64) -> Result<
         sky: Sky::DAYLIGHT,
         lights: env_asset.lights,
     })
+}
+
+/// Smallest base side whose pyramid of square layers holds `count` objects.
+fn pyramid_base(count: usize) -> usize {
+    let mut base = 1usize;
+    while (1..=base).map(|n| n * n).sum::<usize>() < count {
+        base += 1;
+    }
+    base
+}
+
+/// `count` places in a pyramid of square layers, `spacing` apart, on a base of `base` x `base`
+/// centred on `bottom`, bottom layer first, each with a random turn about the vertical.
+fn pyramid(count: usize, base: usize, spacing: f32, bottom: Vec3, seed: u64) -> impl Iterator<Item = (Vec3, Quat)> {
+    let mut rng = SplitMix64::new(seed);
+    (0..base)
+        .flat_map(move |layer| {
+            let side = base - layer;
+            let half = (side as f32 - 1.0) * 0.5;
+            (0..side * side).map(move |k| {
+                let (i, j) = (k / side, k % side);
+                let offset = Vec3::new(i as f32 - half, layer as f32 + 0.5, j as f32 - half);
+                bottom + offset * spacing
+            })
+        })
+        .take(count)
+        .map(move |at| (at, Quat::from_rotation_y(rng.unit() * std::f32::consts::TAU)))
 }
 
 /// The environment's materials (grey when it has none), then the object's (ochre when it has
