@@ -81,7 +81,13 @@ pub(super) fn run(
 }
 
 /// The `--json` report: the rays checked by kind and the verdicts.
-fn report_json(scene: &str, frames: &[u32], shutter: f32, counts: [usize; 3], report: &VerifyReport) -> serde_json::Value {
+fn report_json(
+    scene: &str,
+    frames: &[u32],
+    shutter: f32,
+    counts: [usize; 3],
+    report: &VerifyReport,
+) -> serde_json::Value {
     let [camera_rays, surface_rays, shadow_rays] = counts;
     serde_json::json!({
         "scene": scene,

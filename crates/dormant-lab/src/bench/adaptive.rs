@@ -13,7 +13,7 @@ use dormant::accel::{self, Backend};
 use dormant::render::denoise::Denoiser;
 use dormant::render::{
     render_frame, render_with_aovs, AdaptiveSampling, Aov, Film, PathTracer, RenderError, RenderScene,
-    RenderSettings,
+    RenderSettings, RenderStats,
 };
 use dormant::scene::SceneDescription;
 
@@ -114,6 +114,29 @@ fn read_exr(path: &std::path::Path) -> Option<Film> {
     Some(Film { width: img.width(), height: img.height(), pixels })
 }
 
+/// The reference image: read from `opts.reference` when it holds one of the right size, else
+/// rendered by `render` (and written there).
+fn reference_film(
+    opts: &AdaptiveBenchOptions,
+    render: impl FnOnce() -> Result<(Film, RenderStats), RenderError>,
+    log: &mut dyn FnMut(&str),
+) -> Result<(Film, Option<f64>), RenderError> {
+    let cached = opts
+        .reference
+        .as_deref()
+        .and_then(read_exr)
+        .filter(|f| (f.width, f.height) == (opts.width, opts.height));
+    if let Some(film) = cached {
+        return Ok((film, None));
+    }
+    log(&format!("reference, {} spp", opts.reference_spp));
+    let (film, stats) = render()?;
+    if let Some(path) = &opts.reference {
+        dormant::render::write_exr_atomic(&film, path)?;
+    }
+    Ok((film, Some(stats.seconds)))
+}
+
 pub fn bench_adaptive(
     desc: &SceneDescription,
     opts: &AdaptiveBenchOptions,
@@ -126,27 +149,9 @@ pub fn bench_adaptive(
     let integrator = PathTracer { max_depth: opts.max_depth, ..PathTracer::default() };
     let settings =
         |spp, seed, adaptive| RenderSettings { width: opts.width, height: opts.height, spp, seed, adaptive };
-    let cached = opts
-        .reference
-        .as_deref()
-        .and_then(read_exr)
-        .filter(|f| (f.width, f.height) == (opts.width, opts.height));
-    let (reference, reference_seconds) = match cached {
-        Some(film) => (film, None),
-        None => {
-            log(&format!("reference, {} spp", opts.reference_spp));
-            let (film, stats) = render_frame(
-                &scene,
-                query,
-                &integrator,
-                &settings(opts.reference_spp, 1, AdaptiveSampling::OFF),
-            )?;
-            if let Some(path) = &opts.reference {
-                dormant::render::write_exr_atomic(&film, path)?;
-            }
-            (film, Some(stats.seconds))
-        }
-    };
+    let reference =
+        || render_frame(&scene, query, &integrator, &settings(opts.reference_spp, 1, AdaptiveSampling::OFF));
+    let (reference, reference_seconds) = reference_film(opts, reference, log)?;
     let guides: &[Aov] = if opts.denoiser.is_some() { &dormant::render::denoise::GUIDE_AOVS } else { &[] };
     let uniform = opts.uniform_spp.iter().map(|&spp| (spp, AdaptiveSampling::OFF));
     let adaptive = opts

@@ -474,6 +474,21 @@ fn renderer<'a>(integrator: &'a dyn Integrator, options: &IntegrationBenchOption
     }
 }
 
+/// The scene manager options of each configuration.
+fn config_manager_options(
+    sequence: &Sequence,
+    configs: &[BenchConfig],
+    options: &IntegrationBenchOptions,
+) -> Vec<ManagerOptions> {
+    configs
+        .iter()
+        .map(|c| ManagerOptions {
+            shutter: if c.unblurred { 0.0 } else { options.shutter },
+            ..sequence.manager_options(&options.frames, c.settings())
+        })
+        .collect()
+}
+
 /// See the module docs. `progress` gets (frames rendered, frames planned) after each frame.
 pub fn bench_integration(
     sequence: &Sequence,
@@ -484,13 +499,7 @@ pub fn bench_integration(
     let asleep_fraction = asleep_fractions(sequence, &options.frames);
     let settled: Vec<bool> = asleep_fraction.iter().map(|&a| a >= 0.9).collect();
     let configs = configs(options);
-    let manager_options: Vec<ManagerOptions> = configs
-        .iter()
-        .map(|c| ManagerOptions {
-            shutter: if c.unblurred { 0.0 } else { options.shutter },
-            ..sequence.manager_options(&options.frames, c.settings())
-        })
-        .collect();
+    let manager_options = config_manager_options(sequence, &configs, options);
     // Only the BVH keeps a persistent static tree to watch.
     let watched = configs
         .iter()
@@ -508,17 +517,16 @@ pub fn bench_integration(
     let results =
         run_lockstep(sequence, &renderer(integrator, options), options, &manager_options, observers)?;
     let mut runs = Vec::new();
-    let (mut rebuild_ms, mut rebuild_triangles, mut mean_insert_ms) = (0.0, 0, 0.0);
-    let mut variants = Vec::new();
+    let (mut variants, mut rebuild_triangles, mut mean_insert_ms) = (Vec::new(), 0, 0.0);
     for (config, (frames, manager)) in configs.into_iter().zip(results) {
         let run = policy_run(config, &frames, &settled, &manager);
         if config == BenchConfig::ALWAYS_BAKED {
             (variants, rebuild_triangles) = static_variants(&manager, &sequence.template, options)?;
-            rebuild_ms = variants.first().map_or(0.0, |v| v.build_ms);
             mean_insert_ms = run.integrate_ms_per_island;
         }
         runs.push(run);
     }
+    let rebuild_ms = variants.first().map_or(0.0, |v| v.build_ms);
     let awake = settled_awake_share(&asleep_fraction, &settled);
     let rebuild_over_insert = if mean_insert_ms > 0.0 { rebuild_ms / mean_insert_ms } else { f64::NAN };
     let ratios_by_form: BTreeMap<String, IntegrationRatios> = options

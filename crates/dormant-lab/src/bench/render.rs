@@ -381,6 +381,26 @@ fn time_frames(
     Ok(FrameTimes { rays, frame_ms, single_ms, bare_ms, frame_rays })
 }
 
+impl RenderRatios {
+    /// The BVH against Embree, and each backend's packets against single rays, from their
+    /// timings (`None` where a backend is missing).
+    fn of(backends: &[BackendRenderTiming]) -> Self {
+        let find = |b: Backend| backends.iter().find(|t| t.backend == b);
+        let ratio = |f: fn(&BackendRenderTiming) -> f64| match (find(Backend::Bvh), find(Backend::Embree)) {
+            (Some(bvh), Some(embree)) if f(embree) > 0.0 => Some(f(bvh) / f(embree)),
+            _ => None,
+        };
+        RenderRatios {
+            bvh_over_embree_camera: ratio(|t| t.camera.mrays_per_s),
+            bvh_over_embree_shadow: ratio(|t| t.shadow.mrays_per_s),
+            bvh_over_embree_bounce: ratio(|t| t.bounce.mrays_per_s),
+            bvh_over_embree_frame_samples: ratio(|t| t.frame.samples_per_s),
+            embree_frame_packets_over_single: find(Backend::Embree).map(frame_packets_over_single),
+            bvh_frame_packets_over_single: find(Backend::Bvh).map(frame_packets_over_single),
+        }
+    }
+}
+
 pub fn bench_render(
     desc: &SceneDescription,
     opts: &RenderBenchOptions,
@@ -427,19 +447,7 @@ pub fn bench_render(
             frame_over_bare_rays: bare_ms / frame_ms.max(1e-9),
         });
     }
-    let find = |b: Backend| backends.iter().find(|t| t.backend == b);
-    let ratio = |f: fn(&BackendRenderTiming) -> f64| match (find(Backend::Bvh), find(Backend::Embree)) {
-        (Some(bvh), Some(embree)) if f(embree) > 0.0 => Some(f(bvh) / f(embree)),
-        _ => None,
-    };
-    let ratios = RenderRatios {
-        bvh_over_embree_camera: ratio(|t| t.camera.mrays_per_s),
-        bvh_over_embree_shadow: ratio(|t| t.shadow.mrays_per_s),
-        bvh_over_embree_bounce: ratio(|t| t.bounce.mrays_per_s),
-        bvh_over_embree_frame_samples: ratio(|t| t.frame.samples_per_s),
-        embree_frame_packets_over_single: find(Backend::Embree).map(frame_packets_over_single),
-        bvh_frame_packets_over_single: find(Backend::Bvh).map(frame_packets_over_single),
-    };
+    let ratios = RenderRatios::of(&backends);
     Ok(RenderBenchReport {
         scene: desc.name.clone(),
         width: opts.width,

@@ -37,7 +37,8 @@ pub fn asset_pile(env: &Path, object: &Path, count: usize, seed: u64) -> Result<
     let bottom = Vec3::new(centre.x, floor, centre.z);
     // Re-centre the object on its bounds, then scale, turn and place it.
     let recentre = Affine3A::from_translation(-obj_bounds.center());
-    let place = |(at, turn)| Affine3A::from_scale_rotation_translation(Vec3::splat(scale), turn, at) * recentre;
+    let place =
+        |(at, turn)| Affine3A::from_scale_rotation_translation(Vec3::splat(scale), turn, at) * recentre;
     let bodies = pyramid(count, base, spacing, bottom, seed)
         .map(|p| Body { prototype: 0, transform: place(p) })
         .collect();
@@ -78,7 +79,13 @@ fn pyramid_base(count: usize) -> usize {
 
 /// `count` places in a pyramid of square layers, `spacing` apart, on a base of `base` x `base`
 /// centred on `bottom`, bottom layer first, each with a random turn about the vertical.
-fn pyramid(count: usize, base: usize, spacing: f32, bottom: Vec3, seed: u64) -> impl Iterator<Item = (Vec3, Quat)> {
+fn pyramid(
+    count: usize,
+    base: usize,
+    spacing: f32,
+    bottom: Vec3,
+    seed: u64,
+) -> impl Iterator<Item = (Vec3, Quat)> {
     let mut rng = SplitMix64::new(seed);
     (0..base)
         .flat_map(move |layer| {

@@ -83,72 +83,65 @@ fn segments(path: &str) -> Vec<Segment<'_>> {
     out
 }
 
+/// A place in a parsed TOML document while a field path is followed.
+#[derive(Clone, Copy)]
+enum Node<'a> {
+    Item(&'a toml_edit::Item),
+    Value(&'a toml_edit::Value),
+    Table(&'a toml_edit::Table),
+}
+
 /// The byte span of the deepest part of `path` that is written in `source`.
 fn locate(source: &str, path: &str) -> Option<Range<usize>> {
-    use toml_edit::{Item, Value};
     let doc = toml_edit::ImDocument::parse(source).ok()?;
     let mut best = None;
-    enum Node<'a> {
-        Item(&'a Item),
-        Value(&'a Value),
-        Table(&'a toml_edit::Table),
-    }
     let mut node = Node::Table(doc.as_table());
     for seg in segments(path) {
-        let next = match (&node, seg) {
-            (Node::Table(t), Segment::Key(k)) => {
-                if let Some((key, _)) = t.get_key_value(k) {
-                    if let Some(s) = key.span() {
-                        best = Some(s);
-                    }
-                }
-                t.get(k).map(Node::Item)
-            }
-            (Node::Item(Item::Table(t)), Segment::Key(k)) => {
-                if let Some((key, _)) = t.get_key_value(k) {
-                    if let Some(s) = key.span() {
-                        best = Some(s);
-                    }
-                }
-                t.get(k).map(Node::Item)
-            }
-            (Node::Item(Item::Value(Value::InlineTable(t))), Segment::Key(k))
-            | (Node::Value(Value::InlineTable(t)), Segment::Key(k)) => {
-                if let Some((key, _)) = t.get_key_value(k) {
-                    if let Some(s) = key.span() {
-                        best = Some(s);
-                    }
-                }
-                t.get(k).map(Node::Value)
-            }
-            (Node::Item(Item::ArrayOfTables(a)), Segment::Index(i)) => a.get(i).map(|t| {
-                if let Some(s) = t.span() {
-                    best = Some(s);
-                }
-                Node::Table(t)
-            }),
-            (Node::Item(Item::Value(Value::Array(a))), Segment::Index(i))
-            | (Node::Value(Value::Array(a)), Segment::Index(i)) => a.get(i).map(|v| {
-                if let Some(s) = v.span() {
-                    best = Some(s);
-                }
-                Node::Value(v)
-            }),
-            _ => None,
+        let Some(next) = step(&node, seg, &mut best) else {
+            break;
         };
-        match next {
-            Some(n) => {
-                if let Node::Item(Item::Value(v)) = &n {
-                    if let Some(s) = v.span() {
-                        best = Some(s);
-                    }
-                }
-                node = n;
-            }
-            None => break,
+        if let Node::Item(toml_edit::Item::Value(v)) = &next {
+            best = v.span().or(best);
         }
+        node = next;
     }
     best
+}
+
+/// The node `seg` leads to from `node`, with `best` moved to the span of the key or element
+/// written for it.
+fn step<'a>(node: &Node<'a>, seg: Segment<'_>, best: &mut Option<Range<usize>>) -> Option<Node<'a>> {
+    use toml_edit::{Item, TableLike, Value};
+    let mut key = |t: &dyn TableLike, k: &str| {
+        if let Some(s) = t.get_key_value(k).and_then(|(key, _)| key.span()) {
+            *best = Some(s);
+        }
+    };
+    if let Segment::Key(k) = seg {
+        return match *node {
+            Node::Table(t) | Node::Item(Item::Table(t)) => {
+                key(t, k);
+                t.get(k).map(Node::Item)
+            }
+            Node::Item(Item::Value(Value::InlineTable(t))) | Node::Value(Value::InlineTable(t)) => {
+                key(t, k);
+                t.get(k).map(Node::Value)
+            }
+            _ => None,
+        };
+    }
+    match (*node, seg) {
+        (Node::Item(Item::ArrayOfTables(a)), Segment::Index(i)) => a.get(i).map(|t| {
+            *best = t.span().or(best.take());
+            Node::Table(t)
+        }),
+        (Node::Item(Item::Value(Value::Array(a))), Segment::Index(i))
+        | (Node::Value(Value::Array(a)), Segment::Index(i)) => a.get(i).map(|v| {
+            *best = v.span().or(best.take());
+            Node::Value(v)
+        }),
+        _ => None,
+    }
 }
 
 #[cfg(test)]

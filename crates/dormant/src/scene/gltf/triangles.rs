@@ -48,7 +48,12 @@ impl Triangles {
     }
 
     /// Appends one checked triangle primitive: its triangles, normals, UVs and material slot.
-    fn add_primitive(&mut self, source: &Primitive<'_>, xf: &Affine3A, with_materials: bool) -> Result<(), GltfError> {
+    fn add_primitive(
+        &mut self,
+        source: &Primitive<'_>,
+        xf: &Affine3A,
+        with_materials: bool,
+    ) -> Result<(), GltfError> {
         let (path, element, prim) = (source.path, source.element, source.prim);
         let reader = source.reader();
         let positions: Vec<Vec3> = reader
