@@ -6,7 +6,9 @@ use std::path::Path;
 
 use dormant::residency::{StageTimes, FRACTION_BUCKETS};
 use dormant::sequence::stats::{FrameRecord, RunStats};
-use dormant_lab::report::plot::{count_labels, draw_legend, err, write_png, Area, PlotResult, FONT, STAGES};
+use dormant_lab::report::figure::{
+    count_labels, draw_legend, err, write_png, Area, PlotResult, FONT, STAGES,
+};
 use dormant_lab::report::ReportError;
 use plotters::prelude::*;
 

@@ -9,7 +9,7 @@ use plotters::prelude::*;
 
 use super::WorkloadReport;
 use crate::bench::integration::IntegrationBenchReport;
-use crate::report::plot::{count_labels, draw_legend, err, write_png, Area, PlotResult, FONT, STAGES};
+use crate::report::figure::{count_labels, draw_legend, err, write_png, Area, PlotResult, FONT, STAGES};
 use crate::report::ReportError;
 use dormant::residency::{IntegrationForm, IntegrationPolicy, StageTimes, FRACTION_BUCKETS};
 

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use plotters::prelude::*;
 
 use super::{Budget, RegimeCell, RegimesReport};
-use crate::report::plot::{draw_legend, err, write_png, Area, PlotResult, FONT};
+use crate::report::figure::{draw_legend, err, write_png, Area, PlotResult, FONT};
 use crate::report::ReportError;
 
 const WIDTH: u32 = 1500;

@@ -2,7 +2,7 @@
 //! helpers every figure (the paper's, the regime map's, the binary's `report.png`) is drawn
 //! with.
 
-pub mod plot;
+pub mod figure;
 
 /// Failures writing a report or a figure.
 #[derive(Debug, thiserror::Error)]

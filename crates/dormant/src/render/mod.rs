@@ -14,7 +14,7 @@ mod image_size;
 mod integrator;
 mod render_scene;
 mod sampler;
-mod texture;
+mod texture_sampling;
 mod tiles;
 
 pub use adaptive::{AdaptiveSampling, SppStats, DARK_FLOOR};

@@ -5,7 +5,7 @@
 use glam::{Vec2, Vec3};
 
 use super::emitters::{EmitterSample, Emitters};
-use super::texture::sample;
+use super::texture_sampling::sample;
 use super::RenderError;
 use crate::accel::{load_scene, Accelerator, Hit};
 use crate::accel::{LoadedObjectMap, MeshRef, ObjectMap, ResolvedHit};

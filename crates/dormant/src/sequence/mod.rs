@@ -24,7 +24,7 @@ pub mod export;
 mod kept;
 pub mod output;
 mod render;
-mod replay;
+mod replay_loop;
 mod selection;
 mod source;
 pub mod stats;

@@ -1,13 +1,13 @@
 //! The Embree backend: [`EmbreeAccel`], the [`crate::accel::Accelerator`] over Intel Embree 4
 //! through the safe wrapper `dormant_embree` (its scenes are described on the type), the build
 //! quality of each kind of scene it makes ([`EmbreeBuildParams`]), and when a moving instance's
-//! poses go to Embree as matrices (`motion.rs`).
+//! poses go to Embree as matrices (`shutter_poses.rs`).
 
 mod awake_bounds;
-mod motion;
 mod query;
+mod shutter_poses;
 
-pub use motion::{lerps_as_matrices, shutter_poses};
+pub use shutter_poses::{lerps_as_matrices, shutter_poses};
 
 use std::sync::Arc;
 use std::time::Instant;

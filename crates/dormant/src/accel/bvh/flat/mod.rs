@@ -9,7 +9,7 @@
 //! structure of record.
 
 mod build;
-mod mesh;
+mod mesh_bvh;
 mod packet;
 mod sah;
 mod stack;
@@ -17,7 +17,7 @@ mod traverse;
 mod wide;
 
 pub(crate) use build::{build, build_with};
-pub(crate) use mesh::{MeshBvh, PrimHit};
+pub(crate) use mesh_bvh::{MeshBvh, PrimHit};
 pub(crate) use packet::{each_bit, Lanes, RayPacket, PACKET};
 pub(crate) use sah::subtree_cost;
 #[cfg(test)]
