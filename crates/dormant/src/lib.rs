@@ -6,11 +6,14 @@
 //! scene terms) → [`residency`] (where sleeping bodies reside: awake instances, the resting
 //! scene, baked into the static scene) and [`render`] (pixels), which do not know each other →
 //! [`sequence`] (the replay that drives both frame by frame, and its output files).
+//!
+//! [`prelude`] holds what a program needs to render a physics scene, with an example.
 
 pub mod accel;
 pub mod atomic_file;
 pub mod geometry;
 pub mod physics;
+pub mod prelude;
 pub mod render;
 pub mod residency;
 pub mod rng;

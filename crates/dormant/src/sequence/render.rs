@@ -49,7 +49,23 @@ pub struct FrameRenderer<'a> {
     pub shutter: f32,
 }
 
-impl FrameRenderer<'_> {
+impl<'a> FrameRenderer<'a> {
+    /// `integrator` at `width` x `height` and `spp` samples per pixel; no AOVs, no adaptive
+    /// sampling, one seed for every frame with static-frame reuse, no motion blur.
+    pub fn new(integrator: &'a dyn Integrator, width: u32, height: u32, spp: u32) -> Self {
+        Self {
+            integrator,
+            aovs: &[],
+            width,
+            height,
+            spp,
+            adaptive: AdaptiveSampling::OFF,
+            seed: SeedMode::Fixed,
+            reuse_static: true,
+            shutter: 0.0,
+        }
+    }
+
     fn settings(&self, frame: u32) -> RenderSettings {
         let seed = match self.seed {
             SeedMode::Fixed => 0,
