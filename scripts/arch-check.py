@@ -32,6 +32,7 @@ CRATES = {
         "accel": 3,
         "render": 4, "residency": 4,
         "sequence": 5,
+        "prelude": 6,
     }),
     "dormant-embree": ("crates/dormant-embree/src", "lib.rs", {
         "error": 0, "quality": 0, "motion": 0,

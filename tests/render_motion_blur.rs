@@ -15,7 +15,10 @@ use dormant::physics::SimulateOptions;
 use dormant::render::{DirectLighting, Film};
 use dormant::residency::{IntegrationPolicy, ManagerOptions};
 use dormant::scene::file::SceneFile;
-use dormant::sequence::{FrameRange, FrameRenderer, SeedMode, Sequence, SequenceError, SequenceSource};
+use dormant::sequence::{
+    FrameRange, FrameRenderer, ReuseMode, SeedMode, Sequence, SequenceError, SequenceSource,
+    DEFAULT_REUSE_BYTES,
+};
 use glam::Vec3;
 
 const SIZE: (u32, u32) = (320, 180);
@@ -42,7 +45,8 @@ fn render(sequence: &Sequence, backend: Backend, shutter: f32, first: u32, count
         spp: SPP,
         adaptive: dormant::render::AdaptiveSampling::OFF,
         seed: SeedMode::Fixed,
-        reuse_static: false,
+        reuse: ReuseMode::Off,
+        reuse_budget: DEFAULT_REUSE_BYTES,
         shutter,
     };
     let options = ManagerOptions { policy: IntegrationPolicy::Never, shutter, ..ManagerOptions::default() };

@@ -20,7 +20,10 @@ use dormant::residency::{
     ReactivationStrategy, SceneManager,
 };
 use dormant::scene::{Body, Camera, Material, Prototype, SceneDescription, Sky, StaticMesh, Sun};
-use dormant::sequence::{FrameRange, FrameRenderer, SeedMode, Sequence, SequenceError, SequenceSource};
+use dormant::sequence::{
+    FrameRange, FrameRenderer, ReuseMode, SeedMode, Sequence, SequenceError, SequenceSource,
+    DEFAULT_REUSE_BYTES,
+};
 use dormant_lab::crosscheck::{camera_rays, compare, surface_rays, MappedQuery, VerifyReport};
 use glam::{Quat, Vec3};
 use proptest::prelude::*;
@@ -332,7 +335,8 @@ fn never_always_and_auto_render_the_same_images() {
         spp: 4,
         adaptive: dormant::render::AdaptiveSampling::OFF,
         seed: SeedMode::PerFrame,
-        reuse_static: false,
+        reuse: ReuseMode::Off,
+        reuse_budget: DEFAULT_REUSE_BYTES,
         shutter: 0.0,
     };
     for backend in backends() {
@@ -390,7 +394,8 @@ fn baked_debug_view_shows_integrated_bodies_in_orange() {
         spp: 1,
         adaptive: dormant::render::AdaptiveSampling::OFF,
         seed: SeedMode::PerFrame,
-        reuse_static: false,
+        reuse: ReuseMode::Off,
+        reuse_budget: DEFAULT_REUSE_BYTES,
         shutter: 0.0,
     };
     let orange = |p: glam::Vec3| p.x > 1.5 * p.z && p.x > 0.1;

@@ -70,7 +70,7 @@ impl FrameOutput<'_> {
             "seconds": stats.seconds, "mrays_per_second": stats.mrays_per_second(), "aovs": aov_paths,
             "spp_mean": stats.spp.mean, "spp_min": stats.spp.min, "spp_max": stats.spp.max,
             "denoise_seconds": denoise_seconds, "noisy_path": noisy_path,
-            "reused_from": frame.reused_from, "scene": scene_stats })
+            "reused_from": frame.reused_from, "reuse": frame.reuse, "scene": scene_stats })
     }
 
     /// The line printed for a written frame.
@@ -88,8 +88,16 @@ impl FrameOutput<'_> {
         } else {
             format!("{:.1} spp mean, {} to {}", stats.spp.mean, stats.spp.min, stats.spp.max)
         };
+        let reuse = match frame.reuse {
+            Some(exact) if exact.full.is_none() => {
+                let s = exact.stats;
+                let share = s.samples_traced as f64 / (s.samples_traced + s.samples_reused).max(1) as f64;
+                format!(", {:.1}% of samples traced", 100.0 * share)
+            }
+            _ => String::new(),
+        };
         format!(
-            "rendered {} ({}x{}, {}, {:?} mode, {}): {:.2} s, {} rays, {:.1} Mrays/s",
+            "rendered {} ({}x{}, {}, {:?} mode, {}): {:.2} s, {} rays, {:.1} Mrays/s{reuse}",
             path.display(),
             args.size.width,
             args.size.height,

@@ -24,7 +24,10 @@ use dormant::residency::{CacheBudget, IntegrationForm, IntegrationPolicy};
 use dormant::scene::file::SceneFile;
 use dormant::scene::limits::{shutter_problem, MAX_SAMPLES_PER_PIXEL};
 use dormant::sequence::output::FrameWriter;
-use dormant::sequence::{FrameRange, RenderedFrame, SeedMode, Sequence, SequenceError, SequenceSource};
+use dormant::sequence::{
+    check_budget, FrameRange, FrameRenderer, RenderedFrame, ReuseMode, SeedMode, Sequence, SequenceError,
+    SequenceSource, DEFAULT_REUSE_BYTES,
+};
 
 use frame_output::FrameOutput;
 
@@ -122,10 +125,17 @@ pub struct RenderArgs {
     /// (noise changes from frame to frame).
     #[arg(long, value_enum, default_value_t = SeedMode::Fixed)]
     pub seed: SeedMode,
-    /// With a fixed seed: copy the previous frame's files for frames where nothing moved and
-    /// the camera stayed, instead of tracing them (`off` traces every frame).
-    #[arg(long, value_enum, default_value_t = Switch::On)]
-    pub reuse: Switch,
+    /// With a fixed seed: how a frame reuses earlier frames' work. `exact`: trace only the
+    /// pixel blocks whose samples can see something that moved since they were traced (the
+    /// simulation's future is known, so each block's next change is), take the rest from
+    /// earlier frames, bit for bit; `static`: only copy the previous frame's files where
+    /// nothing moved and the camera stayed (`on` is an alias); `off`: trace every frame.
+    #[arg(long, value_enum, default_value_t = ReuseMode::Exact)]
+    pub reuse: ReuseMode,
+    /// With --reuse exact: memory its store of pixels may keep, in MiB (one value per pixel
+    /// and pass: a 3840x2160 frame with every AOV needs about 510 MiB).
+    #[arg(long, value_name = "MIB", default_value_t = DEFAULT_REUSE_BYTES >> 20)]
+    pub reuse_mib: usize,
     /// With SCENE or --trajectory: continue a run that was interrupted in --out DIR. Frames
     /// whose files are all there and whose statistics DIR/stats.json holds are not rendered
     /// again (the island events and decisions up to them are replayed); the rest are. DIR's
@@ -291,6 +301,7 @@ fn check_flags(args: &RenderArgs) -> Result<(), CliError> {
         return Err(CliError::Input(format!("--exposure {}: must be a positive number", args.exposure)));
     }
     check_shutter(args.shutter)?;
+    check_reuse(args)?;
     let sequence = args.scene_file.is_some() || args.trajectory.is_some();
     if !sequence {
         for (flag, given) in [
@@ -348,6 +359,27 @@ fn adaptive_sampling(args: &RenderArgs, sequence: Option<&Sequence>) -> Result<A
     }
 }
 
+/// `--reuse-mib`: positive, and with exact reuse of a sequence large enough for a store of one
+/// value per pixel and pass at `--size` with the passes rendered.
+fn check_reuse(args: &RenderArgs) -> Result<(), CliError> {
+    if args.reuse_mib == 0 {
+        return Err(CliError::Input("--reuse-mib 0: must be at least 1".into()));
+    }
+    let sequence = args.scene_file.is_some() || args.trajectory.is_some();
+    if !sequence || args.reuse != ReuseMode::Exact || args.seed != SeedMode::Fixed {
+        return Ok(());
+    }
+    let passes = aov_passes(args);
+    let budget = sequence::reuse_budget(args)?;
+    let integrator = PathTracer::default();
+    let renderer = FrameRenderer {
+        aovs: &passes,
+        reuse_budget: budget,
+        ..FrameRenderer::new(&integrator, args.size.width, args.size.height, args.spp)
+    };
+    check_budget(&renderer).map_err(|e| CliError::Input(format!("--reuse-mib {}: {e}", args.reuse_mib)))
+}
+
 /// `--shutter S` (render, verify, bench integration): from 0 to 1.
 pub(super) fn check_shutter(shutter: Option<f32>) -> Result<(), CliError> {
     match shutter.and_then(shutter_problem) {
@@ -398,7 +430,7 @@ fn render_still(job: &RenderJob<'_>, output: &mut FrameOutput<'_>) -> Result<Str
     let (film, stats, aovs) =
         render::render_with_aovs(&scene, query, job.integrator, &settings, &aov_passes(args))
             .map_err(|e| runtime(&e))?;
-    let frame = RenderedFrame { index: 0, film, render: stats, aovs, reused_from: None };
+    let frame = RenderedFrame { index: 0, film, render: stats, aovs, reused_from: None, reuse: None };
     output.write(&frame, None, &ProgressBar::hidden())?;
     Ok(description.name)
 }

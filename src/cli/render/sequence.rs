@@ -11,8 +11,8 @@ use dormant::render::denoise::Denoiser;
 use dormant::render::{AdaptiveSampling, RenderStats};
 use dormant::residency::{CacheBudget, IntegrationSettings, SceneManager};
 use dormant::sequence::output;
-use dormant::sequence::stats::{FrameRecord, RunInfo, StatsFile};
-use dormant::sequence::{FrameRenderer, FrameSelection, KeptFrame, Sequence, SequenceError};
+use dormant::sequence::stats::{FrameRecord, ReuseRecord, RunInfo, StatsFile};
+use dormant::sequence::{FrameRenderer, FrameSelection, KeptFrame, ReuseMode, Sequence, SequenceError};
 
 /// The selected frames of `sequence` through one scene manager, with `stats.json` and
 /// `stats.csv` written as frames finish, then `report.png` and, with `--video`, `video.mp4`;
@@ -35,7 +35,8 @@ pub(super) fn render_sequence(
         spp: args.spp,
         adaptive: adaptive_sampling(args, Some(sequence))?,
         seed: args.seed,
-        reuse_static: args.reuse == Switch::On,
+        reuse: args.reuse,
+        reuse_budget: reuse_budget(args)?,
         shutter: shutter(args, sequence),
     };
     let denoise = output.writer.denoiser.map(Denoiser::label);
@@ -57,7 +58,7 @@ pub(super) fn render_sequence(
                 frame_paths.push(path);
             }
             let physics = sequence.physics_ms.get(frame.index as usize).copied();
-            let record = FrameRecord::new(stats, &frame.render, physics);
+            let record = FrameRecord::new(stats, &frame.render, physics).with_reuse(ReuseRecord::of(frame));
             stats_file.push(record, manager).map_err(|e| runtime(&e))?;
             let mrays = rate.add(&frame.render);
             progress.set_message(format!(
@@ -76,6 +77,13 @@ pub(super) fn render_sequence(
         encode_video(args, &frame_paths, fps, output.quiet)?;
     }
     Ok(sequence.template.name.clone())
+}
+
+/// `--reuse-mib` in bytes (checked against the frames' needs when the sequence starts).
+pub(super) fn reuse_budget(args: &RenderArgs) -> Result<usize, CliError> {
+    args.reuse_mib
+        .checked_mul(1 << 20)
+        .ok_or_else(|| CliError::Input(format!("--reuse-mib {}: too large for this machine", args.reuse_mib)))
 }
 
 /// A failure while running, as the CLI reports it.
@@ -224,7 +232,8 @@ fn run_info(
         frame_step: frames.step(),
         max_depth: (args.mode == RenderMode::Path).then_some(args.max_depth),
         seed: json_name(&args.seed),
-        reuse: args.reuse == Switch::On,
+        reuse: args.reuse != ReuseMode::Off,
+        reuse_mode: json_name(&args.reuse),
         exposure: args.exposure,
         aovs: args.aov.iter().map(|a| a.name().to_string()).collect(),
         exr: args.exr,

@@ -27,7 +27,9 @@ use dormant::residency::{
     ManagerOptions, ReactivationPath, SceneManager, StageTimes, FRACTION_BUCKETS,
 };
 use dormant::scene::{SceneDescription, StaticMesh};
-use dormant::sequence::{FrameRenderer, FrameSelection, SeedMode, Sequence, SequenceError};
+use dormant::sequence::{
+    FrameRenderer, FrameSelection, ReuseMode, SeedMode, Sequence, SequenceError, DEFAULT_REUSE_BYTES,
+};
 
 /// What to run.
 pub struct IntegrationBenchOptions {
@@ -469,7 +471,8 @@ fn renderer<'a>(integrator: &'a dyn Integrator, options: &IntegrationBenchOption
         adaptive: AdaptiveSampling::OFF,
         // Every frame traced, and noise decorrelated as in a per-frame-seeded render.
         seed: SeedMode::PerFrame,
-        reuse_static: false,
+        reuse: ReuseMode::Off,
+        reuse_budget: DEFAULT_REUSE_BYTES,
         shutter: options.shutter,
     }
 }

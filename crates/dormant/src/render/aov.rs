@@ -5,7 +5,7 @@
 use glam::Vec3;
 
 use super::{
-    render_frame_counted, Film, FrameContext, FrameIntegrator, Integrator, PixelSampler, RenderError,
+    render_frame_counted, Film, FrameContext, FrameIntegrator, Integrator, PixelSampler, RayLog, RenderError,
     RenderScene, RenderSettings, RenderStats, SurfaceKind,
 };
 use crate::accel::{Hit, SceneQuery};
@@ -28,6 +28,10 @@ pub enum Aov {
     /// everywhere without it), in all three channels. Not an integrator's pass: it is the
     /// beauty pass's sample counts ([`render_with_aovs`]).
     Spp,
+    /// Camera samples traced this frame: the pixel's samples where its block was traced, 0
+    /// where exact temporal reuse took it from an earlier frame (every pixel's samples
+    /// without reuse). Shows where the motion is.
+    Traced,
 }
 
 impl Aov {
@@ -38,7 +42,13 @@ impl Aov {
             Aov::Depth => "depth",
             Aov::Baked => "baked",
             Aov::Spp => "spp",
+            Aov::Traced => "traced",
         }
+    }
+
+    /// Whether the pass is traced by its own integrator (not derived from sample counts).
+    pub(crate) fn is_traced(self) -> bool {
+        !matches!(self, Aov::Spp | Aov::Traced)
     }
 }
 
@@ -58,7 +68,7 @@ pub fn render_with_aovs(
     let mut passes = Vec::with_capacity(aovs.len());
     for &aov in aovs {
         let pass = match aov {
-            Aov::Spp => Film {
+            Aov::Spp | Aov::Traced => Film {
                 width: film.width,
                 height: film.height,
                 pixels: samples.iter().map(|&n| Vec3::splat(n as f32)).collect(),
@@ -93,9 +103,8 @@ impl FrameIntegrator for AovFrame<'_> {
         first: Option<Hit>,
         _sampler: &PixelSampler,
         _index: u32,
-        rays: &mut u64,
+        _log: &mut RayLog,
     ) -> Vec3 {
-        *rays += 1;
         let Some(hit) = first else {
             return Vec3::ZERO;
         };
@@ -113,7 +122,7 @@ impl FrameIntegrator for AovFrame<'_> {
                 colour * (0.35 + 0.65 * s.ns.dot(-ray.dir).abs())
             }
             // Filled from the sample counts by `render_with_aovs`, never traced.
-            Aov::Spp => Vec3::ZERO,
+            Aov::Spp | Aov::Traced => Vec3::ZERO,
         }
     }
 }

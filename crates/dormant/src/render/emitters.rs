@@ -96,9 +96,17 @@ impl Emitters {
     /// Whether any prototype of `desc` has an emissive triangle (so its bodies' positions
     /// matter for light sampling).
     pub(crate) fn prototypes_emit(desc: &SceneDescription) -> bool {
-        desc.prototypes.iter().any(|p| {
-            (0..p.mesh.triangle_count()).any(|i| power(desc, p.material + p.mesh.material_slot(i)) > 0.0)
-        })
+        Self::emissive_prototypes(desc).into_iter().any(|e| e)
+    }
+
+    /// Per prototype of `desc`, whether it has an emissive triangle.
+    pub(crate) fn emissive_prototypes(desc: &SceneDescription) -> Vec<bool> {
+        desc.prototypes
+            .iter()
+            .map(|p| {
+                (0..p.mesh.triangle_count()).any(|i| power(desc, p.material + p.mesh.material_slot(i)) > 0.0)
+            })
+            .collect()
     }
 
     /// Area density with which [`Self::sample`] picks a given point on a surface whose

@@ -31,7 +31,7 @@ pub(crate) fn write_aov_png_atomic(film: &Film, aov: Aov, path: &Path) -> Result
                 Aov::Normal => (p * 0.5 + Vec3::splat(0.5)).to_array().map(byte),
                 Aov::Depth if p.x <= 0.0 => [255; 3],
                 Aov::Depth => [byte(p.x / far); 3],
-                Aov::Spp => [byte(p.x / far); 3],
+                Aov::Spp | Aov::Traced => [byte(p.x / far); 3],
             }
         })
         .collect();

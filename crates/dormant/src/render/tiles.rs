@@ -10,8 +10,10 @@ use rayon::prelude::*;
 use super::adaptive::{AdaptiveSampling, SppStats, Stopping};
 use super::integrator::dims;
 use super::{
-    Film, FrameContext, FrameIntegrator, Integrator, PinholeCamera, PixelSampler, RenderError, RenderScene,
+    Film, FrameContext, FrameIntegrator, Integrator, PinholeCamera, PixelSampler, RayLog, RenderError,
+    RenderScene,
 };
+use crate::accel::bvh::ChangeIndex;
 use crate::accel::SceneQuery;
 use crate::geometry::Ray;
 use crate::scene::limits::{image_size_problem, MAX_SAMPLES_PER_PIXEL};
@@ -149,10 +151,61 @@ pub(crate) fn render_frame_counted(
     settings: &RenderSettings,
     samples: Option<&[u32]>,
 ) -> Result<(Film, RenderStats, Vec<u32>), RenderError> {
+    let plan = FramePlan { samples, ..FramePlan::default() };
+    let out = render_planned(scene, query, integrator, settings, &plan)?;
+    let stats = RenderStats { rays: out.rays, seconds: out.seconds, spp: SppStats::of(&out.counts) };
+    Ok((out.film, stats, out.counts))
+}
+
+/// Which of a frame's pixel blocks to render, and how: the unit of exact temporal reuse is a
+/// camera-ray block ([`BLOCK`] pixels, every sample), traced exactly as a full frame traces it.
+#[derive(Clone, Copy, Default)]
+pub(crate) struct FramePlan<'a> {
+    /// Fixed samples per pixel (row-major) instead of `spp` and adaptive sampling.
+    pub samples: Option<&'a [u32]>,
+    /// The blocks to trace, by [`block_index`]; `None`: every block. Pixels of other blocks
+    /// come back black with no samples.
+    pub blocks: Option<&'a [bool]>,
+    /// Find each traced block's horizon against this index: the frame's ordinal and the
+    /// horizon of a block that meets no change (the run's number of rendered frames).
+    pub horizons: Option<(&'a ChangeIndex, u32, u32)>,
+}
+
+/// A planned frame: the traced blocks' pixels and sample counts (row-major; zero elsewhere),
+/// the rays traced, each block's horizon (row-major over the block grid; only traced blocks'
+/// are meaningful) and what the horizon queries cost.
+pub(crate) struct PlannedFrame {
+    pub film: Film,
+    pub counts: Vec<u32>,
+    pub rays: u64,
+    pub seconds: f64,
+    pub horizons: Vec<u32>,
+    pub horizon_queries: u64,
+    pub horizon_seconds: f64,
+}
+
+/// The block grid of a `width` x `height` image: blocks per row and rows of blocks.
+pub(crate) fn block_grid(width: u32, height: u32) -> (u32, u32) {
+    (width.div_ceil(BLOCK.0), height.div_ceil(BLOCK.1))
+}
+
+/// The index of the block holding pixel `(x, y)` in an image `width` pixels wide.
+pub(crate) fn block_index(width: u32, x: u32, y: u32) -> usize {
+    ((y / BLOCK.1) * width.div_ceil(BLOCK.0) + x / BLOCK.0) as usize
+}
+
+/// Renders the blocks `plan` selects, tiles spread over the current rayon pool.
+pub(crate) fn render_planned(
+    scene: &RenderScene,
+    query: &dyn SceneQuery,
+    integrator: &dyn Integrator,
+    settings: &RenderSettings,
+    plan: &FramePlan,
+) -> Result<PlannedFrame, RenderError> {
     settings.validate()?;
     let start = Instant::now();
     let (w, h) = (settings.width, settings.height);
-    debug_assert!(samples.is_none_or(|s| s.len() == (w * h) as usize));
+    debug_assert!(plan.samples.is_none_or(|s| s.len() == (w * h) as usize));
     let renderer = TileRenderer {
         camera: FrameCamera {
             open: PinholeCamera::new(&scene.camera, w, h),
@@ -161,35 +214,65 @@ pub(crate) fn render_frame_counted(
         query,
         integrator: &*integrator.bind(FrameContext { scene, query }),
         settings,
-        stopping: if samples.is_some() { None } else { settings.adaptive.stopping(settings.spp) },
-        samples,
+        stopping: if plan.samples.is_some() { None } else { settings.adaptive.stopping(settings.spp) },
+        plan,
     };
     let tiles_x = w.div_ceil(TILE);
     let tiles: Vec<(u32, u32)> =
         (0..tiles_x * h.div_ceil(TILE)).map(|t| ((t % tiles_x) * TILE, (t / tiles_x) * TILE)).collect();
     let rendered: Vec<(u32, u32, Tile)> =
         tiles.par_iter().map(|&(x0, y0)| (x0, y0, renderer.render(x0, y0))).collect();
-    let mut film = Film::new(w, h);
-    let mut counts = vec![0; (w * h) as usize];
-    let mut rays = 0;
+    let (bw, bh) = block_grid(w, h);
+    let mut out = PlannedFrame {
+        film: Film::new(w, h),
+        counts: vec![0; (w * h) as usize],
+        rays: 0,
+        seconds: 0.0,
+        horizons: vec![0; (bw * bh) as usize],
+        horizon_queries: 0,
+        horizon_seconds: 0.0,
+    };
     for (x0, y0, tile) in rendered {
+        out.add_tile(x0, y0, tile);
+    }
+    out.seconds = start.elapsed().as_secs_f64();
+    Ok(out)
+}
+
+impl PlannedFrame {
+    /// Copies a rendered tile whose top-left pixel is `(x0, y0)` into the frame.
+    fn add_tile(&mut self, x0: u32, y0: u32, tile: Tile) {
+        let w = self.film.width;
         let tw = (x0 + TILE).min(w) - x0;
         for (i, (p, n)) in tile.pixels.into_iter().zip(tile.samples).enumerate() {
             let at = ((y0 + i as u32 / tw) * w + x0 + i as u32 % tw) as usize;
-            film.pixels[at] = p;
-            counts[at] = n;
+            self.film.pixels[at] = p;
+            self.counts[at] = n;
         }
-        rays += tile.rays;
+        for (block, horizon) in tile.horizons {
+            self.horizons[block] = horizon;
+        }
+        self.rays += tile.rays;
+        self.horizon_queries += tile.horizon_queries;
+        self.horizon_seconds += tile.horizon_seconds;
     }
-    let stats = RenderStats { rays, seconds: start.elapsed().as_secs_f64(), spp: SppStats::of(&counts) };
-    Ok((film, stats, counts))
 }
 
-/// A rendered tile: its pixels row by row, the samples each got, and the rays traced.
+/// A rendered tile: its pixels row by row, the samples each got, the rays traced, and each
+/// traced block's horizon (with what finding them cost).
 struct Tile {
     pixels: Vec<Vec3>,
     samples: Vec<u32>,
     rays: u64,
+    horizons: Vec<(usize, u32)>,
+    horizon_queries: u64,
+    horizon_seconds: f64,
+}
+
+/// The pixels of one camera-ray block (at most [`BLOCK_PIXELS`]).
+struct Cells {
+    cells: [Cell; BLOCK_PIXELS],
+    len: usize,
 }
 
 /// A pixel of a camera-ray block: its coordinates, sampler, and the most samples it may get.
@@ -210,8 +293,8 @@ struct TileRenderer<'a> {
     settings: &'a RenderSettings,
     /// Adaptive sampling's rule, when on and no sample counts are fixed.
     stopping: Option<Stopping>,
-    /// Fixed samples per pixel for the whole frame (row-major), instead of `spp`.
-    samples: Option<&'a [u32]>,
+    /// Which blocks, with how many samples, and whether to find their horizons.
+    plan: &'a FramePlan<'a>,
 }
 
 impl TileRenderer<'_> {
@@ -227,32 +310,65 @@ impl TileRenderer<'_> {
             sums: vec![Vec3::ZERO; n],
             squares: if self.stopping.is_some() { vec![Vec3::ZERO; n] } else { Vec::new() },
             samples: vec![0; n],
+        };
+        let mut tile = Tile {
+            pixels: Vec::new(),
+            samples: Vec::new(),
             rays: 0,
+            horizons: Vec::new(),
+            horizon_queries: 0,
+            horizon_seconds: 0.0,
         };
         for by in (y0..y1).step_by(BLOCK.1 as usize) {
             for bx in (x0..x1).step_by(BLOCK.0 as usize) {
-                // A fixed array, not a Vec: one block per 8 pixels is on the hot path.
-                let mut cells =
-                    [Cell { x: 0, y: 0, sampler: PixelSampler::new(0, 0, 0), budget: 0 }; BLOCK_PIXELS];
-                let mut n = 0;
-                for y in by..(by + BLOCK.1).min(y1) {
-                    for x in bx..(bx + BLOCK.0).min(x1) {
-                        let budget = self.samples.map_or(self.settings.spp, |s| s[(y * w + x) as usize]);
-                        cells[n] =
-                            Cell { x, y, sampler: PixelSampler::new(x, y, self.settings.seed), budget };
-                        n += 1;
-                    }
+                let block = block_index(w, bx, by);
+                if self.plan.blocks.is_some_and(|b| !b[block]) {
+                    continue;
                 }
-                self.render_block(&cells[..n], &mut acc);
+                let mut log = match self.plan.horizons {
+                    Some((index, ordinal, until)) => RayLog::with_horizon(index, ordinal, until),
+                    None => RayLog::counting(),
+                };
+                self.render_block(&self.cells(bx, by, x1, y1), &mut acc, &mut log);
+                tile.rays += log.rays;
+                if let Some(horizon) = log.horizon() {
+                    tile.horizons.push((block, horizon));
+                    let (queries, seconds) = log.query_cost();
+                    tile.horizon_queries += u64::from(queries);
+                    tile.horizon_seconds += seconds;
+                }
             }
         }
-        let pixels = acc.sums.iter().zip(&acc.samples).map(|(&sum, &k)| sum / k.max(1) as f32).collect();
-        Tile { pixels, samples: acc.samples, rays: acc.rays }
+        tile.pixels = acc.sums.iter().zip(&acc.samples).map(|(&sum, &k)| sum / k.max(1) as f32).collect();
+        tile.samples = acc.samples;
+        tile
+    }
+
+    /// The pixels of the block whose top-left pixel is `(bx, by)`, clipped to `(x1, y1)`:
+    /// each with its sampler and sample budget. A fixed array, not a Vec: one block per 8
+    /// pixels is on the hot path.
+    fn cells(&self, bx: u32, by: u32, x1: u32, y1: u32) -> Cells {
+        let w = self.settings.width;
+        let mut cells = Cells {
+            cells: [Cell { x: 0, y: 0, sampler: PixelSampler::new(0, 0, 0), budget: 0 }; BLOCK_PIXELS],
+            len: 0,
+        };
+        for y in by..(by + BLOCK.1).min(y1) {
+            for x in bx..(bx + BLOCK.0).min(x1) {
+                let budget = self.plan.samples.map_or(self.settings.spp, |s| s[(y * w + x) as usize]);
+                cells.cells[cells.len] =
+                    Cell { x, y, sampler: PixelSampler::new(x, y, self.settings.seed), budget };
+                cells.len += 1;
+            }
+        }
+        cells
     }
 
     /// Samples the pixels of one block in index order, the camera rays of those still
-    /// sampling traced as one packet per index, until each has its budget or has converged.
-    fn render_block(&self, block: &[Cell], acc: &mut Accumulator) {
+    /// sampling traced as one packet per index, until each has its budget or has converged;
+    /// every ray goes into `log`.
+    fn render_block(&self, cells: &Cells, acc: &mut Accumulator, log: &mut RayLog) {
+        let block = &cells.cells[..cells.len];
         let spp = self.settings.spp;
         let mut camera_rays = [Ray::new(Vec3::ZERO, Vec3::Z); BLOCK_PIXELS];
         let mut hits = [None; BLOCK_PIXELS];
@@ -275,7 +391,8 @@ impl TileRenderer<'_> {
             self.query.intersect_packet(&camera_rays[..m], &mut hits[..m]);
             for ((ray, hit), &c) in camera_rays.iter().zip(hits).zip(&slots[..m]) {
                 let cell = &block[c];
-                let li = self.integrator.li_from_hit(ray, hit, &cell.sampler, i, &mut acc.rays);
+                log.closest(ray, hit.as_ref());
+                let li = self.integrator.li_from_hit(ray, hit, &cell.sampler, i, log);
                 done[c] = acc.add(cell, li, self.stopping.as_ref());
             }
         }
@@ -292,7 +409,6 @@ struct Accumulator {
     /// Sums of squared samples; only with adaptive sampling.
     squares: Vec<Vec3>,
     samples: Vec<u32>,
-    rays: u64,
 }
 
 impl Accumulator {

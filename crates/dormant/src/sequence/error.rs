@@ -50,6 +50,12 @@ pub enum SequenceError {
         "frame {frame}: the kept statistics record {what} = {recorded}, replaying them gives {replayed}"
     )]
     KeptMismatch { frame: u32, what: &'static str, recorded: String, replayed: String },
+    /// Exact temporal reuse needs more memory than its budget allows (callers name the flag).
+    #[error(
+        "{budget_mib} MiB is too small for exact reuse of {width}x{height} frames with these passes: \
+         it needs {needed_mib} MiB (one value per pixel and pass); raise the budget or turn reuse off"
+    )]
+    ReuseBudget { budget_mib: usize, needed_mib: usize, width: u32, height: u32 },
     #[error(transparent)]
     Render(#[from] RenderError),
     #[error(transparent)]

@@ -21,16 +21,20 @@
 mod describe;
 mod error;
 pub mod export;
+mod frame_renderer;
 mod kept;
 pub mod output;
 mod render;
 mod replay_loop;
+mod reuse;
 mod selection;
 mod source;
 pub mod stats;
 
 pub use error::SequenceError;
+pub use frame_renderer::{FrameRenderer, ReuseMode, SeedMode, DEFAULT_REUSE_BYTES};
 pub use kept::KeptFrame;
-pub use render::{FrameRenderer, RenderedFrame, SeedMode};
+pub use render::{ExactFrame, RenderedFrame};
+pub use reuse::{check_budget, FullFrame};
 pub use selection::{FrameRange, FrameSelection};
 pub use source::{PhysicsSource, Sequence, SequenceSource};

@@ -2,11 +2,13 @@
 //! scene rendered with the run's integrator and AOVs, and the trace time reported back to the
 //! manager's cost model.
 
+use super::frame_renderer::{FrameRenderer, ReuseMode, SeedMode};
+use super::reuse::{ExactReuse, FullFrame};
 use super::{FrameSelection, KeptFrame, Sequence, SequenceError};
 use crate::physics::trajectory::ReplayFrame;
 use crate::render::{
-    render_with_aovs, AdaptiveSampling, Aov, Emitters, Film, Integrator, PinholeCamera, RenderError,
-    RenderScene, RenderSettings, RenderStats,
+    render_reusing, render_with_aovs, Aov, Emitters, Film, FrameReuse, PinholeCamera, RenderError,
+    RenderScene, RenderStats, ReuseStats,
 };
 use crate::residency::{FrameStats, SceneManager};
 use crate::scene::Camera;
@@ -14,72 +16,6 @@ use crate::scene::Camera;
 /// Camera rays (one per pixel of this image) of the manager's trace-penalty probes: enough
 /// rays for a stable time, few enough to cost a few ms.
 const PROBE_SIZE: (u32, u32) = (128, 72);
-
-/// How the pixel sampler is seeded across a sequence (`--seed`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum SeedMode {
-    /// One seed for every frame, as Cycles does by default: a frame that shows the same scene
-    /// as the one before is the same image, so it is not traced again but copied.
-    #[default]
-    Fixed,
-    /// The frame number seeds each frame: noise decorrelates from frame to frame (like
-    /// Cycles' animated seed), and every frame is traced.
-    PerFrame,
-}
-
-/// How every frame of a run is rendered.
-#[derive(Clone, Copy)]
-pub struct FrameRenderer<'a> {
-    pub integrator: &'a dyn Integrator,
-    /// Extra passes, rendered after the beauty image in this order.
-    pub aovs: &'a [Aov],
-    pub width: u32,
-    pub height: u32,
-    /// Samples per pixel; with adaptive sampling, the most a pixel gets.
-    pub spp: u32,
-    pub adaptive: AdaptiveSampling,
-    pub seed: SeedMode,
-    /// With a fixed seed, hand on the previous image for frames where nothing visible changed
-    /// instead of tracing them again.
-    pub reuse_static: bool,
-    /// Motion blur: the shutter in frame intervals, centred on each frame (0: off). The
-    /// manager must have been made with the same (`ManagerOptions::shutter`): it moves the
-    /// instances; the renderer moves the camera and gives each camera sample a time.
-    pub shutter: f32,
-}
-
-impl<'a> FrameRenderer<'a> {
-    /// `integrator` at `width` x `height` and `spp` samples per pixel; no AOVs, no adaptive
-    /// sampling, one seed for every frame with static-frame reuse, no motion blur.
-    pub fn new(integrator: &'a dyn Integrator, width: u32, height: u32, spp: u32) -> Self {
-        Self {
-            integrator,
-            aovs: &[],
-            width,
-            height,
-            spp,
-            adaptive: AdaptiveSampling::OFF,
-            seed: SeedMode::Fixed,
-            reuse_static: true,
-            shutter: 0.0,
-        }
-    }
-
-    fn settings(&self, frame: u32) -> RenderSettings {
-        let seed = match self.seed {
-            SeedMode::Fixed => 0,
-            SeedMode::PerFrame => frame,
-        };
-        RenderSettings {
-            width: self.width,
-            height: self.height,
-            spp: self.spp,
-            seed,
-            adaptive: self.adaptive,
-        }
-    }
-}
 
 /// One frame of a sequence: rendered, or (static-frame reuse) the same image as an earlier
 /// one; the manager keeps the statistics of the last frame it prepared.
@@ -94,6 +30,18 @@ pub struct RenderedFrame {
     /// `Some(f)`: nothing visible changed since frame `f`, whose image (and AOVs) this is; no
     /// ray was traced.
     pub reused_from: Option<u32>,
+    /// With exact temporal reuse: what was traced and reused, and why the frame was traced in
+    /// full when it was.
+    pub reuse: Option<ExactFrame>,
+}
+
+/// What exact temporal reuse did in a frame.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct ExactFrame {
+    #[serde(flatten)]
+    pub stats: ReuseStats,
+    /// Why every block was traced (`None`: blocks were reused where their samples allowed).
+    pub full: Option<FullFrame>,
 }
 
 impl RenderedFrame {
@@ -105,6 +53,7 @@ impl RenderedFrame {
             render: RenderStats::default(),
             aovs: Vec::new(),
             reused_from: None,
+            reuse: None,
         }
     }
 
@@ -113,6 +62,7 @@ impl RenderedFrame {
         self.reused_from = Some(self.reused_from.unwrap_or(self.index));
         self.index = index;
         self.render = RenderStats::default();
+        self.reuse = None;
     }
 }
 
@@ -131,6 +81,17 @@ impl Sequence {
         frame: &ReplayFrame<'_>,
         renderer: &FrameRenderer<'_>,
     ) -> Result<RenderedFrame, RenderError> {
+        self.render_frame_with(manager, frame, renderer, None)
+    }
+
+    /// [`Self::render_frame`], with exact temporal reuse when `reuse` is given.
+    pub(crate) fn render_frame_with(
+        &self,
+        manager: &mut SceneManager,
+        frame: &ReplayFrame<'_>,
+        renderer: &FrameRenderer<'_>,
+        reuse: Option<&mut ExactReuse>,
+    ) -> Result<RenderedFrame, RenderError> {
         self.aim_probes(manager, frame, renderer);
         manager.prepare(frame)?;
         debug_assert_eq!(manager.options().shutter, renderer.shutter, "one shutter for instances and camera");
@@ -139,20 +100,45 @@ impl Sequence {
         let bodies =
             if Emitters::prototypes_emit(&self.template) { self.bodies_at(frame) } else { Vec::new() };
         let settings = renderer.settings(frame.index);
-        let (film, render, aovs) = {
+        let (film, render, aovs, exact) = {
             let mut scene = RenderScene::with_objects(&self.template, &*manager, &bodies)?;
             scene.camera = camera;
             scene.camera_close = camera_close;
             let query = manager.query()?;
-            render_with_aovs(&scene, query, renderer.integrator, &settings, renderer.aovs)?
+            match reuse {
+                None => {
+                    let (film, render, aovs) =
+                        render_with_aovs(&scene, query, renderer.integrator, &settings, renderer.aovs)?;
+                    (film, render, aovs, None)
+                }
+                Some(reuse) => {
+                    let full = reuse.full_frame(frame.index, manager.last_frame());
+                    let plan = FrameReuse {
+                        index: &reuse.index,
+                        ordinal: reuse.ordinal(frame.index),
+                        frames: reuse.frame_count(),
+                        full: full.is_some(),
+                    };
+                    let (film, render, aovs, stats) = render_reusing(
+                        &scene,
+                        query,
+                        renderer.integrator,
+                        &settings,
+                        renderer.aovs,
+                        plan,
+                        &mut reuse.store,
+                    )?;
+                    (film, render, aovs, Some(ExactFrame { stats, full }))
+                }
+            }
         };
         manager.record_trace(render.seconds * 1e3, render.rays);
-        Ok(RenderedFrame { index: frame.index, film, render, aovs, reused_from: None })
+        Ok(RenderedFrame { index: frame.index, film, render, aovs, reused_from: None, reuse: exact })
     }
 
     /// The camera of frame `index`: without a shutter, at the frame's instant; with one, at
     /// shutter open and close (`shutter / 2` frame intervals before and after it).
-    fn shutter_cameras(&self, index: u32, shutter: f32) -> (Camera, Option<Camera>) {
+    pub(super) fn shutter_cameras(&self, index: u32, shutter: f32) -> (Camera, Option<Camera>) {
         let t = self.time_of(index);
         if shutter <= 0.0 {
             return (self.assets.camera_at(t), None);
@@ -208,7 +194,8 @@ impl Sequence {
     ) -> Result<(), E> {
         let mut last: Option<RenderedFrame> = None;
         let mut kept = kept.iter().peekable();
-        let reusable = renderer.reuse_static && renderer.seed == SeedMode::Fixed;
+        let reusable = renderer.reuse != ReuseMode::Off && renderer.seed == SeedMode::Fixed;
+        let mut exact = ExactReuse::plan(self, selection, renderer, manager.options().form)?;
         // With motion blur a frame's image also shows the motion from the frame before it to
         // the frame after it.
         let last_frame = self.frame_count().saturating_sub(1);
@@ -232,7 +219,9 @@ impl Sequence {
                 let stats = manager.last_frame().reused_as(frame.index);
                 return on_frame(prev, &stats, manager);
             }
-            let rendered = self.render_frame(manager, frame, renderer).map_err(SequenceError::from)?;
+            let rendered = self
+                .render_frame_with(manager, frame, renderer, exact.as_mut())
+                .map_err(SequenceError::from)?;
             on_frame(&rendered, manager.last_frame(), manager)?;
             last = Some(rendered);
             Ok(())

@@ -25,6 +25,7 @@
 //! Hits follow Embree's conventions: `t` in units of the (unnormalised) direction, both sides
 //! of triangles, barycentrics `(1-u-v)*p0 + u*p1 + v*p2`, unit world-space `ng`.
 
+mod change_index;
 mod flat;
 mod params;
 mod persistent;
@@ -34,6 +35,7 @@ pub(crate) mod testing;
 mod triangle;
 mod two_level;
 
+pub use change_index::{ChangeBox, ChangeIndex};
 pub use params::BuildParams;
 pub use persistent::{StaticBvh, StaticSnapshot, StaticUpdate};
 pub use simd::{SimdError, SimdPath};

@@ -8,7 +8,7 @@ pub(super) mod preview;
 
 use glam::Vec3;
 
-use super::{PixelSampler, RenderScene};
+use super::{PixelSampler, RayLog, RenderScene};
 use crate::accel::{Hit, SceneQuery};
 use crate::geometry::Ray;
 use crate::scene::Light;
@@ -22,9 +22,16 @@ pub struct FrameContext<'a> {
 }
 
 impl FrameContext<'_> {
-    /// Whether nothing blocks `ray` (a shadow ray: any hit counts); counts it in `rays`.
-    fn unoccluded(&self, ray: &Ray, rays: &mut u64) -> bool {
-        *rays += 1;
+    /// The closest hit along `ray`, recorded in `log`.
+    fn intersect(&self, ray: &Ray, log: &mut RayLog) -> Option<Hit> {
+        let hit = self.query.intersect(ray);
+        log.closest(ray, hit.as_ref());
+        hit
+    }
+
+    /// Whether nothing blocks `ray` (a shadow ray: any hit counts), recorded in `log`.
+    fn unoccluded(&self, ray: &Ray, log: &mut RayLog) -> bool {
+        log.any(ray);
         !self.query.intersect_p(ray)
     }
 }
@@ -40,15 +47,15 @@ pub trait Integrator: Sync {
 /// An integrator bound to one frame: computes the radiance arriving along camera rays.
 pub trait FrameIntegrator: Sync {
     /// Radiance along camera ray `ray` whose closest hit `first` the caller traced (as
-    /// `query.intersect(ray)`, possibly in a packet with neighbouring pixels), for sample
-    /// `index` of `sampler`; adds the rays it traced to `rays`, the camera ray included.
+    /// `query.intersect(ray)`, possibly in a packet with neighbouring pixels) and recorded in
+    /// `log`, for sample `index` of `sampler`; records every further ray it traces in `log`.
     fn li_from_hit(
         &self,
         ray: &Ray,
         first: Option<Hit>,
         sampler: &PixelSampler,
         index: u32,
-        rays: &mut u64,
+        log: &mut RayLog,
     ) -> Vec3;
 }
 

@@ -9,7 +9,7 @@ use super::{dims, punctual_light, shadow_ray, FrameContext, FrameIntegrator, Int
 use crate::accel::Hit;
 use crate::geometry::{offset_origin, Ray};
 use crate::render::bsdf::{Bsdf, Frame};
-use crate::render::{PixelSampler, RenderScene, SurfaceHit};
+use crate::render::{PixelSampler, RayLog, RenderScene, SurfaceHit};
 
 /// Unidirectional path tracing with next-event estimation of the sun, the sky and emissive
 /// triangles, each combined with BSDF sampling by multiple importance sampling (power
@@ -98,10 +98,10 @@ struct PathTracerFrame<'a> {
 
 /// One camera sample's path in flight: where its sample points come from, the light gathered
 /// so far, the throughput up to the current vertex and how the current ray was sampled.
-struct Path<'r> {
+struct Path<'r, 'l> {
     sampler: &'r PixelSampler,
     index: u32,
-    rays: &'r mut u64,
+    log: &'r mut RayLog<'l>,
     radiance: Vec3,
     beta: Vec3,
     /// The BSDF sample that made the current ray: its pdf and the shading normal it left from
@@ -110,7 +110,7 @@ struct Path<'r> {
     clamp_indirect: f32,
 }
 
-impl Path<'_> {
+impl Path<'_, '_> {
     /// Adds light `c` that reaches the camera through vertex `depth`. Direct light at the
     /// first vertex is never clamped; everything later is.
     fn add(&mut self, c: Vec3, depth: u32) {
@@ -150,12 +150,12 @@ impl FrameIntegrator for PathTracerFrame<'_> {
         first: Option<Hit>,
         sampler: &PixelSampler,
         index: u32,
-        rays: &mut u64,
+        log: &mut RayLog,
     ) -> Vec3 {
         let mut path = Path {
             sampler,
             index,
-            rays,
+            log,
             radiance: Vec3::ZERO,
             beta: Vec3::ONE,
             came_from: None,
@@ -163,8 +163,7 @@ impl FrameIntegrator for PathTracerFrame<'_> {
         };
         let mut ray = *camera_ray;
         for depth in 0..self.settings.max_depth {
-            *path.rays += 1;
-            let hit = if depth == 0 { first } else { self.frame.query.intersect(&ray) };
+            let hit = if depth == 0 { first } else { self.frame.intersect(&ray, path.log) };
             let Some(hit) = hit else {
                 // Light reached through a bounce from vertex depth-1.
                 let c = path.beta * self.escaped(&ray, path.came_from);
@@ -227,7 +226,7 @@ impl PathTracerFrame<'_> {
             let Some((l, e, distance)) = punctual_light(light, v.s.p) else { continue };
             if v.bsdf.reflects(l)
                 && v.s.ng.dot(l) > 0.0
-                && self.frame.unoccluded(&shadow_ray(v.origin, l, distance).at_time(v.time), path.rays)
+                && self.frame.unoccluded(&shadow_ray(v.origin, l, distance).at_time(v.time), path.log)
             {
                 path.add(path.beta * v.bsdf.eval(l) * e, v.depth);
             }
@@ -248,7 +247,7 @@ impl PathTracerFrame<'_> {
         let l = sun.frame.cone(sun.cos_max, path.sampler.get_2d(path.index, v.dim()));
         if v.bsdf.reflects(l)
             && v.s.ng.dot(l) > 0.0
-            && self.frame.unoccluded(&Ray::new(v.origin, l).at_time(v.time), path.rays)
+            && self.frame.unoccluded(&Ray::new(v.origin, l).at_time(v.time), path.log)
         {
             let (f, pdf_bsdf) = v.bsdf.eval_pdf(l);
             let w_over_pdf = power_heuristic_over_pdf(sun.pdf, pdf_bsdf);
@@ -264,7 +263,7 @@ impl PathTracerFrame<'_> {
         if pdf_sky > 0.0
             && v.bsdf.reflects(d)
             && v.s.ng.dot(d) > 0.0
-            && self.frame.unoccluded(&Ray::new(v.origin, d).at_time(v.time), path.rays)
+            && self.frame.unoccluded(&Ray::new(v.origin, d).at_time(v.time), path.log)
         {
             let (f, pdf_bsdf) = v.bsdf.eval_pdf(d);
             let w_over_pdf = power_heuristic_over_pdf(pdf_sky, pdf_bsdf);
@@ -290,7 +289,7 @@ impl PathTracerFrame<'_> {
         if dist2 > 0.0 && cos_light > 0.0 && v.bsdf.reflects(wi) && v.s.ng.dot(wi) > 0.0 {
             let pdf_light = e.pdf_area * dist2 / cos_light;
             let shadow = Ray::segment(v.origin, wi, 0.0, dist2.sqrt() * (1.0 - 1e-3)).at_time(v.time);
-            if self.frame.unoccluded(&shadow, path.rays) {
+            if self.frame.unoccluded(&shadow, path.log) {
                 let (f, pdf_bsdf) = v.bsdf.eval_pdf(wi);
                 let w_over_pdf = power_heuristic_over_pdf(pdf_light, pdf_bsdf);
                 path.add(path.beta * f * le * w_over_pdf, v.depth);

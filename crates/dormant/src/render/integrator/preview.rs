@@ -9,7 +9,7 @@ use super::{dims, punctual_light, shadow_ray, FrameContext, FrameIntegrator, Int
 use crate::accel::Hit;
 use crate::geometry::{offset_origin, Ray};
 use crate::render::bsdf::{sample_cone, sample_cosine};
-use crate::render::PixelSampler;
+use crate::render::{PixelSampler, RayLog};
 
 /// Direct light only: the sun (a disc, so shadows are soft), the sky and punctual lights,
 /// each through one shadow ray per sample, on Lambertian surfaces, plus emission. The preview
@@ -38,10 +38,9 @@ impl FrameIntegrator for DirectLightingFrame<'_> {
         first: Option<Hit>,
         sampler: &PixelSampler,
         index: u32,
-        rays: &mut u64,
+        log: &mut RayLog,
     ) -> Vec3 {
         let FrameContext { scene, .. } = self.frame;
-        *rays += 1;
         let Some(hit) = first else {
             return scene.sky.radiance(ray.dir.normalize());
         };
@@ -55,7 +54,7 @@ impl FrameIntegrator for DirectLightingFrame<'_> {
             let cos = s.ns.dot(l);
             if cos > 0.0
                 && s.ng.dot(l) > 0.0
-                && self.frame.unoccluded(&shadow_ray(origin, l, distance).at_time(ray.time), rays)
+                && self.frame.unoccluded(&shadow_ray(origin, l, distance).at_time(ray.time), log)
             {
                 radiance += albedo / PI * e * cos;
             }
@@ -66,13 +65,13 @@ impl FrameIntegrator for DirectLightingFrame<'_> {
         let cos = s.ns.dot(l);
         if cos > 0.0
             && s.ng.dot(l) > 0.0
-            && self.frame.unoccluded(&Ray::new(origin, l).at_time(ray.time), rays)
+            && self.frame.unoccluded(&Ray::new(origin, l).at_time(ray.time), log)
         {
             radiance += albedo / PI * sun.irradiance * cos;
         }
 
         let d = sample_cosine(s.ns, sampler.get_2d(index, dims::SKY));
-        if s.ng.dot(d) > 0.0 && self.frame.unoccluded(&Ray::new(origin, d).at_time(ray.time), rays) {
+        if s.ng.dot(d) > 0.0 && self.frame.unoccluded(&Ray::new(origin, d).at_time(ray.time), log) {
             // Lambert BRDF times cosine over the cosine-weighted pdf leaves the albedo.
             radiance += albedo * scene.sky.radiance(d);
         }
@@ -106,9 +105,8 @@ impl FrameIntegrator for AmbientOcclusionFrame<'_> {
         first: Option<Hit>,
         sampler: &PixelSampler,
         index: u32,
-        rays: &mut u64,
+        log: &mut RayLog,
     ) -> Vec3 {
-        *rays += 1;
         let Some(hit) = first else {
             return Vec3::ONE;
         };
@@ -118,7 +116,7 @@ impl FrameIntegrator for AmbientOcclusionFrame<'_> {
             return Vec3::ZERO;
         }
         let open = Ray::segment(offset_origin(s.p, s.ng), d, 0.0, self.radius).at_time(ray.time);
-        let open = self.frame.unoccluded(&open, rays);
+        let open = self.frame.unoccluded(&open, log);
         Vec3::splat(if open { 0.8 } else { 0.0 })
     }
 }

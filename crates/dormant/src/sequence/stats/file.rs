@@ -169,6 +169,7 @@ mod tests {
             max_depth: Some(6),
             seed: "fixed".into(),
             reuse: true,
+            reuse_mode: "exact".into(),
             exposure: 1.1,
             aovs: vec!["albedo".into()],
             exr: false,

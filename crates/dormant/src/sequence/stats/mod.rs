@@ -7,7 +7,7 @@ mod record;
 
 pub(crate) use file::read_kept_frames;
 pub use file::StatsFile;
-pub use record::{median, FrameRecord, RunInfo, RunStats};
+pub use record::{median, FrameRecord, ReuseRecord, RunInfo, RunStats};
 
 use std::path::PathBuf;
 

@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 use super::StatsError;
 use crate::render::{RenderStats, SppStats};
 use crate::residency::{CacheStats, CostModelState, Decision, FrameStats, StageTimes, FRACTION_BUCKETS};
-use crate::sequence::{KeptFrame, PhysicsSource};
+use crate::sequence::{FullFrame, KeptFrame, PhysicsSource, RenderedFrame};
 
 /// `format` field of stats.json.
 pub(crate) const STATS_FORMAT: &str = "dormant-stats";
@@ -50,6 +50,66 @@ pub struct FrameRecord {
     pub cache_partial: u64,
     pub cache_miss: u64,
     pub decisions: Vec<Decision>,
+    /// What was traced and what reused. Absent in runs from before exact reuse (read as 0).
+    #[serde(flatten, default)]
+    pub reuse: ReuseRecord,
+}
+
+/// A frame's samples traced and reused, and with exact temporal reuse what that cost.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct ReuseRecord {
+    /// Camera samples traced this frame, and taken from earlier frames (every sample of a
+    /// frame that reused the previous image).
+    #[serde(default)]
+    pub samples_traced: u64,
+    #[serde(default)]
+    pub samples_reused: u64,
+    /// Pixel blocks traced (exact reuse; every block without it).
+    #[serde(default)]
+    pub blocks_traced: u64,
+    /// Time of the horizon queries, ms (exact reuse).
+    #[serde(default)]
+    pub horizon_ms: f64,
+    /// Bytes the reuse store holds (exact reuse).
+    #[serde(default)]
+    pub reuse_store_bytes: u64,
+    /// Why exact reuse traced every block of this frame; `null` when it reused blocks, or
+    /// without exact reuse.
+    #[serde(default)]
+    pub full_frame: Option<FullFrame>,
+}
+
+impl ReuseRecord {
+    /// What `frame` traced and reused.
+    pub fn of(frame: &RenderedFrame) -> Self {
+        if let Some(exact) = frame.reuse {
+            let s = exact.stats;
+            return Self {
+                samples_traced: s.samples_traced,
+                samples_reused: s.samples_reused,
+                blocks_traced: s.blocks_traced,
+                horizon_ms: s.horizon_ms,
+                reuse_store_bytes: s.store_bytes,
+                full_frame: exact.full,
+            };
+        }
+        let pixels = f64::from(frame.film.width) * f64::from(frame.film.height);
+        let samples = (frame.render.spp.mean * pixels).round() as u64;
+        match frame.reused_from {
+            Some(_) => Self { samples_reused: samples, ..Self::default() },
+            None => Self { samples_traced: samples, ..Self::default() },
+        }
+    }
+
+    /// The share of the frame's samples that were traced (1 when it has none).
+    pub fn traced_share(&self) -> f64 {
+        let total = self.samples_traced + self.samples_reused;
+        if total == 0 {
+            1.0
+        } else {
+            self.samples_traced as f64 / total as f64
+        }
+    }
 }
 
 impl FrameRecord {
@@ -80,7 +140,13 @@ impl FrameRecord {
             cache_partial: stats.cache_partial,
             cache_miss: stats.cache_miss,
             decisions: stats.decisions.clone(),
+            reuse: ReuseRecord::default(),
         }
+    }
+
+    /// This record with what its frame traced and reused.
+    pub fn with_reuse(self, reuse: ReuseRecord) -> Self {
+        Self { reuse, ..self }
     }
 
     /// What `render --resume` needs of this frame, finished by an earlier run, to bring the
@@ -147,8 +213,12 @@ pub struct RunInfo {
     pub max_depth: Option<u32>,
     /// `fixed` or `per-frame`.
     pub seed: String,
-    /// Static-frame reuse (`--reuse on`).
+    /// Any reuse: `--reuse static` or `exact`.
     pub reuse: bool,
+    /// `--reuse`: `off`, `static` or `exact`. Absent in runs from before exact reuse, which
+    /// reused only static frames.
+    #[serde(default = "static_reuse")]
+    pub reuse_mode: String,
     pub exposure: f32,
     /// Extra passes (`--aov`), in request order.
     pub aovs: Vec<String>,
@@ -164,6 +234,11 @@ pub struct RunInfo {
     /// before motion blur, which had none.
     #[serde(default)]
     pub shutter: f32,
+}
+
+/// `reuse_mode` of runs from before exact reuse.
+fn static_reuse() -> String {
+    "static".into()
 }
 
 /// Sums over the run.
@@ -184,6 +259,11 @@ pub(crate) struct Totals {
     pub rest_rebuilds: u64,
     /// Frames that reused the previous image.
     pub(crate) reused_frames: u64,
+    /// Camera samples traced and reused over the run.
+    pub samples_traced: u64,
+    pub samples_reused: u64,
+    /// Horizon queries of exact reuse, ms.
+    pub horizon_ms: f64,
     pub cache_full: u64,
     pub cache_partial: u64,
     pub cache_miss: u64,
@@ -290,6 +370,15 @@ fn csv_columns() -> Vec<(&'static str, Cell)> {
     ];
     columns.extend(rest);
     columns.push(("estimated_net_ms", Cell::Text(|f| format!("{:.4}", f.estimated_net_ms()))));
+    columns.extend([
+        ("samples_traced", Cell::Text(|f| f.reuse.samples_traced.to_string())),
+        ("samples_reused", Cell::Text(|f| f.reuse.samples_reused.to_string())),
+        ("traced_share", Cell::Text(|f| format!("{:.5}", f.reuse.traced_share()))),
+        ("blocks_traced", Cell::Text(|f| f.reuse.blocks_traced.to_string())),
+        ("horizon_ms", Cell::Text(|f| format!("{:.4}", f.reuse.horizon_ms))),
+        ("reuse_store_bytes", Cell::Text(|f| f.reuse.reuse_store_bytes.to_string())),
+        ("full_frame", Cell::Text(|f| f.reuse.full_frame.map(|r| r.name()).unwrap_or_default().to_string())),
+    ]);
     columns
 }
 
@@ -314,6 +403,9 @@ impl RunStats {
             totals.islands_reactivated += u64::from(f.islands_reactivated);
             totals.rest_rebuilds += u64::from(f.rest_rebuilt);
             totals.reused_frames += u64::from(f.reused);
+            totals.samples_traced += f.reuse.samples_traced;
+            totals.samples_reused += f.reuse.samples_reused;
+            totals.horizon_ms += f.reuse.horizon_ms;
             totals.cache_full += f.cache_full;
             totals.cache_partial += f.cache_partial;
             totals.cache_miss += f.cache_miss;
@@ -419,6 +511,7 @@ mod tests {
             max_depth: Some(6),
             seed: "fixed".into(),
             reuse: true,
+            reuse_mode: "exact".into(),
             exposure: 1.0,
             aovs: Vec::new(),
             exr: false,

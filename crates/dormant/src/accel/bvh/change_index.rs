@@ -1,0 +1,203 @@
+//! [`ChangeIndex`]: where and when a sequence's scene changes, indexed in space and time for
+//! the horizons of exact temporal reuse. Each [`ChangeBox`] bounds something whose look
+//! differs from one rendered frame to the next (a body that moved, appeared or left, with
+//! motion blur over both shutters) and carries the ordinal of the first rendered frame that
+//! shows the difference. The boxes sit in a binned-SAH BVH whose nodes also carry the range of
+//! their boxes' ordinals, so a query ("the earliest change after ordinal `n` that this ray
+//! segment meets") skips subtrees that lie wholly in the past or no earlier than the best
+//! change found so far.
+
+use glam::Vec3;
+
+use super::flat::{build, interval_is_valid, BoxRay, STACK_SIZE};
+use super::BuildParams;
+use crate::geometry::{Aabb, Ray};
+
+/// A world box whose content looks different from rendered frame `visible_at` on (an
+/// ordinal: 0 for the first rendered frame) than at the frame before it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ChangeBox {
+    pub bounds: Aabb,
+    pub visible_at: u32,
+}
+
+/// A node of the index: bounds, children or boxes as in the flat BVH, and the least and most
+/// `visible_at` below it.
+#[derive(Clone, Copy, Debug)]
+struct IndexNode {
+    min: Vec3,
+    /// Interior: the first child (the second follows it). Leaf: the first box.
+    first: u32,
+    max: Vec3,
+    /// Boxes in the leaf; 0 for interior nodes.
+    count: u32,
+    earliest: u32,
+    latest: u32,
+}
+
+/// The change boxes of a sequence in a BVH (see the module docs). Immutable once built; queries
+/// run from many threads at once.
+#[derive(Clone, Debug, Default)]
+pub struct ChangeIndex {
+    nodes: Vec<IndexNode>,
+    /// The boxes in leaf order.
+    boxes: Vec<ChangeBox>,
+}
+
+/// Builds change indexes with a cheap build: the index is built once per sequence and its
+/// queries are short.
+const INDEX_PARAMS: BuildParams = BuildParams::TOP_LEVEL;
+
+impl ChangeIndex {
+    /// The index over `boxes`; each box is padded by a small margin (a relative 1e-4 of its
+    /// size plus 1e-5 of its distance from the origin) so that rounding in the tracers' hit
+    /// points and instance transforms never puts a change outside its box. Empty and
+    /// non-finite boxes are dropped.
+    pub fn build(boxes: Vec<ChangeBox>) -> Self {
+        let boxes: Vec<ChangeBox> = boxes
+            .into_iter()
+            .filter(|b| !b.bounds.is_empty() && b.bounds.min.is_finite() && b.bounds.max.is_finite())
+            .map(|b| ChangeBox { bounds: padded(b.bounds), ..b })
+            .collect();
+        let bounds: Vec<Aabb> = boxes.iter().map(|b| b.bounds).collect();
+        let (bvh, order) = build(&bounds, INDEX_PARAMS);
+        let boxes: Vec<ChangeBox> = order.iter().map(|&i| boxes[i as usize]).collect();
+        let mut nodes: Vec<IndexNode> = bvh
+            .nodes
+            .iter()
+            .map(|n| IndexNode {
+                min: n.min,
+                first: n.first,
+                max: n.max,
+                count: n.count,
+                earliest: u32::MAX,
+                latest: 0,
+            })
+            .collect();
+        // Children follow their parents in the array, so one backwards pass fills every
+        // interior node's frame range from its children's.
+        for i in (0..nodes.len()).rev() {
+            let n = nodes[i];
+            let (earliest, latest) = if n.count > 0 {
+                let range = &boxes[n.first as usize..(n.first + n.count) as usize];
+                range.iter().fold((u32::MAX, 0), |(e, l), b| (e.min(b.visible_at), l.max(b.visible_at)))
+            } else {
+                let (a, b) = (nodes[n.first as usize], nodes[n.first as usize + 1]);
+                (a.earliest.min(b.earliest), a.latest.max(b.latest))
+            };
+            nodes[i].earliest = earliest;
+            nodes[i].latest = latest;
+        }
+        Self { nodes, boxes }
+    }
+
+    /// The number of change boxes.
+    pub fn len(&self) -> usize {
+        self.boxes.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.boxes.is_empty()
+    }
+
+    /// Bytes the index holds.
+    pub fn memory_bytes(&self) -> usize {
+        self.nodes.len() * std::mem::size_of::<IndexNode>()
+            + self.boxes.len() * std::mem::size_of::<ChangeBox>()
+    }
+
+    /// The earliest `visible_at` greater than `after` and less than `before` of a box that the
+    /// segment of `ray` over `[t_min, t_max]` meets, or `before` when there is none. A segment
+    /// traced at ordinal `after` stays valid until the returned ordinal.
+    pub fn first_change(&self, ray: &Ray, after: u32, before: u32) -> u32 {
+        if self.nodes.is_empty() || after.saturating_add(1) >= before || !interval_is_valid(ray) {
+            return before;
+        }
+        let r = BoxRay::new(ray);
+        let mut best = before;
+        let mut stack = [0u32; STACK_SIZE];
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let n = &self.nodes[stack[top] as usize];
+            if n.latest <= after
+                || n.earliest >= best
+                || r.hit_bounds(n.min, n.max, ray.t_max) == f32::INFINITY
+            {
+                continue;
+            }
+            if n.count > 0 {
+                for b in &self.boxes[n.first as usize..(n.first + n.count) as usize] {
+                    if b.visible_at > after
+                        && b.visible_at < best
+                        && r.hit_bounds(b.bounds.min, b.bounds.max, ray.t_max) != f32::INFINITY
+                    {
+                        best = b.visible_at;
+                    }
+                }
+                // Nothing can come before the frame right after `after`.
+                if best == after + 1 {
+                    return best;
+                }
+                continue;
+            }
+            // The child whose changes come earlier is visited first: finding an early change
+            // first prunes more.
+            let (a, b) = (n.first, n.first + 1);
+            let (near, far) = if self.nodes[a as usize].earliest <= self.nodes[b as usize].earliest {
+                (a, b)
+            } else {
+                (b, a)
+            };
+            debug_assert!(top + 2 <= STACK_SIZE, "the index is deeper than the traversal stack");
+            stack[top] = far;
+            stack[top + 1] = near;
+            top += 2;
+        }
+        best
+    }
+}
+
+/// `b` grown by a margin that absorbs rounding: 1e-4 of its largest side plus 1e-5 of its
+/// largest coordinate's magnitude.
+fn padded(b: Aabb) -> Aabb {
+    let size = (b.max - b.min).max_element();
+    let reach = b.min.abs().max(b.max.abs()).max_element();
+    let pad = Vec3::splat(1e-4 * size + 1e-5 * reach);
+    Aabb { min: b.min - pad, max: b.max + pad }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn unit_box_at(x: f32, visible_at: u32) -> ChangeBox {
+        let min = Vec3::new(x, 0.0, 0.0);
+        ChangeBox { bounds: Aabb { min, max: min + Vec3::ONE }, visible_at }
+    }
+
+    #[test]
+    fn the_earliest_change_after_the_frame_on_the_segment_wins() {
+        let index = ChangeIndex::build(vec![unit_box_at(0.0, 5), unit_box_at(3.0, 2), unit_box_at(6.0, 9)]);
+        let along_x = Ray::new(Vec3::new(-1.0, 0.5, 0.5), Vec3::X);
+        assert_eq!(index.first_change(&along_x, 0, u32::MAX), 2);
+        // Traced at ordinal 2 or later, the change at 2 is in the past.
+        assert_eq!(index.first_change(&along_x, 2, u32::MAX), 5);
+        assert_eq!(index.first_change(&along_x, 5, u32::MAX), 9);
+        assert_eq!(index.first_change(&along_x, 9, u32::MAX), u32::MAX);
+        // A segment that stops before the second box.
+        let short = Ray::segment(along_x.origin, along_x.dir, 0.0, 2.5);
+        assert_eq!(index.first_change(&short, 0, u32::MAX), 5);
+        // Nothing beyond `before`; a ray that misses every box.
+        assert_eq!(index.first_change(&along_x, 0, 2), 2);
+        let up = Ray::new(Vec3::new(-1.0, 0.5, 0.5), Vec3::Y);
+        assert_eq!(index.first_change(&up, 0, 7), 7);
+    }
+
+    #[test]
+    fn an_empty_index_never_changes() {
+        let index = ChangeIndex::build(Vec::new());
+        assert!(index.is_empty());
+        assert_eq!(index.first_change(&Ray::new(Vec3::ZERO, Vec3::X), 0, 42), 42);
+    }
+}

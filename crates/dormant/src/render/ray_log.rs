@@ -1,0 +1,104 @@
+//! [`RayLog`]: what a pixel block's rays leave behind besides light: how many were traced and,
+//! for exact temporal reuse, their horizon: the earliest later rendered frame whose changes
+//! ([`ChangeIndex`]) any of their segments meets. Until that frame every one of the block's
+//! samples computes the same bits, so the block's pixels can be reused.
+//!
+//! Integrators trace through [`FrameContext`](super::FrameContext)'s `intersect` and
+//! `unoccluded`, which record every ray here: a closest-hit ray as the segment up to its hit
+//! (to infinity when it escapes), an occlusion ray over its whole interval.
+
+use std::time::Instant;
+
+use crate::accel::bvh::ChangeIndex;
+use crate::accel::Hit;
+use crate::geometry::Ray;
+
+/// One query in this many is timed, and the time scaled up: timing every query would cost
+/// about as much as the query.
+const TIME_ONE_IN: u32 = 32;
+
+/// Rays traced for a block of pixels, and their horizon when reuse is on.
+pub struct RayLog<'a> {
+    /// Rays traced (camera, bounce, shadow).
+    pub rays: u64,
+    horizon: Option<HorizonProbe<'a>>,
+}
+
+/// The horizon being found: the segments so far meet no change before `best`.
+struct HorizonProbe<'a> {
+    index: &'a ChangeIndex,
+    /// The ordinal of the frame being traced.
+    traced_at: u32,
+    best: u32,
+    queries: u32,
+    /// Seconds of the timed queries, scaled by [`TIME_ONE_IN`].
+    seconds: f64,
+}
+
+impl<'a> RayLog<'a> {
+    /// A log that only counts rays.
+    pub(crate) fn counting() -> Self {
+        Self { rays: 0, horizon: None }
+    }
+
+    /// A log that also finds the horizon of rays traced at ordinal `traced_at`, against
+    /// `index`; `until` is the horizon when nothing changes (the number of frames rendered).
+    pub(crate) fn with_horizon(index: &'a ChangeIndex, traced_at: u32, until: u32) -> Self {
+        let probe = HorizonProbe { index, traced_at, best: until, queries: 0, seconds: 0.0 };
+        Self { rays: 0, horizon: Some(probe) }
+    }
+
+    /// Records a closest-hit ray and its hit: the segment up to the hit, or the whole ray
+    /// when it escaped.
+    #[inline]
+    pub(crate) fn closest(&mut self, ray: &Ray, hit: Option<&Hit>) {
+        self.rays += 1;
+        if let Some(probe) = &mut self.horizon {
+            let segment = match hit {
+                Some(h) => Ray { t_max: h.t, ..*ray },
+                None => *ray,
+            };
+            probe.meet(&segment);
+        }
+    }
+
+    /// Records an occlusion ray over its whole interval (the occluder found, if any, is not
+    /// known, and what lies past it may matter to another ray).
+    #[inline]
+    pub(crate) fn any(&mut self, ray: &Ray) {
+        self.rays += 1;
+        if let Some(probe) = &mut self.horizon {
+            probe.meet(ray);
+        }
+    }
+
+    /// The earliest ordinal at which a change meets any recorded segment (the log's `until`
+    /// when none does); `None` without horizons.
+    pub(crate) fn horizon(&self) -> Option<u32> {
+        self.horizon.as_ref().map(|p| p.best)
+    }
+
+    /// Horizon queries made and the seconds they took (estimated from a sample of them).
+    pub(crate) fn query_cost(&self) -> (u32, f64) {
+        self.horizon.as_ref().map_or((0, 0.0), |p| (p.queries, p.seconds))
+    }
+}
+
+impl HorizonProbe<'_> {
+    #[inline]
+    fn meet(&mut self, segment: &Ray) {
+        // The frame right after this one is the soonest a change can be: once there, no
+        // further segment can bring the horizon nearer.
+        if self.best <= self.traced_at + 1 {
+            return;
+        }
+        self.queries += 1;
+        if self.queries % TIME_ONE_IN == 0 {
+            let start = Instant::now();
+            self.best = self.index.first_change(segment, self.traced_at, self.best);
+            self.seconds += start.elapsed().as_secs_f64() * f64::from(TIME_ONE_IN);
+        } else {
+            self.best = self.index.first_change(segment, self.traced_at, self.best);
+        }
+    }
+}
