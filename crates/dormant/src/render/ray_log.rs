@@ -7,6 +7,7 @@
 //! `unoccluded`, which record every ray here: a closest-hit ray as the segment up to its hit
 //! (to infinity when it escapes), an occlusion ray over its whole interval.
 
+use std::cell::Cell;
 use std::time::Instant;
 
 use crate::accel::bvh::ChangeIndex;
@@ -16,6 +17,12 @@ use crate::geometry::Ray;
 /// One query in this many is timed, and the time scaled up: timing every query would cost
 /// about as much as the query.
 const TIME_ONE_IN: u32 = 32;
+
+thread_local! {
+    /// The thread's queries so far, which pick the ones to time: counted per thread rather
+    /// than per log, as a log of one sample often makes fewer queries than [`TIME_ONE_IN`].
+    static QUERIES: Cell<u32> = const { Cell::new(0) };
+}
 
 /// Rays traced for a block of pixels, and their horizon when reuse is on.
 pub struct RayLog<'a> {
@@ -58,7 +65,7 @@ impl<'a> RayLog<'a> {
                 Some(h) => Ray { t_max: h.t, ..*ray },
                 None => *ray,
             };
-            probe.meet(&segment);
+            probe.meet(&segment, false);
         }
     }
 
@@ -68,7 +75,22 @@ impl<'a> RayLog<'a> {
     pub(crate) fn any(&mut self, ray: &Ray) {
         self.rays += 1;
         if let Some(probe) = &mut self.horizon {
-            probe.meet(ray);
+            probe.meet(ray, true);
+        }
+    }
+
+    /// Counts a camera ray traced in a packet for a sample that is not traced (its lane only
+    /// keeps the packet as a full frame has it).
+    pub(crate) fn count_untraced(&mut self) {
+        self.rays += 1;
+    }
+
+    /// Adds the rays and horizon queries of `other` (a sample's log) to this one's counts.
+    pub(crate) fn absorb(&mut self, other: &RayLog) {
+        self.rays += other.rays;
+        if let (Some(probe), Some(theirs)) = (&mut self.horizon, &other.horizon) {
+            probe.queries += theirs.queries;
+            probe.seconds += theirs.seconds;
         }
     }
 
@@ -86,19 +108,23 @@ impl<'a> RayLog<'a> {
 
 impl HorizonProbe<'_> {
     #[inline]
-    fn meet(&mut self, segment: &Ray) {
+    fn meet(&mut self, segment: &Ray, occlusion: bool) {
         // The frame right after this one is the soonest a change can be: once there, no
         // further segment can bring the horizon nearer.
         if self.best <= self.traced_at + 1 {
             return;
         }
         self.queries += 1;
-        if self.queries % TIME_ONE_IN == 0 {
+        let nth = QUERIES.with(|q| {
+            q.set(q.get().wrapping_add(1));
+            q.get()
+        });
+        if nth % TIME_ONE_IN == 0 {
             let start = Instant::now();
-            self.best = self.index.first_change(segment, self.traced_at, self.best);
+            self.best = self.index.first_change(segment, self.traced_at, self.best, occlusion);
             self.seconds += start.elapsed().as_secs_f64() * f64::from(TIME_ONE_IN);
         } else {
-            self.best = self.index.first_change(segment, self.traced_at, self.best);
+            self.best = self.index.first_change(segment, self.traced_at, self.best, occlusion);
         }
     }
 }

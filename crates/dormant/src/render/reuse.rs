@@ -1,64 +1,91 @@
-//! Exact temporal reuse: a frame traces only the pixel blocks whose horizon has come, and takes
-//! every other block's pixels from the [`ReuseStore`], which holds the last traced value of
-//! every pixel (image, sample count, AOV passes) and each block's horizon.
+//! Exact temporal reuse: a frame traces only the samples (or pixels) whose horizon has come,
+//! and takes everything else from the [`ReuseStore`], which holds the last traced value of
+//! every sample (or pixel), the AOV passes, and each one's horizon.
 //!
-//! Why it is exact: a block is traced as a full frame traces it (the same camera-ray packets,
-//! samples in the same order, adaptive sampling deciding from the pixel's own samples), and
-//! its horizon is the earliest later frame whose changes ([`ChangeIndex`]) any of its rays'
-//! segments meets. Until then every segment sees the same geometry, so with the camera, lights
-//! and seed unchanged every sample computes the same bits, and the stored pixel is the pixel a
-//! full render would compute. Whether a frame may reuse at all (camera, lights, seed, the
-//! scene's representation) is its caller's to decide ([`FrameReuse::full`]).
+//! Why it is exact: a sample is traced as a full frame traces it (its camera ray in the same
+//! packet with the same neighbours, the same sampler dimensions), and its horizon is the
+//! earliest later frame whose changes ([`ChangeIndex`]) any of its rays' segments meets. Until
+//! then every segment sees the same geometry, so with the camera, lights and seed unchanged the
+//! sample computes the same bits; a pixel is the sum of its samples in index order, so it is
+//! the pixel a full render computes. Whether a frame may reuse at all (camera, lights, seed,
+//! the scene's representation) is its caller's to decide ([`FrameReuse::full`]).
+//!
+//! The store keeps every sample when the budget allows and adaptive sampling is off (a pixel
+//! whose path changed in one sample of sixteen retraces one); otherwise one value per pixel,
+//! retraced whole ([`ReuseGranularity`]).
 
 use glam::Vec3;
 use serde::Serialize;
 
 use super::aov::{AovIntegrator, AovPasses};
-use super::tiles::{block_grid, block_index, render_planned, FramePlan, PlannedFrame};
+use super::tiles::{render_planned, Due, FramePlan, PlannedFrame};
 use super::{Aov, Film, Integrator, RenderError, RenderScene, RenderSettings, RenderStats, SppStats};
 use crate::accel::bvh::ChangeIndex;
 use crate::accel::SceneQuery;
 
-/// What the store keeps of every pixel: a sample count (4 bytes) and one RGB value (12 bytes)
-/// for the image and for each AOV pass that is traced.
-const PIXEL_BYTES: usize = 4 + 12;
+/// What the store keeps of every pixel: a sample count and a horizon (4 bytes each) and one RGB
+/// value (12 bytes) for the image and for each AOV pass that is traced.
+const PIXEL_BYTES: usize = 4 + 4 + 12;
+/// And of every sample, when it keeps samples: a value and a horizon.
+const SAMPLE_BYTES: usize = 12 + 4;
 
-/// The last traced value of every pixel of a sequence's frames, and each pixel block's horizon.
+/// What the store keeps, and so the unit a frame retraces.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ReuseGranularity {
+    /// Every sample's value and horizon: only the samples whose horizon has come are traced.
+    #[default]
+    Sample,
+    /// A value and a horizon per pixel: a pixel with any sample's horizon come is traced whole.
+    Pixel,
+}
+
+/// The last traced values of a sequence's frames and their horizons.
 #[derive(Clone, Debug, Default)]
 pub struct ReuseStore {
-    /// What the stored pixels were rendered with; a frame of other settings starts afresh.
+    /// What the stored values were rendered with; a frame of other settings starts afresh.
     settings: Option<(RenderSettings, Vec<Aov>)>,
+    granularity: ReuseGranularity,
+    /// Per pixel: the value, the sample count, and the ordinal of the first frame that must
+    /// trace it (or one of its samples) again.
     image: Vec<Vec3>,
     counts: Vec<u32>,
+    horizons: Vec<u32>,
     /// Per traced AOV pass (not `spp` or `traced`, which come from the counts), its pixels.
     passes: Vec<(Aov, Vec<Vec3>)>,
-    /// Per block, the ordinal of the first frame that must trace it again.
-    horizons: Vec<u32>,
+    /// With [`ReuseGranularity::Sample`], per sample (`spp` per pixel, pixel by pixel): its
+    /// radiance and horizon.
+    samples: Vec<Vec3>,
+    sample_horizons: Vec<u32>,
 }
 
 /// One frame's use of the store: the change index, this frame's ordinal, the run's number of
-/// rendered frames, and whether the frame must be traced in full.
+/// rendered frames, whether the frame must be traced in full, and the memory the store may
+/// use.
 #[derive(Clone, Copy)]
 pub struct FrameReuse<'a> {
     pub index: &'a ChangeIndex,
     pub ordinal: u32,
     pub frames: u32,
-    /// Trace every block (and refill the store): the first frame, or one where something
-    /// every sample sees changed (the camera, a light, the scene's representation).
+    /// Trace everything (and refill the store): the first frame, or one where something every
+    /// sample sees changed (the camera, a light, the scene's representation).
     pub full: bool,
+    /// Bytes the store may hold: with room for every sample it keeps samples.
+    pub budget: usize,
 }
 
 /// What reuse did in a frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct ReuseStats {
+    pub granularity: ReuseGranularity,
     /// Camera samples traced and taken from the store.
     pub samples_traced: u64,
     pub samples_reused: u64,
-    /// Pixel blocks traced, of all blocks.
-    pub blocks_traced: u64,
-    pub blocks: u64,
-    /// Horizon queries (one per traced ray segment that could still lower its block's
-    /// horizon) and their time, estimated from a sample of them.
+    /// Pixels with a sample traced, of all pixels.
+    pub pixels_traced: u64,
+    pub pixels: u64,
+    /// Horizon queries (one per traced ray segment that could still bring its horizon nearer)
+    /// and their time, estimated from a sample of them.
     pub horizon_queries: u64,
     pub horizon_ms: f64,
     /// Bytes the store holds.
@@ -66,18 +93,23 @@ pub struct ReuseStats {
 }
 
 impl ReuseStore {
-    /// The bytes a store of `width` x `height` pixels with `aovs` needs.
+    /// The bytes a store of `width` x `height` pixels with `aovs` needs: one value per pixel
+    /// and pass (the least the store works with).
     pub fn bytes_for(width: u32, height: u32, aovs: &[Aov]) -> usize {
         let traced_passes = aovs.iter().filter(|a| a.is_traced()).count();
-        let (bw, bh) = block_grid(width, height);
-        width as usize * height as usize * (PIXEL_BYTES + 12 * traced_passes) + (bw * bh) as usize * 4
+        width as usize * height as usize * (PIXEL_BYTES + 12 * traced_passes)
+    }
+
+    /// The bytes a store that keeps every one of `spp` samples per pixel needs.
+    pub fn sample_bytes_for(width: u32, height: u32, spp: u32, aovs: &[Aov]) -> usize {
+        Self::bytes_for(width, height, aovs) + width as usize * height as usize * spp as usize * SAMPLE_BYTES
     }
 
     /// Bytes the store holds now.
     pub fn memory_bytes(&self) -> usize {
-        let pixels = self.image.len() * 12 + self.counts.len() * 4;
+        let pixels = self.image.len() * (12 + 4 + 4);
         let passes: usize = self.passes.iter().map(|(_, p)| p.len() * 12).sum();
-        pixels + passes + self.horizons.len() * 4
+        pixels + passes + self.samples.len() * SAMPLE_BYTES
     }
 
     /// Whether the store holds a frame rendered with `settings` and `aovs`.
@@ -85,16 +117,35 @@ impl ReuseStore {
         self.settings.as_ref().is_some_and(|(s, a)| s == settings && a == aovs)
     }
 
-    /// Blocks a frame at `ordinal` must trace: those whose horizon has come.
+    /// An empty store for frames of `settings` and `aovs` in `budget` bytes, every value due
+    /// at `ordinal`.
+    fn fresh(settings: &RenderSettings, aovs: &[Aov], budget: usize, ordinal: u32) -> Self {
+        let (w, h, spp) = (settings.width, settings.height, settings.spp);
+        let pixels = w as usize * h as usize;
+        let keep_samples = !settings.adaptive.is_on() && Self::sample_bytes_for(w, h, spp, aovs) <= budget;
+        let samples = if keep_samples { pixels * spp as usize } else { 0 };
+        ReuseStore {
+            settings: Some((*settings, aovs.to_vec())),
+            granularity: if keep_samples { ReuseGranularity::Sample } else { ReuseGranularity::Pixel },
+            image: vec![Vec3::ZERO; pixels],
+            counts: vec![0; pixels],
+            horizons: vec![ordinal; pixels],
+            passes: aovs.iter().filter(|a| a.is_traced()).map(|&a| (a, vec![Vec3::ZERO; pixels])).collect(),
+            samples: vec![Vec3::ZERO; samples],
+            sample_horizons: vec![ordinal; samples],
+        }
+    }
+
+    /// Pixels a frame at `ordinal` must trace (wholly or in part): those whose horizon has come.
     fn due(&self, ordinal: u32) -> Vec<bool> {
         self.horizons.iter().map(|&h| h <= ordinal).collect()
     }
 }
 
-/// A frame's image with `integrator` and its `aovs` passes, tracing only the blocks `reuse`
-/// and the store say must be traced, and the rest taken from `store`, which is brought up to
-/// date. The same bits as [`super::render_with_aovs`] (see the module docs); the statistics
-/// count only what was traced, but for the samples per pixel, which are the whole frame's.
+/// A frame's image with `integrator` and its `aovs` passes, tracing only what `reuse` and the
+/// store say must be traced and taking the rest from `store`, which is brought up to date.
+/// The same bits as [`super::render_with_aovs`] (see the module docs); the statistics count
+/// only what was traced, but for the samples per pixel, which are the whole frame's.
 pub fn render_reusing(
     scene: &RenderScene,
     query: &dyn SceneQuery,
@@ -104,44 +155,47 @@ pub fn render_reusing(
     reuse: FrameReuse,
     store: &mut ReuseStore,
 ) -> Result<(Film, RenderStats, AovPasses, ReuseStats), RenderError> {
-    let full = reuse.full || !store.fits(settings, aovs);
-    let due = (!full).then(|| store.due(reuse.ordinal));
+    if reuse.full || !store.fits(settings, aovs) {
+        *store = ReuseStore::fresh(settings, aovs, reuse.budget, reuse.ordinal);
+    }
+    let due = store.due(reuse.ordinal);
     let plan = FramePlan {
         samples: None,
-        blocks: due.as_deref(),
+        due: match store.granularity {
+            ReuseGranularity::Sample => {
+                Due::Samples { horizons: &store.sample_horizons, pixels: &due, ordinal: reuse.ordinal }
+            }
+            ReuseGranularity::Pixel => Due::Pixels { due: &due, stored: &store.counts },
+        },
         horizons: Some((reuse.index, reuse.ordinal, reuse.frames)),
     };
     let beauty = render_planned(scene, query, integrator, settings, &plan)?;
-    if full {
-        *store = ReuseStore {
-            settings: Some((*settings, aovs.to_vec())),
-            image: vec![Vec3::ZERO; beauty.counts.len()],
-            counts: vec![0; beauty.counts.len()],
-            passes: aovs
-                .iter()
-                .filter(|a| a.is_traced())
-                .map(|&a| (a, vec![Vec3::ZERO; beauty.counts.len()]))
-                .collect(),
-            horizons: beauty.horizons.clone(),
-        };
-    }
-    let traced = due.unwrap_or_else(|| vec![true; beauty.horizons.len()]);
-    let merged = merge(store, &beauty, &traced, settings.width);
+    let traced = match store.granularity {
+        ReuseGranularity::Sample => store.merge_samples(&beauty, &due, settings.spp),
+        ReuseGranularity::Pixel => store.merge_pixels(&beauty, &due),
+    };
     let mut seconds = beauty.seconds;
     for i in 0..store.passes.len() {
         let aov = store.passes[i].0;
-        let plan = FramePlan { samples: Some(&store.counts), blocks: Some(&traced), horizons: None };
+        let plan = FramePlan {
+            samples: Some(&store.counts),
+            due: Due::Pixels { due: &due, stored: &store.counts },
+            horizons: None,
+        };
         let pass = render_planned(scene, query, &AovIntegrator(aov), settings, &plan)?;
         seconds += pass.seconds;
-        copy_blocks(&mut store.passes[i].1, &pass.film.pixels, &traced, settings.width);
+        copy_due(&mut store.passes[i].1, &pass.film.pixels, &due);
     }
+    let total: u64 = store.counts.iter().map(|&n| u64::from(n)).sum();
+    let samples_traced: u64 = traced.iter().map(|&n| u64::from(n)).sum();
     let (film, passes) = store.frame(aovs, &traced, settings);
     let stats = RenderStats { rays: beauty.rays, seconds, spp: SppStats::of(&store.counts) };
     let reuse_stats = ReuseStats {
-        samples_traced: merged.0,
-        samples_reused: merged.1,
-        blocks_traced: traced.iter().filter(|t| **t).count() as u64,
-        blocks: traced.len() as u64,
+        granularity: store.granularity,
+        samples_traced,
+        samples_reused: total - samples_traced,
+        pixels_traced: traced.iter().filter(|&&n| n > 0).count() as u64,
+        pixels: due.len() as u64,
         horizon_queries: beauty.horizon_queries,
         horizon_ms: beauty.horizon_seconds * 1e3,
         store_bytes: store.memory_bytes() as u64,
@@ -149,57 +203,64 @@ pub fn render_reusing(
     Ok((film, stats, passes, reuse_stats))
 }
 
-/// Copies the traced blocks of `beauty` (image, counts, horizons) into `store`; returns the
-/// camera samples traced and reused.
-fn merge(store: &mut ReuseStore, beauty: &PlannedFrame, traced: &[bool], width: u32) -> (u64, u64) {
-    copy_blocks(&mut store.image, &beauty.film.pixels, traced, width);
-    let (mut samples_traced, mut samples_reused) = (0u64, 0u64);
-    for (i, (&count, stored)) in beauty.counts.iter().zip(store.counts.iter_mut()).enumerate() {
-        let (x, y) = (i as u32 % width, i as u32 / width);
-        if traced[block_index(width, x, y)] {
-            *stored = count;
-            samples_traced += u64::from(count);
-        } else {
-            samples_reused += u64::from(*stored);
-        }
-    }
-    for (b, &horizon) in beauty.horizons.iter().enumerate() {
-        if traced[b] {
-            store.horizons[b] = horizon;
-        }
-    }
-    (samples_traced, samples_reused)
-}
-
-/// Copies the pixels of the traced blocks from `from` into `to` (both row-major, `width` wide).
-fn copy_blocks(to: &mut [Vec3], from: &[Vec3], traced: &[bool], width: u32) {
-    for (i, (to, from)) in to.iter_mut().zip(from).enumerate() {
-        if traced[block_index(width, i as u32 % width, i as u32 / width)] {
+/// Copies the values of the pixels `due` from `from` into `to`.
+fn copy_due(to: &mut [Vec3], from: &[Vec3], due: &[bool]) {
+    for ((to, from), &due) in to.iter_mut().zip(from).zip(due) {
+        if due {
             *to = *from;
         }
     }
 }
 
 impl ReuseStore {
-    /// The stored frame as images: the beauty image and `aovs` in order (`spp` and `traced`
-    /// from the counts and the blocks `traced` this frame).
-    fn frame(&self, aovs: &[Aov], traced: &[bool], settings: &RenderSettings) -> (Film, AovPasses) {
+    /// Copies the traced pixels of `beauty` (image, counts, horizons) in; returns the camera
+    /// samples traced per pixel.
+    fn merge_pixels(&mut self, beauty: &PlannedFrame, due: &[bool]) -> Vec<u32> {
+        copy_due(&mut self.image, &beauty.film.pixels, due);
+        let mut traced = vec![0; due.len()];
+        for (p, _) in due.iter().enumerate().filter(|(_, d)| **d) {
+            self.counts[p] = beauty.counts[p];
+            self.horizons[p] = beauty.horizons[p];
+            traced[p] = beauty.counts[p];
+        }
+        traced
+    }
+
+    /// Copies the traced samples of `beauty` in and computes the pixels `due` (those with a
+    /// traced sample) again: each the sum of its `spp` samples in index order over `spp`, as
+    /// a full frame computes it, and its horizon the nearest of its samples'. Returns the
+    /// samples traced per pixel.
+    fn merge_samples(&mut self, beauty: &PlannedFrame, due: &[bool], spp: u32) -> Vec<u32> {
+        let n = spp as usize;
+        let mut traced = vec![0; due.len()];
+        for s in &beauty.samples {
+            let at = s.pixel as usize * n + s.index as usize;
+            self.samples[at] = s.li;
+            self.sample_horizons[at] = s.horizon;
+            traced[s.pixel as usize] += 1;
+        }
+        for (p, _) in due.iter().enumerate().filter(|(_, d)| **d) {
+            let samples = p * n..(p + 1) * n;
+            let sum = self.samples[samples.clone()].iter().fold(Vec3::ZERO, |sum, &li| sum + li);
+            self.image[p] = sum / spp as f32;
+            self.counts[p] = spp;
+            self.horizons[p] = self.sample_horizons[samples].iter().copied().min().unwrap_or(0);
+        }
+        traced
+    }
+
+    /// The stored frame as images: the beauty image and `aovs` in order (`spp` from the
+    /// counts, `traced` from the samples traced per pixel this frame).
+    fn frame(&self, aovs: &[Aov], traced: &[u32], settings: &RenderSettings) -> (Film, AovPasses) {
         let (w, h) = (settings.width, settings.height);
         let film = |pixels: Vec<Vec3>| Film { width: w, height: h, pixels };
+        let counts = |counts: &[u32]| counts.iter().map(|&n| Vec3::splat(n as f32)).collect();
         let passes = aovs
             .iter()
             .map(|&aov| {
                 let pixels = match aov {
-                    Aov::Spp => self.counts.iter().map(|&n| Vec3::splat(n as f32)).collect(),
-                    Aov::Traced => self
-                        .counts
-                        .iter()
-                        .enumerate()
-                        .map(|(i, &n)| {
-                            let block = block_index(w, i as u32 % w, i as u32 / w);
-                            Vec3::splat(if traced[block] { n as f32 } else { 0.0 })
-                        })
-                        .collect(),
+                    Aov::Spp => counts(&self.counts),
+                    Aov::Traced => counts(traced),
                     aov => self
                         .passes
                         .iter()

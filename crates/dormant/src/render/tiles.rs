@@ -14,7 +14,7 @@ use super::{
     RenderScene,
 };
 use crate::accel::bvh::ChangeIndex;
-use crate::accel::SceneQuery;
+use crate::accel::{Hit, SceneQuery};
 use crate::geometry::Ray;
 use crate::scene::limits::{image_size_problem, MAX_SAMPLES_PER_PIXEL};
 
@@ -157,41 +157,58 @@ pub(crate) fn render_frame_counted(
     Ok((out.film, stats, out.counts))
 }
 
-/// Which of a frame's pixel blocks to render, and how: the unit of exact temporal reuse is a
-/// camera-ray block ([`BLOCK`] pixels, every sample), traced exactly as a full frame traces it.
+/// Which of a frame's pixels (or samples) to render, and how. For exact temporal reuse a
+/// sample must be traced exactly as a full frame traces it: its camera ray goes in the same
+/// packet, with the same neighbours, as in a full frame, so a block with a sample to trace
+/// traces that sample's camera packet and continues only the paths of the samples it traces.
 #[derive(Clone, Copy, Default)]
 pub(crate) struct FramePlan<'a> {
     /// Fixed samples per pixel (row-major) instead of `spp` and adaptive sampling.
     pub samples: Option<&'a [u32]>,
-    /// The blocks to trace, by [`block_index`]; `None`: every block. Pixels of other blocks
-    /// come back black with no samples.
-    pub blocks: Option<&'a [bool]>,
-    /// Find each traced block's horizon against this index: the frame's ordinal and the
-    /// horizon of a block that meets no change (the run's number of rendered frames).
+    /// Which samples to trace.
+    pub due: Due<'a>,
+    /// Find each traced pixel's (or sample's) horizon against this index: the frame's ordinal
+    /// and the horizon of what meets no change (the run's number of rendered frames).
     pub horizons: Option<(&'a ChangeIndex, u32, u32)>,
 }
 
-/// A planned frame: the traced blocks' pixels and sample counts (row-major; zero elsewhere),
-/// the rays traced, each block's horizon (row-major over the block grid; only traced blocks'
-/// are meaningful) and what the horizon queries cost.
+/// Which samples a frame traces (row-major pixels).
+#[derive(Clone, Copy, Default)]
+pub(crate) enum Due<'a> {
+    /// Every sample of every pixel.
+    #[default]
+    All,
+    /// Every sample of the pixels marked; the other pixels take their lanes in the camera
+    /// packets from their `stored` sample counts. They come back black with no samples.
+    Pixels { due: &'a [bool], stored: &'a [u32] },
+    /// The samples whose horizon has come by `ordinal` (`horizons`: `spp` per pixel, pixel by
+    /// pixel; `pixels`: whether a pixel has any). Every pixel has `spp` samples (no adaptive
+    /// sampling); traced samples come back one by one ([`PlannedFrame::samples`]).
+    Samples { horizons: &'a [u32], pixels: &'a [bool], ordinal: u32 },
+}
+
+/// A planned frame: the traced pixels' values and sample counts and horizons (row-major; zero
+/// elsewhere), or with [`Due::Samples`] the traced samples; the rays traced, and what the
+/// horizon queries cost.
 pub(crate) struct PlannedFrame {
     pub film: Film,
     pub counts: Vec<u32>,
+    pub horizons: Vec<u32>,
+    pub samples: Vec<TracedSample>,
     pub rays: u64,
     pub seconds: f64,
-    pub horizons: Vec<u32>,
     pub horizon_queries: u64,
     pub horizon_seconds: f64,
 }
 
-/// The block grid of a `width` x `height` image: blocks per row and rows of blocks.
-pub(crate) fn block_grid(width: u32, height: u32) -> (u32, u32) {
-    (width.div_ceil(BLOCK.0), height.div_ceil(BLOCK.1))
-}
-
-/// The index of the block holding pixel `(x, y)` in an image `width` pixels wide.
-pub(crate) fn block_index(width: u32, x: u32, y: u32) -> usize {
-    ((y / BLOCK.1) * width.div_ceil(BLOCK.0) + x / BLOCK.0) as usize
+/// One sample traced under [`Due::Samples`]: its pixel (row-major), index, radiance and
+/// horizon.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct TracedSample {
+    pub pixel: u32,
+    pub index: u32,
+    pub li: Vec3,
+    pub horizon: u32,
 }
 
 /// Renders the blocks `plan` selects, tiles spread over the current rayon pool.
@@ -222,13 +239,13 @@ pub(crate) fn render_planned(
         (0..tiles_x * h.div_ceil(TILE)).map(|t| ((t % tiles_x) * TILE, (t / tiles_x) * TILE)).collect();
     let rendered: Vec<(u32, u32, Tile)> =
         tiles.par_iter().map(|&(x0, y0)| (x0, y0, renderer.render(x0, y0))).collect();
-    let (bw, bh) = block_grid(w, h);
     let mut out = PlannedFrame {
         film: Film::new(w, h),
         counts: vec![0; (w * h) as usize],
+        horizons: vec![0; (w * h) as usize],
+        samples: Vec::new(),
         rays: 0,
         seconds: 0.0,
-        horizons: vec![0; (bw * bh) as usize],
         horizon_queries: 0,
         horizon_seconds: 0.0,
     };
@@ -244,27 +261,29 @@ impl PlannedFrame {
     fn add_tile(&mut self, x0: u32, y0: u32, tile: Tile) {
         let w = self.film.width;
         let tw = (x0 + TILE).min(w) - x0;
-        for (i, (p, n)) in tile.pixels.into_iter().zip(tile.samples).enumerate() {
+        for (i, ((p, n), horizon)) in tile.pixels.into_iter().zip(tile.samples).zip(tile.horizons).enumerate()
+        {
             let at = ((y0 + i as u32 / tw) * w + x0 + i as u32 % tw) as usize;
             self.film.pixels[at] = p;
             self.counts[at] = n;
+            self.horizons[at] = horizon;
         }
-        for (block, horizon) in tile.horizons {
-            self.horizons[block] = horizon;
-        }
+        self.samples.extend(tile.traced);
         self.rays += tile.rays;
         self.horizon_queries += tile.horizon_queries;
         self.horizon_seconds += tile.horizon_seconds;
     }
 }
 
-/// A rendered tile: its pixels row by row, the samples each got, the rays traced, and each
-/// traced block's horizon (with what finding them cost).
+/// A rendered tile: its pixels row by row, the samples each got and each one's horizon (0
+/// without horizons), the rays traced, and what finding the horizons cost.
 struct Tile {
     pixels: Vec<Vec3>,
     samples: Vec<u32>,
+    horizons: Vec<u32>,
+    /// With [`Due::Samples`], the samples traced.
+    traced: Vec<TracedSample>,
     rays: u64,
-    horizons: Vec<(usize, u32)>,
     horizon_queries: u64,
     horizon_seconds: f64,
 }
@@ -275,13 +294,18 @@ struct Cells {
     len: usize,
 }
 
-/// A pixel of a camera-ray block: its coordinates, sampler, and the most samples it may get.
+/// A pixel of a camera-ray block: its coordinates, sampler, the most samples it may get, and
+/// whether its paths are traced (a pixel reused from earlier frames only takes its place in
+/// the camera packets, for each of its samples up to its stored count).
 #[derive(Clone, Copy)]
 struct Cell {
     x: u32,
     y: u32,
+    /// Row-major index of the pixel in the image.
+    pixel: u32,
     sampler: PixelSampler,
     budget: u32,
+    traced: bool,
 }
 
 /// What every tile of a frame is rendered with.
@@ -314,28 +338,28 @@ impl TileRenderer<'_> {
         let mut tile = Tile {
             pixels: Vec::new(),
             samples: Vec::new(),
+            horizons: vec![0; n],
+            traced: Vec::new(),
             rays: 0,
-            horizons: Vec::new(),
             horizon_queries: 0,
             horizon_seconds: 0.0,
         };
         for by in (y0..y1).step_by(BLOCK.1 as usize) {
             for bx in (x0..x1).step_by(BLOCK.0 as usize) {
-                let block = block_index(w, bx, by);
-                if self.plan.blocks.is_some_and(|b| !b[block]) {
+                if !self.any_due(bx, by, x1, y1) {
                     continue;
                 }
-                let mut log = match self.plan.horizons {
-                    Some((index, ordinal, until)) => RayLog::with_horizon(index, ordinal, until),
-                    None => RayLog::counting(),
-                };
-                self.render_block(&self.cells(bx, by, x1, y1), &mut acc, &mut log);
-                tile.rays += log.rays;
-                if let Some(horizon) = log.horizon() {
-                    tile.horizons.push((block, horizon));
+                let cells = self.cells(bx, by, x1, y1);
+                let mut logs: [RayLog; BLOCK_PIXELS] = std::array::from_fn(|_| self.new_log());
+                self.render_block(&cells, &mut acc, &mut logs, &mut tile.traced);
+                for (cell, log) in cells.cells[..cells.len].iter().zip(&logs) {
+                    tile.rays += log.rays;
                     let (queries, seconds) = log.query_cost();
                     tile.horizon_queries += u64::from(queries);
                     tile.horizon_seconds += seconds;
+                    if let (true, Some(horizon)) = (cell.traced, log.horizon()) {
+                        tile.horizons[acc.at(cell)] = horizon;
+                    }
                 }
             }
         }
@@ -344,20 +368,71 @@ impl TileRenderer<'_> {
         tile
     }
 
+    /// A log for the rays of a pixel (or a sample), finding horizons when the plan asks.
+    fn new_log(&self) -> RayLog<'_> {
+        match self.plan.horizons {
+            Some((index, ordinal, until)) => RayLog::with_horizon(index, ordinal, until),
+            None => RayLog::counting(),
+        }
+    }
+
+    /// Whether sample `i` of `cell`'s pixel is traced.
+    fn sample_due(&self, cell: &Cell, i: u32) -> bool {
+        match self.plan.due {
+            Due::Samples { horizons, ordinal, .. } => {
+                horizons[cell.pixel as usize * self.settings.spp as usize + i as usize] <= ordinal
+            }
+            _ => cell.traced,
+        }
+    }
+
+    /// Whether the block whose top-left pixel is `(bx, by)`, clipped to `(x1, y1)`, has a pixel
+    /// to trace.
+    fn any_due(&self, bx: u32, by: u32, x1: u32, y1: u32) -> bool {
+        let due = match self.plan.due {
+            Due::All => return true,
+            Due::Pixels { due, .. } => due,
+            Due::Samples { pixels, .. } => pixels,
+        };
+        let w = self.settings.width;
+        (by..(by + BLOCK.1).min(y1)).any(|y| {
+            let row = (y * w) as usize;
+            due[row + bx as usize..row + (bx + BLOCK.0).min(x1) as usize].iter().any(|&d| d)
+        })
+    }
+
     /// The pixels of the block whose top-left pixel is `(bx, by)`, clipped to `(x1, y1)`:
     /// each with its sampler and sample budget. A fixed array, not a Vec: one block per 8
     /// pixels is on the hot path.
     fn cells(&self, bx: u32, by: u32, x1: u32, y1: u32) -> Cells {
         let w = self.settings.width;
         let mut cells = Cells {
-            cells: [Cell { x: 0, y: 0, sampler: PixelSampler::new(0, 0, 0), budget: 0 }; BLOCK_PIXELS],
+            cells: [Cell {
+                x: 0,
+                y: 0,
+                pixel: 0,
+                sampler: PixelSampler::new(0, 0, 0),
+                budget: 0,
+                traced: false,
+            }; BLOCK_PIXELS],
             len: 0,
         };
         for y in by..(by + BLOCK.1).min(y1) {
             for x in bx..(bx + BLOCK.0).min(x1) {
-                let budget = self.plan.samples.map_or(self.settings.spp, |s| s[(y * w + x) as usize]);
-                cells.cells[cells.len] =
-                    Cell { x, y, sampler: PixelSampler::new(x, y, self.settings.seed), budget };
+                let p = (y * w + x) as usize;
+                let traced = match self.plan.due {
+                    Due::All => true,
+                    Due::Pixels { due, .. } => due[p],
+                    Due::Samples { pixels, .. } => pixels[p],
+                };
+                // A pixel not traced keeps its lanes as when it was: its stored samples.
+                let budget = match (self.plan.samples, self.plan.due) {
+                    (Some(s), _) => s[p],
+                    (None, Due::Pixels { stored, .. }) if !traced => stored[p],
+                    _ => self.settings.spp,
+                };
+                let sampler = PixelSampler::new(x, y, self.settings.seed);
+                cells.cells[cells.len] = Cell { x, y, pixel: p as u32, sampler, budget, traced };
                 cells.len += 1;
             }
         }
@@ -366,8 +441,15 @@ impl TileRenderer<'_> {
 
     /// Samples the pixels of one block in index order, the camera rays of those still
     /// sampling traced as one packet per index, until each has its budget or has converged;
-    /// every ray goes into `log`.
-    fn render_block(&self, cells: &Cells, acc: &mut Accumulator, log: &mut RayLog) {
+    /// each pixel's rays go into its log. A pixel not traced keeps its lane in the packets but
+    /// its path is not continued.
+    fn render_block(
+        &self,
+        cells: &Cells,
+        acc: &mut Accumulator,
+        logs: &mut [RayLog; BLOCK_PIXELS],
+        traced: &mut Vec<TracedSample>,
+    ) {
         let block = &cells.cells[..cells.len];
         let spp = self.settings.spp;
         let mut camera_rays = [Ray::new(Vec3::ZERO, Vec3::Z); BLOCK_PIXELS];
@@ -388,14 +470,52 @@ impl TileRenderer<'_> {
             if m == 0 {
                 break;
             }
+            if !slots[..m].iter().any(|&c| self.sample_due(&block[c], i)) {
+                continue;
+            }
             self.query.intersect_packet(&camera_rays[..m], &mut hits[..m]);
             for ((ray, hit), &c) in camera_rays.iter().zip(hits).zip(&slots[..m]) {
                 let cell = &block[c];
-                log.closest(ray, hit.as_ref());
-                let li = self.integrator.li_from_hit(ray, hit, &cell.sampler, i, log);
-                done[c] = acc.add(cell, li, self.stopping.as_ref());
+                if let Due::Samples { .. } = self.plan.due {
+                    self.trace_sample(cell, i, ray, hit, &mut logs[c], traced);
+                    continue;
+                }
+                let log = &mut logs[c];
+                if cell.traced {
+                    log.closest(ray, hit.as_ref());
+                    let li = self.integrator.li_from_hit(ray, hit, &cell.sampler, i, log);
+                    done[c] = acc.add(cell, li, self.stopping.as_ref());
+                } else {
+                    log.count_untraced();
+                }
             }
         }
+    }
+}
+
+impl TileRenderer<'_> {
+    /// Under [`Due::Samples`], continues sample `i` of `cell`'s pixel from its camera `ray`
+    /// and `hit` when it is due, recording it with its own horizon in `traced`; its rays count
+    /// into the pixel's `log` (which otherwise only counts the camera ray).
+    fn trace_sample(
+        &self,
+        cell: &Cell,
+        i: u32,
+        ray: &Ray,
+        hit: Option<Hit>,
+        log: &mut RayLog,
+        traced: &mut Vec<TracedSample>,
+    ) {
+        if !self.sample_due(cell, i) {
+            log.count_untraced();
+            return;
+        }
+        let mut sample_log = self.new_log();
+        sample_log.closest(ray, hit.as_ref());
+        let li = self.integrator.li_from_hit(ray, hit, &cell.sampler, i, &mut sample_log);
+        let horizon = sample_log.horizon().unwrap_or(0);
+        traced.push(TracedSample { pixel: cell.pixel, index: i, li, horizon });
+        log.absorb(&sample_log);
     }
 }
 
@@ -412,9 +532,14 @@ struct Accumulator {
 }
 
 impl Accumulator {
+    /// The index of `cell`'s pixel in the tile.
+    fn at(&self, cell: &Cell) -> usize {
+        ((cell.y - self.y0) * self.tw + (cell.x - self.x0)) as usize
+    }
+
     /// Adds sample `li` to `cell`'s pixel; whether the pixel has converged.
     fn add(&mut self, cell: &Cell, li: Vec3, stopping: Option<&Stopping>) -> bool {
-        let at = ((cell.y - self.y0) * self.tw + (cell.x - self.x0)) as usize;
+        let at = self.at(cell);
         self.sums[at] += li;
         self.samples[at] += 1;
         let Some(stopping) = stopping else {

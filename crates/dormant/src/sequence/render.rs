@@ -118,6 +118,7 @@ impl Sequence {
                         ordinal: reuse.ordinal(frame.index),
                         frames: reuse.frame_count(),
                         full: full.is_some(),
+                        budget: renderer.reuse_budget,
                     };
                     let (film, render, aovs, stats) = render_reusing(
                         &scene,

@@ -10,7 +10,7 @@ use serde::Serialize;
 
 use super::frame_renderer::{FrameRenderer, ReuseMode, SeedMode};
 use super::{FrameSelection, Sequence, SequenceError};
-use crate::accel::bvh::{ChangeBox, ChangeIndex};
+use crate::accel::bvh::{ChangeBox, ChangeIndex, ChangeShape, EXACT_MESH_TRIANGLES};
 use crate::geometry::{Aabb, InstanceMotion};
 use crate::physics::trajectory::ReplayFrame;
 use crate::render::{Emitters, ReuseStore};
@@ -69,7 +69,8 @@ impl ExactReuse {
         check_budget(renderer)?;
         let frames = selection.frames();
         let (boxes, full) = sequence.changes(&frames, renderer.shutter);
-        Ok(Some(Self { index: ChangeIndex::build(boxes), frames, full, form, store: ReuseStore::default() }))
+        let index = ChangeIndex::build(boxes, sequence.small_prototypes());
+        Ok(Some(Self { index, frames, full, form, store: ReuseStore::default() }))
     }
 
     /// The ordinal of selected frame `frame`.
@@ -156,7 +157,8 @@ impl Sequence {
                     let p = body_prototype[b];
                     emitter |= emissive.get(p).copied().unwrap_or(false);
                     let bounds = look_bounds(before, &local[p]).union(look_bounds(after, &local[p]));
-                    boxes.push(ChangeBox { bounds, visible_at: ordinal as u32 });
+                    let shape = look_shape(before, after, p as u32);
+                    boxes.push(ChangeBox { bounds, visible_at: ordinal as u32, shape });
                 }
                 full[ordinal] = match (camera, emitter) {
                     (true, _) => Some(FullFrame::CameraMoved),
@@ -169,6 +171,32 @@ impl Sequence {
         }
         (boxes, full)
     }
+}
+
+impl Sequence {
+    /// Each prototype's triangles when it has few enough for the change index to test exactly
+    /// ([`EXACT_MESH_TRIANGLES`]); empty otherwise (its changes are tested by their boxes).
+    fn small_prototypes(&self) -> Vec<Vec<[glam::Vec3; 3]>> {
+        self.template
+            .prototypes
+            .iter()
+            .map(|p| match p.mesh.triangle_count() <= EXACT_MESH_TRIANGLES {
+                true => (0..p.mesh.triangle_count()).map(|i| p.mesh.triangle(i)).collect(),
+                false => Vec::new(),
+            })
+            .collect()
+    }
+}
+
+/// The shape of a body of prototype `prototype` that changed from `before` to `after`, when
+/// neither look moves over a shutter (a swept body is tested by its box).
+fn look_shape(before: &Look, after: &Look, prototype: u32) -> Option<ChangeShape> {
+    let pose = |look: &Look| match look {
+        Look::Absent => Some(None),
+        Look::Still(transform) => Some(Some(*transform)),
+        Look::Moving(_) => None,
+    };
+    Some(ChangeShape { mesh: prototype, poses: [pose(before)?, pose(after)?] })
 }
 
 /// Every body's look in `frame` with a shutter of `shutter` frame intervals.

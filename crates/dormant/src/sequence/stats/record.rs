@@ -64,16 +64,16 @@ pub struct ReuseRecord {
     pub samples_traced: u64,
     #[serde(default)]
     pub samples_reused: u64,
-    /// Pixel blocks traced (exact reuse; every block without it).
+    /// Pixels traced (exact reuse; every pixel without it).
     #[serde(default)]
-    pub blocks_traced: u64,
+    pub pixels_traced: u64,
     /// Time of the horizon queries, ms (exact reuse).
     #[serde(default)]
     pub horizon_ms: f64,
     /// Bytes the reuse store holds (exact reuse).
     #[serde(default)]
     pub reuse_store_bytes: u64,
-    /// Why exact reuse traced every block of this frame; `null` when it reused blocks, or
+    /// Why exact reuse traced every pixel of this frame; `null` when it reused pixels, or
     /// without exact reuse.
     #[serde(default)]
     pub full_frame: Option<FullFrame>,
@@ -87,7 +87,7 @@ impl ReuseRecord {
             return Self {
                 samples_traced: s.samples_traced,
                 samples_reused: s.samples_reused,
-                blocks_traced: s.blocks_traced,
+                pixels_traced: s.pixels_traced,
                 horizon_ms: s.horizon_ms,
                 reuse_store_bytes: s.store_bytes,
                 full_frame: exact.full,
@@ -374,7 +374,7 @@ fn csv_columns() -> Vec<(&'static str, Cell)> {
         ("samples_traced", Cell::Text(|f| f.reuse.samples_traced.to_string())),
         ("samples_reused", Cell::Text(|f| f.reuse.samples_reused.to_string())),
         ("traced_share", Cell::Text(|f| format!("{:.5}", f.reuse.traced_share()))),
-        ("blocks_traced", Cell::Text(|f| f.reuse.blocks_traced.to_string())),
+        ("pixels_traced", Cell::Text(|f| f.reuse.pixels_traced.to_string())),
         ("horizon_ms", Cell::Text(|f| format!("{:.4}", f.reuse.horizon_ms))),
         ("reuse_store_bytes", Cell::Text(|f| f.reuse.reuse_store_bytes.to_string())),
         ("full_frame", Cell::Text(|f| f.reuse.full_frame.map(|r| r.name()).unwrap_or_default().to_string())),

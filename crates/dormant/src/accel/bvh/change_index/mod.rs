@@ -6,10 +6,21 @@
 //! their boxes' ordinals, so a query ("the earliest change after ordinal `n` that this ray
 //! segment meets") skips subtrees that lie wholly in the past or no earlier than the best
 //! change found so far.
+//!
+//! A box may also name the geometry it bounds ([`ChangeShape`]: a small mesh at the poses of
+//! the body before and after the change). A segment that crosses such a box then counts only
+//! if it comes near that geometry at either pose: a ray passing a moved body without touching
+//! it sees nothing change. The test is conservative (f64, with a margin), so it never misses a
+//! hit either tracer could find.
+
+mod shape;
 
 use glam::Vec3;
 
-use super::flat::{build, interval_is_valid, BoxRay, STACK_SIZE};
+pub use shape::{ChangeShape, EXACT_MESH_TRIANGLES};
+use shape::{ExactMesh, ShapeTest};
+
+use super::flat::{build, interval_is_valid, BoxRay, Node, STACK_SIZE};
 use super::BuildParams;
 use crate::geometry::{Aabb, Ray};
 
@@ -19,6 +30,8 @@ use crate::geometry::{Aabb, Ray};
 pub struct ChangeBox {
     pub bounds: Aabb,
     pub visible_at: u32,
+    /// What changed inside the box, when it can be tested exactly; `None`: anything in it.
+    pub shape: Option<ChangeShape>,
 }
 
 /// A node of the index: bounds, children or boxes as in the flat BVH, and the least and most
@@ -42,6 +55,10 @@ pub struct ChangeIndex {
     nodes: Vec<IndexNode>,
     /// The boxes in leaf order.
     boxes: Vec<ChangeBox>,
+    /// Per box (leaf order), the object-space views of its shape's poses.
+    shapes: Vec<Option<ShapeTest>>,
+    /// The meshes shapes refer to, ready for exact tests.
+    meshes: Vec<ExactMesh>,
 }
 
 /// Builds change indexes with a cheap build: the index is built once per sequence and its
@@ -53,7 +70,7 @@ impl ChangeIndex {
     /// size plus 1e-5 of its distance from the origin) so that rounding in the tracers' hit
     /// points and instance transforms never puts a change outside its box. Empty and
     /// non-finite boxes are dropped.
-    pub fn build(boxes: Vec<ChangeBox>) -> Self {
+    pub fn build(boxes: Vec<ChangeBox>, meshes: Vec<Vec<[Vec3; 3]>>) -> Self {
         let boxes: Vec<ChangeBox> = boxes
             .into_iter()
             .filter(|b| !b.bounds.is_empty() && b.bounds.min.is_finite() && b.bounds.max.is_finite())
@@ -61,34 +78,11 @@ impl ChangeIndex {
             .collect();
         let bounds: Vec<Aabb> = boxes.iter().map(|b| b.bounds).collect();
         let (bvh, order) = build(&bounds, INDEX_PARAMS);
-        let boxes: Vec<ChangeBox> = order.iter().map(|&i| boxes[i as usize]).collect();
-        let mut nodes: Vec<IndexNode> = bvh
-            .nodes
-            .iter()
-            .map(|n| IndexNode {
-                min: n.min,
-                first: n.first,
-                max: n.max,
-                count: n.count,
-                earliest: u32::MAX,
-                latest: 0,
-            })
-            .collect();
-        // Children follow their parents in the array, so one backwards pass fills every
-        // interior node's frame range from its children's.
-        for i in (0..nodes.len()).rev() {
-            let n = nodes[i];
-            let (earliest, latest) = if n.count > 0 {
-                let range = &boxes[n.first as usize..(n.first + n.count) as usize];
-                range.iter().fold((u32::MAX, 0), |(e, l), b| (e.min(b.visible_at), l.max(b.visible_at)))
-            } else {
-                let (a, b) = (nodes[n.first as usize], nodes[n.first as usize + 1]);
-                (a.earliest.min(b.earliest), a.latest.max(b.latest))
-            };
-            nodes[i].earliest = earliest;
-            nodes[i].latest = latest;
-        }
-        Self { nodes, boxes }
+        let mut boxes: Vec<ChangeBox> = order.iter().map(|&i| boxes[i as usize]).collect();
+        let nodes = index_nodes(&bvh.nodes, &mut boxes);
+        let meshes: Vec<ExactMesh> = meshes.iter().map(|m| ExactMesh::new(m)).collect();
+        let shapes = boxes.iter().map(|b| b.shape.and_then(|s| ShapeTest::new(&s, &meshes))).collect();
+        Self { nodes, boxes, shapes, meshes }
     }
 
     /// The number of change boxes.
@@ -109,7 +103,11 @@ impl ChangeIndex {
     /// The earliest `visible_at` greater than `after` and less than `before` of a box that the
     /// segment of `ray` over `[t_min, t_max]` meets, or `before` when there is none. A segment
     /// traced at ordinal `after` stays valid until the returned ordinal.
-    pub fn first_change(&self, ray: &Ray, after: u32, before: u32) -> u32 {
+    ///
+    /// With `occlusion` the segment is an occlusion ray's, whose result is only whether
+    /// anything blocks it: a shape it meets at both poses blocks it before and after the
+    /// change, so only a shape met at one pose counts.
+    pub fn first_change(&self, ray: &Ray, after: u32, before: u32, occlusion: bool) -> u32 {
         if self.nodes.is_empty() || after.saturating_add(1) >= before || !interval_is_valid(ray) {
             return before;
         }
@@ -127,10 +125,14 @@ impl ChangeIndex {
                 continue;
             }
             if n.count > 0 {
-                for b in &self.boxes[n.first as usize..(n.first + n.count) as usize] {
+                for k in n.first as usize..(n.first + n.count) as usize {
+                    let b = &self.boxes[k];
+                    if b.visible_at >= best {
+                        break;
+                    }
                     if b.visible_at > after
-                        && b.visible_at < best
                         && r.hit_bounds(b.bounds.min, b.bounds.max, ray.t_max) != f32::INFINITY
+                        && self.shapes[k].is_none_or(|s| s.changes_for(&self.meshes, ray, occlusion))
                     {
                         best = b.visible_at;
                     }
@@ -158,6 +160,39 @@ impl ChangeIndex {
     }
 }
 
+/// The index's nodes over the flat BVH's `nodes`, with `boxes` (in leaf order) sorted by
+/// `visible_at` within each leaf, so a query stops in a leaf at the first box no earlier than
+/// its best change.
+fn index_nodes(nodes: &[Node], boxes: &mut [ChangeBox]) -> Vec<IndexNode> {
+    let mut nodes: Vec<IndexNode> = nodes
+        .iter()
+        .map(|n| IndexNode {
+            min: n.min,
+            first: n.first,
+            max: n.max,
+            count: n.count,
+            earliest: u32::MAX,
+            latest: 0,
+        })
+        .collect();
+    // Children follow their parents in the array, so one backwards pass fills every interior
+    // node's frame range from its children's.
+    for i in (0..nodes.len()).rev() {
+        let n = nodes[i];
+        let (earliest, latest) = if n.count > 0 {
+            let leaf = &mut boxes[n.first as usize..(n.first + n.count) as usize];
+            leaf.sort_by_key(|b| b.visible_at);
+            (leaf[0].visible_at, leaf[leaf.len() - 1].visible_at)
+        } else {
+            let (a, b) = (nodes[n.first as usize], nodes[n.first as usize + 1]);
+            (a.earliest.min(b.earliest), a.latest.max(b.latest))
+        };
+        nodes[i].earliest = earliest;
+        nodes[i].latest = latest;
+    }
+    nodes
+}
+
 /// `b` grown by a margin that absorbs rounding: 1e-4 of its largest side plus 1e-5 of its
 /// largest coordinate's magnitude.
 fn padded(b: Aabb) -> Aabb {
@@ -169,35 +204,62 @@ fn padded(b: Aabb) -> Aabb {
 
 #[cfg(test)]
 mod tests {
+    use glam::Affine3A;
+
     use super::*;
 
     fn unit_box_at(x: f32, visible_at: u32) -> ChangeBox {
         let min = Vec3::new(x, 0.0, 0.0);
-        ChangeBox { bounds: Aabb { min, max: min + Vec3::ONE }, visible_at }
+        ChangeBox { bounds: Aabb { min, max: min + Vec3::ONE }, visible_at, shape: None }
     }
 
     #[test]
     fn the_earliest_change_after_the_frame_on_the_segment_wins() {
-        let index = ChangeIndex::build(vec![unit_box_at(0.0, 5), unit_box_at(3.0, 2), unit_box_at(6.0, 9)]);
+        let index = ChangeIndex::build(
+            vec![unit_box_at(0.0, 5), unit_box_at(3.0, 2), unit_box_at(6.0, 9)],
+            Vec::new(),
+        );
         let along_x = Ray::new(Vec3::new(-1.0, 0.5, 0.5), Vec3::X);
-        assert_eq!(index.first_change(&along_x, 0, u32::MAX), 2);
+        assert_eq!(index.first_change(&along_x, 0, u32::MAX, false), 2);
         // Traced at ordinal 2 or later, the change at 2 is in the past.
-        assert_eq!(index.first_change(&along_x, 2, u32::MAX), 5);
-        assert_eq!(index.first_change(&along_x, 5, u32::MAX), 9);
-        assert_eq!(index.first_change(&along_x, 9, u32::MAX), u32::MAX);
+        assert_eq!(index.first_change(&along_x, 2, u32::MAX, false), 5);
+        assert_eq!(index.first_change(&along_x, 5, u32::MAX, false), 9);
+        assert_eq!(index.first_change(&along_x, 9, u32::MAX, false), u32::MAX);
         // A segment that stops before the second box.
         let short = Ray::segment(along_x.origin, along_x.dir, 0.0, 2.5);
-        assert_eq!(index.first_change(&short, 0, u32::MAX), 5);
+        assert_eq!(index.first_change(&short, 0, u32::MAX, false), 5);
         // Nothing beyond `before`; a ray that misses every box.
-        assert_eq!(index.first_change(&along_x, 0, 2), 2);
+        assert_eq!(index.first_change(&along_x, 0, 2, false), 2);
         let up = Ray::new(Vec3::new(-1.0, 0.5, 0.5), Vec3::Y);
-        assert_eq!(index.first_change(&up, 0, 7), 7);
+        assert_eq!(index.first_change(&up, 0, 7, false), 7);
     }
 
     #[test]
     fn an_empty_index_never_changes() {
-        let index = ChangeIndex::build(Vec::new());
+        let index = ChangeIndex::build(Vec::new(), Vec::new());
         assert!(index.is_empty());
-        assert_eq!(index.first_change(&Ray::new(Vec3::ZERO, Vec3::X), 0, 42), 42);
+        assert_eq!(index.first_change(&Ray::new(Vec3::ZERO, Vec3::X), 0, 42, false), 42);
+    }
+
+    #[test]
+    fn a_shaped_box_counts_only_segments_near_its_geometry() {
+        // The lower-left half of the unit square at z = 0.5, placed 5 units along x.
+        let tri = [Vec3::new(0.0, 0.0, 0.5), Vec3::new(1.0, 0.0, 0.5), Vec3::new(0.0, 1.0, 0.5)];
+        let pose = Affine3A::from_translation(Vec3::new(5.0, 0.0, 0.0));
+        let bounds = Aabb { min: Vec3::new(5.0, 0.0, 0.0), max: Vec3::new(6.0, 1.0, 1.0) };
+        let shape = ChangeShape { mesh: 0, poses: [Some(pose), None] };
+        let index = ChangeIndex::build(
+            vec![ChangeBox { bounds, visible_at: 3, shape: Some(shape) }],
+            vec![vec![tri]],
+        );
+        // Through the box and the triangle.
+        let through = Ray::new(Vec3::new(5.25, 0.25, -1.0), Vec3::Z);
+        assert_eq!(index.first_change(&through, 0, 10, false), 3);
+        // Through the box's corner the triangle leaves empty.
+        let past = Ray::new(Vec3::new(5.9, 0.9, -1.0), Vec3::Z);
+        assert_eq!(index.first_change(&past, 0, 10, false), 10);
+        // A segment that stops short of the triangle (at z = -0.5).
+        let short = Ray::segment(through.origin, through.dir, 0.0, 0.5);
+        assert_eq!(index.first_change(&short, 0, 10, false), 10);
     }
 }
