@@ -60,6 +60,7 @@ const RUN: &[(&str, &str)] = &[
     ("max_depth", "integer|null"),
     ("seed", "string"),
     ("reuse", "boolean"),
+    ("reuse_mode", "string"),
     ("exposure", "number"),
     ("aovs", "array"),
     ("exr", "boolean"),
@@ -98,6 +99,13 @@ const FRAME: &[(&str, &str)] = &[
     ("cache_partial", "integer"),
     ("cache_miss", "integer"),
     ("decisions", "array"),
+    ("samples_traced", "integer"),
+    ("samples_reused", "integer"),
+    ("pixels_traced", "integer"),
+    ("horizon_ms", "number"),
+    ("reuse_store_bytes", "integer"),
+    ("full_frame", "string|null"),
+    ("reuse_granularity", "string|null"),
 ];
 
 const DECISION: &[(&str, &str)] = &[
@@ -147,6 +155,9 @@ const TOTALS: &[(&str, &str)] = &[
     ("cache_miss", "integer"),
     ("decisions_integrate", "integer"),
     ("decisions_decline", "integer"),
+    ("samples_traced", "integer"),
+    ("samples_reused", "integer"),
+    ("horizon_ms", "number"),
 ];
 
 const MEDIAN: &[(&str, &str)] = &[

@@ -126,14 +126,16 @@ pub struct RenderArgs {
     #[arg(long, value_enum, default_value_t = SeedMode::Fixed)]
     pub seed: SeedMode,
     /// With a fixed seed: how a frame reuses earlier frames' work. `exact`: trace only the
-    /// pixel blocks whose samples can see something that moved since they were traced (the
-    /// simulation's future is known, so each block's next change is), take the rest from
-    /// earlier frames, bit for bit; `static`: only copy the previous frame's files where
+    /// samples that can see something that moved since they were traced (the simulation's
+    /// future is known, so each sample's next change is), take the rest from earlier frames,
+    /// bit for bit; `static`: only copy the previous frame's files where
     /// nothing moved and the camera stayed (`on` is an alias); `off`: trace every frame.
     #[arg(long, value_enum, default_value_t = ReuseMode::Exact)]
     pub reuse: ReuseMode,
-    /// With --reuse exact: memory its store of pixels may keep, in MiB (one value per pixel
-    /// and pass: a 3840x2160 frame with every AOV needs about 510 MiB).
+    /// With --reuse exact: memory its store may keep, in MiB. With room for every sample (16
+    /// bytes each, plus the pixels) it keeps samples and retraces only those due; else one
+    /// value per pixel and pass (20 bytes, 12 more per AOV: a 3840x2160 frame with every AOV
+    /// needs 538 MiB), retracing a due pixel whole.
     #[arg(long, value_name = "MIB", default_value_t = DEFAULT_REUSE_BYTES >> 20)]
     pub reuse_mib: usize,
     /// With SCENE or --trajectory: continue a run that was interrupted in --out DIR. Frames

@@ -11,6 +11,7 @@ pub mod integration;
 pub mod persistent_tree;
 pub mod physics;
 pub mod render;
+pub mod reuse;
 
 pub use accel::{bench_accel, AccelBenchOptions};
 pub use adaptive::{bench_adaptive, AdaptiveBenchOptions};
@@ -19,6 +20,7 @@ pub use instances::{bench_instances, InstancesBenchOptions};
 pub use integration::{bench_integration, IntegrationBenchOptions};
 pub use physics::{bench_physics, PhysicsBenchOptions, PhysicsBenchReport};
 pub use render::{bench_render, RenderBenchOptions};
+pub use reuse::{bench_reuse, ReuseBenchOptions};
 
 use std::time::Instant;
 

@@ -34,8 +34,9 @@ pub use integrator::{FrameContext, FrameIntegrator, Integrator};
 pub use ray_log::RayLog;
 pub use render_scene::RenderScene;
 pub(crate) use render_scene::{SurfaceHit, SurfaceKind};
-pub use reuse::{render_reusing, FrameReuse, ReuseStats, ReuseStore};
-pub use sampler::PixelSampler;
+pub(crate) use reuse::{render_reusing, FrameReuse, ReuseStore};
+pub use reuse::{ReuseGranularity, ReuseStats};
+pub(crate) use sampler::PixelSampler;
 pub(crate) use tiles::render_frame_counted;
 pub use tiles::{render_frame, RenderSettings, RenderStats};
 

@@ -15,7 +15,7 @@
 //! retraced whole ([`ReuseGranularity`]).
 
 use glam::Vec3;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::aov::{AovIntegrator, AovPasses};
 use super::tiles::{render_planned, Due, FramePlan, PlannedFrame};
@@ -30,7 +30,7 @@ const PIXEL_BYTES: usize = 4 + 4 + 12;
 const SAMPLE_BYTES: usize = 12 + 4;
 
 /// What the store keeps, and so the unit a frame retraces.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum ReuseGranularity {
     /// Every sample's value and horizon: only the samples whose horizon has come are traced.
@@ -38,6 +38,15 @@ pub enum ReuseGranularity {
     Sample,
     /// A value and a horizon per pixel: a pixel with any sample's horizon come is traced whole.
     Pixel,
+}
+
+impl ReuseGranularity {
+    pub fn name(self) -> &'static str {
+        match self {
+            ReuseGranularity::Sample => "sample",
+            ReuseGranularity::Pixel => "pixel",
+        }
+    }
 }
 
 /// The last traced values of a sequence's frames and their horizons.
@@ -272,5 +281,19 @@ impl ReuseStore {
             })
             .collect();
         (film(self.image.clone()), passes)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sequence::DEFAULT_REUSE_BYTES;
+
+    #[test]
+    fn the_default_budget_holds_a_4k_frame_per_pixel_and_hd_per_sample() {
+        let every = [Aov::Albedo, Aov::Normal, Aov::Depth, Aov::Baked, Aov::Spp, Aov::Traced];
+        assert!(ReuseStore::bytes_for(3840, 2160, &every) <= DEFAULT_REUSE_BYTES);
+        assert!(ReuseStore::sample_bytes_for(1920, 1080, 16, &[]) <= DEFAULT_REUSE_BYTES);
+        assert!(ReuseStore::sample_bytes_for(960, 540, 64, &[]) <= DEFAULT_REUSE_BYTES);
     }
 }

@@ -13,15 +13,16 @@ pub enum ReuseMode {
     /// copied instead of traced.
     #[value(alias = "on")]
     Static,
-    /// Also within frames: trace only the pixel blocks whose samples can see something that
-    /// changed since they were traced; take the rest from the previous frames, bit for bit.
+    /// Also within frames: trace only the samples that can see something that changed since
+    /// they were traced; take the rest from the previous frames, bit for bit.
     #[default]
     Exact,
 }
 
-/// Memory exact reuse may keep by default: a per-pixel store of a 3840x2160 frame with every
-/// AOV ([`ReuseStore::bytes_for`]).
-pub const DEFAULT_REUSE_BYTES: usize = 512 << 20;
+/// Memory exact reuse may keep by default: room for a per-pixel store of a 3840x2160 frame
+/// with every AOV (538 MiB, [`crate::render::ReuseStore::bytes_for`]), and for a per-sample
+/// store of 1920x1080 at 16 spp or 960x540 at 64 spp.
+pub const DEFAULT_REUSE_BYTES: usize = 576 << 20;
 
 /// How the pixel sampler is seeded across a sequence (`--seed`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]

@@ -35,7 +35,7 @@ pub(crate) mod testing;
 mod triangle;
 mod two_level;
 
-pub use change_index::{ChangeBox, ChangeIndex, ChangeShape, EXACT_MESH_TRIANGLES};
+pub(crate) use change_index::{ChangeBox, ChangeIndex, ChangeShape, EXACT_MESH_TRIANGLES};
 pub use params::BuildParams;
 pub use persistent::{StaticBvh, StaticSnapshot, StaticUpdate};
 pub use simd::{SimdError, SimdPath};

@@ -7,7 +7,7 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use super::StatsError;
-use crate::render::{RenderStats, SppStats};
+use crate::render::{RenderStats, ReuseGranularity, SppStats};
 use crate::residency::{CacheStats, CostModelState, Decision, FrameStats, StageTimes, FRACTION_BUCKETS};
 use crate::sequence::{FullFrame, KeptFrame, PhysicsSource, RenderedFrame};
 
@@ -77,6 +77,10 @@ pub struct ReuseRecord {
     /// without exact reuse.
     #[serde(default)]
     pub full_frame: Option<FullFrame>,
+    /// What exact reuse's store kept, so what it retraced: every `sample`, or one value per
+    /// `pixel` (adaptive sampling, or a budget too small for samples); `null` without it.
+    #[serde(default)]
+    pub reuse_granularity: Option<ReuseGranularity>,
 }
 
 impl ReuseRecord {
@@ -91,6 +95,7 @@ impl ReuseRecord {
                 horizon_ms: s.horizon_ms,
                 reuse_store_bytes: s.store_bytes,
                 full_frame: exact.full,
+                reuse_granularity: Some(s.granularity),
             };
         }
         let pixels = f64::from(frame.film.width) * f64::from(frame.film.height);
@@ -378,6 +383,10 @@ fn csv_columns() -> Vec<(&'static str, Cell)> {
         ("horizon_ms", Cell::Text(|f| format!("{:.4}", f.reuse.horizon_ms))),
         ("reuse_store_bytes", Cell::Text(|f| f.reuse.reuse_store_bytes.to_string())),
         ("full_frame", Cell::Text(|f| f.reuse.full_frame.map(|r| r.name()).unwrap_or_default().to_string())),
+        (
+            "reuse_granularity",
+            Cell::Text(|f| f.reuse.reuse_granularity.map(|g| g.name()).unwrap_or_default().to_string()),
+        ),
     ]);
     columns
 }
@@ -526,7 +535,7 @@ mod tests {
         let lines: Vec<&str> = csv.lines().collect();
         assert_eq!(lines.len(), 4);
         let n = csv_columns().len();
-        assert_eq!(n, 32);
+        assert_eq!(n, 40);
         assert_eq!(lines[0].split(',').count(), n);
         assert!(lines[1..].iter().all(|l| l.split(',').count() == n));
         assert_eq!(stats.summary.totals.stages.trace_ms, 3.0);

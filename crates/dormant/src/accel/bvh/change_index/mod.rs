@@ -17,7 +17,7 @@ mod shape;
 
 use glam::Vec3;
 
-pub use shape::{ChangeShape, EXACT_MESH_TRIANGLES};
+pub(crate) use shape::{ChangeShape, EXACT_MESH_TRIANGLES};
 use shape::{ExactMesh, ShapeTest};
 
 use super::flat::{build, interval_is_valid, BoxRay, Node, STACK_SIZE};
@@ -85,21 +85,6 @@ impl ChangeIndex {
         Self { nodes, boxes, shapes, meshes }
     }
 
-    /// The number of change boxes.
-    pub fn len(&self) -> usize {
-        self.boxes.len()
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.boxes.is_empty()
-    }
-
-    /// Bytes the index holds.
-    pub fn memory_bytes(&self) -> usize {
-        self.nodes.len() * std::mem::size_of::<IndexNode>()
-            + self.boxes.len() * std::mem::size_of::<ChangeBox>()
-    }
-
     /// The earliest `visible_at` greater than `after` and less than `before` of a box that the
     /// segment of `ray` over `[t_min, t_max]` meets, or `before` when there is none. A segment
     /// traced at ordinal `after` stays valid until the returned ordinal.
@@ -124,7 +109,13 @@ impl ChangeIndex {
             {
                 continue;
             }
-            if n.count > 0 {
+            if n.count == 1 {
+                // A leaf of one box: the node's bounds and frame are the box's, just tested.
+                let k = n.first as usize;
+                if self.shapes[k].is_none_or(|s| s.changes_for(&self.meshes, ray, occlusion)) {
+                    best = n.earliest;
+                }
+            } else if n.count > 1 {
                 for k in n.first as usize..(n.first + n.count) as usize {
                     let b = &self.boxes[k];
                     if b.visible_at >= best {
@@ -137,6 +128,8 @@ impl ChangeIndex {
                         best = b.visible_at;
                     }
                 }
+            }
+            if n.count > 0 {
                 // Nothing can come before the frame right after `after`.
                 if best == after + 1 {
                     return best;
@@ -237,7 +230,6 @@ mod tests {
     #[test]
     fn an_empty_index_never_changes() {
         let index = ChangeIndex::build(Vec::new(), Vec::new());
-        assert!(index.is_empty());
         assert_eq!(index.first_change(&Ray::new(Vec3::ZERO, Vec3::X), 0, 42, false), 42);
     }
 

@@ -5,6 +5,8 @@ use std::path::PathBuf;
 
 use clap::{Args, Subcommand};
 
+mod reuse;
+
 use super::{CliError, JsonOutput, SceneSource};
 use dormant::scene::limits::MAX_SAMPLES_PER_PIXEL;
 use dormant::sequence::{FrameRange, SequenceSource};
@@ -45,6 +47,13 @@ pub enum BenchCommand {
         after_help = "Examples:\n  dormant bench integration scenes/atrium.toml --json out/integration.json\n  dormant bench integration scenes/tiny.toml --backend bvh --size 160x90"
     )]
     Integration(IntegrationArgs),
+    /// Exact temporal reuse: one sequence rendered every frame in full and with `--reuse
+    /// exact`, in turn: speed-up beside its bound (1 / the traced share), first frame, horizon
+    /// cost, store memory, and whether every frame is the same bits.
+    #[command(
+        after_help = "Examples:\n  dormant bench reuse scenes/demolition.toml --frames 600..720 --json out/reuse.json\n  dormant bench reuse scenes/tiny.toml --size 160x90 --spp 4 --frames 0..60 --runs 1"
+    )]
+    Reuse(reuse::ReuseArgs),
     /// The paper's experiments: the atrium with 8,000 objects (and an asset rain over --env
     /// when given), simulated once and rendered under never/always/auto with the cache on and
     /// off by every backend; writes paper.json, paper.md and figures into --out.
@@ -271,6 +280,7 @@ pub(super) fn run(
         BenchCommand::Adaptive(a) => adaptive(a, threads, quiet, json),
         BenchCommand::Physics(p) => physics(p, quiet, json),
         BenchCommand::Integration(i) => integration(i, threads, quiet, json),
+        BenchCommand::Reuse(r) => reuse::reuse(r, threads, quiet, json),
         BenchCommand::Paper(p) => paper(p, threads, quiet, json),
         BenchCommand::Regimes(r) => regimes(r, threads, quiet, json),
         #[cfg(feature = "embree")]

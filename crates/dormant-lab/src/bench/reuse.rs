@@ -1,0 +1,260 @@
+//! `dormant bench reuse`: one sequence rendered every frame in full (`--reuse off`) and with
+//! exact temporal reuse, in one process, in turn (the order alternates from run to run, so a
+//! slower stretch of a shared machine falls on both), through [`Sequence::render`], the loop
+//! `dormant render` runs. Per run it reports the speed-up of the whole sequence beside its
+//! bound (1 / the share of camera samples traced), the first, fully traced frame against the
+//! same frame without reuse, the horizon queries' share of the tracing they decide about, the
+//! store's memory, and whether every frame's image and AOVs are the same bits in both modes.
+
+use std::time::Instant;
+
+use serde::Serialize;
+
+use dormant::accel::Backend;
+use dormant::render::{AdaptiveSampling, Aov, Film, Integrator};
+use dormant::residency::IntegrationSettings;
+use dormant::sequence::{FrameRenderer, FrameSelection, ReuseMode, SeedMode, Sequence, SequenceError};
+
+/// What to run.
+pub struct ReuseBenchOptions {
+    pub backend: Backend,
+    pub frames: FrameSelection,
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
+    pub adaptive: AdaptiveSampling,
+    pub aovs: Vec<Aov>,
+    pub shutter: f32,
+    pub integration: IntegrationSettings,
+    pub reuse_budget: usize,
+    pub threads: Option<usize>,
+    /// Runs of each mode (the spread of the speed-up is over these).
+    pub runs: usize,
+}
+
+/// One frame of one mode's run.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct ReuseFrame {
+    pub frame: u32,
+    /// Wall time from the previous frame handed on to this one: replay, residency, tracing.
+    pub frame_ms: f64,
+    pub trace_ms: f64,
+    pub samples_traced: u64,
+    pub samples_reused: u64,
+    pub horizon_ms: f64,
+    pub store_bytes: u64,
+    /// FNV-1a of the image's and the AOVs' float bits.
+    #[serde(skip)]
+    pub digest: u64,
+}
+
+/// One run of both modes.
+#[derive(Clone, Debug, Serialize)]
+pub struct ReuseRun {
+    pub off_ms: f64,
+    pub exact_ms: f64,
+    /// `off_ms` over `exact_ms`.
+    pub speedup: f64,
+    /// The first frame's time with exact reuse over without it (both trace it in full).
+    pub first_frame_ratio: f64,
+    /// Whether every frame's image and AOVs were the same bits in both modes.
+    pub identical: bool,
+}
+
+/// Min, median and max over runs.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct Spread {
+    pub min: f64,
+    pub median: f64,
+    pub max: f64,
+}
+
+impl Spread {
+    fn of(mut values: Vec<f64>) -> Self {
+        values.sort_by(f64::total_cmp);
+        match values.len() {
+            0 => Self::default(),
+            n => Self { min: values[0], median: values[n / 2], max: values[n - 1] },
+        }
+    }
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct ReuseBenchReport {
+    pub scene: String,
+    pub backend: Backend,
+    pub frames: Vec<u32>,
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
+    pub adaptive: bool,
+    pub runs: Vec<ReuseRun>,
+    pub speedup: Spread,
+    /// 1 / the share of camera samples traced over the whole sequence: the speed-up if
+    /// tracing were all a frame costs and reused samples cost nothing.
+    pub bound: f64,
+    /// The median speed-up over `bound`.
+    pub of_bound: f64,
+    pub traced_share: f64,
+    pub first_frame_ratio: Spread,
+    /// Horizon queries' CPU time over the rest of the tracing's CPU time (trace time times
+    /// the threads), in the frames after the first: what deciding costs against what it
+    /// decides about.
+    pub horizon_share: f64,
+    pub store_bytes: u64,
+    /// Every run's frames were the same bits with and without reuse.
+    pub identical: bool,
+    /// Per frame of the last run: the share of samples traced, and both modes' frame times.
+    pub per_frame: Vec<FrameComparison>,
+}
+
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct FrameComparison {
+    pub frame: u32,
+    pub traced_share: f64,
+    pub off_ms: f64,
+    pub exact_ms: f64,
+}
+
+/// See the module docs. `progress` gets (run, mode, frames done) as frames finish.
+pub fn bench_reuse(
+    sequence: &Sequence,
+    integrator: &dyn Integrator,
+    options: &ReuseBenchOptions,
+    progress: &mut dyn FnMut(usize, ReuseMode, usize),
+) -> Result<ReuseBenchReport, SequenceError> {
+    let mut runs = Vec::new();
+    let mut last = (Vec::new(), Vec::new());
+    for run in 0..options.runs.max(1) {
+        let order = if run % 2 == 0 {
+            [ReuseMode::Off, ReuseMode::Exact]
+        } else {
+            [ReuseMode::Exact, ReuseMode::Off]
+        };
+        let (mut off, mut exact) = (Vec::new(), Vec::new());
+        for mode in order {
+            let frames = render_mode(sequence, integrator, options, mode, &mut |n| progress(run, mode, n))?;
+            match mode {
+                ReuseMode::Off => off = frames,
+                _ => exact = frames,
+            }
+        }
+        runs.push(compare(&off, &exact));
+        last = (off, exact);
+    }
+    Ok(report(sequence, options, runs, &last.0, &last.1))
+}
+
+/// Renders the selection with `mode`; returns each frame's times, counts and digest.
+fn render_mode(
+    sequence: &Sequence,
+    integrator: &dyn Integrator,
+    options: &ReuseBenchOptions,
+    mode: ReuseMode,
+    progress: &mut dyn FnMut(usize),
+) -> Result<Vec<ReuseFrame>, SequenceError> {
+    let manager_options = sequence.manager_options(&options.frames, options.integration);
+    let mut manager = sequence.manager(options.backend, options.threads, manager_options)?;
+    let renderer = FrameRenderer {
+        aovs: &options.aovs,
+        adaptive: options.adaptive,
+        seed: SeedMode::Fixed,
+        reuse: mode,
+        reuse_budget: options.reuse_budget,
+        shutter: options.shutter,
+        ..FrameRenderer::new(integrator, options.width, options.height, options.spp)
+    };
+    let mut frames = Vec::new();
+    let mut since = Instant::now();
+    sequence.render::<SequenceError>(&options.frames, &mut manager, &renderer, &[], &mut |f, _, _| {
+        let reuse = f.reuse.map(|r| r.stats).unwrap_or_default();
+        let all = (f.render.spp.mean * f64::from(f.film.width) * f64::from(f.film.height)).round() as u64;
+        let traced = if f.reuse.is_some() { reuse.samples_traced } else { all };
+        frames.push(ReuseFrame {
+            frame: f.index,
+            frame_ms: since.elapsed().as_secs_f64() * 1e3,
+            trace_ms: f.render.seconds * 1e3,
+            samples_traced: traced,
+            samples_reused: reuse.samples_reused,
+            horizon_ms: reuse.horizon_ms,
+            store_bytes: reuse.store_bytes,
+            digest: digest(&f.film, &f.aovs),
+        });
+        progress(frames.len());
+        since = Instant::now();
+        Ok(())
+    })?;
+    Ok(frames)
+}
+
+/// FNV-1a over the float bits of `film` and every AOV but `traced`, which differs by design.
+fn digest(film: &Film, aovs: &[(Aov, Film)]) -> u64 {
+    let films = std::iter::once(film).chain(aovs.iter().filter(|(a, _)| *a != Aov::Traced).map(|(_, f)| f));
+    let mut hash = 0xcbf2_9ce4_8422_2325u64;
+    for value in films.flat_map(|f| f.pixels.iter().flat_map(|p| p.to_array())) {
+        for byte in value.to_bits().to_le_bytes() {
+            hash = (hash ^ u64::from(byte)).wrapping_mul(0x0100_0000_01b3);
+        }
+    }
+    hash
+}
+
+/// One run's comparison of the two modes.
+fn compare(off: &[ReuseFrame], exact: &[ReuseFrame]) -> ReuseRun {
+    let total = |frames: &[ReuseFrame]| frames.iter().map(|f| f.frame_ms).sum::<f64>();
+    let (off_ms, exact_ms) = (total(off), total(exact));
+    let first = |frames: &[ReuseFrame]| frames.first().map_or(f64::NAN, |f| f.frame_ms);
+    ReuseRun {
+        off_ms,
+        exact_ms,
+        speedup: off_ms / exact_ms,
+        first_frame_ratio: first(exact) / first(off),
+        identical: off.len() == exact.len() && off.iter().zip(exact).all(|(a, b)| a.digest == b.digest),
+    }
+}
+
+/// The report of `runs`, with the per-frame table of the last run's `off` and `exact`.
+fn report(
+    sequence: &Sequence,
+    options: &ReuseBenchOptions,
+    runs: Vec<ReuseRun>,
+    off: &[ReuseFrame],
+    exact: &[ReuseFrame],
+) -> ReuseBenchReport {
+    let traced: u64 = exact.iter().map(|f| f.samples_traced).sum();
+    let reused: u64 = exact.iter().map(|f| f.samples_reused).sum();
+    let traced_share = traced as f64 / (traced + reused).max(1) as f64;
+    let speedup = Spread::of(runs.iter().map(|r| r.speedup).collect());
+    let later = exact.get(1..).unwrap_or_default();
+    let horizon: f64 = later.iter().map(|f| f.horizon_ms).sum();
+    let trace_cpu: f64 = later.iter().map(|f| f.trace_ms).sum::<f64>() * rayon::current_num_threads() as f64;
+    let per_frame = off
+        .iter()
+        .zip(exact)
+        .map(|(o, e)| FrameComparison {
+            frame: e.frame,
+            traced_share: e.samples_traced as f64 / (e.samples_traced + e.samples_reused).max(1) as f64,
+            off_ms: o.frame_ms,
+            exact_ms: e.frame_ms,
+        })
+        .collect();
+    ReuseBenchReport {
+        scene: sequence.template.name.clone(),
+        backend: options.backend,
+        frames: options.frames.frames(),
+        width: options.width,
+        height: options.height,
+        spp: options.spp,
+        adaptive: options.adaptive.is_on(),
+        identical: runs.iter().all(|r| r.identical),
+        first_frame_ratio: Spread::of(runs.iter().map(|r| r.first_frame_ratio).collect()),
+        runs,
+        bound: 1.0 / traced_share,
+        of_bound: speedup.median * traced_share,
+        traced_share,
+        speedup,
+        horizon_share: if trace_cpu > horizon { horizon / (trace_cpu - horizon) } else { f64::NAN },
+        store_bytes: exact.iter().map(|f| f.store_bytes).max().unwrap_or(0),
+        per_frame,
+    }
+}

@@ -1,0 +1,159 @@
+//! Exact temporal reuse (`--reuse exact`, the default) against rendering every frame in full
+//! (`--reuse off`): every file a frame writes (image, AOVs, EXR) is the same bytes, on both
+//! backends, in both forms of sleeping islands, with motion blur and adaptive sampling, and
+//! later frames really trace only part of their samples. Decisions of `--integration auto`
+//! follow measured times, so the runs pin them with `never` or `always`.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use common::cli::{dormant, exits_with, read_stats, succeeds};
+use common::scenes;
+
+/// Renders `scene` with `--reuse reuse` and `flags` into `dir/name-reuse`.
+fn render(dir: &Path, name: &str, reuse: &str, scene: &Path, flags: &[&str]) -> PathBuf {
+    let out = dir.join(format!("{name}-{reuse}"));
+    succeeds(
+        dormant()
+            .args(["render", "--quiet", "--seed", "fixed", "--reuse", reuse])
+            .args(flags)
+            .arg("--out")
+            .arg(&out)
+            .arg(scene),
+    );
+    out
+}
+
+/// The frame files of `dir` (all but the statistics and the `traced` AOV, which says what
+/// was traced and so differs by design), sorted.
+fn frame_files(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .filter(|n| n.starts_with("frame_") && !n.contains(".traced."))
+        .collect();
+    names.sort();
+    names
+}
+
+/// Renders `scene` with `flags` both ways and asserts every frame file is byte-identical;
+/// returns the share of camera samples the exact run traced.
+fn assert_exact_matches_full(name: &str, scene: &Path, flags: &[&str]) -> f64 {
+    let dir = tempfile::tempdir().unwrap();
+    let off = render(dir.path(), name, "off", scene, flags);
+    let exact = render(dir.path(), name, "exact", scene, flags);
+    let files = frame_files(&off);
+    assert!(!files.is_empty());
+    assert_eq!(files, frame_files(&exact), "{name}: the runs wrote different files");
+    for file in &files {
+        let same = std::fs::read(off.join(file)).unwrap() == std::fs::read(exact.join(file)).unwrap();
+        assert!(same, "{name}: {file} differs between --reuse off and exact");
+    }
+    let totals = &read_stats(&exact)["summary"]["totals"];
+    let traced = totals["samples_traced"].as_f64().unwrap();
+    traced / (traced + totals["samples_reused"].as_f64().unwrap())
+}
+
+/// tiny.toml at a small size, with the frames where boxes fall and settle.
+fn tiny(name: &str, flags: &[&str]) -> f64 {
+    let mut all = vec!["--size", "64x36", "--frames", "0..48"];
+    all.extend_from_slice(flags);
+    assert_exact_matches_full(name, &scenes::shipped("tiny"), &all)
+}
+
+#[test]
+fn exact_reuse_writes_the_full_renders_bytes_path_traced_with_aovs_and_exr() {
+    let share =
+        tiny("path", &["--spp", "4", "--aov", "albedo", "--aov", "normal", "--aov", "depth", "--exr"]);
+    assert!(share < 0.9, "exact reuse traced {share} of the samples");
+}
+
+#[test]
+fn exact_reuse_writes_the_full_renders_bytes_on_the_rust_bvh() {
+    let share =
+        tiny("bvh", &["--spp", "4", "--backend", "bvh", "--aov", "albedo", "--integration", "always"]);
+    assert!(share < 0.9, "exact reuse traced {share} of the samples");
+}
+
+#[test]
+fn exact_reuse_writes_the_full_renders_bytes_with_baked_islands() {
+    let flags = ["--spp", "2", "--integration", "always", "--integrate-as", "baked"];
+    tiny("baked", &flags);
+    let mut bvh = flags.to_vec();
+    bvh.extend(["--backend", "bvh"]);
+    tiny("baked-bvh", &bvh);
+}
+
+#[test]
+fn exact_reuse_writes_the_full_renders_bytes_shaded_and_never_integrating() {
+    tiny("shaded", &["--spp", "2", "--mode", "shaded", "--integration", "never"]);
+}
+
+#[test]
+fn exact_reuse_writes_the_full_renders_bytes_with_motion_blur() {
+    tiny("blur", &["--spp", "2", "--shutter", "0.5"]);
+    tiny("blur-bvh", &["--spp", "2", "--shutter", "0.5", "--backend", "bvh"]);
+}
+
+#[test]
+fn exact_reuse_writes_the_full_renders_bytes_with_adaptive_sampling() {
+    // Adaptive sampling keeps one value per pixel: a due pixel is traced whole.
+    tiny("adaptive", &["--spp", "16", "--noise-threshold", "0.1", "--min-spp", "4", "--aov", "spp"]);
+}
+
+#[test]
+fn a_budget_without_room_for_samples_reuses_whole_pixels_exactly() {
+    // 64x36 pixels need 45 KiB per pixel but 576 KiB per sample at 256 spp: 1 MiB holds
+    // pixels only.
+    let dir = tempfile::tempdir().unwrap();
+    let flags =
+        ["--size", "64x36", "--frames", "0..24", "--spp", "256", "--mode", "shaded", "--reuse-mib", "1"];
+    let out = render(dir.path(), "pixels", "exact", &scenes::shipped("tiny"), &flags);
+    let frames = read_stats(&out)["frames"].as_array().unwrap().clone();
+    assert!(frames.iter().all(|f| f["reuse_granularity"] == "pixel"), "{frames:?}");
+    let off = render(dir.path(), "pixels", "off", &scenes::shipped("tiny"), &flags);
+    for file in frame_files(&off) {
+        assert_eq!(
+            std::fs::read(off.join(&file)).unwrap(),
+            std::fs::read(out.join(&file)).unwrap(),
+            "{file}"
+        );
+    }
+}
+
+#[test]
+fn exact_reuse_writes_the_full_renders_bytes_on_a_small_demolition() {
+    // A few hundred bodies: the first structures fall around frame 150.
+    let flags = [
+        "--count",
+        "300",
+        "--size",
+        "96x54",
+        "--spp",
+        "2",
+        "--frames",
+        "150..170",
+        "--integration",
+        "always",
+    ];
+    let share = assert_exact_matches_full("demolition", &scenes::shipped("demolition"), &flags);
+    assert!(share < 0.8, "exact reuse traced {share} of the samples");
+}
+
+#[test]
+fn a_reuse_budget_of_zero_or_too_small_is_an_input_error_and_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    for (mib, size) in [("0", "64x36"), ("1", "1920x1080")] {
+        let out = dir.path().join(format!("budget-{mib}"));
+        let stderr = exits_with(
+            dormant()
+                .args(["render", "--quiet", "--frames", "0..3", "--size", size, "--reuse-mib", mib, "--out"])
+                .arg(&out)
+                .arg(scenes::shipped("tiny")),
+            2,
+        );
+        assert!(stderr.contains("--reuse-mib"), "{stderr}");
+        assert!(!out.exists(), "--reuse-mib {mib} left {}", out.display());
+    }
+}
