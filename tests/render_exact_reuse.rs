@@ -157,3 +157,31 @@ fn a_reuse_budget_of_zero_or_too_small_is_an_input_error_and_writes_nothing() {
         assert!(!out.exists(), "--reuse-mib {mib} left {}", out.display());
     }
 }
+
+#[test]
+fn a_camera_that_moves_every_frame_traces_every_frame_without_horizon_queries() {
+    // forest-walk's "follow" camera is key-framed: every frame is traced in full, and since
+    // the next frame is always full, no sample's horizon is worth finding.
+    let flags = ["--camera", "follow", "--size", "48x27", "--spp", "1", "--frames", "0..6"];
+    assert_exact_matches_full("follow", &scenes::shipped("forest-walk"), &flags);
+    let dir = tempfile::tempdir().unwrap();
+    let out = render(dir.path(), "follow", "exact", &scenes::shipped("forest-walk"), &flags);
+    let frames = read_stats(&out)["frames"].as_array().unwrap().clone();
+    assert!(frames[1..].iter().all(|f| f["full_frame"] == "camera_moved"), "{frames:?}");
+    assert!(frames.iter().all(|f| f["horizon_ms"] == 0.0), "{frames:?}");
+}
+
+#[test]
+fn an_unknown_camera_is_an_input_error_naming_the_cameras() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("nope");
+    let stderr = exits_with(
+        dormant()
+            .args(["render", "--quiet", "--camera", "nope", "--frames", "0..2", "--out"])
+            .arg(&out)
+            .arg(scenes::shipped("forest-walk")),
+        2,
+    );
+    assert!(!out.exists());
+    assert!(stderr.contains("--camera") && stderr.contains("follow"), "{stderr}");
+}

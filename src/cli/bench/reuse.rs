@@ -24,6 +24,9 @@ pub struct ReuseArgs {
     /// simulating.
     #[arg(long, value_name = "FILE")]
     pub trajectory: Option<PathBuf>,
+    /// Render through the scene file's camera of this name, as `render --camera`.
+    #[arg(long, value_name = "NAME")]
+    pub camera: Option<String>,
     /// Ray tracing backend (default: the first compiled in, Embree preferred).
     #[arg(long)]
     pub backend: Option<dormant::accel::Backend>,
@@ -54,6 +57,10 @@ pub struct ReuseArgs {
     /// When sleeping islands are integrated (both modes alike).
     #[arg(long, value_enum, default_value_t = IntegrationPolicy::Auto)]
     pub integration: IntegrationPolicy,
+    /// The run without reuse integrates under this policy instead (e.g. `never`: reuse and
+    /// integration together against neither).
+    #[arg(long, value_enum, value_name = "POLICY")]
+    pub off_integration: Option<IntegrationPolicy>,
     /// How integrated islands are held.
     #[arg(long, value_enum, default_value_t = IntegrationForm::default())]
     pub integrate_as: IntegrationForm,
@@ -87,9 +94,18 @@ pub(super) fn reuse(
         .checked_mul(1 << 20)
         .filter(|&b| b > 0)
         .ok_or_else(|| CliError::Input(format!("--reuse-mib {}: must be at least 1", args.reuse_mib)))?;
-    let (file, options) = args.scene.load()?;
+    let (mut file, options) = args.scene.load()?;
+    if let Some(name) = &args.camera {
+        file = file.with_render_camera(name).map_err(|e| CliError::Input(e.to_string()))?;
+    }
     let sequence = load_sequence(SequenceSource::scene(file, options, args.trajectory.clone()), quiet)?;
     let frames = sequence.select(args.frames, args.frame_step).map_err(|e| sequence_error(e, "--frames"))?;
+    let integration = IntegrationSettings {
+        policy: args.integration,
+        form: args.integrate_as,
+        cache: true,
+        lookahead: true,
+    };
     let options = ReuseBenchOptions {
         backend,
         frames,
@@ -99,12 +115,8 @@ pub(super) fn reuse(
         adaptive: AdaptiveSampling { noise_threshold: args.noise_threshold, min_spp: args.min_spp },
         aovs: args.aov.clone(),
         shutter: args.shutter,
-        integration: IntegrationSettings {
-            policy: args.integration,
-            form: args.integrate_as,
-            cache: true,
-            lookahead: true,
-        },
+        integration,
+        off_integration: args.off_integration.map(|policy| IntegrationSettings { policy, ..integration }),
         reuse_budget,
         threads,
         runs: args.runs as usize,

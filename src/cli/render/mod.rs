@@ -52,6 +52,10 @@ pub struct RenderArgs {
     /// render the scene recorded in it.
     #[arg(long, value_name = "FILE", conflicts_with_all = ["env", "object"])]
     pub trajectory: Option<PathBuf>,
+    /// With SCENE: render through the file's camera of this name instead of its
+    /// `render.camera` (a trajectory of the file still replays: the camera is not physics).
+    #[arg(long, value_name = "NAME", requires = "scene_file")]
+    pub camera: Option<String>,
     /// With SCENE or --trajectory: render frames A..B (half-open) of the simulation.
     #[arg(long, value_name = "A..B")]
     pub frames: Option<FrameRange>,
@@ -393,7 +397,14 @@ pub(super) fn check_shutter(shutter: Option<f32>) -> Result<(), CliError> {
 /// A sequence: a scene file, maybe with a trajectory of it, or a trajectory alone with the
 /// scene recorded in it; `None` for a still.
 fn sequence_source(args: &RenderArgs) -> Result<Option<SequenceSource>, CliError> {
-    sequence_source_of(args.scene_file.as_deref(), args.trajectory.as_ref(), args.scene.count)
+    let source = sequence_source_of(args.scene_file.as_deref(), args.trajectory.as_ref(), args.scene.count)?;
+    match (source, &args.camera) {
+        (Some(SequenceSource::Scene { file, options, trajectory }), Some(name)) => {
+            let file = file.with_render_camera(name).map_err(|e| CliError::Input(e.to_string()))?;
+            Ok(Some(SequenceSource::scene(file, options, trajectory)))
+        }
+        (source, _) => Ok(source),
+    }
 }
 
 /// The sequence a SCENE file (with `count` objects), a trajectory, or both give; `None` for

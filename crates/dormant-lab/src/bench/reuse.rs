@@ -26,6 +26,9 @@ pub struct ReuseBenchOptions {
     pub aovs: Vec<Aov>,
     pub shutter: f32,
     pub integration: IntegrationSettings,
+    /// The integration of the run without reuse, when it differs (the preview's target
+    /// compares reuse and integration together against neither).
+    pub off_integration: Option<IntegrationSettings>,
     pub reuse_budget: usize,
     pub threads: Option<usize>,
     /// Runs of each mode (the spread of the speed-up is over these).
@@ -88,6 +91,9 @@ pub struct ReuseBenchReport {
     pub height: u32,
     pub spp: u32,
     pub adaptive: bool,
+    /// The integration of the exact run and of the run without reuse.
+    pub integration: IntegrationSettings,
+    pub off_integration: IntegrationSettings,
     pub runs: Vec<ReuseRun>,
     pub speedup: Spread,
     /// 1 / the share of camera samples traced over the whole sequence: the speed-up if
@@ -114,6 +120,8 @@ pub struct FrameComparison {
     pub traced_share: f64,
     pub off_ms: f64,
     pub exact_ms: f64,
+    /// The image and AOVs are the same bits in both modes.
+    pub identical: bool,
 }
 
 /// See the module docs. `progress` gets (run, mode, frames done) as frames finish.
@@ -153,7 +161,11 @@ fn render_mode(
     mode: ReuseMode,
     progress: &mut dyn FnMut(usize),
 ) -> Result<Vec<ReuseFrame>, SequenceError> {
-    let manager_options = sequence.manager_options(&options.frames, options.integration);
+    let integration = match mode {
+        ReuseMode::Off => options.off_integration.unwrap_or(options.integration),
+        _ => options.integration,
+    };
+    let manager_options = sequence.manager_options(&options.frames, integration);
     let mut manager = sequence.manager(options.backend, options.threads, manager_options)?;
     let renderer = FrameRenderer {
         aovs: &options.aovs,
@@ -236,6 +248,7 @@ fn report(
             traced_share: e.samples_traced as f64 / (e.samples_traced + e.samples_reused).max(1) as f64,
             off_ms: o.frame_ms,
             exact_ms: e.frame_ms,
+            identical: o.digest == e.digest,
         })
         .collect();
     ReuseBenchReport {
@@ -246,6 +259,8 @@ fn report(
         height: options.height,
         spp: options.spp,
         adaptive: options.adaptive.is_on(),
+        integration: options.integration,
+        off_integration: options.off_integration.unwrap_or(options.integration),
         identical: runs.iter().all(|r| r.identical),
         first_frame_ratio: Spread::of(runs.iter().map(|r| r.first_frame_ratio).collect()),
         runs,

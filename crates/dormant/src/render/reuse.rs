@@ -68,14 +68,14 @@ pub struct ReuseStore {
     sample_horizons: Vec<u32>,
 }
 
-/// One frame's use of the store: the change index, this frame's ordinal, the run's number of
-/// rendered frames, whether the frame must be traced in full, and the memory the store may
-/// use.
+/// One frame's use of the store: the change index, this frame's ordinal, the latest horizon
+/// worth finding, whether the frame must be traced in full, and the memory the store may use.
 #[derive(Clone, Copy)]
 pub struct FrameReuse<'a> {
     pub index: &'a ChangeIndex,
     pub ordinal: u32,
-    pub frames: u32,
+    /// Horizons end here at the latest: the next frame traced in full, or the run's end.
+    pub until: u32,
     /// Trace everything (and refill the store): the first frame, or one where something every
     /// sample sees changed (the camera, a light, the scene's representation).
     pub full: bool,
@@ -176,7 +176,7 @@ pub fn render_reusing(
             }
             ReuseGranularity::Pixel => Due::Pixels { due: &due, stored: &store.counts },
         },
-        horizons: Some((reuse.index, reuse.ordinal, reuse.frames)),
+        horizons: Some((reuse.index, reuse.ordinal, reuse.until)),
     };
     let beauty = render_planned(scene, query, integrator, settings, &plan)?;
     let traced = match store.granularity {

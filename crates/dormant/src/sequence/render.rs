@@ -40,7 +40,7 @@ pub struct RenderedFrame {
 pub struct ExactFrame {
     #[serde(flatten)]
     pub stats: ReuseStats,
-    /// Why every block was traced (`None`: blocks were reused where their samples allowed).
+    /// Why every sample was traced (`None`: samples were reused where their horizons allowed).
     pub full: Option<FullFrame>,
 }
 
@@ -116,7 +116,7 @@ impl Sequence {
                     let plan = FrameReuse {
                         index: &reuse.index,
                         ordinal: reuse.ordinal(frame.index),
-                        frames: reuse.frame_count(),
+                        until: reuse.horizon_limit(frame.index),
                         full: full.is_some(),
                         budget: renderer.reuse_budget,
                     };

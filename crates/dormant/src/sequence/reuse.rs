@@ -1,10 +1,10 @@
 //! Reuse across a sequence's frames (`--reuse`): whole frames where nothing moved (`static`),
-//! or, with exact temporal reuse (`exact`), every pixel block whose samples cannot see what
-//! changed. This module owns the sequence's side of exact reuse: the changes between
-//! consecutive rendered frames, indexed in space and time ([`ChangeIndex`]) from the
-//! trajectory before the first frame; which frames must be traced in full and why (a moving
-//! camera, a moving light or emissive body, baked islands coming or going); and the store of
-//! pixels kept from frame to frame ([`ReuseStore`]).
+//! or, with exact temporal reuse (`exact`), every sample that cannot see what changed. This
+//! module owns the sequence's side of exact reuse: the changes between consecutive rendered
+//! frames, indexed in space and time ([`ChangeIndex`]) from the trajectory before the first
+//! frame; which frames must be traced in full and why (a moving camera, a moving light or
+//! emissive body, baked islands coming or going); and the store of samples (or pixels) kept
+//! from frame to frame ([`ReuseStore`]), within its budget.
 
 use serde::Serialize;
 
@@ -16,7 +16,7 @@ use crate::physics::trajectory::ReplayFrame;
 use crate::render::{Emitters, ReuseStore};
 use crate::residency::{FrameStats, IntegrationForm};
 
-/// Why a frame traced every pixel block instead of reusing blocks of earlier frames.
+/// Why a frame traced every sample instead of reusing samples of earlier frames.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum FullFrame {
@@ -48,7 +48,7 @@ pub(crate) struct ExactReuse {
     pub index: ChangeIndex,
     /// The selected frames, ascending: a frame's ordinal is its position here.
     frames: Vec<u32>,
-    /// Per ordinal, why that frame cannot reuse blocks of the frame before it (`None`: it can).
+    /// Per ordinal, why that frame cannot reuse samples of the frame before it (`None`: it can).
     full: Vec<Option<FullFrame>>,
     form: IntegrationForm,
     pub store: ReuseStore,
@@ -78,9 +78,14 @@ impl ExactReuse {
         self.frames.partition_point(|&f| f < frame) as u32
     }
 
-    /// The number of rendered frames: the horizon of a block that sees no change.
-    pub(crate) fn frame_count(&self) -> u32 {
-        self.frames.len() as u32
+    /// The latest horizon worth finding for a sample traced in frame `frame`: the next frame
+    /// traced in full anyway (a camera cut, a moving light), else the end of the run. When
+    /// that is the very next frame, as under a camera that moves every frame, no horizon
+    /// query runs at all.
+    pub(crate) fn horizon_limit(&self, frame: u32) -> u32 {
+        let next = self.ordinal(frame) as usize + 1;
+        let full = self.full.get(next..).unwrap_or_default().iter().position(Option::is_some);
+        full.map_or(self.frames.len(), |k| next + k) as u32
     }
 
     /// Why frame `frame`, whose scene manager did `stats`, must be traced in full; `None` when

@@ -84,6 +84,23 @@ impl SceneFile {
         &self.spec
     }
 
+    /// The file rendered through its camera `name` instead of `render.camera` (`--camera`).
+    /// The camera is not physics, so the hash a trajectory records does not change.
+    pub fn with_render_camera(mut self, name: &str) -> Result<Self, SceneError> {
+        let Some(index) = self.spec.cameras.iter().position(|c| c.name == name) else {
+            let names: Vec<&str> = self.spec.cameras.iter().map(|c| c.name.as_str()).collect();
+            let message = format!("no camera named {name:?} (the file's cameras: {names:?})");
+            return Err(SceneError::Invalid {
+                file: self.path,
+                line: None,
+                field: "--camera".into(),
+                message,
+            });
+        };
+        self.spec.render.camera = Some(index);
+        Ok(self)
+    }
+
     /// The directory relative asset paths resolve against: the override given when loading,
     /// else `scene.assets` (relative to the scene file), else the scene file's directory.
     pub fn asset_dir(&self) -> &Path {

@@ -68,6 +68,9 @@ struct MeshNode {
 #[derive(Clone, Copy, Debug)]
 struct Triangle {
     corners: [DVec3; 3],
+    /// A sphere around the triangle (centroid, farthest corner), for a cheap first rejection.
+    center: DVec3,
+    radius: f64,
     normal: DVec3,
     offset: f64,
     edge_normals: [DVec3; 3],
@@ -112,7 +115,9 @@ impl Triangle {
             edge_normals[i] = m;
             edge_offsets[i] = m.dot(a);
         }
-        Self { corners, normal, offset: normal.dot(corners[0]), edge_normals, edge_offsets }
+        let center = (corners[0] + corners[1] + corners[2]) / 3.0;
+        let radius = corners.iter().map(|c| c.distance(center)).fold(0.0, f64::max);
+        Self { corners, center, radius, normal, offset: normal.dot(corners[0]), edge_normals, edge_offsets }
     }
 }
 
@@ -264,6 +269,9 @@ impl Segment {
     /// Conservative: distances across and along the plane are bounded apart.
     fn passes_near(&self, t: &Triangle) -> bool {
         let eps = self.tolerance;
+        if self.misses_sphere(t.center, t.radius + eps) {
+            return false;
+        }
         let (a, b) = (t.normal.dot(self.origin) - t.offset, t.normal.dot(self.dir));
         let (lo, hi) = if b == 0.0 {
             if a.abs() > eps {
@@ -289,6 +297,16 @@ impl Segment {
         let across = t.normal.cross(q1 - q0).normalize_or_zero();
         let sides = t.corners.map(|c| across.dot(c - q0));
         !(sides.iter().all(|&s| s > eps) || sides.iter().all(|&s| s < -eps))
+    }
+
+    /// Whether the segment surely passes farther than `radius` from `center` (its closest
+    /// point is farther); `false` when that cannot be told (a zero direction, non-finite
+    /// values).
+    fn misses_sphere(&self, center: DVec3, radius: f64) -> bool {
+        let dd = self.dir.length_squared();
+        let t = ((center - self.origin).dot(self.dir) / dd).max(self.t_min).min(self.t_max);
+        let closest = self.origin + t * self.dir;
+        closest.distance_squared(center) > radius * radius
     }
 
     /// Whether the segment surely crosses `t`: its ends lie on either side of the plane by

@@ -1,0 +1,171 @@
+//! The change index of exact temporal reuse against brute force. Over plain boxes, a query
+//! returns the earliest change after the frame whose box the segment meets, checked against
+//! every box (never later than the boxes themselves say, never earlier than boxes grown by 1%
+//! say). With shapes, a segment that a real tracer (every compiled backend) finds hitting the
+//! body at either pose is never reported unchanged: the exact test misses nothing a tracer
+//! could see, grazing rays and segments that end on a face included.
+
+use super::common::{cluster, unit_rng, vec3};
+use crate::accel::bvh::{ChangeBox, ChangeIndex, ChangeShape};
+use crate::accel::{self, Accelerator, Backend, SceneQuery};
+use crate::geometry::{Aabb, Ray, TriangleMesh};
+use glam::{Affine3A, Quat, Vec3};
+use proptest::prelude::*;
+
+fn config(cases: u32) -> ProptestConfig {
+    ProptestConfig { cases, failure_persistence: None, ..ProptestConfig::default() }
+}
+
+/// Whether the segment of `ray` over `[t_min, t_max]` meets `b` (closed), in f64.
+fn segment_meets(ray: &Ray, b: &Aabb) -> bool {
+    let (o, d) = (ray.origin.as_dvec3(), ray.dir.as_dvec3());
+    let (mut lo, mut hi) = (f64::from(ray.t_min), f64::from(ray.t_max));
+    for axis in 0..3 {
+        let (min, max) = (f64::from(b.min[axis]), f64::from(b.max[axis]));
+        if d[axis] == 0.0 {
+            if o[axis] < min || o[axis] > max {
+                return false;
+            }
+            continue;
+        }
+        let (a, c) = ((min - o[axis]) / d[axis], (max - o[axis]) / d[axis]);
+        lo = lo.max(a.min(c));
+        hi = hi.min(a.max(c));
+    }
+    lo <= hi
+}
+
+/// The earliest `visible_at` in `(after, before)` of the `boxes` the segment meets, each
+/// grown by `grow` of its largest side; `before` when none.
+fn brute_force(boxes: &[ChangeBox], ray: &Ray, after: u32, before: u32, grow: f32) -> u32 {
+    boxes
+        .iter()
+        .filter(|b| b.visible_at > after && b.visible_at < before)
+        .filter(|b| {
+            let pad = Vec3::splat(grow * (b.bounds.max - b.bounds.min).max_element());
+            segment_meets(ray, &Aabb { min: b.bounds.min - pad, max: b.bounds.max + pad })
+        })
+        .map(|b| b.visible_at)
+        .min()
+        .unwrap_or(before)
+}
+
+fn change_box() -> impl Strategy<Value = ChangeBox> {
+    (vec3(10.0), (0.01f32..3.0, 0.01f32..3.0, 0.01f32..3.0), 1u32..30).prop_map(
+        |(min, (x, y, z), visible_at)| ChangeBox {
+            bounds: Aabb { min, max: min + Vec3::new(x, y, z) },
+            visible_at,
+            shape: None,
+        },
+    )
+}
+
+fn segment() -> impl Strategy<Value = Ray> {
+    (vec3(15.0), vec3(1.0), prop_oneof![Just(f32::INFINITY), 0.1f32..40.0])
+        .prop_filter_map("a direction", |(origin, dir, t_max)| {
+            (dir.length() > 1e-3).then(|| Ray::segment(origin, dir, 0.0, t_max))
+        })
+}
+
+proptest! {
+    #![proptest_config(config(256))]
+
+    #[test]
+    fn a_query_finds_the_earliest_change_box_the_segment_meets(
+        boxes in prop::collection::vec(change_box(), 1..60),
+        rays in prop::collection::vec(segment(), 16),
+        after in 0u32..15,
+        span in 1u32..30,
+    ) {
+        let index = ChangeIndex::build(boxes.clone(), Vec::new());
+        let before = after + span;
+        for ray in &rays {
+            let got = index.first_change(ray, after, before, false);
+            prop_assert!(got <= brute_force(&boxes, ray, after, before, 0.0), "later than a box it meets: {ray:?}");
+            prop_assert!(got >= brute_force(&boxes, ray, after, before, 0.01), "earlier than any box: {ray:?}");
+        }
+    }
+}
+
+/// A pose: translation, rotation axis and angle.
+fn pose() -> impl Strategy<Value = Affine3A> {
+    (vec3(3.0), vec3(1.0), -3.2f32..3.2).prop_map(|(at, axis, angle)| {
+        let axis = axis.try_normalize().unwrap_or(Vec3::Y);
+        Affine3A::from_rotation_translation(Quat::from_axis_angle(axis, angle), at)
+    })
+}
+
+/// The world bounds of `mesh` at `pose`.
+fn posed_bounds(mesh: &TriangleMesh, pose: &Affine3A) -> Aabb {
+    Aabb::from_points(mesh.positions.iter().map(|p| pose.transform_point3(*p)))
+}
+
+/// Each compiled backend's scene of `mesh` as one instance at `pose`.
+fn traced_at(mesh: &TriangleMesh, pose: Affine3A) -> Vec<Box<dyn Accelerator>> {
+    Backend::compiled()
+        .iter()
+        .map(|&backend| {
+            let mut accel = accel::create(backend, Some(1)).unwrap();
+            let proto = accel.add_prototype(mesh).unwrap();
+            accel.add_instance(proto, pose).unwrap();
+            accel.commit().unwrap();
+            accel
+        })
+        .collect()
+}
+
+/// Segments from random origins aimed at random points of the posed triangles (barycentrics
+/// a little beyond the edges too), ending at that point up to ±1% (ending on a face, short of
+/// it, or through it), and some grazing the triangle's plane.
+fn aimed_segments(mesh: &TriangleMesh, poses: &[Affine3A; 2], seed: u64, count: usize) -> Vec<Ray> {
+    let mut next = unit_rng(seed);
+    (0..count)
+        .map(|i| {
+            let [a, b, c] =
+                mesh.triangle((next() * mesh.triangle_count() as f32) as usize % mesh.triangle_count());
+            let pose = poses[i % 2];
+            let (u, v) = (next() * 1.1 - 0.05, next() * 1.1 - 0.05);
+            let target = pose.transform_point3(a + (b - a) * u + (c - a) * v * (1.0 - u));
+            let normal = pose.transform_vector3((b - a).cross(c - a)).normalize_or_zero();
+            let mut origin = target + Vec3::new(next() - 0.5, next() - 0.5, next() - 0.5) * 8.0;
+            if i % 4 == 0 {
+                // Within a degree or so of the plane.
+                origin -= normal * normal.dot(origin - target) * (1.0 - 0.02 * next());
+            }
+            let dir = (target - origin).normalize();
+            let length = (target - origin).length();
+            Ray::segment(origin, dir, 0.0, length * (0.99 + 0.02 * next()))
+        })
+        .collect()
+}
+
+proptest! {
+    #![proptest_config(config(48))]
+
+    #[test]
+    fn a_segment_a_tracer_sees_hit_the_body_always_counts(
+        seed in any::<u64>(),
+        triangles in 1usize..12,
+        poses in [pose(), pose()],
+    ) {
+        let mesh = cluster(Vec3::ZERO, triangles, seed);
+        let tris: Vec<[Vec3; 3]> = (0..mesh.triangle_count()).map(|i| mesh.triangle(i)).collect();
+        let bounds = posed_bounds(&mesh, &poses[0]).union(posed_bounds(&mesh, &poses[1]));
+        let shape = ChangeShape { mesh: 0, poses: [Some(poses[0]), Some(poses[1])] };
+        let index = ChangeIndex::build(vec![ChangeBox { bounds, visible_at: 1, shape: Some(shape) }], vec![tris]);
+        let scenes = [traced_at(&mesh, poses[0]), traced_at(&mesh, poses[1])];
+        for ray in aimed_segments(&mesh, &poses, seed, 64) {
+            for k in 0..scenes[0].len() {
+                let query = |pose: usize| -> &dyn SceneQuery { scenes[pose][k].query().unwrap() };
+                let hits = [query(0).intersect(&ray).is_some(), query(1).intersect(&ray).is_some()];
+                if hits[0] || hits[1] {
+                    prop_assert_eq!(index.first_change(&ray, 0, 2, false), 1, "a hit unseen: {:?}", ray);
+                }
+                let blocked = [query(0).intersect_p(&ray), query(1).intersect_p(&ray)];
+                if blocked[0] != blocked[1] {
+                    prop_assert_eq!(index.first_change(&ray, 0, 2, true), 1, "an occlusion change unseen: {:?}", ray);
+                }
+            }
+        }
+    }
+}
