@@ -1,6 +1,8 @@
 //! `report.png`, the plot of a rendered sequence's statistics: frame time by stage over the
-//! run, the geometry cache's hits over the run, and the histogram of the fraction of requested
-//! islands the cache already held. Drawn with the lab's figure helpers.
+//! run, the share of camera samples each frame traced, the bodies in the per-frame top level,
+//! resting and baked over the run, and, when the geometry cache served requests, its hits over the
+//! run and the histogram of the fraction of requested islands it already held. Drawn with
+//! the lab's figure helpers.
 
 use std::path::Path;
 
@@ -13,7 +15,8 @@ use dormant_lab::report::ReportError;
 use plotters::prelude::*;
 
 const PLOT_WIDTH: u32 = 1200;
-const PLOT_HEIGHT: u32 = 1350;
+/// Height of one panel.
+const PANEL_HEIGHT: u32 = 450;
 
 /// A per-frame count of a record.
 type Count = fn(&FrameRecord) -> u64;
@@ -24,11 +27,21 @@ fn stage_ms(f: &FrameRecord, stage: usize) -> f64 {
 
 /// Draws the report of `stats` and writes it to `path` as PNG.
 pub fn write_report_png(stats: &RunStats, path: &Path) -> Result<(), ReportError> {
-    write_png(path, PLOT_WIDTH, PLOT_HEIGHT, |buffer| draw(stats, buffer))
+    let height = PANEL_HEIGHT * panel_count(stats);
+    write_png(path, PLOT_WIDTH, height, |buffer| draw(stats, buffer, height))
 }
 
-fn draw(stats: &RunStats, buffer: &mut [u8]) -> PlotResult {
-    let root = BitMapBackend::with_buffer(buffer, (PLOT_WIDTH, PLOT_HEIGHT)).into_drawing_area();
+/// Whether the geometry cache served any request: without, its panels would say nothing.
+fn cache_used(stats: &RunStats) -> bool {
+    stats.summary.cache.stats.requests > 0
+}
+
+fn panel_count(stats: &RunStats) -> u32 {
+    3 + if cache_used(stats) { 2 } else { 0 }
+}
+
+fn draw(stats: &RunStats, buffer: &mut [u8], height: u32) -> PlotResult {
+    let root = BitMapBackend::with_buffer(buffer, (PLOT_WIDTH, height)).into_drawing_area();
     root.fill(&WHITE).map_err(err)?;
     let run = &stats.run;
     let title = format!(
@@ -36,10 +49,14 @@ fn draw(stats: &RunStats, buffer: &mut [u8]) -> PlotResult {
         run.scene, stats.summary.frames, run.width, run.height, run.spp, run.backend, run.integration
     );
     let root = root.titled(&title, (FONT, 22)).map_err(err)?;
-    let panels = root.split_evenly((3, 1));
+    let panels = root.split_evenly((panel_count(stats) as usize, 1));
     stage_times(stats, &panels[0])?;
-    cache_hits(stats, &panels[1])?;
-    fraction_histogram(stats, &panels[2])?;
+    traced_share(stats, &panels[1])?;
+    bodies(stats, &panels[2])?;
+    if cache_used(stats) {
+        cache_hits(stats, &panels[3])?;
+        fraction_histogram(stats, &panels[4])?;
+    }
     root.present().map_err(err)
 }
 
@@ -80,6 +97,72 @@ fn stage_times(stats: &RunStats, area: &Area<'_>) -> PlotResult {
             .legend(move |(x, y)| Rectangle::new([(x, y - 6), (x + 14, y + 6)], colour.filled()));
     }
     draw_legend(&mut chart, SeriesLabelPosition::UpperRight)
+}
+
+/// The share of each frame's camera samples it traced (the rest were reused), in percent.
+fn traced_share(stats: &RunStats, area: &Area<'_>) -> PlotResult {
+    let points: Vec<(f64, f64)> =
+        stats.frames.iter().map(|f| (f.frame as f64, 100.0 * f.reuse.traced_share())).collect();
+    let caption = format!("Camera samples traced, % of the frame's (--reuse {})", stats.run.reuse_mode);
+    let mut chart = ChartBuilder::on(area)
+        .caption(caption, (FONT, 20))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(70)
+        .build_cartesian_2d(frame_range(stats), (0.001f64..110.0).log_scale())
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc("frame")
+        .x_label_formatter(&|v| format!("{v:.0}"))
+        .y_desc("traced (%, log)")
+        .y_label_formatter(&|v| format!("{v}"))
+        .label_style((FONT, 14))
+        .axis_desc_style((FONT, 16))
+        .draw()
+        .map_err(err)?;
+    let colour = RGBColor(31, 119, 180);
+    let clamped = points.into_iter().map(|(x, y)| (x, y.max(0.001)));
+    chart.draw_series(LineSeries::new(clamped, colour.stroke_width(2))).map_err(err)?;
+    Ok(())
+}
+
+/// Bodies in the per-frame top level (awake, and asleep but not integrated), resting and baked.
+fn bodies(stats: &RunStats, area: &Area<'_>) -> PlotResult {
+    let series: [(&str, RGBColor, Count); 3] = [
+        ("in the per-frame top level", RGBColor(31, 119, 180), |f| f.instances as u64),
+        ("resting", RGBColor(44, 160, 44), |f| f.resting_bodies as u64),
+        ("baked", RGBColor(255, 127, 14), |f| f.baked_bodies as u64),
+    ];
+    let top =
+        stats.frames.iter().flat_map(|f| series.map(|s| s.2(f))).max().unwrap_or(0).max(1) as f64 * 1.15;
+    let mut chart = ChartBuilder::on(area)
+        .caption("Bodies in the per-frame top level, resting and baked", (FONT, 20))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(70)
+        .build_cartesian_2d(frame_range(stats), 0.0..top)
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc("frame")
+        .x_label_formatter(&|v| format!("{v:.0}"))
+        .y_desc("bodies (count)")
+        .y_labels(count_labels(top))
+        .y_label_formatter(&|v| format!("{v:.0}"))
+        .label_style((FONT, 14))
+        .axis_desc_style((FONT, 16))
+        .draw()
+        .map_err(err)?;
+    for (name, colour, get) in series {
+        let points: Vec<(f64, f64)> = stats.frames.iter().map(|f| (f.frame as f64, get(f) as f64)).collect();
+        chart
+            .draw_series(LineSeries::new(points, colour.stroke_width(3)))
+            .map_err(err)?
+            .label(name)
+            .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], colour.stroke_width(3)));
+    }
+    draw_legend(&mut chart, SeriesLabelPosition::UpperLeft)
 }
 
 fn median_of(stats: &RunStats, stage: usize) -> f64 {

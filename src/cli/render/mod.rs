@@ -243,6 +243,8 @@ pub(super) fn run(
         .then(|| Denoiser::new(threads).map(|d| d.prefilter(args.denoise_prefilter)))
         .transpose()
         .map_err(denoise_error)?;
+    // The scene file is read (and a bad one refused) before anything is written.
+    let source = sequence_source(args)?;
     std::fs::create_dir_all(&args.out).map_err(|e| {
         CliError::Runtime(format!("cannot create output directory {}: {e}", args.out.display()))
     })?;
@@ -258,7 +260,7 @@ pub(super) fn run(
         records: Vec::new(),
         kept: 0,
     };
-    let (scene_name, is_sequence) = match sequence_source(args)? {
+    let (scene_name, is_sequence) = match source {
         None => (render_still(&job, &mut output)?, false),
         Some(source) => {
             let sequence = load_sequence(source, quiet)?;

@@ -154,18 +154,22 @@ proptest! {
         let shape = ChangeShape { mesh: 0, poses: [Some(poses[0]), Some(poses[1])] };
         let index = ChangeIndex::build(vec![ChangeBox { bounds, visible_at: 1, shape: Some(shape) }], vec![tris]);
         let scenes = [traced_at(&mesh, poses[0]), traced_at(&mesh, poses[1])];
+        let mut seen = 0;
         for ray in aimed_segments(&mesh, &poses, seed, 64) {
-            for k in 0..scenes[0].len() {
-                let query = |pose: usize| -> &dyn SceneQuery { scenes[pose][k].query().unwrap() };
-                let hits = [query(0).intersect(&ray).is_some(), query(1).intersect(&ray).is_some()];
+            for (before, after) in scenes[0].iter().zip(&scenes[1]) {
+                let queries: [&dyn SceneQuery; 2] = [before.query().unwrap(), after.query().unwrap()];
+                let hits = queries.map(|q| q.intersect(&ray).is_some());
                 if hits[0] || hits[1] {
+                    seen += 1;
                     prop_assert_eq!(index.first_change(&ray, 0, 2, false), 1, "a hit unseen: {:?}", ray);
                 }
-                let blocked = [query(0).intersect_p(&ray), query(1).intersect_p(&ray)];
+                let blocked = queries.map(|q| q.intersect_p(&ray));
                 if blocked[0] != blocked[1] {
                     prop_assert_eq!(index.first_change(&ray, 0, 2, true), 1, "an occlusion change unseen: {:?}", ray);
                 }
             }
         }
+        // The segments are aimed at the triangles: most of them hit.
+        prop_assert!(seen > 16, "only {} hits", seen);
     }
 }

@@ -37,7 +37,7 @@ pub struct FrameRecord {
     pub instances: usize,
     pub integrated_islands: usize,
     pub(crate) sleeping_islands: usize,
-    pub(crate) baked_bodies: usize,
+    pub baked_bodies: usize,
     pub resting_bodies: usize,
     pub rest_rebuilt: bool,
     /// The previous image again: nothing visible changed, nothing was traced.
