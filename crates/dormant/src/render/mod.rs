@@ -20,6 +20,7 @@ mod texture_sampling;
 mod tiles;
 
 pub use adaptive::{AdaptiveSampling, SppStats, DARK_FLOOR};
+pub(crate) use aov::AovPasses;
 pub use aov::{render_with_aovs, Aov, AovIntegrator};
 pub use bsdf::{sample_cone, sample_cosine};
 pub use camera::PinholeCamera;

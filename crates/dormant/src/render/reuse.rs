@@ -101,6 +101,19 @@ pub struct ReuseStats {
     pub store_bytes: u64,
 }
 
+impl ReuseStats {
+    /// A frame rendered without the store: every sample of `film` traced.
+    pub(crate) fn traced_in_full(film: &Film, stats: &RenderStats) -> Self {
+        let pixels = u64::from(film.width) * u64::from(film.height);
+        ReuseStats {
+            samples_traced: (stats.spp.mean * pixels as f64).round() as u64,
+            pixels_traced: pixels,
+            pixels,
+            ..ReuseStats::default()
+        }
+    }
+}
+
 impl ReuseStore {
     /// The bytes a store of `width` x `height` pixels with `aovs` needs: one value per pixel
     /// and pass (the least the store works with).
@@ -119,6 +132,11 @@ impl ReuseStore {
         let pixels = self.image.len() * (12 + 4 + 4);
         let passes: usize = self.passes.iter().map(|(_, p)| p.len() * 12).sum();
         pixels + passes + self.samples.len() * SAMPLE_BYTES
+    }
+
+    /// Whether the store holds nothing yet.
+    pub(crate) fn is_empty(&self) -> bool {
+        self.settings.is_none()
     }
 
     /// Whether the store holds a frame rendered with `settings` and `aovs`.

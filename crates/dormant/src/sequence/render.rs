@@ -7,8 +7,7 @@ use super::reuse::{ExactReuse, FullFrame};
 use super::{FrameSelection, KeptFrame, Sequence, SequenceError};
 use crate::physics::trajectory::ReplayFrame;
 use crate::render::{
-    render_reusing, render_with_aovs, Aov, Emitters, Film, FrameReuse, PinholeCamera, RenderError,
-    RenderScene, RenderStats, ReuseStats,
+    render_with_aovs, Aov, Emitters, Film, PinholeCamera, RenderError, RenderScene, RenderStats, ReuseStats,
 };
 use crate::residency::{FrameStats, SceneManager};
 use crate::scene::Camera;
@@ -112,24 +111,9 @@ impl Sequence {
                     (film, render, aovs, None)
                 }
                 Some(reuse) => {
-                    let full = reuse.full_frame(frame.index, manager.last_frame());
-                    let plan = FrameReuse {
-                        index: &reuse.index,
-                        ordinal: reuse.ordinal(frame.index),
-                        until: reuse.horizon_limit(frame.index),
-                        full: full.is_some(),
-                        budget: renderer.reuse_budget,
-                    };
-                    let (film, render, aovs, stats) = render_reusing(
-                        &scene,
-                        query,
-                        renderer.integrator,
-                        &settings,
-                        renderer.aovs,
-                        plan,
-                        &mut reuse.store,
-                    )?;
-                    (film, render, aovs, Some(ExactFrame { stats, full }))
+                    let (film, render, aovs, exact) =
+                        reuse.render(&scene, query, renderer, frame.index, manager.last_frame())?;
+                    (film, render, aovs, Some(exact))
                 }
             }
         };

@@ -9,11 +9,17 @@
 use serde::Serialize;
 
 use super::frame_renderer::{FrameRenderer, ReuseMode, SeedMode};
+use super::ExactFrame;
 use super::{FrameSelection, Sequence, SequenceError};
 use crate::accel::bvh::{ChangeBox, ChangeIndex, ChangeShape, EXACT_MESH_TRIANGLES};
+use crate::accel::SceneQuery;
 use crate::geometry::{Aabb, InstanceMotion};
-use crate::physics::trajectory::ReplayFrame;
-use crate::render::{Emitters, ReuseStore};
+use crate::physics::trajectory::{ReplayFrame, TrajectoryFrame};
+use crate::physics::BodyId;
+use crate::render::{
+    render_reusing, render_with_aovs, AovPasses, Emitters, Film, FrameReuse, RenderError, RenderScene,
+    RenderStats, ReuseStats, ReuseStore,
+};
 use crate::residency::{FrameStats, IntegrationForm};
 
 /// Why a frame traced every sample instead of reusing samples of earlier frames.
@@ -88,6 +94,51 @@ impl ExactReuse {
         full.map_or(self.frames.len(), |k| next + k) as u32
     }
 
+    /// Frame `frame`'s image and AOVs through `renderer`, tracing only what its horizons
+    /// say and keeping the store up to date; `stats` is what the scene manager did for it.
+    /// A frame traced in full whose next frame is traced in full too (a camera that moves
+    /// every frame) keeps nothing: nothing it traces could be reused, so it renders as
+    /// without reuse and the store is emptied.
+    pub(crate) fn render(
+        &mut self,
+        scene: &RenderScene,
+        query: &dyn SceneQuery,
+        renderer: &FrameRenderer<'_>,
+        frame: u32,
+        stats: &FrameStats,
+    ) -> Result<(Film, RenderStats, AovPasses, ExactFrame), RenderError> {
+        // An empty store (frames kept from an earlier run before this one) traces in full too.
+        let full =
+            self.full_frame(frame, stats).or_else(|| self.store.is_empty().then_some(FullFrame::First));
+        let settings = renderer.settings(frame);
+        let ordinal = self.ordinal(frame);
+        let until = self.horizon_limit(frame);
+        if full.is_some() && until <= ordinal + 1 {
+            self.store = ReuseStore::default();
+            let (film, render, aovs) =
+                render_with_aovs(scene, query, renderer.integrator, &settings, renderer.aovs)?;
+            let stats = ReuseStats::traced_in_full(&film, &render);
+            return Ok((film, render, aovs, ExactFrame { stats, full }));
+        }
+        let plan = FrameReuse {
+            index: &self.index,
+            ordinal,
+            until,
+            full: full.is_some(),
+            budget: renderer.reuse_budget,
+        };
+        let (film, render, aovs, stats) = render_reusing(
+            scene,
+            query,
+            renderer.integrator,
+            &settings,
+            renderer.aovs,
+            plan,
+            &mut self.store,
+        )?;
+        Ok((film, render, aovs, ExactFrame { stats, full }))
+    }
+
     /// Why frame `frame`, whose scene manager did `stats`, must be traced in full; `None` when
     /// it may reuse blocks.
     pub(crate) fn full_frame(&self, frame: u32, stats: &FrameStats) -> Option<FullFrame> {
@@ -130,51 +181,126 @@ impl Sequence {
     /// `shutter` frame intervals: a box for every body whose look differs from one frame to
     /// the next (its bounds at both, swept over the shutter when blurred), tagged with the
     /// ordinal of the later frame; and per ordinal whether the frame must be traced in full
-    /// (the camera moved, or an emissive body changed).
+    /// (the camera moved, or an emissive body changed). Only bodies the trajectory records a
+    /// change for since the last selected frame (or that move over a shutter) are looked at.
     fn changes(&self, frames: &[u32], shutter: f32) -> (Vec<ChangeBox>, Vec<Option<FullFrame>>) {
-        let local: Vec<Aabb> = self.template.prototypes.iter().map(|p| p.mesh.bounds()).collect();
-        let emissive = Emitters::emissive_prototypes(&self.template);
-        let body_prototype: Vec<usize> =
-            self.trajectory.bodies.iter().map(|b| b.prototype as usize).collect();
-        let mut boxes = Vec::new();
+        let mut changes = FrameChanges::new(self);
         let mut full = vec![None; frames.len()];
-        let mut looks: Vec<Look> = Vec::new();
         let mut replay = self.trajectory.replay();
         let (mut ordinal, last) = (0usize, frames.last().copied());
         while let Some(frame) = replay.next_frame() {
             if ordinal >= frames.len() || Some(frame.index) > last {
                 break;
             }
+            changes.note(&self.trajectory.frames[frame.index as usize]);
             if frame.index != frames[ordinal] {
                 continue;
             }
-            let now = body_looks(&frame, shutter);
-            if ordinal == 0 {
-                full[0] = Some(FullFrame::First);
+            let emitter = changes.compare(&frame, shutter, ordinal as u32);
+            full[ordinal] = if ordinal == 0 {
+                Some(FullFrame::First)
+            } else if self.shutter_cameras(frames[ordinal - 1], shutter)
+                != self.shutter_cameras(frame.index, shutter)
+            {
+                Some(FullFrame::CameraMoved)
             } else {
-                let camera = self.shutter_cameras(frames[ordinal - 1], shutter)
-                    != self.shutter_cameras(frame.index, shutter);
-                let mut emitter = false;
-                for (b, (before, after)) in looks.iter().zip(&now).enumerate() {
-                    if before == after {
-                        continue;
-                    }
-                    let p = body_prototype[b];
-                    emitter |= emissive.get(p).copied().unwrap_or(false);
-                    let bounds = look_bounds(before, &local[p]).union(look_bounds(after, &local[p]));
-                    let shape = look_shape(before, after, p as u32);
-                    boxes.push(ChangeBox { bounds, visible_at: ordinal as u32, shape });
-                }
-                full[ordinal] = match (camera, emitter) {
-                    (true, _) => Some(FullFrame::CameraMoved),
-                    (false, true) => Some(FullFrame::EmitterMoved),
-                    (false, false) => None,
-                };
-            }
-            looks = now;
+                emitter.then_some(FullFrame::EmitterMoved)
+            };
             ordinal += 1;
         }
-        (boxes, full)
+        (changes.boxes, full)
+    }
+}
+
+/// The looks of a sequence's bodies at the last selected frame, the bodies recorded as changed
+/// since, and the change boxes found so far.
+struct FrameChanges {
+    local: Vec<Aabb>,
+    emissive: Vec<bool>,
+    body_prototype: Vec<usize>,
+    /// Every body's look at the last selected frame; empty before the first.
+    looks: Vec<Look>,
+    /// Bodies to look at again at the next selected frame (`dirty` flags them once).
+    changed: Vec<usize>,
+    dirty: Vec<bool>,
+    /// Bodies moving over the last selected frame's shutter: their look there was a motion.
+    moving: Vec<usize>,
+    boxes: Vec<ChangeBox>,
+}
+
+impl FrameChanges {
+    fn new(sequence: &Sequence) -> Self {
+        let bodies = sequence.trajectory.bodies.len();
+        Self {
+            local: sequence.template.prototypes.iter().map(|p| p.mesh.bounds()).collect(),
+            emissive: Emitters::emissive_prototypes(&sequence.template),
+            body_prototype: sequence.trajectory.bodies.iter().map(|b| b.prototype as usize).collect(),
+            looks: Vec::new(),
+            changed: Vec::new(),
+            dirty: vec![false; bodies],
+            moving: Vec::new(),
+            boxes: Vec::new(),
+        }
+    }
+
+    /// Marks the bodies whose state or pose `frame` changed.
+    fn note(&mut self, frame: &TrajectoryFrame) {
+        let ids = frame.state_changes.iter().map(|c| c.0).chain(frame.pose_changes.iter().map(|c| c.0));
+        for BodyId(b) in ids {
+            self.mark(b as usize);
+        }
+    }
+
+    fn mark(&mut self, b: usize) {
+        if !std::mem::replace(&mut self.dirty[b], true) {
+            self.changed.push(b);
+        }
+    }
+
+    /// Brings the looks to selected frame `frame` (ordinal `ordinal`), with a box for every
+    /// body whose look changed; whether an emissive body's did.
+    fn compare(&mut self, frame: &ReplayFrame<'_>, shutter: f32, ordinal: u32) -> bool {
+        let motions = frame.shutter_motions(shutter);
+        if self.looks.is_empty() {
+            self.looks = body_looks(frame, &motions);
+            self.end_frame(&motions);
+            return false;
+        }
+        for b in std::mem::take(&mut self.moving) {
+            self.mark(b);
+        }
+        for &(b, _) in &motions {
+            self.mark(b);
+        }
+        let mut sorted = motions.clone();
+        sorted.sort_unstable_by_key(|m| m.0);
+        let look = |b: usize| match sorted.binary_search_by_key(&b, |m| m.0) {
+            Ok(k) => Look::Moving(sorted[k].1),
+            Err(_) => still_look(frame, b),
+        };
+        let now: Vec<(usize, Look)> = self.changed.iter().map(|&b| (b, look(b))).collect();
+        let mut emitter = false;
+        for (b, after) in now {
+            let before = std::mem::replace(&mut self.looks[b], after);
+            if before == after {
+                continue;
+            }
+            let p = self.body_prototype[b];
+            emitter |= self.emissive.get(p).copied().unwrap_or(false);
+            let bounds = look_bounds(&before, &self.local[p]).union(look_bounds(&after, &self.local[p]));
+            let shape = look_shape(&before, &after, p as u32);
+            self.boxes.push(ChangeBox { bounds, visible_at: ordinal, shape });
+        }
+        self.end_frame(&motions);
+        emitter
+    }
+
+    /// Clears the changed set after a selected frame; remembers who moved over its shutter.
+    fn end_frame(&mut self, motions: &[(usize, InstanceMotion)]) {
+        for b in self.changed.drain(..) {
+            self.dirty[b] = false;
+        }
+        self.moving = motions.iter().map(|m| m.0).collect();
     }
 }
 
@@ -204,15 +330,18 @@ fn look_shape(before: &Look, after: &Look, prototype: u32) -> Option<ChangeShape
     Some(ChangeShape { mesh: prototype, poses: [pose(before)?, pose(after)?] })
 }
 
-/// Every body's look in `frame` with a shutter of `shutter` frame intervals.
-fn body_looks(frame: &ReplayFrame<'_>, shutter: f32) -> Vec<Look> {
-    let mut looks: Vec<Look> = (0..frame.poses.len())
-        .map(|b| match frame.is_present(b) {
-            true => Look::Still(frame.poses[b].to_affine()),
-            false => Look::Absent,
-        })
-        .collect();
-    for (b, motion) in frame.shutter_motions(shutter) {
+/// Body `b`'s look in `frame` without a shutter.
+fn still_look(frame: &ReplayFrame<'_>, b: usize) -> Look {
+    match frame.is_present(b) {
+        true => Look::Still(frame.poses[b].to_affine()),
+        false => Look::Absent,
+    }
+}
+
+/// Every body's look in `frame`, `motions` the bodies moving over its shutter.
+fn body_looks(frame: &ReplayFrame<'_>, motions: &[(usize, InstanceMotion)]) -> Vec<Look> {
+    let mut looks: Vec<Look> = (0..frame.poses.len()).map(|b| still_look(frame, b)).collect();
+    for &(b, motion) in motions {
         looks[b] = Look::Moving(motion);
     }
     looks

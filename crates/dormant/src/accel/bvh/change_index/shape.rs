@@ -68,9 +68,6 @@ struct MeshNode {
 #[derive(Clone, Copy, Debug)]
 struct Triangle {
     corners: [DVec3; 3],
-    /// A sphere around the triangle (centroid, farthest corner), for a cheap first rejection.
-    center: DVec3,
-    radius: f64,
     normal: DVec3,
     offset: f64,
     edge_normals: [DVec3; 3],
@@ -115,9 +112,7 @@ impl Triangle {
             edge_normals[i] = m;
             edge_offsets[i] = m.dot(a);
         }
-        let center = (corners[0] + corners[1] + corners[2]) / 3.0;
-        let radius = corners.iter().map(|c| c.distance(center)).fold(0.0, f64::max);
-        Self { corners, center, radius, normal, offset: normal.dot(corners[0]), edge_normals, edge_offsets }
+        Self { corners, normal, offset: normal.dot(corners[0]), edge_normals, edge_offsets }
     }
 }
 
@@ -267,11 +262,9 @@ impl Segment {
     /// separated from the triangle by more than the tolerance (the separating axes of a
     /// segment and a triangle in a plane: the triangle's edge normals and the segment's).
     /// Conservative: distances across and along the plane are bounded apart.
+    /// A bounding-sphere test first did not pay: docs/lab/reuse.md#2026-12-05-the-demolition-over-120-frames-bench-reuse
     fn passes_near(&self, t: &Triangle) -> bool {
         let eps = self.tolerance;
-        if self.misses_sphere(t.center, t.radius + eps) {
-            return false;
-        }
         let (a, b) = (t.normal.dot(self.origin) - t.offset, t.normal.dot(self.dir));
         let (lo, hi) = if b == 0.0 {
             if a.abs() > eps {
@@ -297,16 +290,6 @@ impl Segment {
         let across = t.normal.cross(q1 - q0).normalize_or_zero();
         let sides = t.corners.map(|c| across.dot(c - q0));
         !(sides.iter().all(|&s| s > eps) || sides.iter().all(|&s| s < -eps))
-    }
-
-    /// Whether the segment surely passes farther than `radius` from `center` (its closest
-    /// point is farther); `false` when that cannot be told (a zero direction, non-finite
-    /// values).
-    fn misses_sphere(&self, center: DVec3, radius: f64) -> bool {
-        let dd = self.dir.length_squared();
-        let t = ((center - self.origin).dot(self.dir) / dd).max(self.t_min).min(self.t_max);
-        let closest = self.origin + t * self.dir;
-        closest.distance_squared(center) > radius * radius
     }
 
     /// Whether the segment surely crosses `t`: its ends lie on either side of the plane by
