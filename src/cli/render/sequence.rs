@@ -8,7 +8,7 @@ use super::{adaptive_sampling, aov_passes, sequence_error, RenderArgs, RenderJob
 use crate::cli::CliError;
 use dormant::accel::Backend;
 use dormant::render::denoise::Denoiser;
-use dormant::render::{AdaptiveSampling, RenderStats};
+use dormant::render::{AdaptiveSampling, Aov, RenderStats};
 use dormant::residency::{CacheBudget, IntegrationSettings, SceneManager};
 use dormant::sequence::output;
 use dormant::sequence::stats::{FrameRecord, ReuseRecord, RunInfo, StatsFile};
@@ -27,18 +27,7 @@ pub(super) fn render_sequence(
     let frames = sequence.select(args.frames, args.frame_step).map_err(|e| sequence_error(e, "--frames"))?;
     let mut manager = scene_manager(args, sequence, &frames, job.backend, job.threads)?;
     let passes = aov_passes(args);
-    let renderer = FrameRenderer {
-        integrator: job.integrator,
-        aovs: &passes,
-        width: args.size.width,
-        height: args.size.height,
-        spp: args.spp,
-        adaptive: adaptive_sampling(args, Some(sequence))?,
-        seed: args.seed,
-        reuse: args.reuse,
-        reuse_budget: reuse_budget(args)?,
-        shutter: shutter(args, sequence),
-    };
+    let renderer = frame_renderer(job, sequence, &passes)?;
     let denoise = output.writer.denoiser.map(Denoiser::label);
     let info = run_info(args, sequence, job.backend, &frames, renderer.adaptive, denoise);
     let kept = kept_frames(output, &info, &frames)?;
@@ -77,6 +66,27 @@ pub(super) fn render_sequence(
         encode_video(args, &frame_paths, fps, output.quiet)?;
     }
     Ok(sequence.template.name.clone())
+}
+
+/// How `job` renders each frame of `sequence`, with the AOV `passes`.
+fn frame_renderer<'a>(
+    job: &RenderJob<'a>,
+    sequence: &Sequence,
+    passes: &'a [Aov],
+) -> Result<FrameRenderer<'a>, CliError> {
+    let args = job.args;
+    Ok(FrameRenderer {
+        integrator: job.integrator,
+        aovs: passes,
+        width: args.size.width,
+        height: args.size.height,
+        spp: args.spp,
+        adaptive: adaptive_sampling(args, Some(sequence))?,
+        seed: args.seed,
+        reuse: args.reuse,
+        reuse_budget: reuse_budget(args)?,
+        shutter: shutter(args, sequence),
+    })
 }
 
 /// `--reuse-mib` in bytes (checked against the frames' needs when the sequence starts).

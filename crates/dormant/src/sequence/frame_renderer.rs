@@ -20,7 +20,7 @@ pub enum ReuseMode {
 }
 
 /// Memory exact reuse may keep by default: room for a per-pixel store of a 3840x2160 frame
-/// with every AOV (538 MiB, [`crate::render::ReuseStore::bytes_for`]), and for a per-sample
+/// with every AOV (538 MiB, `ReuseStore::bytes_for`), and for a per-sample
 /// store of 1920x1080 at 16 spp or 960x540 at 64 spp.
 pub const DEFAULT_REUSE_BYTES: usize = 576 << 20;
 

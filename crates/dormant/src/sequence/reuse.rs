@@ -152,7 +152,7 @@ impl ExactReuse {
 }
 
 /// Checks that exact reuse of `renderer`'s frames fits in its budget: a store of one value per
-/// pixel and pass ([`ReuseStore::bytes_for`]).
+/// pixel and pass (`ReuseStore::bytes_for`).
 pub fn check_budget(renderer: &FrameRenderer<'_>) -> Result<(), SequenceError> {
     let needed = ReuseStore::bytes_for(renderer.width, renderer.height, renderer.aovs);
     if needed <= renderer.reuse_budget {
