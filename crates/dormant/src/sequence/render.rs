@@ -3,11 +3,11 @@
 //! manager's cost model.
 
 use super::frame_renderer::{FrameRenderer, ReuseMode, SeedMode};
-use super::reuse::{ExactReuse, FullFrame};
+use super::reuse::{ExactFrame, ExactReuse};
 use super::{FrameSelection, KeptFrame, Sequence, SequenceError};
 use crate::physics::trajectory::ReplayFrame;
 use crate::render::{
-    render_with_aovs, Aov, Emitters, Film, PinholeCamera, RenderError, RenderScene, RenderStats, ReuseStats,
+    render_with_aovs, Aov, Emitters, Film, PinholeCamera, RenderError, RenderScene, RenderStats,
 };
 use crate::residency::{FrameStats, SceneManager};
 use crate::scene::Camera;
@@ -32,15 +32,6 @@ pub struct RenderedFrame {
     /// With exact temporal reuse: what was traced and reused, and why the frame was traced in
     /// full when it was.
     pub reuse: Option<ExactFrame>,
-}
-
-/// What exact temporal reuse did in a frame.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
-pub struct ExactFrame {
-    #[serde(flatten)]
-    pub stats: ReuseStats,
-    /// Why every sample was traced (`None`: samples were reused where their horizons allowed).
-    pub full: Option<FullFrame>,
 }
 
 impl RenderedFrame {

@@ -9,7 +9,6 @@
 use serde::Serialize;
 
 use super::frame_renderer::{FrameRenderer, ReuseMode, SeedMode};
-use super::ExactFrame;
 use super::{FrameSelection, Sequence, SequenceError};
 use crate::accel::bvh::{ChangeBox, ChangeIndex, ChangeShape, EXACT_MESH_TRIANGLES};
 use crate::accel::SceneQuery;
@@ -46,6 +45,15 @@ impl FullFrame {
             FullFrame::IslandsBaked => "islands_baked",
         }
     }
+}
+
+/// What exact temporal reuse did in a frame.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct ExactFrame {
+    #[serde(flatten)]
+    pub stats: ReuseStats,
+    /// Why every sample was traced (`None`: samples were reused where their horizons allowed).
+    pub full: Option<FullFrame>,
 }
 
 /// Exact reuse over one run: the change index, the rendered frames' ordinals, the frames that
