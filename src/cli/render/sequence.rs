@@ -12,7 +12,7 @@ use dormant::render::{AdaptiveSampling, Aov, RenderStats};
 use dormant::residency::{CacheBudget, IntegrationSettings, SceneManager};
 use dormant::sequence::output;
 use dormant::sequence::stats::{FrameRecord, ReuseRecord, RunInfo, StatsFile};
-use dormant::sequence::{FrameRenderer, FrameSelection, KeptFrame, ReuseMode, Sequence, SequenceError};
+use dormant::sequence::{FrameRenderer, FrameSelection, ReuseMode, Sequence, SequenceError};
 
 /// The selected frames of `sequence` through one scene manager, with `stats.json` and
 /// `stats.csv` written as frames finish, then `report.png` and, with `--video`, `video.mp4`;
@@ -35,7 +35,7 @@ pub(super) fn render_sequence(
         true => kept.iter().map(|r| output.writer.layout.frame_files(r.frame).remove(0)).collect(),
         false => Vec::new(),
     };
-    let kept_frames: Vec<KeptFrame> = kept.iter().map(FrameRecord::kept).collect();
+    let kept_frames: Vec<_> = kept.iter().map(FrameRecord::kept).collect();
     let mut stats_file = stats_file(args, sequence, &frames, info, kept);
     let progress = crate::cli::progress::frames_bar(quiet, "rendering", Some(u64::from(frames.count())));
     progress.set_position(kept_frames.len() as u64);

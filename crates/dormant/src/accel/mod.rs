@@ -30,7 +30,8 @@ pub use hit::{Hit, HitObject};
 pub use load::{load_scene, LoadedScene};
 pub(crate) use object_map::mesh_triangle;
 pub(crate) use object_map::normal_matrix;
-pub use object_map::{HitTriangle, LoadedObjectMap, MeshRef, ObjectMap, ResolvedHit};
+pub(crate) use object_map::ResolvedHit;
+pub use object_map::{HitTriangle, LoadedObjectMap, MeshRef, ObjectMap};
 pub use snapshot::StaticSceneSnapshot;
 
 use glam::Affine3A;

@@ -19,7 +19,8 @@ mod sampler;
 mod texture_sampling;
 mod tiles;
 
-pub use adaptive::{AdaptiveSampling, SppStats, DARK_FLOOR};
+pub(crate) use adaptive::SppStats;
+pub use adaptive::{AdaptiveSampling, DARK_FLOOR};
 pub(crate) use aov::AovPasses;
 pub use aov::{render_with_aovs, Aov, AovIntegrator};
 pub use bsdf::{sample_cone, sample_cosine};
@@ -36,7 +37,7 @@ pub use ray_log::RayLog;
 pub use render_scene::RenderScene;
 pub(crate) use render_scene::{SurfaceHit, SurfaceKind};
 pub(crate) use reuse::{render_reusing, FrameReuse, ReuseStore};
-pub use reuse::{ReuseGranularity, ReuseStats};
+pub(crate) use reuse::{ReuseGranularity, ReuseStats};
 pub(crate) use sampler::PixelSampler;
 pub(crate) use tiles::render_frame_counted;
 pub use tiles::{render_frame, RenderSettings, RenderStats};

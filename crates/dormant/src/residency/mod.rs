@@ -19,11 +19,10 @@ mod manager;
 mod policy;
 mod stage_times;
 
-pub use cache::{CacheBudget, CacheOutcome, CacheStats, FRACTION_BUCKETS};
+pub use cache::{CacheBudget, CacheStats, FRACTION_BUCKETS};
 pub use cost_model::{CostModelState, IntegrationForm};
-pub use lookahead::Lookahead;
-pub use manager::{
-    Decision, FrameStats, ManagerOptions, ReactivationPath, ReactivationStrategy, SceneManager,
-};
+pub(crate) use lookahead::Lookahead;
+pub(crate) use manager::Decision;
+pub use manager::{FrameStats, ManagerOptions, ReactivationPath, ReactivationStrategy, SceneManager};
 pub use policy::{IntegrationPolicy, IntegrationSettings};
 pub use stage_times::StageTimes;

@@ -10,7 +10,8 @@ pub mod limits;
 mod pile;
 pub mod texture;
 
-pub use assets::{MeshSource, SceneAssets};
+pub(crate) use assets::MeshSource;
+pub use assets::SceneAssets;
 pub use builtin::default_scene;
 pub use description::{Body, Camera, Light, Material, Prototype, SceneDescription, Sky, StaticMesh, Sun};
 pub use pile::asset_pile;

@@ -33,8 +33,10 @@ pub mod stats;
 
 pub use error::SequenceError;
 pub use frame_renderer::{FrameRenderer, ReuseMode, SeedMode, DEFAULT_REUSE_BYTES};
-pub use kept::KeptFrame;
+pub(crate) use kept::KeptFrame;
 pub use render::RenderedFrame;
-pub use reuse::{check_budget, ExactFrame, FullFrame};
+pub use reuse::check_budget;
+pub(crate) use reuse::FullFrame;
 pub use selection::{FrameRange, FrameSelection};
-pub use source::{PhysicsSource, Sequence, SequenceSource};
+pub(crate) use source::PhysicsSource;
+pub use source::{Sequence, SequenceSource};

@@ -37,6 +37,6 @@ mod two_level;
 
 pub(crate) use change_index::{ChangeBox, ChangeIndex, ChangeShape, EXACT_MESH_TRIANGLES};
 pub use params::BuildParams;
-pub use persistent::{StaticBvh, StaticSnapshot, StaticUpdate};
-pub use simd::{SimdError, SimdPath};
+pub use persistent::{StaticBvh, StaticSnapshot};
+pub use simd::SimdPath;
 pub use two_level::BvhAccel;

@@ -27,4 +27,3 @@ pub(crate) use spec::{
     SpawnPattern, SpawnerDef, StructureDef,
 };
 pub(crate) use spec::{DisturbanceDef, DisturbanceKind, KeyframeDef};
-pub use structure::{Footprint, Launch, StructureBlock};

@@ -9,7 +9,7 @@ mod writer;
 
 pub use layout::OutputLayout;
 pub use resume::kept_frames;
-pub use writer::{FrameWriter, WrittenFrame};
+pub use writer::FrameWriter;
 
 use std::path::PathBuf;
 
