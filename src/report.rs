@@ -21,6 +21,9 @@ const PANEL_HEIGHT: u32 = 450;
 /// A per-frame count of a record.
 type Count = fn(&FrameRecord) -> u64;
 
+/// A line of a plot: its legend, colour and (frame, value) points.
+type Line = (String, RGBColor, Vec<(f64, f64)>);
+
 fn stage_ms(f: &FrameRecord, stage: usize) -> f64 {
     (StageTimes::STAGES[stage].1)(&f.stages)
 }
@@ -134,10 +137,24 @@ fn bodies(stats: &RunStats, area: &Area<'_>) -> PlotResult {
         ("resting", RGBColor(44, 160, 44), |f| f.resting_bodies as u64),
         ("baked", RGBColor(255, 127, 14), |f| f.baked_bodies as u64),
     ];
-    let top =
-        stats.frames.iter().flat_map(|f| series.map(|s| s.2(f))).max().unwrap_or(0).max(1) as f64 * 1.15;
+    let lines = series.map(|(name, colour, get)| {
+        let points = stats.frames.iter().map(|f| (f.frame as f64, get(f) as f64)).collect();
+        (name.to_string(), colour, points)
+    });
+    count_lines(stats, area, "Bodies in the per-frame top level, resting and baked", "bodies (count)", lines)
+}
+
+/// Lines of counts over the run's frames, each with its name in the legend.
+fn count_lines(
+    stats: &RunStats,
+    area: &Area<'_>,
+    caption: &str,
+    y_desc: &str,
+    lines: [Line; 3],
+) -> PlotResult {
+    let top = lines.iter().flat_map(|l| l.2.iter().map(|p| p.1)).fold(0.0, f64::max).max(1.0) * 1.15;
     let mut chart = ChartBuilder::on(area)
-        .caption("Bodies in the per-frame top level, resting and baked", (FONT, 20))
+        .caption(caption, (FONT, 20))
         .margin(12)
         .x_label_area_size(40)
         .y_label_area_size(70)
@@ -147,15 +164,14 @@ fn bodies(stats: &RunStats, area: &Area<'_>) -> PlotResult {
         .configure_mesh()
         .x_desc("frame")
         .x_label_formatter(&|v| format!("{v:.0}"))
-        .y_desc("bodies (count)")
+        .y_desc(y_desc)
         .y_labels(count_labels(top))
         .y_label_formatter(&|v| format!("{v:.0}"))
         .label_style((FONT, 14))
         .axis_desc_style((FONT, 16))
         .draw()
         .map_err(err)?;
-    for (name, colour, get) in series {
-        let points: Vec<(f64, f64)> = stats.frames.iter().map(|f| (f.frame as f64, get(f) as f64)).collect();
+    for (name, colour, points) in lines {
         chart
             .draw_series(LineSeries::new(points, colour.stroke_width(3)))
             .map_err(err)?
@@ -175,52 +191,24 @@ fn cache_hits(stats: &RunStats, area: &Area<'_>) -> PlotResult {
         ("partial hits", RGBColor(255, 127, 14), |f| f.cache_partial),
         ("misses", RGBColor(214, 39, 40), |f| f.cache_miss),
     ];
-    let cumulative = |get: Count| -> Vec<(f64, f64)> {
+    let lines = series.map(|(name, colour, get)| {
         let mut sum = 0u64;
-        stats
+        let points: Vec<(f64, f64)> = stats
             .frames
             .iter()
             .map(|f| {
                 sum += get(f);
                 (f.frame as f64, sum as f64)
             })
-            .collect()
-    };
-    let top = series.iter().map(|s| cumulative(s.2).last().map_or(0.0, |p| p.1)).fold(0.0, f64::max).max(1.0)
-        * 1.15;
+            .collect();
+        (format!("{name} ({sum})"), colour, points)
+    });
     let caption = if stats.run.cache_enabled {
         "Geometry cache lookups on reactivation, cumulative"
     } else {
         "Geometry cache: off (--cache off)"
     };
-    let mut chart = ChartBuilder::on(area)
-        .caption(caption, (FONT, 20))
-        .margin(12)
-        .x_label_area_size(40)
-        .y_label_area_size(70)
-        .build_cartesian_2d(frame_range(stats), 0.0..top)
-        .map_err(err)?;
-    chart
-        .configure_mesh()
-        .x_desc("frame")
-        .x_label_formatter(&|v| format!("{v:.0}"))
-        .y_desc("cache requests (count)")
-        .y_labels(count_labels(top))
-        .y_label_formatter(&|v| format!("{v:.0}"))
-        .label_style((FONT, 14))
-        .axis_desc_style((FONT, 16))
-        .draw()
-        .map_err(err)?;
-    for (name, colour, get) in series {
-        let points = cumulative(get);
-        let total = points.last().map_or(0.0, |p| p.1);
-        chart
-            .draw_series(LineSeries::new(points, colour.stroke_width(3)))
-            .map_err(err)?
-            .label(format!("{name} ({total:.0})"))
-            .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], colour.stroke_width(3)));
-    }
-    draw_legend(&mut chart, SeriesLabelPosition::UpperLeft)
+    count_lines(stats, area, caption, "cache requests (count)", lines)
 }
 
 fn fraction_histogram(stats: &RunStats, area: &Area<'_>) -> PlotResult {

@@ -13,6 +13,7 @@ use serde::Serialize;
 use dormant::accel::Backend;
 use dormant::render::{AdaptiveSampling, Aov, Film, Integrator};
 use dormant::residency::IntegrationSettings;
+use dormant::sequence::stats::ReuseRecord;
 use dormant::sequence::{FrameRenderer, FrameSelection, ReuseMode, SeedMode, Sequence, SequenceError};
 
 /// What to run.
@@ -179,17 +180,15 @@ fn render_mode(
     let mut frames = Vec::new();
     let mut since = Instant::now();
     sequence.render::<SequenceError>(&options.frames, &mut manager, &renderer, &[], &mut |f, _, _| {
-        let reuse = f.reuse.map(|r| r.stats).unwrap_or_default();
-        let all = (f.render.spp.mean * f64::from(f.film.width) * f64::from(f.film.height)).round() as u64;
-        let traced = if f.reuse.is_some() { reuse.samples_traced } else { all };
+        let reuse = ReuseRecord::of(f);
         frames.push(ReuseFrame {
             frame: f.index,
             frame_ms: since.elapsed().as_secs_f64() * 1e3,
             trace_ms: f.render.seconds * 1e3,
-            samples_traced: traced,
+            samples_traced: reuse.samples_traced,
             samples_reused: reuse.samples_reused,
             horizon_ms: reuse.horizon_ms,
-            store_bytes: reuse.store_bytes,
+            store_bytes: reuse.reuse_store_bytes,
             digest: digest(&f.film, &f.aovs),
         });
         progress(frames.len());
