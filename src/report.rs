@@ -6,7 +6,7 @@
 
 use std::path::Path;
 
-use dormant::residency::{StageTimes, FRACTION_BUCKETS};
+use dormant::residency::{CacheStats, StageTimes};
 use dormant::sequence::stats::{FrameRecord, RunStats};
 use dormant_lab::report::figure::{
     count_labels, draw_legend, err, write_png, Area, PlotResult, FONT, STAGES,
@@ -219,7 +219,7 @@ fn fraction_histogram(stats: &RunStats, area: &Area<'_>) -> PlotResult {
         "Fraction of requested islands already integrated in the served cache entry ({} requests)",
         cache.requests
     );
-    let buckets = FRACTION_BUCKETS.len() as u32;
+    let buckets = CacheStats::FRACTION_BUCKETS.len() as u32;
     let mut chart = ChartBuilder::on(area)
         .caption(caption, (FONT, 18))
         .margin(12)
@@ -230,10 +230,10 @@ fn fraction_histogram(stats: &RunStats, area: &Area<'_>) -> PlotResult {
     chart
         .configure_mesh()
         .disable_x_mesh()
-        .x_labels(FRACTION_BUCKETS.len())
+        .x_labels(CacheStats::FRACTION_BUCKETS.len())
         .x_label_formatter(&|v| match v {
             SegmentValue::CenterOf(i) | SegmentValue::Exact(i) => {
-                FRACTION_BUCKETS.get(*i as usize).copied().unwrap_or("").to_string()
+                CacheStats::FRACTION_BUCKETS.get(*i as usize).copied().unwrap_or("").to_string()
             }
             SegmentValue::Last => String::new(),
         })

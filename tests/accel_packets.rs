@@ -172,7 +172,7 @@ proptest! {
 mod embree_wrapper {
     use std::sync::Arc;
 
-    use dormant::geometry::{Ray, FRAME_TIME};
+    use dormant::geometry::Ray;
     use dormant_embree::{
         BuildQuality, Coherence, Device, EmbreeHit, FrozenScene, InstanceGeometry, Scene, SceneFlags,
         TriangleGeometry,
@@ -212,8 +212,8 @@ mod embree_wrapper {
         let v = s.view().unwrap();
         let (o, d) = (r.origin.to_array(), r.dir.to_array());
         (
-            v.intersect1_at(o, d, r.t_min, r.t_max, FRAME_TIME),
-            v.occluded1_at(o, d, r.t_min, r.t_max, FRAME_TIME),
+            v.intersect1_at(o, d, r.t_min, r.t_max, Ray::FRAME_TIME),
+            v.occluded1_at(o, d, r.t_min, r.t_max, Ray::FRAME_TIME),
         )
     }
 

@@ -5,7 +5,7 @@
 use std::sync::Arc;
 
 use dormant::accel::embree::shutter_poses;
-use dormant::geometry::{InstanceMotion, RigidTransform, FRAME_TIME};
+use dormant::geometry::{InstanceMotion, Ray, RigidTransform};
 use dormant_embree::{
     BuildQuality, Device, EmbreeError, Geometry, InstanceArrayGeometry, InstanceGeometry, Scene, SceneFlags,
     TriangleGeometry, Version,
@@ -51,19 +51,19 @@ fn known_triangle_hit_has_expected_t_u_v_and_prim() {
     let hit = s
         .view()
         .unwrap()
-        .intersect1_at([5.2, 0.3, -3.0], [0.0, 0.0, 1.0], 0.0, f32::INFINITY, FRAME_TIME)
+        .intersect1_at([5.2, 0.3, -3.0], [0.0, 0.0, 1.0], 0.0, f32::INFINITY, Ray::FRAME_TIME)
         .unwrap();
     assert_eq!((hit.geom_id, hit.prim_id, hit.inst_id), (0, 1, None));
     assert!((hit.t - 3.0).abs() < 1e-6);
     assert!((hit.u - 0.2).abs() < 1e-5 && (hit.v - 0.3).abs() < 1e-5, "u={} v={}", hit.u, hit.v);
     // Ng = (p1-p0) x (p2-p0) = +z.
     assert!(hit.ng[2] > 0.0);
-    assert!(s.view().unwrap().occluded1_at([5.2, 0.3, -3.0], [0.0, 0.0, 1.0], 0.0, 10.0, FRAME_TIME));
-    assert!(!s.view().unwrap().occluded1_at([5.2, 0.3, -3.0], [0.0, 0.0, 1.0], 0.0, 2.9, FRAME_TIME));
+    assert!(s.view().unwrap().occluded1_at([5.2, 0.3, -3.0], [0.0, 0.0, 1.0], 0.0, 10.0, Ray::FRAME_TIME));
+    assert!(!s.view().unwrap().occluded1_at([5.2, 0.3, -3.0], [0.0, 0.0, 1.0], 0.0, 2.9, Ray::FRAME_TIME));
     assert!(s
         .view()
         .unwrap()
-        .intersect1_at([5.2, 0.3, -3.0], [0.0, 0.0, -1.0], 0.0, f32::INFINITY, FRAME_TIME)
+        .intersect1_at([5.2, 0.3, -3.0], [0.0, 0.0, -1.0], 0.0, f32::INFINITY, Ray::FRAME_TIME)
         .is_none());
 }
 
@@ -81,7 +81,7 @@ fn instanced_hit_reports_instance_id() {
     let hit = top
         .view()
         .unwrap()
-        .intersect1_at([10.25, 0.25, 1.0], [0.0, 0.0, -1.0], 0.0, f32::INFINITY, FRAME_TIME)
+        .intersect1_at([10.25, 0.25, 1.0], [0.0, 0.0, -1.0], 0.0, f32::INFINITY, Ray::FRAME_TIME)
         .unwrap();
     assert_eq!((hit.inst_id, hit.geom_id, hit.prim_id), (Some(7), 0, 0));
     assert!((hit.t - 1.0).abs() < 1e-6);
@@ -106,16 +106,16 @@ fn detach_reattach_and_recommit() {
     let id = s.attach(unit_triangle(&d)).unwrap();
     s.commit().unwrap();
     let ray = ([0.25, 0.25, 1.0], [0.0, 0.0, -1.0]);
-    assert!(s.view().unwrap().intersect1_at(ray.0, ray.1, 0.0, f32::INFINITY, FRAME_TIME).is_some());
+    assert!(s.view().unwrap().intersect1_at(ray.0, ray.1, 0.0, f32::INFINITY, Ray::FRAME_TIME).is_some());
 
     let geometry = s.detach(id).unwrap();
     assert!(s.view().is_none());
     s.commit().unwrap();
-    assert!(s.view().unwrap().intersect1_at(ray.0, ray.1, 0.0, f32::INFINITY, FRAME_TIME).is_none());
+    assert!(s.view().unwrap().intersect1_at(ray.0, ray.1, 0.0, f32::INFINITY, Ray::FRAME_TIME).is_none());
 
     s.attach_by_id(geometry, 42).unwrap();
     s.commit().unwrap();
-    let hit = s.view().unwrap().intersect1_at(ray.0, ray.1, 0.0, f32::INFINITY, FRAME_TIME).unwrap();
+    let hit = s.view().unwrap().intersect1_at(ray.0, ray.1, 0.0, f32::INFINITY, Ray::FRAME_TIME).unwrap();
     assert_eq!(hit.geom_id, 42);
 }
 
@@ -129,7 +129,13 @@ fn one_geometry_in_two_scenes() {
     a.commit().unwrap();
     b.commit().unwrap();
     for s in [&a, &b] {
-        assert!(s.view().unwrap().occluded1_at([0.25, 0.25, 1.0], [0.0, 0.0, -1.0], 0.0, 2.0, FRAME_TIME));
+        assert!(s.view().unwrap().occluded1_at(
+            [0.25, 0.25, 1.0],
+            [0.0, 0.0, -1.0],
+            0.0,
+            2.0,
+            Ray::FRAME_TIME
+        ));
     }
 }
 
@@ -146,7 +152,7 @@ fn shared_buffers_are_traced() {
     let hit = s
         .view()
         .unwrap()
-        .intersect1_at([0.5, 0.25, -2.0], [0.0, 0.0, 1.0], 0.0, f32::INFINITY, FRAME_TIME)
+        .intersect1_at([0.5, 0.25, -2.0], [0.0, 0.0, 1.0], 0.0, f32::INFINITY, Ray::FRAME_TIME)
         .unwrap();
     assert!((hit.t - 2.0).abs() < 1e-6);
 }
@@ -183,13 +189,13 @@ fn owned_child_scene_changes_reach_the_parent() {
     top.attach_by_id(InstanceGeometry::owning(&d, child, &Affine3A::IDENTITY).unwrap(), 0).unwrap();
     top.commit().unwrap();
     let ray = ([0.25, 0.25, 1.0], [0.0, 0.0, -1.0]);
-    assert!(top.view().unwrap().intersect1_at(ray.0, ray.1, 0.0, f32::INFINITY, FRAME_TIME).is_none());
+    assert!(top.view().unwrap().intersect1_at(ray.0, ray.1, 0.0, f32::INFINITY, Ray::FRAME_TIME).is_none());
 
     let inst = top.instance_mut(0).unwrap();
     inst.child_mut().unwrap().attach_by_id(unit_triangle(&d), 5).unwrap();
     assert!(top.view().is_none(), "changing the child stages a change in the parent");
     top.commit().unwrap();
-    let hit = top.view().unwrap().intersect1_at(ray.0, ray.1, 0.0, f32::INFINITY, FRAME_TIME).unwrap();
+    let hit = top.view().unwrap().intersect1_at(ray.0, ray.1, 0.0, f32::INFINITY, Ray::FRAME_TIME).unwrap();
     assert_eq!((hit.inst_id, hit.geom_id), (Some(0), 5));
 }
 
@@ -208,7 +214,7 @@ fn instance_transform_updates_and_rejects_nan() {
     let hit = top
         .view()
         .unwrap()
-        .intersect1_at([0.1, 0.3, 1.0], [0.0, 0.0, -1.0], 0.0, f32::INFINITY, FRAME_TIME)
+        .intersect1_at([0.1, 0.3, 1.0], [0.0, 0.0, -1.0], 0.0, f32::INFINITY, Ray::FRAME_TIME)
         .unwrap();
     assert!((hit.t - 5.0).abs() < 1e-5);
     let nan = Affine3A::from_translation(Vec3::new(f32::NAN, 0.0, 0.0));

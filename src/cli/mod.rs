@@ -134,8 +134,7 @@ pub(crate) fn run(cli: &Cli) -> Result<(), CliError> {
     }
     let threads = cli.threads.map(|n| n as usize);
     // A bad DORMANT_SIMD is a usage error before any work (the library would fall back).
-    let simd = dormant::accel::bvh::SimdPath::from_env().map_err(|e| CliError::Input(e.to_string()))?;
-    dormant::accel::bvh::SimdPath::set_active(simd).map_err(|e| CliError::Input(e.to_string()))?;
+    dormant::accel::bvh::SimdPath::activate_from_env().map_err(|e| CliError::Input(e.to_string()))?;
     match &cli.command {
         Command::Render(args) => render::run(args, threads, cli.quiet, &cli.json),
         Command::Simulate(args) => simulate::run(args, cli.quiet, &cli.json),

@@ -25,8 +25,8 @@ use dormant::scene::file::SceneFile;
 use dormant::scene::limits::{shutter_problem, MAX_SAMPLES_PER_PIXEL};
 use dormant::sequence::output::FrameWriter;
 use dormant::sequence::{
-    check_budget, FrameRange, FrameRenderer, RenderedFrame, ReuseMode, SeedMode, Sequence, SequenceError,
-    SequenceSource, DEFAULT_REUSE_BYTES,
+    FrameRange, FrameRenderer, RenderedFrame, ReuseMode, SeedMode, Sequence, SequenceError, SequenceSource,
+    DEFAULT_REUSE_BYTES,
 };
 
 use frame_output::FrameOutput;
@@ -385,7 +385,7 @@ fn check_reuse(args: &RenderArgs) -> Result<(), CliError> {
         reuse_budget: budget,
         ..FrameRenderer::new(&integrator, args.size.width, args.size.height, args.spp)
     };
-    check_budget(&renderer).map_err(|e| CliError::Input(format!("--reuse-mib {}: {e}", args.reuse_mib)))
+    renderer.check_reuse_budget().map_err(|e| CliError::Input(format!("--reuse-mib {}: {e}", args.reuse_mib)))
 }
 
 /// `--shutter S` (render, verify, bench integration): from 0 to 1.

@@ -11,7 +11,7 @@ use dormant::render::denoise::Denoiser;
 use dormant::render::{AdaptiveSampling, Aov, RenderStats};
 use dormant::residency::{CacheBudget, IntegrationSettings, SceneManager};
 use dormant::sequence::output;
-use dormant::sequence::stats::{FrameRecord, ReuseRecord, RunInfo, StatsFile};
+use dormant::sequence::stats::{FrameRecord, RunInfo, StatsFile};
 use dormant::sequence::{FrameRenderer, FrameSelection, ReuseMode, Sequence, SequenceError};
 
 /// The selected frames of `sequence` through one scene manager, with `stats.json` and
@@ -47,7 +47,7 @@ pub(super) fn render_sequence(
                 frame_paths.push(path);
             }
             let physics = sequence.physics_ms.get(frame.index as usize).copied();
-            let record = FrameRecord::new(stats, &frame.render, physics).with_reuse(ReuseRecord::of(frame));
+            let record = FrameRecord::of(frame, stats, physics);
             stats_file.push(record, manager).map_err(|e| runtime(&e))?;
             let mrays = rate.add(&frame.render);
             progress.set_message(format!(

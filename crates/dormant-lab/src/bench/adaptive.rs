@@ -93,7 +93,7 @@ pub struct AdaptiveBenchReport {
 /// non-finite pixels count as black.
 pub fn relative_mse(image: &Film, reference: &Film) -> f64 {
     debug_assert_eq!(image.pixels.len(), reference.pixels.len());
-    let floor = f64::from(dormant::render::DARK_FLOOR).powi(2);
+    let floor = f64::from(dormant::render::AdaptiveSampling::DARK_FLOOR).powi(2);
     let sum: f64 = image
         .pixels
         .iter()
@@ -193,7 +193,7 @@ pub fn bench_adaptive(
         reference_spp: opts.reference_spp,
         reference_seconds,
         min_spp: AdaptiveSampling { noise_threshold: 1.0, min_spp: opts.min_spp }.min_spp(opts.adaptive_spp),
-        floor: dormant::render::DARK_FLOOR,
+        floor: dormant::render::AdaptiveSampling::DARK_FLOOR,
         denoise: opts.denoiser.as_ref().map(Denoiser::label),
         rows,
         equal_error,

@@ -24,7 +24,7 @@ use dormant::physics::{BodyKind, BodyState};
 use dormant::render::{AdaptiveSampling, Integrator};
 use dormant::residency::{
     CacheStats, CostModelState, FrameStats, IntegrationForm, IntegrationPolicy, IntegrationSettings,
-    ManagerOptions, ReactivationPath, SceneManager, StageTimes, FRACTION_BUCKETS,
+    ManagerOptions, ReactivationPath, SceneManager, StageTimes,
 };
 use dormant::scene::{SceneDescription, StaticMesh};
 use dormant::sequence::{
@@ -562,7 +562,7 @@ pub fn bench_integration(
         persistent_most_fragmented,
         ratios,
         ratios_by_form,
-        cache_histogram_buckets: FRACTION_BUCKETS,
+        cache_histogram_buckets: CacheStats::FRACTION_BUCKETS,
     })
 }
 

@@ -11,7 +11,7 @@ use super::WorkloadReport;
 use crate::bench::integration::IntegrationBenchReport;
 use crate::report::figure::{count_labels, draw_legend, err, write_png, Area, PlotResult, FONT, STAGES};
 use crate::report::ReportError;
-use dormant::residency::{IntegrationForm, IntegrationPolicy, StageTimes, FRACTION_BUCKETS};
+use dormant::residency::{CacheStats, IntegrationForm, IntegrationPolicy, StageTimes};
 
 const WIDTH: u32 = 1400;
 const ROW_HEIGHT: u32 = 480;
@@ -181,7 +181,7 @@ fn fraction_histogram(w: &WorkloadReport, area: &Area<'_>) -> PlotResult {
         })
         .collect();
     let top = series.iter().flat_map(|s| s.1.iter().copied()).max().unwrap_or(0).max(1) as f64 * 1.3;
-    let buckets = FRACTION_BUCKETS.len();
+    let buckets = CacheStats::FRACTION_BUCKETS.len();
     let mut chart = ChartBuilder::on(area)
         .caption("auto, cache on: fraction of requested islands held", (FONT, 20))
         .margin(12)
@@ -197,7 +197,7 @@ fn fraction_histogram(w: &WorkloadReport, area: &Area<'_>) -> PlotResult {
         .x_label_formatter(&|v| {
             match v.round() {
                 i if (v - i).abs() < 1e-6 && i >= 0.0 => {
-                    FRACTION_BUCKETS.get(i as usize).copied().unwrap_or("")
+                    CacheStats::FRACTION_BUCKETS.get(i as usize).copied().unwrap_or("")
                 }
                 _ => "",
             }

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use super::plot::write_workload_png;
 use super::{PaperReport, Reproduction, WorkloadReport};
 use crate::report::ReportError;
-use dormant::residency::{IntegrationForm, IntegrationPolicy, FRACTION_BUCKETS};
+use dormant::residency::{CacheStats, IntegrationForm, IntegrationPolicy};
 
 /// Writes `paper.json`, `paper.md` and `figures/<workload>.png` into `dir` (created if
 /// missing) and returns the paths written.
@@ -287,9 +287,9 @@ fn cache_table(md: &mut String, w: &WorkloadReport) {
         md,
         "Requests by the fraction of the requested islands the served entry held.\n\n| backend | requests | \
          full | partial | miss | {} |",
-        FRACTION_BUCKETS.join(" | ")
+        CacheStats::FRACTION_BUCKETS.join(" | ")
     );
-    let _ = writeln!(md, "| --- |{}", " ---: |".repeat(4 + FRACTION_BUCKETS.len()));
+    let _ = writeln!(md, "| --- |{}", " ---: |".repeat(4 + CacheStats::FRACTION_BUCKETS.len()));
     for run in &w.runs {
         let Some(auto) = run.integration.run_of(IntegrationPolicy::Auto, IntegrationForm::Baked) else {
             continue;

@@ -11,5 +11,4 @@ mod ray;
 pub use aabb::Aabb;
 pub use mesh::{MeshError, TriangleMesh};
 pub use motion::{InstanceMotion, RigidTransform};
-pub use ray::FRAME_TIME;
 pub use ray::{offset_origin, Ray};

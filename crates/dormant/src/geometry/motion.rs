@@ -4,7 +4,7 @@
 //! along the shorter arc. Both backends and the per-frame shutter poses use this one
 //! interpolation, so they agree.
 
-use glam::{Affine3A, Mat3, Quat, Vec3};
+use glam::{Affine3A, Quat, Vec3};
 
 use super::Aabb;
 
@@ -51,9 +51,11 @@ impl InstanceMotion {
         RigidTransform::interpolate(&self.open, &self.close, time.clamp(0.0, 1.0))
     }
 
-    /// The rotation's normal matrix at `time` (a rotation is its own inverse transpose).
-    pub fn normal_matrix_at(&self, time: f32) -> Mat3 {
-        Mat3::from_quat(self.at(time).rotation)
+    /// The rotation's normal matrix at `time` (a rotation is its own inverse transpose); Embree's
+    /// hits need it, the Rust BVH's carry their normal.
+    #[cfg(feature = "embree")]
+    pub(crate) fn normal_matrix_at(&self, time: f32) -> glam::Mat3 {
+        glam::Mat3::from_quat(self.at(time).rotation)
     }
 
     pub fn is_finite(&self) -> bool {

@@ -14,17 +14,17 @@ pub struct Ray {
     pub time: f32,
 }
 
-/// The time of rays that name none: the middle of the shutter, where a centred shutter puts
-/// the frame's own instant.
-pub const FRAME_TIME: f32 = 0.5;
-
 impl Ray {
+    /// The time of rays that name none: the middle of the shutter, where a centred shutter puts
+    /// the frame's own instant.
+    pub const FRAME_TIME: f32 = 0.5;
+
     pub fn new(origin: Vec3, dir: Vec3) -> Self {
-        Self { origin, dir, t_min: 0.0, t_max: f32::INFINITY, time: FRAME_TIME }
+        Self { origin, dir, t_min: 0.0, t_max: f32::INFINITY, time: Self::FRAME_TIME }
     }
 
     pub fn segment(origin: Vec3, dir: Vec3, t_min: f32, t_max: f32) -> Self {
-        Self { origin, dir, t_min, t_max, time: FRAME_TIME }
+        Self { origin, dir, t_min, t_max, time: Self::FRAME_TIME }
     }
 
     /// The same ray at shutter time `time`.

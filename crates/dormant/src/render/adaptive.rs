@@ -24,11 +24,6 @@ use crate::scene::limits::MAX_SAMPLES_PER_PIXEL;
 /// After the minimum, a pixel's error is checked every this many samples.
 pub(crate) const CHECK_EVERY: u32 = 4;
 
-/// Radiance below which the error is measured against this absolute value instead of the
-/// pixel's own (dark pixels would otherwise never converge). The same floor as the relative
-/// MSE of docs/performance.md#denoising-render---denoise: `(x - ref)^2 / (ref^2 + 0.1^2)`.
-pub const DARK_FLOOR: f32 = 0.1;
-
 /// `--noise-threshold` and `--min-spp` (`[render] noise_threshold`, `min_spp`).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct AdaptiveSampling {
@@ -48,6 +43,11 @@ pub(crate) fn default_min_spp(spp: u32) -> u32 {
 }
 
 impl AdaptiveSampling {
+    /// Radiance below which the error is measured against this absolute value instead of the
+    /// pixel's own (dark pixels would otherwise never converge). The same floor as the relative
+    /// MSE of docs/performance.md#denoising-render---denoise: `(x - ref)^2 / (ref^2 + 0.1^2)`.
+    pub const DARK_FLOOR: f32 = 0.1;
+
     /// Uniform sampling: every pixel gets `spp` samples.
     pub const OFF: Self = Self { noise_threshold: 0.0, min_spp: None };
 
@@ -101,8 +101,8 @@ impl Stopping {
 
 /// Relative standard deviation of one sample of a pixel after `n >= 2` samples summing to
 /// `sum`, their squares to `squares`: per channel the sample variance over the squared mean
-/// plus [`DARK_FLOOR`] squared; the root of the mean over the channels. Non-finite samples
-/// give NaN; fewer than 2 samples infinity.
+/// plus [`AdaptiveSampling::DARK_FLOOR`] squared; the root of the mean over the channels.
+/// Non-finite samples give NaN; fewer than 2 samples infinity.
 pub(crate) fn relative_spread(n: u32, sum: Vec3, squares: Vec3) -> f32 {
     if n < 2 {
         return f32::INFINITY;
@@ -110,7 +110,8 @@ pub(crate) fn relative_spread(n: u32, sum: Vec3, squares: Vec3) -> f32 {
     let n = n as f32;
     let mean = sum / n;
     let variance = ((squares - sum * mean) / (n - 1.0)).max(Vec3::ZERO);
-    let relative = variance / (mean * mean + Vec3::splat(DARK_FLOOR * DARK_FLOOR));
+    let floor = AdaptiveSampling::DARK_FLOOR;
+    let relative = variance / (mean * mean + Vec3::splat(floor * floor));
     ((relative.x + relative.y + relative.z) / 3.0).sqrt()
 }
 

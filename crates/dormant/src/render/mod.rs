@@ -19,8 +19,8 @@ mod sampler;
 mod texture_sampling;
 mod tiles;
 
+pub use adaptive::AdaptiveSampling;
 pub(crate) use adaptive::SppStats;
-pub use adaptive::{AdaptiveSampling, DARK_FLOOR};
 pub(crate) use aov::AovPasses;
 pub use aov::{render_with_aovs, Aov, AovIntegrator};
 pub use bsdf::{sample_cone, sample_cosine};

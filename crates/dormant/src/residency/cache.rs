@@ -23,13 +23,6 @@ pub enum CacheOutcome {
     Miss,
 }
 
-/// Buckets of [`CacheStats::fraction_histogram`]: the fraction of the requested islands the
-/// chosen entry already held, in tenths, with the top tenth split at 99%.
-pub const FRACTION_BUCKETS: [&str; 12] = [
-    "0-10%", "10-20%", "20-30%", "30-40%", "40-50%", "50-60%", "60-70%", "70-80%", "80-90%", "90-99%",
-    "99-100%", "100%",
-];
-
 fn fraction_bucket(fraction: f64) -> usize {
     if fraction >= 1.0 {
         11
@@ -50,7 +43,7 @@ pub struct CacheStats {
     pub recorded: u64,
     pub(crate) evicted: u64,
     pub(crate) invalidated: u64,
-    /// Requests by fraction of requested islands the served entry held ([`FRACTION_BUCKETS`];
+    /// Requests by fraction of requested islands the served entry held ([`Self::FRACTION_BUCKETS`];
     /// an empty request counts as 100%).
     pub fraction_histogram: [u64; 12],
     /// Entries and the bytes they keep alive, after the latest change.
@@ -66,6 +59,13 @@ pub struct CacheStats {
 }
 
 impl CacheStats {
+    /// Buckets of [`Self::fraction_histogram`]: the fraction of the requested islands the
+    /// chosen entry already held, in tenths, with the top tenth split at 99%.
+    pub const FRACTION_BUCKETS: [&str; 12] = [
+        "0-10%", "10-20%", "20-30%", "30-40%", "40-50%", "50-60%", "60-70%", "70-80%", "80-90%", "90-99%",
+        "99-100%", "100%",
+    ];
+
     /// Share of requests whose entry held at least 90% but not all of the requested islands
     /// (the paper's "90-99%" class).
     pub fn partial_90_99_fraction(&self) -> f64 {

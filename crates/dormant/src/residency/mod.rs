@@ -19,7 +19,7 @@ mod manager;
 mod policy;
 mod stage_times;
 
-pub use cache::{CacheBudget, CacheStats, FRACTION_BUCKETS};
+pub use cache::{CacheBudget, CacheStats};
 pub use cost_model::{CostModelState, IntegrationForm};
 pub(crate) use lookahead::Lookahead;
 pub(crate) use manager::Decision;

@@ -35,7 +35,6 @@ pub use error::SequenceError;
 pub use frame_renderer::{FrameRenderer, ReuseMode, SeedMode, DEFAULT_REUSE_BYTES};
 pub(crate) use kept::KeptFrame;
 pub use render::RenderedFrame;
-pub use reuse::check_budget;
 pub(crate) use reuse::FullFrame;
 pub use selection::{FrameRange, FrameSelection};
 pub(crate) use source::PhysicsSource;

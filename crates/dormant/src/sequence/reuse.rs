@@ -80,7 +80,7 @@ impl ExactReuse {
         if renderer.reuse != ReuseMode::Exact || renderer.seed != SeedMode::Fixed {
             return Ok(None);
         }
-        check_budget(renderer)?;
+        renderer.check_reuse_budget()?;
         let frames = selection.frames();
         let (boxes, full) = sequence.changes(&frames, renderer.shutter);
         let index = ChangeIndex::build(boxes, sequence.small_prototypes());
@@ -159,20 +159,22 @@ impl ExactReuse {
     }
 }
 
-/// Checks that exact reuse of `renderer`'s frames fits in its budget: a store of one value per
-/// pixel and pass (`ReuseStore::bytes_for`).
-pub fn check_budget(renderer: &FrameRenderer<'_>) -> Result<(), SequenceError> {
-    let needed = ReuseStore::bytes_for(renderer.width, renderer.height, renderer.aovs);
-    if needed <= renderer.reuse_budget {
-        return Ok(());
+impl FrameRenderer<'_> {
+    /// Checks that exact reuse of this renderer's frames fits in its budget: a store of one
+    /// value per pixel and pass (`ReuseStore::bytes_for`).
+    pub fn check_reuse_budget(&self) -> Result<(), SequenceError> {
+        let needed = ReuseStore::bytes_for(self.width, self.height, self.aovs);
+        if needed <= self.reuse_budget {
+            return Ok(());
+        }
+        let mib = |bytes: usize| bytes.div_ceil(1 << 20);
+        Err(SequenceError::ReuseBudget {
+            budget_mib: self.reuse_budget >> 20,
+            needed_mib: mib(needed),
+            width: self.width,
+            height: self.height,
+        })
     }
-    let mib = |bytes: usize| bytes.div_ceil(1 << 20);
-    Err(SequenceError::ReuseBudget {
-        budget_mib: renderer.reuse_budget >> 20,
-        needed_mib: mib(needed),
-        width: renderer.width,
-        height: renderer.height,
-    })
 }
 
 /// What a body looks like to the rays of one frame: absent, at a pose, or moving over the

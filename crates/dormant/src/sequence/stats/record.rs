@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 
 use super::StatsError;
 use crate::render::{RenderStats, ReuseGranularity, SppStats};
-use crate::residency::{CacheStats, CostModelState, Decision, FrameStats, StageTimes, FRACTION_BUCKETS};
+use crate::residency::{CacheStats, CostModelState, Decision, FrameStats, StageTimes};
 use crate::sequence::{FullFrame, KeptFrame, PhysicsSource, RenderedFrame};
 
 /// `format` field of stats.json.
@@ -118,9 +118,15 @@ impl ReuseRecord {
 }
 
 impl FrameRecord {
-    /// The record of a frame from the manager's statistics, the renderer's (ray rate and
-    /// samples per pixel) and, when the simulation ran in this process, its physics step time.
-    pub fn new(stats: &FrameStats, render: &RenderStats, physics_ms: Option<f64>) -> Self {
+    /// The record of `frame`: the manager's statistics, the renderer's (ray rate, samples per
+    /// pixel, what was traced and reused) and, when the simulation ran in this process, its
+    /// physics step time.
+    pub fn of(frame: &RenderedFrame, stats: &FrameStats, physics_ms: Option<f64>) -> Self {
+        Self { reuse: ReuseRecord::of(frame), ..Self::new(stats, &frame.render, physics_ms) }
+    }
+
+    /// The record of a frame from the manager's and the renderer's statistics, nothing reused.
+    pub(crate) fn new(stats: &FrameStats, render: &RenderStats, physics_ms: Option<f64>) -> Self {
         FrameRecord {
             frame: stats.frame,
             physics_ms,
@@ -147,11 +153,6 @@ impl FrameRecord {
             decisions: stats.decisions.clone(),
             reuse: ReuseRecord::default(),
         }
-    }
-
-    /// This record with what its frame traced and reused.
-    pub fn with_reuse(self, reuse: ReuseRecord) -> Self {
-        Self { reuse, ..self }
     }
 
     /// What `render --resume` needs of this frame, finished by an earlier run, to bring the
@@ -434,7 +435,7 @@ impl RunStats {
             last_frame: frames.last().map(|f| f.frame),
             totals,
             median,
-            cache: CacheSummary { stats: cache, fraction_buckets: FRACTION_BUCKETS.to_vec() },
+            cache: CacheSummary { stats: cache, fraction_buckets: CacheStats::FRACTION_BUCKETS.to_vec() },
             cost_model,
         };
         RunStats { format: STATS_FORMAT, version: STATS_VERSION, run, frames, summary }

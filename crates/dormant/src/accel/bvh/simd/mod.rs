@@ -99,7 +99,7 @@ impl SimdPath {
     }
 
     /// The path `DORMANT_SIMD` asks for (the best supported one when unset or empty).
-    pub fn from_env() -> Result<SimdPath, SimdError> {
+    fn from_env() -> Result<SimdPath, SimdError> {
         match std::env::var(SIMD_ENV) {
             Ok(v) if !v.trim().is_empty() => Self::parse(&v),
             _ => Ok(Self::best()),
@@ -125,7 +125,7 @@ impl SimdPath {
 
     /// The path queries run now: this thread's override ([`Self::with_override`]), else the
     /// process-wide one, which is read from `DORMANT_SIMD` on first use (a bad value falls back
-    /// to the best path there; the CLI refuses it before any query with [`Self::from_env`]).
+    /// to the best path there; the CLI refuses it before any query with [`Self::activate_from_env`]).
     #[inline]
     pub fn current() -> SimdPath {
         if let Some(p) = OVERRIDE.with(Cell::get) {
@@ -141,13 +141,12 @@ impl SimdPath {
         }
     }
 
-    /// Makes `path` the process-wide path (the CLI, after validating `DORMANT_SIMD`).
-    pub fn set_active(path: SimdPath) -> Result<(), SimdError> {
-        if !path.is_supported() {
-            return Err(Self::parse(path.name()).unwrap_err());
-        }
+    /// Makes the path `DORMANT_SIMD` asks for the process-wide one and returns it; a value that
+    /// is unknown or unsupported here is an error (the CLI calls this before any query).
+    pub fn activate_from_env() -> Result<SimdPath, SimdError> {
+        let path = Self::from_env()?;
         ACTIVE.store(path.code(), Ordering::Relaxed);
-        Ok(())
+        Ok(path)
     }
 
     /// Runs `f` with queries on this thread using `path` (tests iterate over the paths with it).
