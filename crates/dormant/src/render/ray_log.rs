@@ -10,6 +10,7 @@
 use std::cell::Cell;
 use std::time::Instant;
 
+use super::RenderScene;
 use crate::accel::bvh::ChangeIndex;
 use crate::accel::Hit;
 use crate::geometry::Ray;
@@ -34,6 +35,8 @@ pub struct RayLog<'a> {
 /// The horizon being found: the segments so far meet no change before `best`.
 struct HorizonProbe<'a> {
     index: &'a ChangeIndex,
+    /// Names the body a hit lies on.
+    scene: &'a RenderScene<'a>,
     /// The ordinal of the frame being traced.
     traced_at: u32,
     best: u32,
@@ -48,21 +51,31 @@ impl<'a> RayLog<'a> {
         Self { rays: 0, horizon: None }
     }
 
-    /// A log that also finds the horizon of rays traced at ordinal `traced_at`, against
-    /// `index`; `until` is the horizon when nothing changes (the number of frames rendered).
-    pub(crate) fn with_horizon(index: &'a ChangeIndex, traced_at: u32, until: u32) -> Self {
-        let probe = HorizonProbe { index, traced_at, best: until, queries: 0, seconds: 0.0 };
+    /// A log that also finds the horizon of rays traced at ordinal `traced_at` in `scene`,
+    /// against `index`; `until` is the horizon when nothing changes (the next frame traced in
+    /// full, or the run's end).
+    pub(crate) fn with_horizon(
+        index: &'a ChangeIndex,
+        scene: &'a RenderScene<'a>,
+        traced_at: u32,
+        until: u32,
+    ) -> Self {
+        let probe = HorizonProbe { index, scene, traced_at, best: until, queries: 0, seconds: 0.0 };
         Self { rays: 0, horizon: Some(probe) }
     }
 
     /// Records a closest-hit ray and its hit: the segment up to the hit, or the whole ray
-    /// when it escaped.
+    /// when it escaped. A hit on a body changes when the body next does, which bounds the
+    /// query before it is made (and often ends it: most bodies that move, move every frame).
     #[inline]
     pub(crate) fn closest(&mut self, ray: &Ray, hit: Option<&Hit>) {
         self.rays += 1;
         if let Some(probe) = &mut self.horizon {
             let segment = match hit {
-                Some(h) => Ray { t_max: h.t, ..*ray },
+                Some(h) => {
+                    probe.hit_body(h);
+                    Ray { t_max: h.t, ..*ray }
+                }
                 None => *ray,
             };
             probe.meet(&segment, false);
@@ -107,6 +120,18 @@ impl<'a> RayLog<'a> {
 }
 
 impl HorizonProbe<'_> {
+    /// Brings the horizon to the next change of the body `hit` lies on, if sooner.
+    #[inline]
+    fn hit_body(&mut self, hit: &Hit) {
+        if self.best <= self.traced_at + 1 {
+            return;
+        }
+        if let Some(next) = self.scene.body_of(hit).and_then(|b| self.index.next_change_of(b, self.traced_at))
+        {
+            self.best = self.best.min(next);
+        }
+    }
+
     #[inline]
     fn meet(&mut self, segment: &Ray, occlusion: bool) {
         // The frame right after this one is the soonest a change can be: once there, no

@@ -126,6 +126,11 @@ impl<'a> RenderScene<'a> {
         Ok(())
     }
 
+    /// The body a hit lies on (instanced, resting or baked), if it is on one.
+    pub(crate) fn body_of(&self, hit: &Hit) -> Option<u32> {
+        self.object(hit)?.body.map(|b| b.0)
+    }
+
     fn object(&self, hit: &Hit) -> Option<ResolvedHit> {
         match &self.objects {
             Objects::Loaded(map) => map.resolve(hit.object, hit.prim),

@@ -224,6 +224,7 @@ pub(crate) fn render_planned(
     let (w, h) = (settings.width, settings.height);
     debug_assert!(plan.samples.is_none_or(|s| s.len() == (w * h) as usize));
     let renderer = TileRenderer {
+        scene,
         camera: FrameCamera {
             open: PinholeCamera::new(&scene.camera, w, h),
             close: scene.camera_close.as_ref().map(|c| PinholeCamera::new(c, w, h)),
@@ -310,6 +311,7 @@ struct Cell {
 
 /// What every tile of a frame is rendered with.
 struct TileRenderer<'a> {
+    scene: &'a RenderScene<'a>,
     camera: FrameCamera,
     /// Traces the camera-ray packets; the integrator traces the rest.
     query: &'a dyn SceneQuery,
@@ -371,7 +373,7 @@ impl TileRenderer<'_> {
     /// A log for the rays of a pixel (or a sample), finding horizons when the plan asks.
     fn new_log(&self) -> RayLog<'_> {
         match self.plan.horizons {
-            Some((index, ordinal, until)) => RayLog::with_horizon(index, ordinal, until),
+            Some((index, ordinal, until)) => RayLog::with_horizon(index, self.scene, ordinal, until),
             None => RayLog::counting(),
         }
     }
@@ -462,7 +464,6 @@ impl TileRenderer<'_> {
             let mut m = 0;
             for (c, cell) in block.iter().enumerate() {
                 if i < cell.budget && !done[c] {
-                    camera_rays[m] = camera_ray(&self.camera, spp, cell.x, cell.y, &cell.sampler, i);
                     slots[m] = c;
                     m += 1;
                 }
@@ -470,8 +471,13 @@ impl TileRenderer<'_> {
             if m == 0 {
                 break;
             }
+            // Camera rays are made only for packets with a sample to trace.
             if !slots[..m].iter().any(|&c| self.sample_due(&block[c], i)) {
                 continue;
+            }
+            for (ray, &c) in camera_rays.iter_mut().zip(&slots[..m]) {
+                let cell = &block[c];
+                *ray = camera_ray(&self.camera, spp, cell.x, cell.y, &cell.sampler, i);
             }
             self.query.intersect_packet(&camera_rays[..m], &mut hits[..m]);
             for ((ray, hit), &c) in camera_rays.iter().zip(hits).zip(&slots[..m]) {

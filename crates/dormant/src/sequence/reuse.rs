@@ -299,7 +299,7 @@ impl FrameChanges {
             emitter |= self.emissive.get(p).copied().unwrap_or(false);
             let bounds = look_bounds(&before, &self.local[p]).union(look_bounds(&after, &self.local[p]));
             let shape = look_shape(&before, &after, p as u32);
-            self.boxes.push(ChangeBox { bounds, visible_at: ordinal, shape });
+            self.boxes.push(ChangeBox { bounds, visible_at: ordinal, body: Some(b as u32), shape });
         }
         self.end_frame(&motions);
         emitter

@@ -55,6 +55,7 @@ fn change_box() -> impl Strategy<Value = ChangeBox> {
         |(min, (x, y, z), visible_at)| ChangeBox {
             bounds: Aabb { min, max: min + Vec3::new(x, y, z) },
             visible_at,
+            body: None,
             shape: None,
         },
     )
@@ -152,7 +153,7 @@ proptest! {
         let tris: Vec<[Vec3; 3]> = (0..mesh.triangle_count()).map(|i| mesh.triangle(i)).collect();
         let bounds = posed_bounds(&mesh, &poses[0]).union(posed_bounds(&mesh, &poses[1]));
         let shape = ChangeShape { mesh: 0, poses: [Some(poses[0]), Some(poses[1])] };
-        let index = ChangeIndex::build(vec![ChangeBox { bounds, visible_at: 1, shape: Some(shape) }], vec![tris]);
+        let index = ChangeIndex::build(vec![ChangeBox { bounds, visible_at: 1, body: Some(0), shape: Some(shape) }], vec![tris]);
         let scenes = [traced_at(&mesh, poses[0]), traced_at(&mesh, poses[1])];
         let mut seen = 0;
         for ray in aimed_segments(&mesh, &poses, seed, 64) {

@@ -30,6 +30,8 @@ use crate::geometry::{Aabb, Ray};
 pub struct ChangeBox {
     pub bounds: Aabb,
     pub visible_at: u32,
+    /// The body that changed, when a body did.
+    pub body: Option<u32>,
     /// What changed inside the box, when it can be tested exactly; `None`: anything in it.
     pub shape: Option<ChangeShape>,
 }
@@ -59,6 +61,10 @@ pub struct ChangeIndex {
     shapes: Vec<Option<ShapeTest>>,
     /// The meshes shapes refer to, ready for exact tests.
     meshes: Vec<ExactMesh>,
+    /// Per body, the `visible_at` of its changes in ascending order (`body_changes[b]` are
+    /// `changes[body_changes[b]..body_changes[b + 1]]`).
+    body_changes: Vec<u32>,
+    changes: Vec<u32>,
 }
 
 /// Builds change indexes with a cheap build: the index is built once per sequence and its
@@ -82,7 +88,18 @@ impl ChangeIndex {
         let nodes = index_nodes(&bvh.nodes, &mut boxes);
         let meshes: Vec<ExactMesh> = meshes.iter().map(|m| ExactMesh::new(m)).collect();
         let shapes = boxes.iter().map(|b| b.shape.and_then(|s| ShapeTest::new(&s, &meshes))).collect();
-        Self { nodes, boxes, shapes, meshes }
+        let (body_changes, changes) = changes_by_body(&boxes);
+        Self { nodes, boxes, shapes, meshes, body_changes, changes }
+    }
+
+    /// The earliest `visible_at` greater than `after` of body `body`'s changes, if it has one.
+    /// A segment that ends on the body at ordinal `after` changes there at the latest, so its
+    /// horizon is no later: a query for it needs to look only before that.
+    pub fn next_change_of(&self, body: u32, after: u32) -> Option<u32> {
+        let b = body as usize;
+        let range = *self.body_changes.get(b)? as usize..*self.body_changes.get(b + 1)? as usize;
+        let changes = &self.changes[range];
+        changes.get(changes.partition_point(|&f| f <= after)).copied()
     }
 
     /// The earliest `visible_at` greater than `after` and less than `before` of a box that the
@@ -186,6 +203,22 @@ fn index_nodes(nodes: &[Node], boxes: &mut [ChangeBox]) -> Vec<IndexNode> {
     nodes
 }
 
+/// Each body's changes among `boxes`, as offsets per body into the `visible_at` of its
+/// changes, ascending.
+fn changes_by_body(boxes: &[ChangeBox]) -> (Vec<u32>, Vec<u32>) {
+    let mut changed: Vec<(u32, u32)> = boxes.iter().filter_map(|b| Some((b.body?, b.visible_at))).collect();
+    changed.sort_unstable();
+    let bodies = changed.last().map_or(0, |c| c.0 as usize + 1);
+    let mut offsets = vec![0u32; bodies + 1];
+    for &(b, _) in &changed {
+        offsets[b as usize + 1] += 1;
+    }
+    for b in 0..bodies {
+        offsets[b + 1] += offsets[b];
+    }
+    (offsets, changed.into_iter().map(|c| c.1).collect())
+}
+
 /// `b` grown by a margin that absorbs rounding: 1e-4 of its largest side plus 1e-5 of its
 /// largest coordinate's magnitude.
 fn padded(b: Aabb) -> Aabb {
@@ -203,7 +236,7 @@ mod tests {
 
     fn unit_box_at(x: f32, visible_at: u32) -> ChangeBox {
         let min = Vec3::new(x, 0.0, 0.0);
-        ChangeBox { bounds: Aabb { min, max: min + Vec3::ONE }, visible_at, shape: None }
+        ChangeBox { bounds: Aabb { min, max: min + Vec3::ONE }, visible_at, body: None, shape: None }
     }
 
     #[test]
@@ -241,7 +274,7 @@ mod tests {
         let bounds = Aabb { min: Vec3::new(5.0, 0.0, 0.0), max: Vec3::new(6.0, 1.0, 1.0) };
         let shape = ChangeShape { mesh: 0, poses: [Some(pose), None] };
         let index = ChangeIndex::build(
-            vec![ChangeBox { bounds, visible_at: 3, shape: Some(shape) }],
+            vec![ChangeBox { bounds, visible_at: 3, body: Some(0), shape: Some(shape) }],
             vec![vec![tri]],
         );
         // Through the box and the triangle.
@@ -253,5 +286,22 @@ mod tests {
         // A segment that stops short of the triangle (at z = -0.5).
         let short = Ray::segment(through.origin, through.dir, 0.0, 0.5);
         assert_eq!(index.first_change(&short, 0, 10, false), 10);
+    }
+
+    #[test]
+    fn a_body_changes_next_at_its_first_change_after_the_frame() {
+        let at =
+            |x: f32, visible_at: u32, body: Option<u32>| ChangeBox { body, ..unit_box_at(x, visible_at) };
+        let index = ChangeIndex::build(
+            vec![at(0.0, 4, Some(2)), at(0.0, 9, Some(2)), at(3.0, 2, Some(0)), at(6.0, 1, None)],
+            Vec::new(),
+        );
+        assert_eq!(index.next_change_of(2, 0), Some(4));
+        assert_eq!(index.next_change_of(2, 4), Some(9));
+        assert_eq!(index.next_change_of(2, 9), None);
+        assert_eq!(index.next_change_of(0, 0), Some(2));
+        // A body without changes, and one the index never heard of.
+        assert_eq!(index.next_change_of(1, 0), None);
+        assert_eq!(index.next_change_of(7, 0), None);
     }
 }
