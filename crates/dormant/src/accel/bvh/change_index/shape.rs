@@ -50,6 +50,9 @@ pub(super) struct ExactMesh {
     triangles: Vec<Triangle>,
     /// The largest coordinate magnitude of the mesh.
     reach: f64,
+    /// Every triangle lies on a face of the mesh's bounding box (a cuboid): a segment near a
+    /// triangle is then near the box's surface, which one box test decides.
+    on_its_box: bool,
 }
 
 /// A node of a mesh's BVH: its box, and its children (interior: the first, the second follows
@@ -123,6 +126,7 @@ impl ExactMesh {
         if triangles.is_empty() || triangles.len() > EXACT_MESH_TRIANGLES {
             return Self::default();
         }
+        let on_its_box = lies_on_its_box(triangles);
         let bounds: Vec<Aabb> = triangles.iter().map(|t| Aabb::from_points(*t)).collect();
         let (bvh, order) = build(&bounds, BuildParams::BALANCED);
         let nodes = bvh
@@ -139,12 +143,15 @@ impl ExactMesh {
             order.iter().map(|&i| Triangle::new(triangles[i as usize].map(|v| v.as_dvec3()))).collect();
         let root = &bvh.nodes[0];
         let reach = f64::from(root.min.abs().max(root.max.abs()).max_element());
-        Self { nodes, triangles, reach }
+        Self { nodes, triangles, reach, on_its_box }
     }
 
     /// Whether the segment meets the mesh (`margin` as for a triangle): the triangles of the
     /// leaves whose boxes, grown by the tolerance, it passes through.
     fn meets(&self, segment: &Segment, margin: Margin) -> bool {
+        if let (Margin::Loose, true, Some(root)) = (margin, self.on_its_box, self.nodes.first()) {
+            return segment.meets_box(root.min, root.max) && !segment.inside_box(root.min, root.max);
+        }
         let mut stack = [0u32; STACK_SIZE];
         let mut top = usize::from(!self.nodes.is_empty());
         while top > 0 {
@@ -167,6 +174,27 @@ impl ExactMesh {
         }
         false
     }
+}
+
+/// Whether `triangles` make up the surface of their bounding box: each lies in a face (its
+/// three corners share the box's least or greatest coordinate on some axis) and together they
+/// cover its area. Lying in the faces is what makes the box test conservative; the area, that
+/// it is as tight as the triangles (a flat or open mesh keeps its triangle tests).
+fn lies_on_its_box(triangles: &[[Vec3; 3]]) -> bool {
+    let bounds = Aabb::from_points(triangles.iter().flatten().copied());
+    let size = (bounds.max - bounds.min).as_dvec3();
+    let on_faces = triangles.iter().all(|t| {
+        (0..3).any(|axis| {
+            let on = |side: f32| t.iter().all(|v| v[axis] == side);
+            on(bounds.min[axis]) || on(bounds.max[axis])
+        })
+    });
+    let area: f64 = triangles
+        .iter()
+        .map(|[a, b, c]| 0.5 * (*b - *a).as_dvec3().cross((*c - *a).as_dvec3()).length())
+        .sum();
+    let surface = 2.0 * (size.x * size.y + size.y * size.z + size.z * size.x);
+    on_faces && size.min_element() > 0.0 && (area - surface).abs() <= 1e-4 * surface
 }
 
 impl ShapeTest {
@@ -245,6 +273,16 @@ impl Segment {
             }
         }
         true
+    }
+
+    /// Whether the whole segment lies inside the box shrunk by the tolerance, so farther than
+    /// that from its surface (both ends inside: the box is convex).
+    fn inside_box(&self, min: DVec3, max: DVec3) -> bool {
+        let (min, max) = (min + self.tolerance, max - self.tolerance);
+        let inside = |p: DVec3| p.cmpgt(min).all() && p.cmplt(max).all();
+        self.t_max.is_finite()
+            && inside(self.origin + self.t_min * self.dir)
+            && inside(self.origin + self.t_max * self.dir)
     }
 
     /// Whether the segment meets triangle `t`: loosely, whether it passes within the
@@ -357,5 +395,37 @@ mod tests {
         // Through the edge the body leaves: blocked before, not after.
         let edge = Ray::segment(Vec3::new(-0.45, 0.3, -5.0), Vec3::Z, 0.0, 10.0);
         assert!(shape.changes_for(&meshes, &edge, true));
+    }
+
+    #[test]
+    fn a_cuboid_is_tested_by_its_box_and_never_misses_what_its_triangles_meet() {
+        let by_box = &cube_mesh(0.5)[0];
+        assert!(by_box.on_its_box);
+        let by_triangles = ExactMesh { on_its_box: false, ..by_box.clone() };
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        let (mut near, mut only_box) = (0, 0);
+        for i in 0..20_000 {
+            let origin = DVec3::new(next(), next(), next()) * if i % 2 == 0 { 3.0 } else { 0.9 };
+            let dir = DVec3::new(next(), next(), next());
+            let t_max = if i % 7 == 0 { f64::INFINITY } else { 2.0 * next().abs() };
+            let segment = Segment { origin, dir, t_min: 0.0, t_max, tolerance: 1e-3 };
+            let exact = by_triangles.meets(&segment, Margin::Loose);
+            let boxed = by_box.meets(&segment, Margin::Loose);
+            assert!(boxed || !exact, "the box test missed a segment near a face: {origin} {dir} {t_max}");
+            near += usize::from(exact);
+            only_box += usize::from(boxed && !exact);
+        }
+        // Both kinds of segment occur, and the box is about as tight as the triangles.
+        assert!(near > 1_000, "{near}");
+        assert!(only_box * 50 < near, "{only_box} of {near}");
+        // A mesh with a triangle off its box's faces is tested by its triangles.
+        let tris = [[Vec3::ZERO, Vec3::X, Vec3::Y], [Vec3::ZERO, Vec3::X, Vec3::new(0.5, 0.5, 1.0)]];
+        assert!(!ExactMesh::new(&tris).on_its_box);
     }
 }
