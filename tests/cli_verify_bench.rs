@@ -170,6 +170,32 @@ fn bench_integration_reports_the_five_ratios_and_every_configuration() {
 }
 
 #[test]
+fn bench_regimes_reports_reuse_integration_and_both_per_cell() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("regimes");
+    succeeds(
+        dormant()
+            .args(["--quiet", "bench", "regimes"])
+            .arg(scenes::shipped("demolition"))
+            .args(["--quick", "--budgets", "preview320", "--backend", "bvh", "--out"])
+            .arg(&out),
+    );
+    let report = read_json(&out.join("regimes.json"));
+    let cells = report["cells"].as_array().unwrap();
+    assert_eq!(cells.len(), 2, "two body counts, one budget, one backend");
+    for cell in cells {
+        let reuse = &cell["reuse"];
+        for key in ["reuse_speedup", "integration_speedup", "both_speedup", "bound"] {
+            assert!(reuse[key].as_f64().is_some_and(|v| v.is_finite() && v > 0.0), "{key}: {reuse:#}");
+        }
+        assert_eq!(reuse["identical"], true, "reuse changed an image: {reuse:#}");
+    }
+    let table = std::fs::read_to_string(out.join("regimes.md")).unwrap();
+    assert!(table.contains("| reuse | integration | both | traced share (bound) |"), "{table}");
+    assert!(out.join("regimes-reuse.png").is_file());
+}
+
+#[test]
 fn bench_render_reports_both_backends_and_ratios_per_ray_type() {
     let dir = tempfile::tempdir().unwrap();
     let json = dir.path().join("render.json");

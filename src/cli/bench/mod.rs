@@ -127,6 +127,10 @@ pub struct RegimesArgs {
     /// Settled frames rendered per production cell.
     #[arg(long, value_name = "N", default_value_t = 4)]
     pub production_frames: u32,
+    /// Consecutive frames of a production cell's reuse measurement (from the start of the last
+    /// quarter).
+    #[arg(long, value_name = "N", default_value_t = 12, value_parser = clap::value_parser!(u32).range(1..))]
+    pub reuse_frames: u32,
     /// Scaled down for tests: counts 300 and 1200 over 240 frames, 24 preview frames, one
     /// production frame at 160x90.
     #[arg(long)]
@@ -361,7 +365,8 @@ fn regimes(
     let budgets = if args.budgets.is_empty() { regimes::Budget::ALL.to_vec() } else { args.budgets.clone() };
     let (counts, frame_count, sizes) = match args.quick {
         true => {
-            (vec![300, 1200], Some(240), regimes::RegimeSizes { preview_frames: 24, production_frames: 1 })
+            let sizes = regimes::RegimeSizes { preview_frames: 24, production_frames: 1, reuse_frames: 3 };
+            (vec![300, 1200], Some(240), sizes)
         }
         false => (
             args.counts.clone(),
@@ -369,6 +374,7 @@ fn regimes(
             regimes::RegimeSizes {
                 preview_frames: args.preview_frames,
                 production_frames: args.production_frames,
+                reuse_frames: args.reuse_frames,
             },
         ),
     };

@@ -38,7 +38,7 @@ pub fn write_paper(report: &PaperReport, dir: &Path) -> Result<Vec<PathBuf>, Rep
 
 /// The regime map's section of `paper.md`, when `dir/regimes/` holds one: the reading of it
 /// (`summary.md`, written by hand after a run of `dormant bench regimes --out
-/// dir/regimes`), then its measured table and figure. Empty when there is none.
+/// dir/regimes`), then its figures and measured table. Empty when there is none.
 fn regime_section(dir: &Path) -> Result<String, ReportError> {
     let regimes = dir.join(REGIMES_DIR);
     let read = |name: &str| {
@@ -56,6 +56,7 @@ fn regime_section(dir: &Path) -> Result<String, ReportError> {
         md.push_str("\n\n");
     }
     md.push_str(&format!("![regime map]({REGIMES_DIR}/regimes.png)\n\n"));
+    md.push_str(&format!("![reuse, integration and both]({REGIMES_DIR}/regimes-reuse.png)\n\n"));
     md.push_str(table.trim_end());
     md.push('\n');
     Ok(md)
@@ -389,7 +390,14 @@ mod tests {
         let md = regime_section(dir.path()).unwrap();
         let summary = md.find("When it pays.").unwrap();
         let figure = md.find("](regimes/regimes.png)").unwrap();
+        let reuse = md.find("](regimes/regimes-reuse.png)").unwrap();
         let table = md.find("| table |").unwrap();
-        assert!(md.starts_with("## Where integration pays") && summary < figure && figure < table, "{md}");
+        assert!(
+            md.starts_with("## Where integration pays")
+                && summary < figure
+                && figure < reuse
+                && reuse < table,
+            "{md}"
+        );
     }
 }

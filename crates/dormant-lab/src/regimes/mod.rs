@@ -4,11 +4,15 @@
 //! two shaded previews over the whole run, and path-traced production frames on a few
 //! settled frames. Each cell reports settled and whole-run speed-ups of `auto` over `never`
 //! next to its ceiling and the integration form's measured trace penalty
-//! ([`bench_integration`] does the measuring; [`write_regimes`] the table and figure).
+//! ([`bench_integration`] does the measuring; [`write_regimes`] the table and figure), and
+//! the speed-ups of exact temporal reuse, of integration and of both over rendering every
+//! frame in full (`reuse.rs`; production cells on consecutive frames, where reuse works).
 
 mod report;
+mod reuse;
 
 pub use report::{regimes_markdown, write_regimes};
+pub use reuse::ReuseCell;
 
 use std::time::Instant;
 
@@ -21,6 +25,7 @@ use dormant::render::{DirectLighting, Integrator, PathTracer};
 use dormant::residency::IntegrationForm;
 use dormant::scene::file::SceneFile;
 use dormant::sequence::{FrameRange, FrameSelection, Sequence, SequenceError, SequenceSource};
+use reuse::ReuseCellOptions;
 
 /// A per-frame ray budget.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, clap::ValueEnum)]
@@ -66,6 +71,20 @@ impl Budget {
             _ => sequence.select(None, Some((n / sizes.preview_frames.max(1)).max(1))),
         }
     }
+
+    /// The frames of a cell's reuse measurement: the previews' frames, or for production
+    /// `reuse_frames` consecutive frames from the start of the last quarter.
+    fn reuse_frames(self, sequence: &Sequence, sizes: &RegimeSizes) -> Result<FrameSelection, SequenceError> {
+        match self {
+            Budget::Production => {
+                let n = sequence.frame_count();
+                let start = n - n / 4;
+                let range = FrameRange { start, end: (start + sizes.reuse_frames.max(1)).min(n) };
+                Ok(sequence.evenly_spaced_in(range, sizes.reuse_frames))
+            }
+            _ => self.frames(sequence, sizes),
+        }
+    }
 }
 
 /// How much each cell renders.
@@ -75,6 +94,8 @@ pub struct RegimeSizes {
     pub preview_frames: u32,
     /// Settled frames rendered per production cell.
     pub production_frames: u32,
+    /// Consecutive frames of a production cell's reuse measurement.
+    pub reuse_frames: u32,
 }
 
 pub struct RegimesOptions {
@@ -108,6 +129,8 @@ pub struct RegimeCell {
     pub never_frame_ms: f64,
     pub auto_frame_ms: f64,
     pub ratios: IntegrationRatios,
+    /// Exact reuse, integration and both over every frame in full.
+    pub reuse: ReuseCell,
     pub wall_s: f64,
 }
 
@@ -164,12 +187,16 @@ pub fn bench_regimes(
             for &budget in &options.budgets {
                 let cell = run_cell(&sequence, count, backend, budget, options)?;
                 log(&format!(
-                    "{count} bodies, {backend}, {budget:?}: settled {:.2} (ceiling {:.2}), run {:.2}, auto/best {:.3}, trace penalty {:.3}, {:.0} s",
+                    "{count} bodies, {backend}, {budget:?}: settled {:.2} (ceiling {:.2}), run {:.2}, auto/best {:.3}, trace penalty {:.3}; reuse {:.2} (bound {:.1}), integration {:.2}, both {:.2}; {:.0} s",
                     cell.ratios.settled_speedup,
                     cell.ratios.ceiling,
                     cell.ratios.run_speedup,
                     cell.ratios.auto_over_best,
                     cell.ratios.trace_penalty,
+                    cell.reuse.reuse_speedup,
+                    cell.reuse.bound,
+                    cell.reuse.integration_speedup,
+                    cell.reuse.both_speedup,
                     cell.wall_s
                 ));
                 cells.push(cell);
@@ -214,7 +241,16 @@ fn run_cell(
         cache_variants: false,
         shutter: 0.0,
     };
-    let report = bench_integration(sequence, budget.integrator().as_ref(), &bench, &mut |_, _| {})?;
+    let integrator = budget.integrator();
+    let report = bench_integration(sequence, integrator.as_ref(), &bench, &mut |_, _| {})?;
+    let reuse_options = ReuseCellOptions {
+        backend,
+        frames: budget.reuse_frames(sequence, &options.sizes)?,
+        image: (width, height, spp),
+        form: options.form,
+        threads: options.threads,
+    };
+    let reuse = reuse::reuse_cell(sequence, integrator.as_ref(), &reuse_options)?;
     let mean = |p| report.cache_on(p).map_or(f64::NAN, |r| r.all.frame_ms);
     Ok(RegimeCell {
         count,
@@ -229,6 +265,7 @@ fn run_cell(
         never_frame_ms: mean(dormant::residency::IntegrationPolicy::Never),
         auto_frame_ms: mean(dormant::residency::IntegrationPolicy::Auto),
         ratios: report.ratios,
+        reuse,
         wall_s: t.elapsed().as_secs_f64(),
     })
 }
