@@ -6,11 +6,13 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
+use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
 use plotters::prelude::*;
 
 use super::{Budget, RegimeCell, RegimesReport};
 use crate::report::figure::{draw_legend, err, write_png, Area, PlotResult, FONT};
 use crate::report::ReportError;
+use dormant::accel::Backend;
 
 const WIDTH: u32 = 1500;
 const HEIGHT: u32 = 520;
@@ -137,41 +139,16 @@ fn draw_panels(
 
 /// One budget: per backend, the settled speed-up (solid) and the ceiling (dashed) over bodies.
 fn panel(cells: &[&RegimeCell], budget: Budget, area: &Area<'_>) -> PlotResult {
-    let xs: Vec<f64> = cells.iter().map(|c| c.bodies.max(1) as f64).collect();
-    let (lo, hi) = xs.iter().fold((f64::MAX, 1.0f64), |(a, b), &x| (a.min(x), b.max(x)));
+    let (lo, hi) = body_range(cells);
     let top = cells
         .iter()
         .flat_map(|c| [c.ratios.settled_speedup, c.ratios.ceiling])
         .filter(|v| v.is_finite())
         .fold(1.2f64, f64::max)
         * 1.15;
-    let mut chart = ChartBuilder::on(area)
-        .caption(budget_name(budget), (FONT, 18))
-        .margin(12)
-        .x_label_area_size(40)
-        .y_label_area_size(50)
-        .build_cartesian_2d((lo * 0.8..hi * 1.25).log_scale(), 0.0..top)
-        .map_err(err)?;
-    chart
-        .configure_mesh()
-        .x_desc("bodies")
-        .y_desc("speed-up")
-        .x_label_formatter(&|v| format!("{v:.0}"))
-        .label_style((FONT, 13))
-        .axis_desc_style((FONT, 15))
-        .draw()
-        .map_err(err)?;
-    let one = vec![(lo * 0.8, 1.0), (hi * 1.25, 1.0)];
-    chart.draw_series(LineSeries::new(one, BLACK.mix(0.4))).map_err(err)?;
+    let mut chart = speedup_chart(area, budget, (lo, hi), 0.0..top)?;
     let colours = [RGBColor(31, 119, 180), RGBColor(214, 39, 40)];
-    // Cells come count by count, each with every backend: one series per backend.
-    let mut backends = Vec::new();
-    for c in cells {
-        if !backends.contains(&c.backend) {
-            backends.push(c.backend);
-        }
-    }
-    for (backend, colour) in backends.into_iter().zip(colours.iter().cycle()) {
+    for (backend, colour) in backends_of(cells).into_iter().zip(colours.iter().cycle()) {
         let series = |get: fn(&RegimeCell) -> f64| -> Vec<(f64, f64)> {
             cells
                 .iter()
@@ -201,45 +178,20 @@ type Speedup = fn(&RegimeCell) -> f64;
 /// One budget: per backend (solid, then dashed), reuse, integration and both over bodies, on
 /// a log scale.
 fn reuse_panel(cells: &[&RegimeCell], budget: Budget, area: &Area<'_>) -> PlotResult {
-    let xs: Vec<f64> = cells.iter().map(|c| c.bodies.max(1) as f64).collect();
-    let (lo, hi) = xs.iter().fold((f64::MAX, 1.0f64), |(a, b), &x| (a.min(x), b.max(x)));
+    let (lo, hi) = body_range(cells);
     let top = cells
         .iter()
         .flat_map(|c| [c.reuse.reuse_speedup, c.reuse.integration_speedup, c.reuse.both_speedup])
         .filter(|v| v.is_finite())
         .fold(2.0f64, f64::max)
         * 1.5;
-    let mut chart = ChartBuilder::on(area)
-        .caption(budget_name(budget), (FONT, 18))
-        .margin(12)
-        .x_label_area_size(40)
-        .y_label_area_size(50)
-        .build_cartesian_2d((lo * 0.8..hi * 1.25).log_scale(), (0.5..top).log_scale())
-        .map_err(err)?;
-    chart
-        .configure_mesh()
-        .x_desc("bodies")
-        .y_desc("speed-up")
-        .x_label_formatter(&|v| format!("{v:.0}"))
-        .y_label_formatter(&|v| format!("{v:.1}"))
-        .label_style((FONT, 13))
-        .axis_desc_style((FONT, 15))
-        .draw()
-        .map_err(err)?;
-    let one = vec![(lo * 0.8, 1.0), (hi * 1.25, 1.0)];
-    chart.draw_series(LineSeries::new(one, BLACK.mix(0.4))).map_err(err)?;
-    let mut backends = Vec::new();
-    for c in cells {
-        if !backends.contains(&c.backend) {
-            backends.push(c.backend);
-        }
-    }
+    let mut chart = speedup_chart(area, budget, (lo, hi), (0.5..top).log_scale())?;
     let kinds: [(&str, RGBColor, Speedup); 3] = [
         ("reuse", RGBColor(31, 119, 180), |c| c.reuse.reuse_speedup),
         ("integration", RGBColor(255, 127, 14), |c| c.reuse.integration_speedup),
         ("both", RGBColor(44, 160, 44), |c| c.reuse.both_speedup),
     ];
-    for (b, backend) in backends.into_iter().enumerate() {
+    for (b, backend) in backends_of(cells).into_iter().enumerate() {
         for (name, colour, get) in kinds {
             let points: Vec<(f64, f64)> = cells
                 .iter()
@@ -258,4 +210,58 @@ fn reuse_panel(cells: &[&RegimeCell], budget: Budget, area: &Area<'_>) -> PlotRe
         }
     }
     draw_legend(&mut chart, SeriesLabelPosition::UpperLeft)
+}
+
+/// A chart of speed-ups (on `Y`) over body counts (log).
+type SpeedupChart<'c, 'b, Y> = ChartContext<'c, BitMapBackend<'b>, Cartesian2d<LogCoord<f64>, Y>>;
+
+/// A panel's chart: body counts `bodies` (least, most) on a log scale against speed-ups on
+/// `y`, its mesh drawn and a line at 1.
+fn speedup_chart<'c, 'b, Y>(
+    area: &Area<'b>,
+    budget: Budget,
+    (lo, hi): (f64, f64),
+    y: Y,
+) -> Result<SpeedupChart<'c, 'b, Y::CoordDescType>, String>
+where
+    Y: AsRangedCoord<Value = f64>,
+    Y::CoordDescType: ValueFormatter<f64>,
+{
+    let mut chart = ChartBuilder::on(area)
+        .caption(budget_name(budget), (FONT, 18))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(50)
+        .build_cartesian_2d((lo * 0.8..hi * 1.25).log_scale(), y)
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc("bodies")
+        .y_desc("speed-up")
+        .x_label_formatter(&|v| format!("{v:.0}"))
+        .y_label_formatter(&|v| format!("{v:.1}"))
+        .label_style((FONT, 13))
+        .axis_desc_style((FONT, 15))
+        .draw()
+        .map_err(err)?;
+    let one = vec![(lo * 0.8, 1.0), (hi * 1.25, 1.0)];
+    chart.draw_series(LineSeries::new(one, BLACK.mix(0.4))).map_err(err)?;
+    Ok(chart)
+}
+
+/// The least and most body counts of `cells`.
+fn body_range(cells: &[&RegimeCell]) -> (f64, f64) {
+    cells.iter().map(|c| c.bodies.max(1) as f64).fold((f64::MAX, 1.0f64), |(a, b), x| (a.min(x), b.max(x)))
+}
+
+/// The backends of `cells` in the order they first come (cells come count by count, each
+/// with every backend): one series each.
+fn backends_of(cells: &[&RegimeCell]) -> Vec<Backend> {
+    let mut backends = Vec::new();
+    for c in cells {
+        if !backends.contains(&c.backend) {
+            backends.push(c.backend);
+        }
+    }
+    backends
 }
