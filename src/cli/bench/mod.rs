@@ -132,7 +132,7 @@ pub struct RegimesArgs {
     #[arg(long, value_name = "N", default_value_t = 12, value_parser = clap::value_parser!(u32).range(1..))]
     pub reuse_frames: u32,
     /// Scaled down for tests: counts 300 and 1200 over 240 frames, 24 preview frames, one
-    /// production frame at 160x90.
+    /// production frame at 160x90 (3 consecutive for reuse).
     #[arg(long)]
     pub quick: bool,
 }

@@ -80,7 +80,7 @@ impl Budget {
                 let n = sequence.frame_count();
                 let start = n - n / 4;
                 let range = FrameRange { start, end: (start + sizes.reuse_frames.max(1)).min(n) };
-                Ok(sequence.evenly_spaced_in(range, sizes.reuse_frames))
+                sequence.select(Some(range), Some(1))
             }
             _ => self.frames(sequence, sizes),
         }

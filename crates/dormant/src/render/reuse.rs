@@ -106,7 +106,7 @@ impl ReuseStats {
     pub(crate) fn traced_in_full(film: &Film, stats: &RenderStats) -> Self {
         let pixels = u64::from(film.width) * u64::from(film.height);
         ReuseStats {
-            samples_traced: (stats.spp.mean * pixels as f64).round() as u64,
+            samples_traced: stats.camera_samples(film.width, film.height),
             pixels_traced: pixels,
             pixels,
             ..ReuseStats::default()

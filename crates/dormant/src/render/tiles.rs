@@ -87,6 +87,11 @@ impl RenderStats {
     pub fn mrays_per_second(&self) -> f64 {
         self.rays as f64 / self.seconds.max(1e-9) / 1e6
     }
+
+    /// The camera samples of a `width` x `height` image at these samples per pixel.
+    pub(crate) fn camera_samples(&self, width: u32, height: u32) -> u64 {
+        (self.spp.mean * f64::from(width) * f64::from(height)).round() as u64
+    }
 }
 
 /// The frame's camera: where it is at shutter open, and at close when the frame is motion

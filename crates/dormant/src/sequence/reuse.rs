@@ -270,7 +270,8 @@ impl FrameChanges {
     /// Brings the looks to selected frame `frame` (ordinal `ordinal`), with a box for every
     /// body whose look changed; whether an emissive body's did.
     fn compare(&mut self, frame: &ReplayFrame<'_>, shutter: f32, ordinal: u32) -> bool {
-        let motions = frame.shutter_motions(shutter);
+        let mut motions = frame.shutter_motions(shutter);
+        motions.sort_unstable_by_key(|m| m.0);
         if self.looks.is_empty() {
             self.looks = body_looks(frame, &motions);
             self.end_frame(&motions);
@@ -282,10 +283,8 @@ impl FrameChanges {
         for &(b, _) in &motions {
             self.mark(b);
         }
-        let mut sorted = motions.clone();
-        sorted.sort_unstable_by_key(|m| m.0);
-        let look = |b: usize| match sorted.binary_search_by_key(&b, |m| m.0) {
-            Ok(k) => Look::Moving(sorted[k].1),
+        let look = |b: usize| match motions.binary_search_by_key(&b, |m| m.0) {
+            Ok(k) => Look::Moving(motions[k].1),
             Err(_) => still_look(frame, b),
         };
         let now: Vec<(usize, Look)> = self.changed.iter().map(|&b| (b, look(b))).collect();

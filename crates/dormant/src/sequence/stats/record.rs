@@ -98,8 +98,7 @@ impl ReuseRecord {
                 reuse_granularity: Some(s.granularity),
             };
         }
-        let pixels = f64::from(frame.film.width) * f64::from(frame.film.height);
-        let samples = (frame.render.spp.mean * pixels).round() as u64;
+        let samples = frame.render.camera_samples(frame.film.width, frame.film.height);
         match frame.reused_from {
             Some(_) => Self { samples_reused: samples, ..Self::default() },
             None => Self { samples_traced: samples, ..Self::default() },
