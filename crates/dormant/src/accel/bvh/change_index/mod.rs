@@ -50,13 +50,22 @@ struct IndexNode {
     latest: u32,
 }
 
+/// What a query reads of a box in a leaf of several: its bounds and frame, 32 bytes (a
+/// [`ChangeBox`] with its shape's two poses is 224, and queries walk many leaves).
+#[derive(Clone, Copy, Debug)]
+struct LeafBox {
+    min: Vec3,
+    visible_at: u32,
+    max: Vec3,
+}
+
 /// The change boxes of a sequence in a BVH (see the module docs). Immutable once built; queries
 /// run from many threads at once.
 #[derive(Clone, Debug, Default)]
 pub struct ChangeIndex {
     nodes: Vec<IndexNode>,
     /// The boxes in leaf order.
-    boxes: Vec<ChangeBox>,
+    boxes: Vec<LeafBox>,
     /// Per box (leaf order), the object-space views of its shape's poses.
     shapes: Vec<Option<ShapeTest>>,
     /// The meshes shapes refer to, ready for exact tests.
@@ -89,6 +98,10 @@ impl ChangeIndex {
         let meshes: Vec<ExactMesh> = meshes.iter().map(|m| ExactMesh::new(m)).collect();
         let shapes = boxes.iter().map(|b| b.shape.and_then(|s| ShapeTest::new(&s, &meshes))).collect();
         let (body_changes, changes) = changes_by_body(&boxes);
+        let boxes = boxes
+            .iter()
+            .map(|b| LeafBox { min: b.bounds.min, visible_at: b.visible_at, max: b.bounds.max })
+            .collect();
         Self { nodes, boxes, shapes, meshes, body_changes, changes }
     }
 
@@ -139,7 +152,7 @@ impl ChangeIndex {
                         break;
                     }
                     if b.visible_at > after
-                        && r.hit_bounds(b.bounds.min, b.bounds.max, ray.t_max) != f32::INFINITY
+                        && r.hit_bounds(b.min, b.max, ray.t_max) != f32::INFINITY
                         && self.shapes[k].is_none_or(|s| s.changes_for(&self.meshes, ray, occlusion))
                     {
                         best = b.visible_at;
