@@ -260,7 +260,7 @@ impl ReuseStore {
     fn merge_samples(&mut self, beauty: &PlannedFrame, due: &[bool], spp: u32) -> Vec<u32> {
         let n = spp as usize;
         let mut traced = vec![0; due.len()];
-        for s in &beauty.samples {
+        for s in beauty.samples.iter().flatten() {
             let at = s.pixel as usize * n + s.index as usize;
             self.samples[at] = s.li;
             self.sample_horizons[at] = s.horizon;
