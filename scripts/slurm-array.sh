@@ -3,6 +3,8 @@
 #SBATCH --array=0-9
 #SBATCH --cpus-per-task=16
 #SBATCH --time=02:00:00
+#SBATCH --signal=B:USR1@120
+#SBATCH --requeue
 # One slice of a simulated sequence per Slurm array task (README, "Splitting a sequence over
 # a job array"). Once, before submitting, from the directory the paths below are relative to:
 #
@@ -23,6 +25,11 @@
 #
 # Relative paths resolve against the job's working directory, which is the directory sbatch
 # ran in unless `sbatch --chdir=DIR` says otherwise.
+#
+# Time limits and preemption (docs/slurm.md): two minutes before the limit Slurm sends SIGUSR1
+# (--signal above); dormant stops after the frame in flight and the task requeues itself
+# (--requeue), to continue where it stopped (--resume) when it runs again. SIGTERM (scancel,
+# preemption) stops it the same way; a preempted task is requeued by Slurm.
 set -euo pipefail
 
 say() { printf 'slurm-array: task %s: %s\n' "${SLURM_ARRAY_TASK_ID:-?}" "$*" >&2; }
@@ -54,7 +61,26 @@ if [ "$a" -ge "$frames" ]; then
 fi
 part=$(printf '%s/part_%04d' "$out" "$SLURM_ARRAY_TASK_ID")
 say "frames $a..$b into $part on $(hostname), $threads threads"
-# --resume: a resubmitted task keeps the frames it finished before it was killed (none on a
-# first run, where its directory holds no stats.json yet).
+# --resume: a resubmitted or requeued task keeps the frames it finished before it was
+# stopped or killed (none on a first run, where its directory holds no stats.json yet).
 "$dormant" --quiet --threads "$threads" render --resume --trajectory "$trajectory" --frames "$a..$b" \
-    "${render_args[@]}" --out "$part"
+    "${render_args[@]}" --out "$part" &
+pid=$!
+# Slurm signals this batch shell (B: above), not its children: pass the signal on. dormant
+# exits 138 (SIGUSR1) or 143 (SIGTERM) once the frame in flight is written; a second signal
+# stops it at once.
+forwarded=
+trap 'forwarded=USR1; kill -s USR1 "$pid" 2>/dev/null || true' USR1
+trap 'forwarded=TERM; kill -s TERM "$pid" 2>/dev/null || true' TERM INT
+status=0
+wait "$pid" || status=$?
+# A trapped signal ends `wait` early (status above 128): wait on until dormant itself exits.
+while [ "$status" -gt 128 ] && kill -0 "$pid" 2>/dev/null; do
+    status=0
+    wait "$pid" || status=$?
+done
+if [ "$forwarded" = USR1 ] && [ "$status" -eq 138 ]; then
+    say "stopped before the time limit; requeueing to resume"
+    scontrol requeue "$SLURM_JOB_ID" || say "could not requeue; resubmit the array task to resume it"
+fi
+exit "$status"

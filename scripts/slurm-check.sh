@@ -9,7 +9,10 @@
 #   3. simulates scenes/tiny.toml, renders it whole, submits the array over it in slices,
 #      waits, gathers, and compares: the same frame files, byte for byte, and stats.csv rows
 #      equal in every column but the timing and the per-slice integration columns (below);
-#   4. stops the daemons and removes the directory, also on failure or Ctrl-C.
+#   4. submits one task over every frame, warns it mid-render with SIGUSR1 (what a time limit's
+#      `--signal=B:USR1@...` sends): it must stop, requeue itself and resume to the whole
+#      run's frames, byte for byte;
+#   5. stops the daemons and removes the directory, also on failure or Ctrl-C.
 #
 # Needs root and target/release/dormant (`make slurm-check` builds it first). Exits 0 when
 # everything matched, 1 with a message naming the mismatch otherwise.
@@ -187,6 +190,38 @@ done
 [ "$state" = idle ] || die "node $node is not idle after 60 s (state: '${state:-no answer}')"
 say "Slurm up in $(( $(date +%s) - started )) s: slurmctld on 127.0.0.1:$ctld_port, node $node with $cpus CPUs ($(sinfo --version))"
 
+# Waits until job $1 has left the queue and requires its $2 tasks to have COMPLETED with exit
+# code 0. No accounting database here (sacct has nothing), but slurmctld keeps finished jobs
+# for MinJobAge (300 s).
+await_job() {
+    local job=$1 tasks=$2 deadline states
+    deadline=$(( $(date +%s) + timeout_s ))
+    while [ -n "$(squeue -h -j "$job" 2>/dev/null)" ]; do
+        [ "$(date +%s)" -lt "$deadline" ] || die "job $job still queued or running after $timeout_s s: $(squeue -h -j "$job" -o '%i %T %R' | head -n 3 | tr '\n' ';')"
+        kill -0 "$slurmctld_pid" 2>/dev/null || die "slurmctld died while job $job ran"
+        sleep 1
+    done
+    states=$(scontrol -o show job "$job" | sed -E 's/.*ArrayTaskId=([0-9]+).* JobState=([A-Z_]+).* ExitCode=([0-9:]+).*/\1 \2 \3/' | sort -n)
+    [ "$(echo "$states" | grep -c ' COMPLETED 0:0$')" -eq "$tasks" ] \
+        || die "job $job: not every task completed with exit code 0 (task state exit): $(echo "$states" | grep -v ' COMPLETED 0:0$' | head -n 5 | tr '\n' ';') (task logs above)"
+}
+
+# Requires every frame file of the whole run in directory $1, byte for byte, and no other.
+same_frames_as_whole() {
+    local dir=$1 whole_files other_files n=0
+    whole_files=$(cd whole && find . -maxdepth 1 -type f -name 'frame_*' -printf '%f\n' | sort)
+    other_files=$(cd "$dir" && find . -maxdepth 1 -type f -name 'frame_*' -printf '%f\n' | sort)
+    [ -n "$whole_files" ] || die "the whole run wrote no frames"
+    if [ "$whole_files" != "$other_files" ]; then
+        die "$dir's frame files differ from the whole run's: $(diff <(echo "$whole_files") <(echo "$other_files") | grep '^[<>]' | head -n 5 | tr '\n' ' ')"
+    fi
+    for f in $whole_files; do
+        cmp -s "whole/$f" "$dir/$f" || die "$dir/$f differs from the whole run's (byte comparison)"
+        n=$((n + 1))
+    done
+    say "frames: $n files in $dir, byte-identical to the whole run"
+}
+
 # --- the sequence, whole and as a job array ------------------------------------------------
 # Relative paths, as in the README: the job runs in the directory it is submitted from.
 work="$tmp/work"
@@ -207,34 +242,13 @@ job=$(DORMANT="$bin" TRAJECTORY=out/tiny.traj FRAMES=$frames PER_TASK=$per_task 
 job=${job%%;*}
 say "job $job submitted; waiting"
 submitted=$(date +%s%N)
-deadline=$(( $(date +%s) + timeout_s ))
-while [ -n "$(squeue -h -j "$job" 2>/dev/null)" ]; do
-    [ "$(date +%s)" -lt "$deadline" ] || die "job $job still queued or running after $timeout_s s: $(squeue -h -j "$job" -o '%i %T %R' | head -n 3 | tr '\n' ';')"
-    kill -0 "$slurmctld_pid" 2>/dev/null || die "slurmctld died while job $job ran"
-    sleep 1
-done
-# No accounting database here (sacct has nothing), but slurmctld keeps finished jobs for
-# MinJobAge (300 s): every task must have COMPLETED with exit code 0.
-states=$(scontrol -o show job "$job" | sed -E 's/.*ArrayTaskId=([0-9]+).* JobState=([A-Z_]+).* ExitCode=([0-9:]+).*/\1 \2 \3/' | sort -n)
-[ "$(echo "$states" | grep -c ' COMPLETED 0:0$')" -eq "$tasks" ] \
-    || die "job $job: not every task completed with exit code 0 (task state exit): $(echo "$states" | grep -v ' COMPLETED 0:0$' | head -n 5 | tr '\n' ';') (task logs above)"
+await_job "$job" "$tasks"
 say "job $job finished: $tasks tasks completed in $(( ($(date +%s%N) - submitted) / 1000000 )) ms"
 
 "$root/scripts/slurm-gather.sh" out/tiny
 
 # --- compare ---------------------------------------------------------------------------------
-whole_files=$(cd whole && find . -maxdepth 1 -type f -name 'frame_*' -printf '%f\n' | sort)
-array_files=$(cd out/tiny && find . -maxdepth 1 -type f -name 'frame_*' -printf '%f\n' | sort)
-[ -n "$whole_files" ] || die "the whole run wrote no frames"
-if [ "$whole_files" != "$array_files" ]; then
-    die "the array's frame files differ from the whole run's: $(diff <(echo "$whole_files") <(echo "$array_files") | grep '^[<>]' | head -n 5 | tr '\n' ' ')"
-fi
-n=0
-for f in $whole_files; do
-    cmp -s "whole/$f" "out/tiny/$f" || die "out/tiny/$f differs from the whole run's (byte comparison)"
-    n=$((n + 1))
-done
-say "frames: $n files, byte-identical to the whole run"
+same_frames_as_whole out/tiny
 
 python3 - whole/stats.csv out/tiny/stats.csv "$timing_columns" "$integration_columns" out/tiny/part_*/stats.csv <<'PY'
 import csv, sys
@@ -277,4 +291,43 @@ print(f"slurm-check: not compared: timing ({', '.join(sorted(timing))}) and the 
       + (", ".join(f"{c} {n}" for c, n in sorted(informational.items())) or "none"))
 PY
 
-say "PASSED in $(( $(date +%s) - started )) s: $tasks slices through Slurm equal one run"
+# --- a task stopped before its time limit and requeued ---------------------------------------
+# One task over every frame. Once it has written a tenth of them, its batch shell gets SIGUSR1,
+# the warning `#SBATCH --signal=B:USR1@120` asks for before a time limit: the script passes it
+# to dormant, which stops after the frame in flight (exit 138); the task requeues itself and,
+# run again, its --resume renders the rest. The result must be the whole run's frames.
+say "submitting one task over all $frames frames, to be warned (SIGUSR1) mid-render"
+job=$(DORMANT="$bin" TRAJECTORY=out/tiny.traj FRAMES=$frames PER_TASK=$frames OUT=out/requeued \
+      RENDER_ARGS="$render_args" \
+      sbatch --parsable --array=0 --cpus-per-task=1 --job-name=dormant-requeue \
+      --chdir="$work" --open-mode=append --output="$tmp/log/requeued-%a.out" "$root/scripts/slurm-array.sh")
+job=${job%%;*}
+part=out/requeued/part_0000
+# Frame 48, the 25th of 240: the frame files appear as frames finish (stats.json at intervals).
+warn_at=$(printf '%s/frame_%04d.png' "$part" 48)
+deadline=$(( $(date +%s) + timeout_s ))
+until [ -f "$warn_at" ]; do
+    [ "$(date +%s)" -lt "$deadline" ] || die "job $job did not write $warn_at in $timeout_s s"
+    [ -n "$(squeue -h -j "$job" 2>/dev/null)" ] || die "job $job ended before it was warned"
+    sleep 0.01
+done
+scancel --batch --signal=USR1 "${job}_0"
+say "warned job $job once it wrote $warn_at; waiting"
+# Slurm holds a requeued job for about two minutes (its BeginTime); start it at once.
+for _ in $(seq 200); do
+    if [ "$(squeue -h -j "$job" -o %T 2>/dev/null)" = PENDING ]; then
+        scontrol update JobId="${job}_0" StartTime=now 2>/dev/null || true
+        break
+    fi
+    [ -n "$(squeue -h -j "$job" 2>/dev/null)" ] || break
+    sleep 0.05
+done
+await_job "$job" 1
+restarts=$(scontrol -o show job "$job" | sed -E 's/.* Restarts=([0-9]+).*/\1/')
+[ "$restarts" -ge 1 ] || die "job $job was not requeued (Restarts=$restarts): $(tail -n 5 "$tmp/log/requeued-0.out" | tr '\n' ';')"
+grep -q "stopped by SIGUSR1 after frame" "$tmp/log/requeued-0.out" \
+    || die "job $job's log does not say dormant stopped on SIGUSR1: $(tail -n 5 "$tmp/log/requeued-0.out" | tr '\n' ';')"
+same_frames_as_whole "$part"
+say "the warned task stopped after frame $(grep -o 'after frame [0-9]*' "$tmp/log/requeued-0.out" | head -n 1 | cut -d' ' -f3), was requeued ($restarts restart) and resumed to the whole run's frames"
+
+say "PASSED in $(( $(date +%s) - started )) s: $tasks slices through Slurm equal one run, and a warned task requeued and resumed to it"

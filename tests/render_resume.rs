@@ -1,13 +1,13 @@
-//! `dormant render --resume`: a render killed mid-sequence and resumed leaves the files of an
-//! uninterrupted run (frames byte for byte, statistics in every field but the timings), a
-//! resumed static stretch copies the kept frames' files, and the statistics of another
-//! configuration, or records the replay does not reach, are refused.
+//! `dormant render --resume`: a render killed mid-sequence, or stopped by a signal, and resumed
+//! leaves the files of an uninterrupted run (frames byte for byte, statistics in every field
+//! but the timings), a resumed static stretch copies the kept frames' files, and the
+//! statistics of another configuration, or records the replay does not reach, are refused.
 
 mod common;
 
 use std::ffi::OsString;
 use std::path::Path;
-use std::process::{Output, Stdio};
+use std::process::{Child, Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
 use common::cli::{dormant, exits_with, read_json, read_stats, succeeds};
@@ -126,14 +126,7 @@ fn assert_same_outputs(whole: &Path, resumed: &Path, first_resumed: u64) {
 fn kill_after(args: &[OsString], out: &Path, frames: usize) {
     let mut child = dormant().args(args).stdout(Stdio::null()).stderr(Stdio::null()).spawn().unwrap();
     let deadline = Instant::now() + Duration::from_secs(300);
-    loop {
-        let recorded = std::fs::read(out.join("stats.json"))
-            .ok()
-            .and_then(|b| serde_json::from_slice::<Value>(&b).ok())
-            .map_or(0, |s| s["frames"].as_array().map_or(0, Vec::len));
-        if recorded >= frames || Instant::now() > deadline {
-            break;
-        }
+    while recorded_frames(out) < frames && Instant::now() < deadline {
         assert!(child.try_wait().unwrap().is_none(), "the run ended before {frames} frames were recorded");
         std::thread::sleep(Duration::from_millis(5));
     }
@@ -165,6 +158,89 @@ fn killed_render_resumes_to_the_files_of_an_uninterrupted_run() {
     assert_eq!(report["frames"].as_array().unwrap().len(), total - kept, "only the rest is rendered");
     let first_resumed = read_stats(&whole)["frames"][kept]["frame"].as_u64().unwrap();
     assert_same_outputs(&whole, &killed, first_resumed);
+}
+
+/// Sends `signal` (a `kill -s` name) to `child`.
+fn send(child: &Child, signal: &str) {
+    succeeds(Command::new("kill").args(["-s", signal, &child.id().to_string()]));
+}
+
+/// The frames `out`'s stats.json records (0 while there is none).
+fn recorded_frames(out: &Path) -> usize {
+    std::fs::read(out.join("stats.json"))
+        .ok()
+        .and_then(|b| serde_json::from_slice::<Value>(&b).ok())
+        .map_or(0, |s| s["frames"].as_array().map_or(0, Vec::len))
+}
+
+/// Starts `args` and, once `ready` holds, sends it `signals` one after another; returns its
+/// exit code and stderr.
+fn signal_when(args: &[OsString], ready: impl Fn() -> bool, signals: &[&str]) -> (Option<i32>, String) {
+    let mut child = dormant().args(args).stdout(Stdio::null()).stderr(Stdio::piped()).spawn().unwrap();
+    let deadline = Instant::now() + Duration::from_secs(300);
+    while !ready() && Instant::now() < deadline {
+        assert!(child.try_wait().unwrap().is_none(), "the run ended before it was signalled");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    for signal in signals {
+        send(&child, signal);
+        // Apart, so that the kernel does not merge two of one kind before they are handled.
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let output = child.wait_with_output().unwrap();
+    (output.status.code(), String::from_utf8_lossy(&output.stderr).into_owned())
+}
+
+#[test]
+fn render_stopped_by_sigterm_finishes_its_frame_exits_143_and_resumes_to_an_uninterrupted_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let (whole, stopped) = (dir.path().join("whole"), dir.path().join("stopped"));
+    run(&tiny_run(&whole), &[]);
+    let total = frame_count(&whole);
+
+    let (code, stderr) = signal_when(&tiny_run(&stopped), || recorded_frames(&stopped) >= 4, &["TERM"]);
+    assert_eq!(code, Some(143), "{stderr}");
+    assert!(stderr.contains("stopped by SIGTERM after frame") && stderr.contains("--resume"), "{stderr}");
+    // The frame in flight was finished: every recorded frame has its files, nothing else is.
+    let recorded = read_stats(&stopped)["frames"].as_array().unwrap().len();
+    assert!(recorded >= 4 && recorded < total, "stopped with {recorded} of {total} frames");
+    assert_eq!(frame_count(&stopped), recorded);
+    let names: Vec<String> =
+        std::fs::read_dir(&stopped).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
+    assert!(!names.iter().any(|n| n.ends_with(".tmp")), "left behind: {names:?}");
+
+    run(&tiny_run(&stopped), &["--resume"]);
+    let first_resumed = read_stats(&whole)["frames"][recorded]["frame"].as_u64().unwrap();
+    assert_same_outputs(&whole, &stopped, first_resumed);
+}
+
+#[test]
+fn sigusr1_and_sigint_stop_a_render_with_128_plus_their_number() {
+    for (signal, code) in [("USR1", 138), ("INT", 130)] {
+        let dir = tempfile::tempdir().unwrap();
+        let ready = || recorded_frames(dir.path()) >= 1;
+        let (exit, stderr) = signal_when(&tiny_run(dir.path()), ready, &[signal]);
+        assert_eq!(exit, Some(code), "SIG{signal}: {stderr}");
+        assert!(stderr.contains(&format!("stopped by SIG{signal}")), "{stderr}");
+        assert_eq!(frame_count(dir.path()), read_stats(dir.path())["frames"].as_array().unwrap().len());
+    }
+}
+
+#[test]
+fn a_second_signal_stops_a_render_without_finishing_its_frame() {
+    // Frames of a second or more: once the first is written, the second is still tracing
+    // when both signals arrive, and no further frame may appear.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let args: Vec<OsString> =
+        ["--quiet", "render", "--size", "640x360", "--spp", "64", "--frames", "100..104"]
+            .iter()
+            .map(OsString::from)
+            .chain([OsString::from("--out"), out.clone().into(), scenes::shipped("tiny").into()])
+            .collect();
+    let (code, stderr) = signal_when(&args, || out.is_dir() && frame_count(&out) >= 1, &["TERM", "TERM"]);
+    assert_eq!(code, Some(143), "{stderr}");
+    assert_eq!(frame_count(&out), 1, "the frame in flight was finished");
 }
 
 #[test]

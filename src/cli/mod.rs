@@ -26,6 +26,13 @@ pub(crate) enum CliError {
     /// Failures while running: exit code 1.
     #[error("{0}")]
     Runtime(String),
+    /// A render stopped by a signal after the frame in flight (`render/stop.rs`): exit code
+    /// 128 plus the signal's number.
+    #[error(
+        "stopped by {} after frame {last_frame} ({frames} frames written by this run); `render --resume` with the same options continues",
+        render::signal_name(*.signal)
+    )]
+    Stopped { signal: i32, last_frame: u32, frames: u64 },
 }
 
 /// Render failures while running (bad scenes are caught as input before rendering starts).
@@ -51,6 +58,7 @@ impl CliError {
         match self {
             CliError::Input(_) => 2,
             CliError::Runtime(_) => 1,
+            CliError::Stopped { signal, .. } => render::stop_exit_code(*signal),
         }
     }
 }
@@ -111,6 +119,10 @@ pub fn main() -> ExitCode {
     init_logging(cli.quiet);
     match run(&cli) {
         Ok(()) => ExitCode::SUCCESS,
+        Err(e @ CliError::Stopped { .. }) => {
+            eprintln!("dormant: {e}");
+            ExitCode::from(e.exit_code())
+        }
         Err(e) => {
             eprintln!("dormant: error: {e}");
             ExitCode::from(e.exit_code())

@@ -1,9 +1,10 @@
 //! `dormant render`: its flags, and the wiring of a still of a built-in or asset scene, or of
-//! a sequence of a scene file or trajectory (`sequence.rs`); each frame's files and report
-//! line (`frame_output.rs`).
+//! a sequence of a scene file or trajectory (`sequence.rs`), which a signal stops between
+//! frames (`stop.rs`); each frame's files and report line (`frame_output.rs`).
 
 mod frame_output;
 mod sequence;
+mod stop;
 mod video;
 
 use std::path::{Path, PathBuf};
@@ -30,6 +31,7 @@ use dormant::sequence::{
 };
 
 use frame_output::FrameOutput;
+pub(crate) use stop::{exit_code as stop_exit_code, signal_name};
 
 /// What a render computes per pixel.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]

@@ -1,9 +1,11 @@
 //! A sequence's run: the scene manager from the integration flags, the frames through it with
-//! their statistics, `report.png` and the video, and what `--resume` keeps.
+//! their statistics (until the last, or until a stop signal: `stop.rs`), `report.png` and the
+//! video, and what `--resume` keeps.
 
 use std::path::{Path, PathBuf};
 
 use super::frame_output::{output_error, FrameOutput};
+use super::stop::StopSignals;
 use super::{adaptive_sampling, aov_passes, sequence_error, RenderArgs, RenderJob, RenderMode, Switch};
 use crate::cli::CliError;
 use dormant::accel::Backend;
@@ -40,6 +42,7 @@ pub(super) fn render_sequence(
     let progress = crate::cli::progress::frames_bar(quiet, "rendering", Some(u64::from(frames.count())));
     progress.set_position(kept_frames.len() as u64);
     let mut rate = RayRate::default();
+    let mut stop = StopSignals::install()?;
     let rendered =
         sequence.render(&frames, &mut manager, &renderer, &kept_frames, &mut |frame, stats, manager| {
             let path = output.write(frame, Some(stats), &progress)?;
@@ -55,11 +58,16 @@ pub(super) fn render_sequence(
                 frame.index, stats.integrated_islands
             ));
             progress.inc(1);
+            stop.after_frame(frame.index)?;
             Ok::<(), LoopError>(())
         });
-    rendered.map_err(|e| e.into_cli(&args.out))?;
+    // Stopped by a signal, the run writes its statistics (written at intervals so far) only.
+    let stopped = LoopError::stop_of(rendered, &args.out)?;
     progress.finish_and_clear();
     let run_stats = stats_file.finish(&manager).map_err(|e| runtime(&e))?;
+    if let Some(stopped) = stopped {
+        return Err(stopped);
+    }
     crate::report::write_report_png(&run_stats, &args.out.join("report.png")).map_err(|e| runtime(&e))?;
     if args.video {
         let fps = 1.0 / (f64::from(sequence.trajectory.timestep) * f64::from(frames.step()));
@@ -198,6 +206,16 @@ impl From<CliError> for LoopError {
 }
 
 impl LoopError {
+    /// How the frame loop ended: `Some` stop error when a stop signal ended it after a frame,
+    /// `None` when every frame rendered; its error otherwise.
+    fn stop_of(rendered: Result<(), LoopError>, out: &Path) -> Result<Option<CliError>, CliError> {
+        match rendered {
+            Ok(()) => Ok(None),
+            Err(LoopError::Cli(stopped @ CliError::Stopped { .. })) => Ok(Some(stopped)),
+            Err(e) => Err(e.into_cli(out)),
+        }
+    }
+
     /// The error as the CLI reports it; a kept frame that does not replay names the statistics
     /// file in `out` it was kept from.
     fn into_cli(self, out: &Path) -> CliError {
