@@ -1,7 +1,8 @@
-//! `dormant render --resume`: a render killed mid-sequence, or stopped by a signal, and resumed
-//! leaves the files of an uninterrupted run (frames byte for byte, statistics in every field
-//! but the timings), a resumed static stretch copies the kept frames' files, and the
-//! statistics of another configuration, or records the replay does not reach, are refused.
+//! `dormant render --resume`: a render killed mid-sequence, stopped by a signal, or failed by
+//! its disk (full, read-only, past the file size limit) and resumed leaves the files of an
+//! uninterrupted run (frames byte for byte, statistics in every field but the timings), a
+//! resumed static stretch copies the kept frames' files, and the statistics of another
+//! configuration, or records the replay does not reach, are refused.
 
 mod common;
 
@@ -122,14 +123,20 @@ fn assert_same_outputs(whole: &Path, resumed: &Path, first_resumed: u64) {
     assert!(temporaries.is_empty(), "left behind: {temporaries:?}");
 }
 
-/// Starts `args` and kills it (SIGKILL) once its stats.json records `frames` frames.
-fn kill_after(args: &[OsString], out: &Path, frames: usize) {
-    let mut child = dormant().args(args).stdout(Stdio::null()).stderr(Stdio::null()).spawn().unwrap();
+/// Starts `args` (stderr piped) and waits until `ready` holds; the run must not end before.
+fn start_until(args: &[OsString], ready: impl Fn() -> bool) -> Child {
+    let mut child = dormant().args(args).stdout(Stdio::null()).stderr(Stdio::piped()).spawn().unwrap();
     let deadline = Instant::now() + Duration::from_secs(300);
-    while recorded_frames(out) < frames && Instant::now() < deadline {
-        assert!(child.try_wait().unwrap().is_none(), "the run ended before {frames} frames were recorded");
+    while !ready() && Instant::now() < deadline {
+        assert!(child.try_wait().unwrap().is_none(), "the run ended too soon");
         std::thread::sleep(Duration::from_millis(5));
     }
+    child
+}
+
+/// Starts `args` and kills it (SIGKILL) once its stats.json records `frames` frames.
+fn kill_after(args: &[OsString], out: &Path, frames: usize) {
+    let mut child = start_until(args, || recorded_frames(out) >= frames);
     child.kill().unwrap();
     child.wait().unwrap();
 }
@@ -176,12 +183,7 @@ fn recorded_frames(out: &Path) -> usize {
 /// Starts `args` and, once `ready` holds, sends it `signals` one after another; returns its
 /// exit code and stderr.
 fn signal_when(args: &[OsString], ready: impl Fn() -> bool, signals: &[&str]) -> (Option<i32>, String) {
-    let mut child = dormant().args(args).stdout(Stdio::null()).stderr(Stdio::piped()).spawn().unwrap();
-    let deadline = Instant::now() + Duration::from_secs(300);
-    while !ready() && Instant::now() < deadline {
-        assert!(child.try_wait().unwrap().is_none(), "the run ended before it was signalled");
-        std::thread::sleep(Duration::from_millis(5));
-    }
+    let child = start_until(args, ready);
     for signal in signals {
         send(&child, signal);
         // Apart, so that the kernel does not merge two of one kind before they are handled.
@@ -241,6 +243,124 @@ fn a_second_signal_stops_a_render_without_finishing_its_frame() {
     let (code, stderr) = signal_when(&args, || out.is_dir() && frame_count(&out) >= 1, &["TERM", "TERM"]);
     assert_eq!(code, Some(143), "{stderr}");
     assert_eq!(frame_count(&out), 1, "the frame in flight was finished");
+}
+
+/// `out`'s temporary files (`.NAME.PID.tmp`).
+fn temporaries(out: &Path) -> Vec<String> {
+    let names = std::fs::read_dir(out).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap());
+    names.filter(|n| n.ends_with(".tmp")).collect()
+}
+
+/// Runs `args`, which must fail with exit code 1 naming a file of `out` and `cause`, having
+/// left no temporary file; returns how many frames its stats.json records.
+fn fails_on_disk(cmd: &mut Command, out: &Path, cause: &str) -> usize {
+    let stderr = exits_with(cmd, 1);
+    assert!(stderr.contains(&out.display().to_string()) && stderr.contains(cause), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert_eq!(temporaries(out), Vec::<String>::new(), "left behind");
+    recorded_frames(out)
+}
+
+#[test]
+fn a_file_past_the_size_limit_fails_the_render_naming_it_and_resume_finishes_it() {
+    // PNGs only: each frame's files stay under the limit while stats.json grows past it.
+    let png_run =
+        |out: &Path| -> Vec<OsString> { tiny_run(out).into_iter().filter(|a| a != "--exr").collect() };
+    let dir = tempfile::tempdir().unwrap();
+    let (whole, limited) = (dir.path().join("whole"), dir.path().join("limited"));
+    run(&png_run(&whole), &[]);
+    let mut limit = Command::new("prlimit");
+    limit.args(["--fsize=20000", "--"]).arg(env!("CARGO_BIN_EXE_dormant")).args(png_run(&limited));
+    let recorded = fails_on_disk(&mut limit, &limited, "File too large");
+    assert!(recorded > 0 && recorded < frame_count(&whole), "failed after {recorded} frames");
+    run(&png_run(&limited), &["--resume"]);
+    let first_resumed = read_stats(&whole)["frames"][recorded]["frame"].as_u64().unwrap();
+    assert_same_outputs(&whole, &limited, first_resumed);
+}
+
+/// A tmpfs of `size` mounted on `dir` for a test, unmounted when dropped; `None` where this
+/// process may not mount (not root, or no CAP_SYS_ADMIN in a container).
+struct SmallDisk<'a> {
+    dir: &'a Path,
+}
+
+impl<'a> SmallDisk<'a> {
+    fn mount(dir: &'a Path, size: &str) -> Option<Self> {
+        std::fs::create_dir_all(dir).unwrap();
+        let ok = Command::new("mount")
+            .args(["-t", "tmpfs", "-o", &format!("size={size}"), "tmpfs"])
+            .arg(dir)
+            .stderr(Stdio::null())
+            .status()
+            .is_ok_and(|s| s.success());
+        if !ok {
+            eprintln!("skipped: cannot mount a tmpfs here (needs root)");
+        }
+        ok.then_some(Self { dir })
+    }
+
+    /// Remounts with `options` (`size=64m`, `ro`, `rw`); a read-only remount waits while a
+    /// file is open for writing (EBUSY).
+    fn remount(&self, options: &str) {
+        let deadline = Instant::now() + Duration::from_secs(30);
+        loop {
+            let status = Command::new("mount")
+                .args(["-o", &format!("remount,{options}")])
+                .arg(self.dir)
+                .stderr(Stdio::null())
+                .status()
+                .unwrap();
+            if status.success() {
+                return;
+            }
+            assert!(Instant::now() < deadline, "cannot remount {} {options}", self.dir.display());
+            std::thread::sleep(Duration::from_millis(2));
+        }
+    }
+}
+
+impl Drop for SmallDisk<'_> {
+    fn drop(&mut self) {
+        let _ = Command::new("umount").arg("-l").arg(self.dir).status();
+    }
+}
+
+#[test]
+fn a_full_disk_fails_the_render_naming_the_file_and_resume_finishes_it_once_there_is_room() {
+    let dir = tempfile::tempdir().unwrap();
+    let (whole, full) = (dir.path().join("whole"), dir.path().join("full"));
+    // The whole run writes 5.6 MB; 2 MB fill up part-way.
+    let Some(disk) = SmallDisk::mount(&full, "2m") else { return };
+    run(&tiny_run(&whole), &[]);
+    let recorded = fails_on_disk(dormant().args(tiny_run(&full)), &full, "No space left on device");
+    assert!(recorded < frame_count(&whole), "failed after {recorded} frames");
+    disk.remount("size=64m");
+    run(&tiny_run(&full), &["--resume"]);
+    let first_resumed = read_stats(&whole)["frames"][recorded]["frame"].as_u64().unwrap();
+    assert_same_outputs(&whole, &full, first_resumed);
+}
+
+#[test]
+fn a_disk_turned_read_only_fails_the_render_and_resume_finishes_it_once_writable() {
+    let dir = tempfile::tempdir().unwrap();
+    let (whole, disk_dir) = (dir.path().join("whole"), dir.path().join("disk"));
+    let Some(disk) = SmallDisk::mount(&disk_dir, "64m") else { return };
+    run(&tiny_run(&whole), &[]);
+    let out = disk_dir.join("out");
+    let child = start_until(&tiny_run(&out), || recorded_frames(&out) >= 4);
+    disk.remount("ro");
+    let output = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains(&out.display().to_string()) && stderr.contains("Read-only file system"),
+        "{stderr}"
+    );
+    let recorded = recorded_frames(&out);
+    disk.remount("rw");
+    run(&tiny_run(&out), &["--resume"]);
+    let first_resumed = read_stats(&whole)["frames"][recorded]["frame"].as_u64().unwrap();
+    assert_same_outputs(&whole, &out, first_resumed);
 }
 
 #[test]

@@ -117,6 +117,7 @@ pub(crate) enum Command {
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
     init_logging(cli.quiet);
+    survive_file_size_limit();
     match run(&cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e @ CliError::Stopped { .. }) => {
@@ -127,6 +128,16 @@ pub fn main() -> ExitCode {
             eprintln!("dormant: error: {e}");
             ExitCode::from(e.exit_code())
         }
+    }
+}
+
+/// Handles SIGXFSZ, which a write past the file size limit (`ulimit -f`, RLIMIT_FSIZE) raises:
+/// its default action kills the process mid-write; handled, the write fails with EFBIG, which
+/// ends the command with an error naming the file, its temporary file removed.
+fn survive_file_size_limit() {
+    let noticed = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    if let Err(e) = signal_hook::flag::register(signal_hook::consts::SIGXFSZ, noticed) {
+        tracing::warn!("cannot handle SIGXFSZ ({e}): a file past the size limit will kill the process");
     }
 }
 
