@@ -2,7 +2,8 @@
 //! its disk (full, read-only, past the file size limit) and resumed leaves the files of an
 //! uninterrupted run (frames byte for byte, statistics in every field but the timings), a
 //! resumed static stretch copies the kept frames' files, and the statistics of another
-//! configuration, or records the replay does not reach, are refused.
+//! configuration, or records the replay does not reach, are refused. One render at a time
+//! writes into a folder; a killed one does not lock out the next.
 
 mod common;
 
@@ -240,7 +241,7 @@ fn a_second_signal_stops_a_render_without_finishing_its_frame() {
             .map(OsString::from)
             .chain([OsString::from("--out"), out.clone().into(), scenes::shipped("tiny").into()])
             .collect();
-    let (code, stderr) = signal_when(&args, || out.is_dir() && frame_count(&out) >= 1, &["TERM", "TERM"]);
+    let (code, stderr) = signal_when(&args, || frame_count_or_zero(&out) >= 1, &["TERM", "TERM"]);
     assert_eq!(code, Some(143), "{stderr}");
     assert_eq!(frame_count(&out), 1, "the frame in flight was finished");
 }
@@ -361,6 +362,41 @@ fn a_disk_turned_read_only_fails_the_render_and_resume_finishes_it_once_writable
     run(&tiny_run(&out), &["--resume"]);
     let first_resumed = read_stats(&whole)["frames"][recorded]["frame"].as_u64().unwrap();
     assert_same_outputs(&whole, &out, first_resumed);
+}
+
+#[test]
+fn a_second_render_into_a_folder_in_use_exits_75_naming_the_first() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let first = start_until(&tiny_run(&out), || frame_count_or_zero(&out) >= 1);
+    let stderr = exits_with(dormant().args(tiny_run(&out)).arg("--resume"), 75);
+    assert!(
+        stderr.contains("is in use by another render") && stderr.contains(&format!("pid {}", first.id())),
+        "{stderr}"
+    );
+    let output = first.wait_with_output().unwrap();
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    assert_eq!(frame_count(&out), 40, "the first render finished undisturbed");
+    assert!(!out.join(".dormant.lock").exists(), "the lock file is removed at the end");
+}
+
+#[test]
+fn a_killed_render_does_not_lock_out_the_next() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    kill_after(&tiny_run(&out), &out, 1);
+    assert!(out.join(".dormant.lock").exists(), "a killed render leaves its lock file");
+    run(&tiny_run(&out), &["--resume"]);
+    assert_eq!(frame_count(&out), 40);
+}
+
+/// [`frame_count`], 0 while `dir` does not exist.
+fn frame_count_or_zero(dir: &Path) -> usize {
+    if dir.is_dir() {
+        frame_count(dir)
+    } else {
+        0
+    }
 }
 
 #[test]

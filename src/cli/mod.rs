@@ -33,6 +33,9 @@ pub(crate) enum CliError {
         render::signal_name(*.signal)
     )]
     Stopped { signal: i32, last_frame: u32, frames: u64 },
+    /// Another render writes into the output folder (`render/output_lock.rs`): exit code 75.
+    #[error("{0}")]
+    Busy(String),
 }
 
 /// Render failures while running (bad scenes are caught as input before rendering starts).
@@ -59,6 +62,7 @@ impl CliError {
             CliError::Input(_) => 2,
             CliError::Runtime(_) => 1,
             CliError::Stopped { signal, .. } => render::stop_exit_code(*signal),
+            CliError::Busy(_) => render::BUSY_EXIT_CODE,
         }
     }
 }

@@ -1,8 +1,10 @@
 //! `dormant render`: its flags, and the wiring of a still of a built-in or asset scene, or of
 //! a sequence of a scene file or trajectory (`sequence.rs`), which a signal stops between
-//! frames (`stop.rs`); each frame's files and report line (`frame_output.rs`).
+//! frames (`stop.rs`), one render per output folder (`output_lock.rs`); each frame's files
+//! and report line (`frame_output.rs`).
 
 mod frame_output;
+mod output_lock;
 mod sequence;
 mod stop;
 mod video;
@@ -31,6 +33,7 @@ use dormant::sequence::{
 };
 
 use frame_output::FrameOutput;
+pub(crate) use output_lock::BUSY_EXIT_CODE;
 pub(crate) use stop::{exit_code as stop_exit_code, signal_name};
 
 /// What a render computes per pixel.
@@ -250,6 +253,7 @@ pub(super) fn run(
     std::fs::create_dir_all(&args.out).map_err(|e| {
         CliError::Runtime(format!("cannot create output directory {}: {e}", args.out.display()))
     })?;
+    let _lock = output_lock::OutputLock::acquire(&args.out)?;
     let integrator = integrator(args.mode, args.max_depth);
     let job = RenderJob { args, backend, threads, integrator: integrator.as_ref() };
     let layout = frame_output::layout(args);
