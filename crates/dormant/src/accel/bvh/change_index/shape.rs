@@ -53,6 +53,9 @@ pub(super) struct ExactMesh {
     /// Every triangle lies on a face of the mesh's bounding box (a cuboid): a segment near a
     /// triangle is then near the box's surface, which one box test decides.
     on_its_box: bool,
+    /// Moreover each face is two triangles split along a diagonal: whether a segment surely
+    /// crosses a triangle is then decided on the box's faces too.
+    halved_faces: bool,
 }
 
 /// A node of a mesh's BVH: its box, and its children (interior: the first, the second follows
@@ -127,6 +130,7 @@ impl ExactMesh {
             return Self::default();
         }
         let on_its_box = lies_on_its_box(triangles);
+        let halved_faces = on_its_box && halves_each_face(triangles);
         let bounds: Vec<Aabb> = triangles.iter().map(|t| Aabb::from_points(*t)).collect();
         let (bvh, order) = build(&bounds, BuildParams::BALANCED);
         let nodes = bvh
@@ -143,14 +147,20 @@ impl ExactMesh {
             order.iter().map(|&i| Triangle::new(triangles[i as usize].map(|v| v.as_dvec3()))).collect();
         let root = &bvh.nodes[0];
         let reach = f64::from(root.min.abs().max(root.max.abs()).max_element());
-        Self { nodes, triangles, reach, on_its_box }
+        Self { nodes, triangles, reach, on_its_box, halved_faces }
     }
 
     /// Whether the segment meets the mesh (`margin` as for a triangle): the triangles of the
     /// leaves whose boxes, grown by the tolerance, it passes through.
     fn meets(&self, segment: &Segment, margin: Margin) -> bool {
-        if let (Margin::Loose, true, Some(root)) = (margin, self.on_its_box, self.nodes.first()) {
-            return segment.meets_box(root.min, root.max) && !segment.inside_box(root.min, root.max);
+        match (margin, self.nodes.first()) {
+            (Margin::Loose, Some(root)) if self.on_its_box => {
+                return segment.meets_box(root.min, root.max) && !segment.inside_box(root.min, root.max);
+            }
+            (Margin::Strict, Some(root)) if self.halved_faces => {
+                return segment.crosses_box_surface(root.min, root.max);
+            }
+            _ => {}
         }
         let mut stack = [0u32; STACK_SIZE];
         let mut top = usize::from(!self.nodes.is_empty());
@@ -195,6 +205,37 @@ fn lies_on_its_box(triangles: &[[Vec3; 3]]) -> bool {
         .sum();
     let surface = 2.0 * (size.x * size.y + size.y * size.z + size.z * size.x);
     on_faces && size.min_element() > 0.0 && (area - surface).abs() <= 1e-4 * surface
+}
+
+/// Whether the 12 `triangles` (on the faces of their box, covering it: [`lies_on_its_box`])
+/// are two per face, split along a diagonal: every corner is a corner of the box, and on each
+/// face two triangles share two opposite corners. Only then does a crossing inside a face and
+/// away from both its diagonals lie inside one triangle.
+fn halves_each_face(triangles: &[[Vec3; 3]]) -> bool {
+    let bounds = Aabb::from_points(triangles.iter().flatten().copied());
+    // A box corner as three bits, one per axis: 0 at the least coordinate, 1 at the greatest.
+    let corner = |v: Vec3| -> Option<u8> {
+        (0..3).try_fold(0u8, |bits, axis| match v[axis] {
+            c if c == bounds.min[axis] => Some(bits),
+            c if c == bounds.max[axis] => Some(bits | 1 << axis),
+            _ => None,
+        })
+    };
+    let mut faces: [Vec<[u8; 3]>; 6] = Default::default();
+    for t in triangles {
+        let Some(c) = t.iter().map(|&v| corner(v)).collect::<Option<Vec<u8>>>() else { return false };
+        let Some(face) = (0..3).find(|&a| c.iter().all(|&x| x & (1 << a) == c[0] & (1 << a))) else {
+            return false;
+        };
+        faces[face * 2 + usize::from(c[0] & (1 << face) != 0)].push([c[0], c[1], c[2]]);
+    }
+    triangles.len() == 12
+        && faces.iter().enumerate().all(|(f, tris)| {
+            let [a, b] = tris.as_slice() else { return false };
+            let shared: Vec<u8> = a.iter().copied().filter(|x| b.contains(x)).collect();
+            let opposite = 0b111 & !(1u8 << (f / 2));
+            shared.len() == 2 && shared[0] ^ shared[1] == opposite
+        })
 }
 
 impl ShapeTest {
@@ -334,6 +375,38 @@ impl Segment {
         !(sides.iter().all(|&s| s > wide) || sides.iter().all(|&s| s < -wide))
     }
 
+    /// Whether the segment surely crosses a triangle of the box `min..max` whose faces are each
+    /// two triangles split along a diagonal: as [`Self::crosses`] asks of a triangle, it
+    /// crosses a face's plane from one side to the other by more than the tolerance, at a
+    /// point farther than the widest crossing from the face's edges and from both its
+    /// diagonals (either may be the one its triangles share), so inside one triangle.
+    fn crosses_box_surface(&self, min: DVec3, max: DVec3) -> bool {
+        let eps = self.tolerance;
+        for axis in 0..3 {
+            let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+            let (du, dv) = (max[u] - min[u], max[v] - min[v]);
+            let diagonal = (du * du + dv * dv).sqrt();
+            for plane in [min[axis], max[axis]] {
+                let (a, b) = (self.origin[axis] - plane, self.dir[axis]);
+                let start = a + b * self.t_min;
+                let end = if self.t_max.is_finite() { a + b * self.t_max } else { b * f64::INFINITY };
+                if !((start < -eps && end > eps) || (start > eps && end < -eps)) {
+                    continue;
+                }
+                let p = self.origin - (a / b) * self.dir;
+                let inside = eps * self.dir.length() / b.abs();
+                let (pu, pv) = (p[u] - min[u], p[v] - min[v]);
+                let in_face = pu > inside && du - pu > inside && pv > inside && dv - pv > inside;
+                let off_diagonals = (pu * dv - pv * du).abs() > inside * diagonal
+                    && (pu * dv + (pv - dv) * du).abs() > inside * diagonal;
+                if in_face && off_diagonals {
+                    return true;
+                }
+            }
+        }
+        false
+    }
+
     /// Whether the segment surely crosses `t`: its ends lie on either side of the plane by
     /// more than the tolerance, and it crosses the plane inside the triangle by more than the
     /// widest any ray within the tolerance could cross it (the tolerance over the sine of
@@ -405,7 +478,7 @@ mod tests {
     fn a_cuboid_is_tested_by_its_box_and_never_misses_what_its_triangles_meet() {
         let by_box = &cube_mesh(0.5)[0];
         assert!(by_box.on_its_box);
-        let by_triangles = ExactMesh { on_its_box: false, ..by_box.clone() };
+        let by_triangles = ExactMesh { on_its_box: false, halved_faces: false, ..by_box.clone() };
         let mut state = 0x2545_f491_4f6c_dd1du64;
         let mut next = move || {
             state ^= state << 13;
@@ -431,6 +504,41 @@ mod tests {
         // A mesh with a triangle off its box's faces is tested by its triangles.
         let tris = [[Vec3::ZERO, Vec3::X, Vec3::Y], [Vec3::ZERO, Vec3::X, Vec3::new(0.5, 0.5, 1.0)]];
         assert!(!ExactMesh::new(&tris).on_its_box);
+    }
+
+    #[test]
+    fn a_cuboid_surely_crossed_by_its_box_is_surely_crossed_by_a_triangle() {
+        let by_box = &cube_mesh(0.5)[0];
+        assert!(by_box.halved_faces);
+        let by_triangles = ExactMesh { on_its_box: false, halved_faces: false, ..by_box.clone() };
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        let (mut crossed, mut only_triangles) = (0, 0);
+        for i in 0..20_000 {
+            let origin = DVec3::new(next(), next(), next()) * if i % 2 == 0 { 3.0 } else { 0.9 };
+            let dir = DVec3::new(next(), next(), next());
+            let t_max = if i % 7 == 0 { f64::INFINITY } else { 4.0 * next().abs() };
+            let segment = Segment { origin, dir, t_min: 0.0, t_max, tolerance: 1e-3 };
+            let exact = by_triangles.meets(&segment, Margin::Strict);
+            let boxed = by_box.meets(&segment, Margin::Strict);
+            assert!(exact || !boxed, "the box said a segment surely crosses: {origin} {dir} {t_max}");
+            crossed += usize::from(exact);
+            only_triangles += usize::from(exact && !boxed);
+        }
+        // Both kinds occur, and the box misses only crossings near a face's other diagonal.
+        assert!(crossed > 1_000, "{crossed}");
+        assert!(only_triangles * 20 < crossed, "{only_triangles} of {crossed}");
+        // With one triangle given twice (a face left half bare), it is not.
+        let cube = primitives::cuboid(Vec3::splat(0.5));
+        let mut tris: Vec<[Vec3; 3]> = (0..cube.triangle_count()).map(|i| cube.triangle(i)).collect();
+        assert!(halves_each_face(&tris));
+        tris[0] = tris[1];
+        assert!(!halves_each_face(&tris));
     }
 
     #[test]
