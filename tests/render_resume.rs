@@ -119,9 +119,7 @@ fn assert_same_outputs(whole: &Path, resumed: &Path, first_resumed: u64) {
     let csv = |dir: &Path| csv_without_timings(dir, first_resumed);
     assert_eq!(csv(whole), csv(resumed), "stats.csv differs");
     assert!(resumed.join("report.png").is_file());
-    let names = std::fs::read_dir(resumed).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap());
-    let temporaries: Vec<String> = names.filter(|n| n.ends_with(".tmp")).collect();
-    assert!(temporaries.is_empty(), "left behind: {temporaries:?}");
+    assert_eq!(temporaries(resumed), Vec::<String>::new(), "left behind");
 }
 
 /// Starts `args` (stderr piped) and waits until `ready` holds; the run must not end before.
@@ -208,13 +206,9 @@ fn render_stopped_by_sigterm_finishes_its_frame_exits_143_and_resumes_to_an_unin
     let recorded = read_stats(&stopped)["frames"].as_array().unwrap().len();
     assert!(recorded >= 4 && recorded < total, "stopped with {recorded} of {total} frames");
     assert_eq!(frame_count(&stopped), recorded);
-    let names: Vec<String> =
-        std::fs::read_dir(&stopped).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
-    assert!(!names.iter().any(|n| n.ends_with(".tmp")), "left behind: {names:?}");
+    assert_eq!(temporaries(&stopped), Vec::<String>::new(), "left behind");
 
-    run(&tiny_run(&stopped), &["--resume"]);
-    let first_resumed = read_stats(&whole)["frames"][recorded]["frame"].as_u64().unwrap();
-    assert_same_outputs(&whole, &stopped, first_resumed);
+    resume_to_whole(&tiny_run(&stopped), &whole, &stopped, recorded);
 }
 
 #[test]
@@ -252,14 +246,30 @@ fn temporaries(out: &Path) -> Vec<String> {
     names.filter(|n| n.ends_with(".tmp")).collect()
 }
 
-/// Runs `args`, which must fail with exit code 1 naming a file of `out` and `cause`, having
-/// left no temporary file; returns how many frames its stats.json records.
+/// Runs `cmd`, which must fail as [`failed_on_disk`] says.
 fn fails_on_disk(cmd: &mut Command, out: &Path, cause: &str) -> usize {
-    let stderr = exits_with(cmd, 1);
+    let output = cmd.output().unwrap();
+    failed_on_disk(&output, out, cause)
+}
+
+/// A render into `out` that ended with `output` must have failed with exit code 1 naming a
+/// file of `out` and `cause`, leaving no temporary file; returns how many frames its
+/// stats.json records.
+fn failed_on_disk(output: &Output, out: &Path, cause: &str) -> usize {
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(1), "{stderr}");
     assert!(stderr.contains(&out.display().to_string()) && stderr.contains(cause), "{stderr}");
     assert!(!stderr.contains("panicked"), "{stderr}");
     assert_eq!(temporaries(out), Vec::<String>::new(), "left behind");
     recorded_frames(out)
+}
+
+/// Resumes `args`, a run into `out` that recorded `recorded` frames before it ended, and
+/// requires the files of the uninterrupted run in `whole`.
+fn resume_to_whole(args: &[OsString], whole: &Path, out: &Path, recorded: usize) {
+    run(args, &["--resume"]);
+    let first_resumed = read_stats(whole)["frames"][recorded]["frame"].as_u64().unwrap();
+    assert_same_outputs(whole, out, first_resumed);
 }
 
 #[test]
@@ -274,9 +284,7 @@ fn a_file_past_the_size_limit_fails_the_render_naming_it_and_resume_finishes_it(
     limit.args(["--fsize=20000", "--"]).arg(env!("CARGO_BIN_EXE_dormant")).args(png_run(&limited));
     let recorded = fails_on_disk(&mut limit, &limited, "File too large");
     assert!(recorded > 0 && recorded < frame_count(&whole), "failed after {recorded} frames");
-    run(&png_run(&limited), &["--resume"]);
-    let first_resumed = read_stats(&whole)["frames"][recorded]["frame"].as_u64().unwrap();
-    assert_same_outputs(&whole, &limited, first_resumed);
+    resume_to_whole(&png_run(&limited), &whole, &limited, recorded);
 }
 
 /// A tmpfs of `size` mounted on `dir` for a test, unmounted when dropped; `None` where this
@@ -336,9 +344,7 @@ fn a_full_disk_fails_the_render_naming_the_file_and_resume_finishes_it_once_ther
     let recorded = fails_on_disk(dormant().args(tiny_run(&full)), &full, "No space left on device");
     assert!(recorded < frame_count(&whole), "failed after {recorded} frames");
     disk.remount("size=64m");
-    run(&tiny_run(&full), &["--resume"]);
-    let first_resumed = read_stats(&whole)["frames"][recorded]["frame"].as_u64().unwrap();
-    assert_same_outputs(&whole, &full, first_resumed);
+    resume_to_whole(&tiny_run(&full), &whole, &full, recorded);
 }
 
 #[test]
@@ -350,18 +356,9 @@ fn a_disk_turned_read_only_fails_the_render_and_resume_finishes_it_once_writable
     let out = disk_dir.join("out");
     let child = start_until(&tiny_run(&out), || recorded_frames(&out) >= 4);
     disk.remount("ro");
-    let output = child.wait_with_output().unwrap();
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert_eq!(output.status.code(), Some(1), "{stderr}");
-    assert!(
-        stderr.contains(&out.display().to_string()) && stderr.contains("Read-only file system"),
-        "{stderr}"
-    );
-    let recorded = recorded_frames(&out);
+    let recorded = failed_on_disk(&child.wait_with_output().unwrap(), &out, "Read-only file system");
     disk.remount("rw");
-    run(&tiny_run(&out), &["--resume"]);
-    let first_resumed = read_stats(&whole)["frames"][recorded]["frame"].as_u64().unwrap();
-    assert_same_outputs(&whole, &out, first_resumed);
+    resume_to_whole(&tiny_run(&out), &whole, &out, recorded);
 }
 
 #[test]

@@ -74,7 +74,7 @@ impl Drop for OutputLock {
 /// Writes this process's note into the lock file at `path`: `pid=... host=... start=UNIX_SECONDS`.
 fn write_note(path: &Path) -> std::io::Result<()> {
     let host = std::fs::read_to_string("/proc/sys/kernel/hostname").unwrap_or_default();
-    let start = SystemTime::now().duration_since(UNIX_EPOCH).map_or(0, |d| d.as_secs());
+    let start = unix_seconds();
     let mut file = OpenOptions::new().write(true).truncate(true).open(path)?;
     writeln!(file, "pid={} host={} start={start}", std::process::id(), host.trim())?;
     file.sync_data()
@@ -87,8 +87,7 @@ fn busy(out: &Path, file: &mut File) -> CliError {
     let field = |key: &str| {
         note.split_whitespace().find_map(|f| f.strip_prefix(key)?.strip_prefix('=')).map(str::to_string)
     };
-    let now = SystemTime::now().duration_since(UNIX_EPOCH).map_or(0, |d| d.as_secs());
-    let since = field("start").and_then(|s| s.parse::<u64>().ok()).map(|s| now.saturating_sub(s));
+    let since = field("start").and_then(|s| s.parse::<u64>().ok()).map(|s| unix_seconds().saturating_sub(s));
     let holder = match (field("pid"), field("host"), since) {
         (Some(pid), Some(host), Some(s)) => format!("pid {pid} on {host}, running for {s} s"),
         _ => "a process that has not written its note yet".to_string(),
@@ -97,4 +96,9 @@ fn busy(out: &Path, file: &mut File) -> CliError {
         "{} is in use by another render ({holder}): wait for it to end, or give another --out",
         out.display()
     ))
+}
+
+/// Seconds since the Unix epoch (0 on a clock set before it).
+fn unix_seconds() -> u64 {
+    SystemTime::now().duration_since(UNIX_EPOCH).map_or(0, |d| d.as_secs())
 }

@@ -474,24 +474,33 @@ mod tests {
         assert!(shape.changes_for(&meshes, &edge, true));
     }
 
-    #[test]
-    fn a_cuboid_is_tested_by_its_box_and_never_misses_what_its_triangles_meet() {
-        let by_box = &cube_mesh(0.5)[0];
-        assert!(by_box.on_its_box);
-        let by_triangles = ExactMesh { on_its_box: false, halved_faces: false, ..by_box.clone() };
-        let mut state = 0x2545_f491_4f6c_dd1du64;
+    /// 20,000 segments (xorshift from `seed`) around a unit cube at the origin: origins within
+    /// 1.5 or 0.45 of it by turns, one in seven infinite, the others up to `length` long
+    /// (in ray parameter), tolerance 1e-3.
+    fn random_segments(seed: u64, length: f64) -> impl Iterator<Item = Segment> {
+        let mut state = seed;
         let mut next = move || {
             state ^= state << 13;
             state ^= state >> 7;
             state ^= state << 17;
             (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
         };
-        let (mut near, mut only_box) = (0, 0);
-        for i in 0..20_000 {
+        (0..20_000).map(move |i| {
             let origin = DVec3::new(next(), next(), next()) * if i % 2 == 0 { 3.0 } else { 0.9 };
             let dir = DVec3::new(next(), next(), next());
-            let t_max = if i % 7 == 0 { f64::INFINITY } else { 2.0 * next().abs() };
-            let segment = Segment { origin, dir, t_min: 0.0, t_max, tolerance: 1e-3 };
+            let t_max = if i % 7 == 0 { f64::INFINITY } else { length * next().abs() };
+            Segment { origin, dir, t_min: 0.0, t_max, tolerance: 1e-3 }
+        })
+    }
+
+    #[test]
+    fn a_cuboid_is_tested_by_its_box_and_never_misses_what_its_triangles_meet() {
+        let by_box = &cube_mesh(0.5)[0];
+        assert!(by_box.on_its_box);
+        let by_triangles = ExactMesh { on_its_box: false, halved_faces: false, ..by_box.clone() };
+        let (mut near, mut only_box) = (0, 0);
+        for segment in random_segments(0x2545_f491_4f6c_dd1d, 2.0) {
+            let Segment { origin, dir, t_max, .. } = segment;
             let exact = by_triangles.meets(&segment, Margin::Loose);
             let boxed = by_box.meets(&segment, Margin::Loose);
             assert!(boxed || !exact, "the box test missed a segment near a face: {origin} {dir} {t_max}");
@@ -511,19 +520,9 @@ mod tests {
         let by_box = &cube_mesh(0.5)[0];
         assert!(by_box.halved_faces);
         let by_triangles = ExactMesh { on_its_box: false, halved_faces: false, ..by_box.clone() };
-        let mut state = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
         let (mut crossed, mut only_triangles) = (0, 0);
-        for i in 0..20_000 {
-            let origin = DVec3::new(next(), next(), next()) * if i % 2 == 0 { 3.0 } else { 0.9 };
-            let dir = DVec3::new(next(), next(), next());
-            let t_max = if i % 7 == 0 { f64::INFINITY } else { 4.0 * next().abs() };
-            let segment = Segment { origin, dir, t_min: 0.0, t_max, tolerance: 1e-3 };
+        for segment in random_segments(0x9e37_79b9_7f4a_7c15, 4.0) {
+            let Segment { origin, dir, t_max, .. } = segment;
             let exact = by_triangles.meets(&segment, Margin::Strict);
             let boxed = by_box.meets(&segment, Margin::Strict);
             assert!(exact || !boxed, "the box said a segment surely crosses: {origin} {dir} {t_max}");
