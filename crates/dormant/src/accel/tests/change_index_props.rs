@@ -116,8 +116,9 @@ fn traced_at(mesh: &TriangleMesh, pose: Affine3A) -> Vec<Box<dyn Accelerator>> {
 }
 
 /// Segments from random origins aimed at random points of the posed triangles (barycentrics
-/// a little beyond the edges too), ending at that point up to ±1% (ending on a face, short of
-/// it, or through it), and some grazing the triangle's plane.
+/// a little beyond the edges too), half of them ending at that point up to ±1% (ending on a
+/// face, short of it, or through it) and half up to 1% beyond it, so most of them hit; and
+/// some grazing the triangle's plane.
 fn aimed_segments(mesh: &TriangleMesh, poses: &[Affine3A; 2], seed: u64, count: usize) -> Vec<Ray> {
     let mut next = unit_rng(seed);
     (0..count)
@@ -135,7 +136,8 @@ fn aimed_segments(mesh: &TriangleMesh, poses: &[Affine3A; 2], seed: u64, count: 
             }
             let dir = (target - origin).normalize();
             let length = (target - origin).length();
-            Ray::segment(origin, dir, 0.0, length * (0.99 + 0.02 * next()))
+            let reach = if i % 4 < 2 { 0.99 + 0.02 * next() } else { 1.0 + 0.01 * next() };
+            Ray::segment(origin, dir, 0.0, length * reach)
         })
         .collect()
 }
@@ -170,7 +172,8 @@ proptest! {
                 }
             }
         }
-        // The segments are aimed at the triangles: most of them hit.
-        prop_assert!(seen > 16, "only {} hits", seen);
+        // The segments are aimed at the triangles: most of them hit (27 or more of 64 on each
+        // backend in 4,000 cases with one triangle to twelve).
+        prop_assert!(seen > 16 * Backend::compiled().len(), "only {} hits", seen);
     }
 }
