@@ -11,12 +11,13 @@ use std::path::{Path, PathBuf};
 
 type Harness = fn(&[u8]) -> Result<(), String>;
 
-const TARGETS: [(&str, Harness); 5] = [
+const TARGETS: [(&str, Harness); 6] = [
     ("scene_toml", fuzz_harness::scene_toml),
     ("gltf_glb", fuzz_harness::gltf_glb),
     ("gltf_json", fuzz_harness::gltf_json),
     ("trajectory", fuzz_harness::trajectory),
     ("cli_values", fuzz_harness::cli_values),
+    ("stats_json", fuzz_harness::stats_json),
 ];
 
 fn root() -> &'static Path {
@@ -144,6 +145,9 @@ fn generated_seeds_are_accepted() {
         ("scene_toml", "tiny.toml"),
         ("cli_values", "value-0"),
         ("cli_values", "value-4"),
+        ("stats_json", "tiny-4-frames.json"),
+        ("stats_json", "tiny-path-exact-aovs.json"),
+        ("stats_json", "tiny-adaptive-stepped.json"),
     ];
     for (target, name) in seeds {
         let data = std::fs::read(root().join("fuzz/corpus").join(target).join(name)).unwrap();

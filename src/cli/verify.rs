@@ -9,7 +9,7 @@ use dormant::geometry::InstanceMotion;
 use dormant::physics::SimulateOptions;
 use dormant::scene::file::SceneFile;
 use dormant::scene::SceneDescription;
-use dormant::sequence::{SequenceError, SequenceSource};
+use dormant::sequence::{FrameRange, SequenceError, SequenceSource};
 use dormant_lab::crosscheck::{self, MappedQuery, VerifyReport, BOUND};
 
 #[derive(Debug, Args)]
@@ -211,7 +211,8 @@ fn simulated_frames(
     let options = SimulateOptions { count: args.scene.count, frames: args.frame_count };
     let sequence = super::render::load_sequence(SequenceSource::scene(file, options, None), quiet)?;
     let shutter = args.shutter.unwrap_or(sequence.shutter);
-    let selection = sequence.evenly_spaced(args.check_frames);
+    let whole = FrameRange { start: 0, end: sequence.frame_count() };
+    let selection = sequence.evenly_spaced_in(whole, args.check_frames);
     let mut descs = Vec::new();
     sequence.replay(&selection, &mut [], &mut |frame, _| {
         // `describe_frame` lists the present bodies in ascending order.

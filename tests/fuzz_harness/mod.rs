@@ -16,6 +16,7 @@ use dormant::render::ImageSize;
 use dormant::scene::file::SceneFile;
 use dormant::scene::gltf::load_gltf_slice;
 use dormant::scene::SceneAssets;
+use dormant::sequence::stats::{RunInfo, StatsFile};
 use dormant::sequence::FrameRange;
 
 // Base64 and the trajectory checksum, shared with the tests' helpers; by path, so that the
@@ -121,4 +122,33 @@ pub fn cli_values(data: &[u8]) -> Result<(), String> {
         (Err(a), Err(b)) => Err(format!("{a}; {b}")),
         _ => Ok(()),
     }
+}
+
+/// Where fuzzed statistics pretend to be read from (the path errors name).
+pub const STATS_PATH: &str = "/nonexistent/dormant-fuzz/stats.json";
+
+/// The run header that [`stats_json`] also checks every input against: a real run's
+/// (`tests/data/stats-tiny.json`, the stats.json of a 4-frame render of `scenes/tiny.toml`).
+const REAL_RUN_STATS: &str = include_str!("../data/stats-tiny.json");
+
+/// A stats.json as `render --resume` reads it, checked against the run header it holds itself
+/// (so that mutations reach the frame records) and against a real run's (so that the fields
+/// that differ are named). Records that read must write back to JSON that reads to the same.
+pub fn stats_json(data: &[u8]) -> Result<(), String> {
+    let path = Path::new(STATS_PATH);
+    let header = |bytes: &[u8]| -> Option<RunInfo> {
+        let value: serde_json::Value = serde_json::from_slice(bytes).ok()?;
+        serde_json::from_value(value.get("run")?.clone()).ok()
+    };
+    let real = header(REAL_RUN_STATS.as_bytes()).expect("the real run's header reads");
+    let against_real = StatsFile::kept_records(path, data, &real).map_err(|e| e.to_string());
+    let Some(own) = header(data) else {
+        return against_real.map(|_| ());
+    };
+    let records = StatsFile::kept_records(path, data, &own).map_err(|e| e.to_string())?;
+    let written = serde_json::to_vec(&records).expect("frame records write");
+    let again: Vec<dormant::sequence::stats::FrameRecord> =
+        serde_json::from_slice(&written).expect("written frame records read back");
+    assert_eq!(again, records, "frame records read back as they were written");
+    Ok(())
 }

@@ -150,11 +150,6 @@ impl Sequence {
         Ok(FrameSelection::stepped(range, step.unwrap_or(self.frame_step).max(1)))
     }
 
-    /// `count` frames, evenly spaced and ending with the last.
-    pub fn evenly_spaced(&self, count: u32) -> FrameSelection {
-        self.evenly_spaced_in(FrameRange { start: 0, end: self.frame_count().max(1) }, count)
-    }
-
     /// `count` frames of `range` (clamped to the trajectory), evenly spaced and ending with
     /// its last.
     pub fn evenly_spaced_in(&self, range: FrameRange, count: u32) -> FrameSelection {

@@ -98,28 +98,37 @@ struct Stored {
 /// run of `run`'s configuration; `None` when `dir` holds no stats.json.
 pub(crate) fn read_kept_frames(dir: &Path, run: &RunInfo) -> Result<Option<Vec<FrameRecord>>, StatsError> {
     let path = dir.join("stats.json");
-    let bytes = match std::fs::read(&path) {
-        Ok(bytes) => bytes,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
-        Err(source) => return Err(StatsError::Read { path, source }),
-    };
-    let parse = |source| StatsError::Parse { path: path.clone(), source };
-    let stored: Stored = serde_json::from_slice(&bytes).map_err(parse)?;
-    if stored.format != STATS_FORMAT || stored.version != STATS_VERSION {
-        let differences = format!(
-            "{} version {} there, {STATS_FORMAT} version {STATS_VERSION} now",
-            stored.format, stored.version
-        );
-        return Err(StatsError::OtherRun { path, differences });
+    match std::fs::read(&path) {
+        Ok(bytes) => StatsFile::kept_records(&path, &bytes, run).map(Some),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
+        Err(source) => Err(StatsError::Read { path, source }),
     }
-    let earlier = RunInfo::deserialize(&stored.run).ok();
-    if earlier.as_ref() != Some(run) {
-        // Through the typed header when it reads, so that both sides print alike.
-        let then = earlier.and_then(|r| serde_json::to_value(r).ok()).unwrap_or(stored.run);
-        return Err(StatsError::OtherRun { path, differences: differences(&then, run) });
+}
+
+impl StatsFile {
+    /// The frame records of `bytes`, a stats.json read from `path` (which errors name), that
+    /// a run of `run`'s configuration must have written: what `render --resume` keeps. A file
+    /// of another format version or another run header is [`StatsError::OtherRun`], naming
+    /// the fields that differ.
+    pub fn kept_records(path: &Path, bytes: &[u8], run: &RunInfo) -> Result<Vec<FrameRecord>, StatsError> {
+        let parse = |source| StatsError::Parse { path: path.to_path_buf(), source };
+        let stored: Stored = serde_json::from_slice(bytes).map_err(parse)?;
+        let path = path.to_path_buf();
+        if stored.format != STATS_FORMAT || stored.version != STATS_VERSION {
+            let differences = format!(
+                "{} version {} there, {STATS_FORMAT} version {STATS_VERSION} now",
+                stored.format, stored.version
+            );
+            return Err(StatsError::OtherRun { path, differences });
+        }
+        let earlier = RunInfo::deserialize(&stored.run).ok();
+        if earlier.as_ref() != Some(run) {
+            // Through the typed header when it reads, so that both sides print alike.
+            let then = earlier.and_then(|r| serde_json::to_value(r).ok()).unwrap_or(stored.run);
+            return Err(StatsError::OtherRun { path, differences: differences(&then, run) });
+        }
+        Vec::<FrameRecord>::deserialize(&stored.frames).map_err(parse)
     }
-    let frames = Vec::<FrameRecord>::deserialize(&stored.frames).map_err(parse)?;
-    Ok(Some(frames))
 }
 
 /// The fields of `now` that `then` (a stats.json's `run`) lacks or holds otherwise, as
