@@ -4,7 +4,7 @@
 CARGO ?= cargo
 RELEASE_BIN := target/release/dormant
 
-.PHONY: setup build demo test test-no-embree lint arch-check fmt bench soak slurm-check fuzz compare-cycles clean
+.PHONY: setup build demo test test-no-embree lint arch-check fmt bench soak slurm-check fuzz fuzz-check compare-cycles clean
 
 setup:
 	bash scripts/setup.sh
@@ -70,6 +70,12 @@ lint: arch-check
 FUZZ_SECONDS ?= 60
 fuzz:
 	FUZZ_SECONDS=$(FUZZ_SECONDS) bash scripts/fuzz.sh
+
+# CI's fuzzing: every target over its committed corpus, then FUZZ_RUNS mutations from a fixed
+# seed, the same executions every time; a crash prints its input in base64 and fails.
+FUZZ_RUNS ?= 20000
+fuzz-check:
+	FUZZ_RUNS=$(FUZZ_RUNS) bash scripts/fuzz.sh
 
 fmt:
 	$(CARGO) fmt --all
