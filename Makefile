@@ -4,7 +4,7 @@
 CARGO ?= cargo
 RELEASE_BIN := target/release/dormant
 
-.PHONY: setup build demo test test-no-embree lint arch-check fmt bench soak slurm-check fuzz fuzz-check compare-cycles clean
+.PHONY: setup build demo test test-no-embree lint arch-check fmt bench bench-check instruction-check soak slurm-check fuzz fuzz-check compare-cycles clean
 
 setup:
 	bash scripts/setup.sh
@@ -64,6 +64,18 @@ lint: arch-check
 	$(CARGO) fmt --all --check
 	$(CARGO) clippy --workspace --all-targets -- -D warnings
 	$(CARGO) clippy -p dormant -p dormant-lab -p dormant-cli --no-default-features --all-targets -- -D warnings
+
+# The headline benchmarks of docs/performance.json run again and printed beside the
+# documented figures, flagging any outside its band (timed, so not in CI; about 15 minutes).
+# BENCH_CHECK_ARGS: e.g. --runs 3, --only integration.atrium. See docs/performance.md.
+BENCH_CHECK_ARGS ?=
+bench-check: build
+	python3 scripts/bench-check.py $(BENCH_CHECK_ARGS)
+
+# CI's guard against work creeping into the hot paths: instruction counts (cachegrind, one
+# thread) of a few small fixed workloads against docs/instruction-counts.json, failing at +5%.
+instruction-check: build
+	python3 scripts/instruction-check.py
 
 # Every cargo-fuzz target for FUZZ_SECONDS seconds (default 60) over a temporary copy of its
 # committed corpus; installs cargo-fuzz when missing (docs/fuzzing.md). Not part of `test`.
