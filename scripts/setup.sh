@@ -35,7 +35,8 @@ as_root() {
 }
 
 # --- apt packages ------------------------------------------------------------------------
-apt_packages=(build-essential pkg-config libclang-dev python3 python3-pip ca-certificates)
+# valgrind: `make instruction-check`, CI's instruction-count guard (scripts/instruction-check.py).
+apt_packages=(build-essential pkg-config libclang-dev python3 python3-pip ca-certificates valgrind)
 apt_updated=0
 apt_install() {
     local missing=()
