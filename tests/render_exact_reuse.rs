@@ -103,6 +103,14 @@ fn exact_reuse_writes_the_full_renders_bytes_with_adaptive_sampling() {
 }
 
 #[test]
+fn a_change_index_rebuilt_window_by_window_keeps_the_full_renders_bytes() {
+    // 1 MiB leaves the change index 128 KiB, a few hundred change boxes: the falling boxes'
+    // frames take several windows, each index built when rendering reaches it.
+    let share = tiny("windows", &["--spp", "4", "--reuse-mib", "1"]);
+    assert!(share < 0.95, "exact reuse traced {share} of the samples");
+}
+
+#[test]
 fn a_budget_without_room_for_samples_reuses_whole_pixels_exactly() {
     // 64x36 pixels need 45 KiB per pixel but 576 KiB per sample at 256 spp: 1 MiB holds
     // pixels only.

@@ -144,7 +144,8 @@ pub struct RenderArgs {
     /// With --reuse exact: memory its store may keep, in MiB. With room for every sample (16
     /// bytes each, plus the pixels) it keeps samples and retraces only those due; else one
     /// value per pixel and pass (20 bytes, 12 more per AOV: a 3840x2160 frame with every AOV
-    /// needs 538 MiB), retracing a due pixel whole.
+    /// needs 538 MiB), retracing a due pixel whole. The changes ahead are indexed a window
+    /// of frames at a time, in up to an eighth of it (64 MiB at most).
     #[arg(long, value_name = "MIB", default_value_t = DEFAULT_REUSE_BYTES >> 20)]
     pub reuse_mib: usize,
     /// With SCENE or --trajectory: continue a run that was interrupted in --out DIR. Frames

@@ -13,7 +13,7 @@ use super::{FrameSelection, Sequence, SequenceError};
 use crate::accel::bvh::{ChangeBox, ChangeIndex, ChangeShape, EXACT_MESH_TRIANGLES};
 use crate::accel::SceneQuery;
 use crate::geometry::{Aabb, InstanceMotion};
-use crate::physics::trajectory::{ReplayFrame, TrajectoryFrame};
+use crate::physics::trajectory::{Replay, ReplayFrame, TrajectoryFrame};
 use crate::physics::BodyId;
 use crate::render::{
     render_reusing, render_with_aovs, AovPasses, Emitters, Film, FrameReuse, RenderError, RenderScene,
@@ -56,23 +56,34 @@ pub struct ExactFrame {
     pub full: Option<FullFrame>,
 }
 
-/// Exact reuse over one run: the change index, the rendered frames' ordinals, the frames that
-/// must be traced in full, and the store.
-pub(crate) struct ExactReuse {
+/// Most of `--reuse-mib` that the change boxes of the frames ahead may take, and at most
+/// this many bytes: the index covers a window of frames and is rebuilt for the next window
+/// when rendering reaches its end, so its memory does not grow with the run's length.
+const CHANGE_WINDOW_BYTES: usize = 64 << 20;
+
+/// Exact reuse over one run: the change index of the window of frames being rendered, the
+/// rendered frames' ordinals, the frames that must be traced in full, and the store.
+pub(crate) struct ExactReuse<'s> {
     pub index: ChangeIndex,
     /// The selected frames, ascending: a frame's ordinal is its position here.
     frames: Vec<u32>,
-    /// Per ordinal, why that frame cannot reuse samples of the frame before it (`None`: it can).
+    /// Per ordinal up to `window_end`, why that frame cannot reuse samples of the frame before
+    /// it (`None`: it can).
     full: Vec<Option<FullFrame>>,
+    /// The ordinal after the last one the index covers: no horizon reaches past it.
+    window_end: u32,
+    stream: ChangeStream<'s>,
+    /// Change boxes a window holds at most (it holds at least one frame's).
+    window_boxes: usize,
     form: IntegrationForm,
     pub store: ReuseStore,
 }
 
-impl ExactReuse {
+impl<'s> ExactReuse<'s> {
     /// Exact reuse for rendering `selection` with `renderer` in integration `form`, or `None`
     /// when the renderer does not ask for it (`--reuse off|static`, or a seed per frame).
     pub(crate) fn plan(
-        sequence: &Sequence,
+        sequence: &'s Sequence,
         selection: &FrameSelection,
         renderer: &FrameRenderer<'_>,
         form: IntegrationForm,
@@ -81,10 +92,34 @@ impl ExactReuse {
             return Ok(None);
         }
         renderer.check_reuse_budget()?;
-        let frames = selection.frames();
-        let (boxes, full) = sequence.changes(&frames, renderer.shutter);
-        let index = ChangeIndex::build(boxes, sequence.small_prototypes());
-        Ok(Some(Self { index, frames, full, form, store: ReuseStore::default() }))
+        let window_bytes = (renderer.reuse_budget / 8).min(CHANGE_WINDOW_BYTES);
+        let mut reuse = Self {
+            index: ChangeIndex::build(Vec::new(), Vec::new()),
+            frames: selection.frames(),
+            full: Vec::new(),
+            window_end: 0,
+            stream: ChangeStream::new(sequence, renderer.shutter),
+            window_boxes: (window_bytes / std::mem::size_of::<ChangeBox>()).max(1),
+            form,
+            store: ReuseStore::default(),
+        };
+        reuse.advance_to(0);
+        Ok(Some(reuse))
+    }
+
+    /// Moves the index on to the window of frames holding ordinal `ordinal`.
+    fn advance_to(&mut self, ordinal: u32) {
+        while ordinal >= self.window_end && (self.window_end as usize) < self.frames.len() {
+            // The old window's index goes first, so that two are never held at once.
+            self.index = ChangeIndex::build(Vec::new(), Vec::new());
+            let boxes = self.stream.window(&self.frames, &mut self.full, self.window_boxes);
+            if self.full.len() as u32 == self.window_end {
+                debug_assert!(false, "the selected frames lie within the trajectory");
+                break;
+            }
+            self.window_end = self.full.len() as u32;
+            self.index = ChangeIndex::build(boxes, self.stream.sequence.small_prototypes());
+        }
     }
 
     /// The ordinal of selected frame `frame`.
@@ -93,13 +128,13 @@ impl ExactReuse {
     }
 
     /// The latest horizon worth finding for a sample traced in frame `frame`: the next frame
-    /// traced in full anyway (a camera cut, a moving light), else the end of the run. When
-    /// that is the very next frame, as under a camera that moves every frame, no horizon
-    /// query runs at all.
+    /// traced in full anyway (a camera cut, a moving light), else the end of the index's
+    /// window (the end of the run but in long runs). When that is the very next frame, as
+    /// under a camera that moves every frame, no horizon query runs at all.
     pub(crate) fn horizon_limit(&self, frame: u32) -> u32 {
         let next = self.ordinal(frame) as usize + 1;
-        let full = self.full.get(next..).unwrap_or_default().iter().position(Option::is_some);
-        full.map_or(self.frames.len(), |k| next + k) as u32
+        let ahead = self.full.get(next..).unwrap_or_default();
+        ahead.iter().position(Option::is_some).map_or(self.window_end, |k| (next + k) as u32)
     }
 
     /// Frame `frame`'s image and AOVs through `renderer`, tracing only what its horizons
@@ -115,6 +150,7 @@ impl ExactReuse {
         frame: u32,
         stats: &FrameStats,
     ) -> Result<(Film, RenderStats, AovPasses, ExactFrame), RenderError> {
+        self.advance_to(self.ordinal(frame));
         // An empty store (frames kept from an earlier run before this one) traces in full too.
         let full =
             self.full_frame(frame, stats).or_else(|| self.store.is_empty().then_some(FullFrame::First));
@@ -186,39 +222,55 @@ enum Look {
     Moving(InstanceMotion),
 }
 
-impl Sequence {
-    /// The changes between consecutive frames of `frames` (ascending) with a shutter of
-    /// `shutter` frame intervals: a box for every body whose look differs from one frame to
-    /// the next (its bounds at both, swept over the shutter when blurred), tagged with the
-    /// ordinal of the later frame; and per ordinal whether the frame must be traced in full
-    /// (the camera moved, or an emissive body changed). Only bodies the trajectory records a
-    /// change for since the last selected frame (or that move over a shutter) are looked at.
-    fn changes(&self, frames: &[u32], shutter: f32) -> (Vec<ChangeBox>, Vec<Option<FullFrame>>) {
-        let mut changes = FrameChanges::new(self);
-        let mut full = vec![None; frames.len()];
-        let mut replay = self.trajectory.replay();
-        let (mut ordinal, last) = (0usize, frames.last().copied());
-        while let Some(frame) = replay.next_frame() {
-            if ordinal >= frames.len() || Some(frame.index) > last {
-                break;
-            }
-            changes.note(&self.trajectory.frames[frame.index as usize]);
+/// The changes between consecutive selected frames, found window by window by one replay of
+/// the trajectory: a box for every body whose look differs from one frame to the next (its
+/// bounds at both, swept over the shutter when blurred), tagged with the ordinal of the later
+/// frame; and per ordinal whether the frame must be traced in full (the camera moved, or an
+/// emissive body changed). Only bodies the trajectory records a change for since the last
+/// selected frame (or that move over a shutter) are looked at.
+struct ChangeStream<'s> {
+    sequence: &'s Sequence,
+    replay: Replay<'s>,
+    changes: FrameChanges,
+    /// The shutter in frame intervals.
+    shutter: f32,
+}
+
+impl<'s> ChangeStream<'s> {
+    fn new(sequence: &'s Sequence, shutter: f32) -> Self {
+        let changes = FrameChanges::new(sequence);
+        Self { sequence, replay: sequence.trajectory.replay(), changes, shutter }
+    }
+
+    /// The change boxes of the next window of `frames` (ascending), its first ordinal
+    /// `full.len()`: frames are added until the boxes reach `max_boxes` or `frames` ends, and
+    /// each one's reason to be traced in full is pushed onto `full`.
+    fn window(
+        &mut self,
+        frames: &[u32],
+        full: &mut Vec<Option<FullFrame>>,
+        max_boxes: usize,
+    ) -> Vec<ChangeBox> {
+        let sequence = self.sequence;
+        while full.len() < frames.len() && self.changes.boxes.len() < max_boxes {
+            let Some(frame) = self.replay.next_frame() else { break };
+            self.changes.note(&sequence.trajectory.frames[frame.index as usize]);
+            let ordinal = full.len();
             if frame.index != frames[ordinal] {
                 continue;
             }
-            let emitter = changes.compare(&frame, shutter, ordinal as u32);
-            full[ordinal] = if ordinal == 0 {
+            let emitter = self.changes.compare(&frame, self.shutter, ordinal as u32);
+            full.push(if ordinal == 0 {
                 Some(FullFrame::First)
-            } else if self.shutter_cameras(frames[ordinal - 1], shutter)
-                != self.shutter_cameras(frame.index, shutter)
+            } else if sequence.shutter_cameras(frames[ordinal - 1], self.shutter)
+                != sequence.shutter_cameras(frame.index, self.shutter)
             {
                 Some(FullFrame::CameraMoved)
             } else {
                 emitter.then_some(FullFrame::EmitterMoved)
-            };
-            ordinal += 1;
+            });
         }
-        (changes.boxes, full)
+        std::mem::take(&mut self.changes.boxes)
     }
 }
 
