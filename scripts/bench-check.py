@@ -19,6 +19,7 @@ import json
 import os
 import pathlib
 import shlex
+import statistics
 import subprocess
 import sys
 import time
@@ -107,7 +108,7 @@ def run_command(command, setup, runs, binary):
 
 def verdict(figure, values, margin):
     """'ok', 'WORSE' or 'better' for the median of `values` against the figure's band."""
-    measured = sorted(values)[len(values) // 2]
+    measured = statistics.median(values)
     slack = margin * abs(figure["value"])
     low, high = figure["min"] - slack, figure["max"] + slack
     if low <= measured <= high:
@@ -144,7 +145,7 @@ def main():
         if reports[f["command"]] is None:
             continue
         values = [float(metric(r, f["metric"])) for r in reports[f["command"]]]
-        median = sorted(values)[len(values) // 2]
+        median = statistics.median(values)
         rows.append({"figure": f, "values": values, "median": median, "verdict": verdict(f, values, args.margin)})
     print_table(rows, args.margin)
     if args.json:
