@@ -26,7 +26,7 @@ import time
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 FIGURES = ROOT / "docs" / "performance.json"
-# What `make bench-check` reruns by default: about 15 minutes on the 2-core machine.
+# What `make bench-check` reruns by default: about 6 minutes on the quiet 2-core machine.
 DEFAULT_AREAS = ("accelerators", "rendering", "integration")
 DEFAULT_MARGIN = 0.10
 
