@@ -66,7 +66,8 @@ lint: arch-check
 	$(CARGO) clippy -p dormant -p dormant-lab -p dormant-cli --no-default-features --all-targets -- -D warnings
 
 # The headline benchmarks of docs/performance.json run again and printed beside the
-# documented figures, flagging any outside its band (timed, so not in CI; about 6 minutes on a quiet machine, the trajectories simulated first).
+# documented figures, flagging any outside its band (timed, so not in CI; about 6 minutes
+# on a quiet machine, the trajectories simulated first).
 # BENCH_CHECK_ARGS: e.g. --runs 3, --only integration.atrium. See docs/performance.md.
 BENCH_CHECK_ARGS ?=
 bench-check: build
