@@ -85,7 +85,7 @@ fuzz:
 	FUZZ_SECONDS=$(FUZZ_SECONDS) bash scripts/fuzz.sh
 
 # CI's fuzzing: every target over its committed corpus, then FUZZ_RUNS mutations from a fixed
-# seed, the same executions every time; a crash prints its input in base64 and fails.
+# seed, the same amount of fuzzing every time; a crash prints its input in base64 and fails.
 FUZZ_RUNS ?= 20000
 fuzz-check:
 	FUZZ_RUNS=$(FUZZ_RUNS) bash scripts/fuzz.sh
