@@ -4,8 +4,9 @@
 #   - timed (default, `make fuzz`): FUZZ_SECONDS seconds a target (default 60), random seed;
 #   - fixed (FUZZ_RUNS set, `make fuzz-check`, run by CI): the corpus, then FUZZ_RUNS
 #     mutations from seed 1 on one process: the same amount of fuzzing every run, from the
-#     same inputs (the mutations drift a little between runs: coverage feedback sees
-#     HashMap's random seeds), so a failure is replayed from the input it prints.
+#     same inputs (the mutations drift a little between runs: coverage is not fully
+#     repeatable, probably through random hash seeds), so a failure is replayed from the
+#     input it prints.
 # Installs cargo-fuzz when missing; builds with RUSTC_BOOTSTRAP=1 because cargo-fuzz passes
 # -Z flags (the sanitizer) to a stable rustc. A crash, hang or out-of-memory stops the run:
 # the script prints the input in base64 (to add under tests/data/fuzz/TARGET/, see
