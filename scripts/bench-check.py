@@ -106,9 +106,8 @@ def run_command(command, setup, runs, binary):
     return reports
 
 
-def verdict(figure, values, margin):
-    """'ok', 'WORSE' or 'better' for the median of `values` against the figure's band."""
-    measured = statistics.median(values)
+def verdict(figure, measured, margin):
+    """'ok', 'WORSE' or 'better' for `measured` against the figure's band."""
     slack = margin * abs(figure["value"])
     low, high = figure["min"] - slack, figure["max"] + slack
     if low <= measured <= high:
@@ -146,7 +145,7 @@ def main():
             continue
         values = [float(metric(r, f["metric"])) for r in reports[f["command"]]]
         median = statistics.median(values)
-        rows.append({"figure": f, "values": values, "median": median, "verdict": verdict(f, values, args.margin)})
+        rows.append({"figure": f, "values": values, "median": median, "verdict": verdict(f, median, args.margin)})
     print_table(rows, args.margin)
     if args.json:
         out = [{"id": r["figure"]["id"], "values": r["values"], "documented": r["figure"]["value"],

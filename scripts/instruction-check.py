@@ -86,7 +86,8 @@ def main():
         ratio = counts[name] / base
         verdict = "ok"
         if ratio > 1 + tolerance:
-            verdict, _ = "FAILED", failed.append(name)
+            verdict = "FAILED"
+            failed.append(name)
         elif ratio < 1 - tolerance:
             verdict = "below the baseline: update it (--update) to keep the guard tight"
         print(f"instruction-check: {name}: {counts[name]:,} against {base:,} ({ratio:.4f}): {verdict}", flush=True)

@@ -67,11 +67,9 @@ pub(crate) struct ExactReuse<'s> {
     pub index: ChangeIndex,
     /// The selected frames, ascending: a frame's ordinal is its position here.
     frames: Vec<u32>,
-    /// Per ordinal up to `window_end`, why that frame cannot reuse samples of the frame before
-    /// it (`None`: it can).
+    /// Per ordinal up to the end of the index's window (`full.len()`, which no horizon
+    /// passes), why that frame cannot reuse samples of the frame before it (`None`: it can).
     full: Vec<Option<FullFrame>>,
-    /// The ordinal after the last one the index covers: no horizon reaches past it.
-    window_end: u32,
     stream: ChangeStream<'s>,
     /// Change boxes a window holds at most (it holds at least one frame's).
     window_boxes: usize,
@@ -97,7 +95,6 @@ impl<'s> ExactReuse<'s> {
             index: ChangeIndex::build(Vec::new(), Vec::new()),
             frames: selection.frames(),
             full: Vec::new(),
-            window_end: 0,
             stream: ChangeStream::new(sequence, renderer.shutter),
             window_boxes: (window_bytes / std::mem::size_of::<ChangeBox>()).max(1),
             form,
@@ -109,15 +106,15 @@ impl<'s> ExactReuse<'s> {
 
     /// Moves the index on to the window of frames holding ordinal `ordinal`.
     fn advance_to(&mut self, ordinal: u32) {
-        while ordinal >= self.window_end && (self.window_end as usize) < self.frames.len() {
+        while ordinal as usize >= self.full.len() && self.full.len() < self.frames.len() {
+            let window_start = self.full.len();
             // The old window's index goes first, so that two are never held at once.
             self.index = ChangeIndex::build(Vec::new(), Vec::new());
             let boxes = self.stream.window(&self.frames, &mut self.full, self.window_boxes);
-            if self.full.len() as u32 == self.window_end {
+            if self.full.len() == window_start {
                 debug_assert!(false, "the selected frames lie within the trajectory");
                 break;
             }
-            self.window_end = self.full.len() as u32;
             self.index = ChangeIndex::build(boxes, self.stream.sequence.small_prototypes());
         }
     }
@@ -134,7 +131,7 @@ impl<'s> ExactReuse<'s> {
     pub(crate) fn horizon_limit(&self, frame: u32) -> u32 {
         let next = self.ordinal(frame) as usize + 1;
         let ahead = self.full.get(next..).unwrap_or_default();
-        ahead.iter().position(Option::is_some).map_or(self.window_end, |k| (next + k) as u32)
+        ahead.iter().position(Option::is_some).map_or(self.full.len(), |k| next + k) as u32
     }
 
     /// Frame `frame`'s image and AOVs through `renderer`, tracing only what its horizons
