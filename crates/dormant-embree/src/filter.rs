@@ -9,6 +9,10 @@
 //! the prototypes). Invoking it on every geometry (`RTC_RAY_QUERY_FLAG_INVOKE_ARGUMENT_FILTER`)
 //! also ran it on the static scene's triangles, which changed which of two triangles sharing
 //! an edge a ray exactly on that edge reports.
+//!
+//! [`OccluderContext`] does invoke its filter on every geometry: an occlusion query through it
+//! also learns what blocked the ray (the instance of the hit it stopped at). Which of two hits
+//! stops an any-hit query may differ, but whether there is one does not.
 
 use embree4_sys as sys;
 
@@ -80,6 +84,36 @@ impl<'a> SkipContext<'a> {
     }
 }
 
+/// The query context of an occlusion ray that records what blocked it: Embree's context, the
+/// skipped set (if any), then the instance and geometry of the first hit the filter accepted
+/// (`RTC_INVALID_GEOMETRY_ID` until one is).
+#[repr(C)]
+pub(super) struct OccluderContext<'a> {
+    base: sys::RTCRayQueryContext,
+    skip: Option<&'a GeometrySet>,
+    pub(super) inst: u32,
+    pub(super) geom: u32,
+}
+
+impl<'a> OccluderContext<'a> {
+    pub(super) fn new(skip: Option<&'a GeometrySet>) -> Self {
+        let invalid = [sys::RTC_INVALID_GEOMETRY_ID; sys::RTC_MAX_INSTANCE_LEVEL_COUNT as usize];
+        Self {
+            base: sys::RTCRayQueryContext { instID: invalid, instPrimID: invalid },
+            skip,
+            inst: sys::RTC_INVALID_GEOMETRY_ID,
+            geom: sys::RTC_INVALID_GEOMETRY_ID,
+        }
+    }
+
+    /// Points `args` at this context and its filter, invoked on every geometry.
+    pub(super) fn occluded_args(&mut self, args: &mut sys::RTCOccludedArguments) {
+        args.flags |= sys::RTCRayQueryFlags::RTC_RAY_QUERY_FLAG_INVOKE_ARGUMENT_FILTER;
+        args.context = &mut self.base;
+        args.filter = Some(record_filter);
+    }
+}
+
 /// rtcInitIntersectArguments (an inline function in the headers, so not in the bindings).
 pub(super) fn intersect_args(flags: sys::RTCRayQueryFlags::Type) -> sys::RTCIntersectArguments {
     sys::RTCIntersectArguments {
@@ -117,6 +151,32 @@ unsafe extern "C" fn skip_filter(args: *const sys::RTCFilterFunctionNArguments) 
         for (v, &id) in valid.iter_mut().zip(inst) {
             if *v != 0 && id != sys::RTC_INVALID_GEOMETRY_ID && ctx.skip.contains(id) {
                 *v = 0;
+            }
+        }
+    }
+}
+
+/// Rejects the candidate hits of lanes whose top-level instance id is skipped, like
+/// [`skip_filter`], and records the first hit it accepts in the [`OccluderContext`].
+unsafe extern "C" fn record_filter(args: *const sys::RTCFilterFunctionNArguments) {
+    // SAFETY: as in `skip_filter` (geomID lanes start at `6 * N` u32s, RTCHitN_geomID); the
+    // filter is only installed by `OccluderContext`, so `context` points to the `base` field,
+    // the first of a live `OccluderContext` that the query exclusively borrows.
+    unsafe {
+        let a = &*args;
+        let n = a.N as usize;
+        let ctx = &mut *(a.context as *mut OccluderContext<'_>);
+        let valid = std::slice::from_raw_parts_mut(a.valid, n);
+        let geom = std::slice::from_raw_parts((a.hit as *const u32).add(6 * n), n);
+        let inst = std::slice::from_raw_parts((a.hit as *const u32).add(7 * n), n);
+        for ((v, &id), &g) in valid.iter_mut().zip(inst).zip(geom) {
+            if *v == 0 {
+                continue;
+            }
+            if id != sys::RTC_INVALID_GEOMETRY_ID && ctx.skip.is_some_and(|s| s.contains(id)) {
+                *v = 0;
+            } else if ctx.geom == sys::RTC_INVALID_GEOMETRY_ID {
+                (ctx.inst, ctx.geom) = (id, g);
             }
         }
     }

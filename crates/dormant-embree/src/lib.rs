@@ -33,4 +33,4 @@ pub use motion::ShutterPoses;
 pub use packet::{Coherence, PacketRay};
 pub use quality::BuildQuality;
 pub use scene::{Geometry, InstanceGeometry, Scene, SceneFlags};
-pub use view::{EmbreeHit, SceneView};
+pub use view::{EmbreeHit, EmbreeOccluder, SceneView};

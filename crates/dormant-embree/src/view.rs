@@ -7,7 +7,7 @@ use std::marker::PhantomData;
 use embree4_sys as sys;
 use glam::Vec3;
 
-use super::filter::{self, GeometrySet, SkipContext};
+use super::filter::{self, GeometrySet, OccluderContext, SkipContext};
 
 /// A closest hit as Embree reports it. For an instanced hit, `ng` is in the instanced
 /// object's space and `inst_id` names the instance geometry in the top scene.
@@ -18,6 +18,14 @@ pub struct EmbreeHit {
     pub v: f32,
     pub ng: [f32; 3],
     pub prim_id: u32,
+    pub geom_id: u32,
+    pub inst_id: Option<u32>,
+}
+
+/// What blocked an occlusion ray ([`SceneView::occluder1_at`]): the instance (in the traced
+/// scene) and geometry of one hit on it, not necessarily the nearest.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct EmbreeOccluder {
     pub geom_id: u32,
     pub inst_id: Option<u32>,
 }
@@ -122,6 +130,32 @@ impl<'a> SceneView<'a> {
         // SAFETY: as in `intersect1`; rtcOccluded1 writes only `ray.tfar`.
         unsafe { sys::rtcOccluded1(self.raw, &mut ray, &mut args) };
         ray.tfar == f32::NEG_INFINITY
+    }
+
+    /// What lies in `[tnear, tfar]` of a ray at shutter time `time`: `None` exactly when
+    /// [`Self::occluded1_at`] is `false`, else one of the hits (`Some(None)` if Embree reported
+    /// none to the filter, which every triangle hit is).
+    pub fn occluder1_at(
+        &self,
+        org: [f32; 3],
+        dir: [f32; 3],
+        tnear: f32,
+        tfar: f32,
+        time: f32,
+    ) -> Option<Option<EmbreeOccluder>> {
+        let mut ray = embree_ray(org, dir, tnear, tfar, time);
+        let mut context = OccluderContext::new(self.skip);
+        let mut args = filter::occluded_args(sys::RTCRayQueryFlags::RTC_RAY_QUERY_FLAG_INCOHERENT);
+        context.occluded_args(&mut args);
+        // SAFETY: as in `occluded1_at`; the context lives until the call returns.
+        unsafe { sys::rtcOccluded1(self.raw, &mut ray, &mut args) };
+        let invalid = sys::RTC_INVALID_GEOMETRY_ID;
+        (ray.tfar == f32::NEG_INFINITY).then(|| {
+            (context.geom != invalid).then(|| EmbreeOccluder {
+                geom_id: context.geom,
+                inst_id: (context.inst != invalid).then_some(context.inst),
+            })
+        })
     }
 
     /// World bounds of the committed scene: its lower and upper corners.

@@ -1,4 +1,5 @@
-//! [`Hit`]: a ray-triangle intersection as every backend reports it.
+//! [`Hit`]: a ray-triangle intersection as every backend reports it, and [`Occluder`]: what
+//! blocks an occlusion ray.
 
 use glam::Vec3;
 
@@ -9,6 +10,18 @@ use super::{InstanceId, StaticId};
 pub enum HitObject {
     Static(StaticId),
     Instance(InstanceId),
+}
+
+/// What blocks an occlusion ray ([`super::SceneQuery::occluder`]): the object of one hit on
+/// it, any, not necessarily the nearest. Exact temporal reuse reads it: the ray stays blocked,
+/// whatever else moves along it, for as long as that object stays where it is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Occluder {
+    /// Static geometry: the environment or a baked island.
+    Static,
+    Instance(InstanceId),
+    /// Something, not said what (a backend that only answers whether).
+    Unknown,
 }
 
 /// A ray-triangle intersection, the same for every backend.

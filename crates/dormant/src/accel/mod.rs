@@ -26,7 +26,7 @@ mod snapshot;
 mod tests;
 
 pub use backend::Backend;
-pub use hit::{Hit, HitObject};
+pub use hit::{Hit, HitObject, Occluder};
 pub use load::{load_scene, LoadedScene};
 pub(crate) use object_map::mesh_triangle;
 pub(crate) use object_map::normal_matrix;
@@ -130,6 +130,12 @@ pub trait SceneQuery: Sync {
     fn intersect(&self, ray: &Ray) -> Option<Hit>;
     /// Whether anything blocks `ray` within `[t_min, t_max]` (shadow and occlusion rays).
     fn intersect_p(&self, ray: &Ray) -> bool;
+
+    /// What blocks `ray` within `[t_min, t_max]`: `None` exactly when [`Self::intersect_p`] is
+    /// `false`, else one blocker (any). The default only says whether.
+    fn occluder(&self, ray: &Ray) -> Option<Occluder> {
+        self.intersect_p(ray).then_some(Occluder::Unknown)
+    }
 
     /// Closest hits of a group of rays, `hits[i]` for `rays[i]`, equal to [`Self::intersect`]
     /// per ray (up to ties between surfaces at one distance). For coherent groups

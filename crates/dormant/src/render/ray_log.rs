@@ -5,14 +5,17 @@
 //!
 //! Integrators trace through [`FrameContext`](super::FrameContext)'s `intersect` and
 //! `unoccluded`, which record every ray here: a closest-hit ray as the segment up to its hit
-//! (to infinity when it escapes), an occlusion ray over its whole interval.
+//! (to infinity when it escapes), an occlusion ray that nothing blocks over its whole
+//! interval. A blocked occlusion ray stays blocked, whatever else moves along it, as long as
+//! its blocker stays: static geometry does until the next frame traced in full, a body until
+//! its next change; it is queried only when that comes before the horizon found so far.
 
 use std::cell::Cell;
 use std::time::Instant;
 
 use super::RenderScene;
 use crate::accel::bvh::ChangeIndex;
-use crate::accel::Hit;
+use crate::accel::{Hit, Occluder};
 use crate::geometry::Ray;
 
 /// One query in this many is timed, and the time scaled up: timing every query would cost
@@ -82,12 +85,28 @@ impl<'a> RayLog<'a> {
         }
     }
 
-    /// Records an occlusion ray over its whole interval (the occluder found, if any, is not
-    /// known, and what lies past it may matter to another ray).
+    /// Whether the log finds horizons, and so needs to know what blocks occlusion rays.
+    pub(crate) fn finds_horizon(&self) -> bool {
+        self.horizon.is_some()
+    }
+
+    /// Records an occlusion ray and what blocks it (`None`: nothing). A ray that nothing
+    /// blocks is queried over its whole interval. A blocked one stays blocked while its
+    /// blocker stays: it is not queried when that is static geometry or a body that does not
+    /// change before the horizon found so far; otherwise (the blocker may still block after
+    /// its change, which the query sees) it is queried as a ray nothing blocks.
     #[inline]
-    pub(crate) fn any(&mut self, ray: &Ray) {
+    pub(crate) fn any(&mut self, ray: &Ray, blocker: Option<Occluder>) {
         self.rays += 1;
-        if let Some(probe) = &mut self.horizon {
+        let Some(probe) = &mut self.horizon else { return };
+        let stays = match blocker {
+            Some(Occluder::Static) => true,
+            Some(Occluder::Instance(id)) => {
+                probe.scene.body_of_instance(id).is_some_and(|b| probe.stays_before_best(b))
+            }
+            None | Some(Occluder::Unknown) => false,
+        };
+        if !stays {
             probe.meet(ray, true);
         }
     }
@@ -130,6 +149,12 @@ impl HorizonProbe<'_> {
         {
             self.best = self.best.min(next);
         }
+    }
+
+    /// Whether `body` does not change before the horizon found so far.
+    #[inline]
+    fn stays_before_best(&self, body: u32) -> bool {
+        self.index.next_change_of(body, self.traced_at).is_none_or(|next| next >= self.best)
     }
 
     #[inline]

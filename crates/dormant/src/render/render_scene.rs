@@ -7,7 +7,7 @@ use glam::{Vec2, Vec3};
 use super::emitters::{EmitterSample, Emitters};
 use super::texture_sampling::sample;
 use super::RenderError;
-use crate::accel::{load_scene, Accelerator, Hit};
+use crate::accel::{load_scene, Accelerator, Hit, HitObject, InstanceId};
 use crate::accel::{LoadedObjectMap, MeshRef, ObjectMap, ResolvedHit};
 use crate::geometry::{Ray, TriangleMesh};
 use crate::scene::{Body, Light, Material, SceneDescription, Sky, Sun};
@@ -129,6 +129,16 @@ impl<'a> RenderScene<'a> {
     /// The body a hit lies on (instanced, resting or baked), if it is on one.
     pub(crate) fn body_of(&self, hit: &Hit) -> Option<u32> {
         self.object(hit)?.body.map(|b| b.0)
+    }
+
+    /// The body instance `id` places, if it places one.
+    pub(crate) fn body_of_instance(&self, id: InstanceId) -> Option<u32> {
+        let object = HitObject::Instance(id);
+        let resolved = match &self.objects {
+            Objects::Loaded(map) => map.resolve(object, 0),
+            Objects::Mapped(map) => map.resolve(object, 0),
+        };
+        resolved?.body.map(|b| b.0)
     }
 
     fn object(&self, hit: &Hit) -> Option<ResolvedHit> {

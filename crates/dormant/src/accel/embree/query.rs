@@ -16,9 +16,9 @@ use std::array;
 use glam::{Mat3, Vec3};
 
 use super::{EmbreeAccel, STATIC_SLOT};
-use crate::accel::{Hit, HitObject, InstanceId, SceneQuery, StaticId};
+use crate::accel::{Hit, HitObject, InstanceId, Occluder, SceneQuery, StaticId};
 use crate::geometry::Ray;
-use dormant_embree::{Coherence, EmbreeHit, PacketRay, SceneView};
+use dormant_embree::{Coherence, EmbreeHit, EmbreeOccluder, PacketRay, SceneView};
 
 /// Widest packet: rays are traced in chunks of this many.
 const LANES: usize = 16;
@@ -50,6 +50,15 @@ impl EmbreeAccel {
             }
         };
         Hit { t: h.t, u: h.u, v: h.v, ng: ng.normalize_or_zero(), object, prim: h.prim_id }
+    }
+
+    /// The blocker Embree reported, as the scene's object.
+    fn to_occluder(found: Option<EmbreeOccluder>) -> Occluder {
+        match found.map(|o| o.inst_id) {
+            None => Occluder::Unknown,
+            Some(Some(STATIC_SLOT) | None) => Occluder::Static,
+            Some(Some(slot)) => Occluder::Instance(InstanceId(slot - 1)),
+        }
     }
 
     /// `ray` cut at `t_max`, if it may meet an awake body in the top level before then (only
@@ -85,6 +94,21 @@ impl SceneQuery for EmbreeAccel {
                         && top.occluded1_at(o, d, ray.t_min, ray.t_max, time))
             }
         }
+    }
+
+    /// As [`Self::intersect_p`], the occlusion queries through a filter that records the hit
+    /// each stops at.
+    fn occluder(&self, ray: &Ray) -> Option<Occluder> {
+        let (o, d, time) = (ray.origin.to_array(), ray.dir.to_array(), ray.time);
+        let top = self.top.view()?;
+        let found = match self.resting_view() {
+            None => top.occluder1_at(o, d, ray.t_min, ray.t_max, time),
+            Some(resting) => resting.occluder1_at(o, d, ray.t_min, ray.t_max, time).or_else(|| {
+                self.awake_part(ray, ray.t_max)?;
+                top.occluder1_at(o, d, ray.t_min, ray.t_max, time)
+            }),
+        };
+        found.map(Self::to_occluder)
     }
 
     /// Chunks of up to 16 rays, each as one packet of the smallest width that holds it; with a

@@ -10,7 +10,8 @@
 
 use super::common::cluster;
 use crate::accel::{
-    self, Accelerator, Backend, CommitReport, Hit, HitObject, InstanceId, PrototypeId, SceneQuery, StaticId,
+    self, Accelerator, Backend, CommitReport, Hit, HitObject, InstanceId, Occluder, PrototypeId, SceneQuery,
+    StaticId,
 };
 use crate::geometry::{primitives, Ray, TriangleMesh};
 use glam::{Affine3A, Quat, Vec3};
@@ -122,6 +123,23 @@ fn compare(reference: &dyn SceneQuery, subject: &dyn SceneQuery, rays: &[Ray]) -
             if r != s {
                 return Err(format!("occlusion packet {c} of {width}: {r:?} awake, {s:?} resting"));
             }
+        }
+    }
+    Ok(())
+}
+
+/// What blocks each of `rays` in `q`: something exactly when the ray is blocked, named (a
+/// backend of ours always says what), and an instance only if it is one of `live`.
+fn check_occluders(q: &dyn SceneQuery, rays: &[Ray], live: &[(InstanceId, bool)]) -> Result<(), String> {
+    for (i, ray) in rays.iter().enumerate() {
+        let (blocker, blocked) = (q.occluder(ray), q.intersect_p(ray));
+        let named = match blocker {
+            Some(Occluder::Instance(id)) => live.iter().any(|(l, _)| *l == id),
+            Some(Occluder::Unknown) => false,
+            Some(Occluder::Static) | None => true,
+        };
+        if blocker.is_some() != blocked || !named {
+            return Err(format!("ray {i} {ray:?}: occluder {blocker:?}, blocked {blocked}"));
         }
     }
     Ok(())
@@ -249,6 +267,8 @@ impl Pair {
         self.resting_hits +=
             self.rays.iter().filter_map(|r| q.intersect(r)).filter(|h| resting.contains(&h.object)).count();
         compare(self.reference.query().unwrap(), self.subject.query().unwrap(), &self.rays)
+            .and_then(|()| check_occluders(self.reference.query().unwrap(), &self.rays, &self.live))
+            .and_then(|()| check_occluders(q, &self.rays, &self.live))
             .map_err(|e| format!("{}: {e}", self.backend))
     }
 }

@@ -9,7 +9,7 @@ pub(super) mod preview;
 use glam::Vec3;
 
 use super::{PixelSampler, RayLog, RenderScene};
-use crate::accel::{Hit, SceneQuery};
+use crate::accel::{Hit, Occluder, SceneQuery};
 use crate::geometry::Ray;
 use crate::scene::Light;
 
@@ -29,10 +29,16 @@ impl FrameContext<'_> {
         hit
     }
 
-    /// Whether nothing blocks `ray` (a shadow ray: any hit counts), recorded in `log`.
+    /// Whether nothing blocks `ray` (a shadow ray: any hit counts), recorded in `log` with
+    /// its blocker when the log finds horizons.
     fn unoccluded(&self, ray: &Ray, log: &mut RayLog) -> bool {
-        log.any(ray);
-        !self.query.intersect_p(ray)
+        let blocker = if log.finds_horizon() {
+            self.query.occluder(ray)
+        } else {
+            self.query.intersect_p(ray).then_some(Occluder::Unknown)
+        };
+        log.any(ray, blocker);
+        blocker.is_none()
     }
 }
 

@@ -10,7 +10,7 @@ use crate::accel::bvh::flat::{
 };
 use crate::accel::bvh::simd::{dispatch, Kernel};
 use crate::accel::bvh::triangle::RayTri;
-use crate::accel::{Hit, HitObject, SceneQuery, StaticId};
+use crate::accel::{Hit, HitObject, Occluder, SceneQuery, StaticId};
 use crate::geometry::{Aabb, Ray};
 
 impl StaticSnapshot {
@@ -222,5 +222,9 @@ impl SceneQuery for StaticSnapshot {
     fn intersect_p(&self, ray: &Ray) -> bool {
         let (bray, tray) = (BoxRay::new(ray), RayTri::new(ray));
         interval_is_valid(ray) && dispatch!(|k| self.occluded_with(k, &bray, &tray, ray.t_max))
+    }
+
+    fn occluder(&self, ray: &Ray) -> Option<Occluder> {
+        self.intersect_p(ray).then_some(Occluder::Static)
     }
 }

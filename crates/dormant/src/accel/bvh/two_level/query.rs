@@ -25,7 +25,7 @@ use crate::accel::bvh::persistent::StaticSnapshot;
 use crate::accel::bvh::simd::{dispatch, Kernel};
 use crate::accel::bvh::triangle::RayTri;
 use crate::accel::bvh::BuildParams;
-use crate::accel::{Hit, HitObject, InstanceId, SceneQuery, StaticId};
+use crate::accel::{Hit, HitObject, InstanceId, Occluder, SceneQuery, StaticId};
 use crate::geometry::{Aabb, InstanceMotion, Ray};
 
 /// Instances per rayon task when a level's bounds and items are made in parallel.
@@ -182,10 +182,12 @@ impl Top {
         );
     }
 
-    /// Whether any instance is hit within `[t_min, t_max]`.
+    /// The first instance found hit within `[t_min, t_max]`, if any (any-hit: not the
+    /// nearest).
     #[inline(always)]
-    fn occluded_with<K: Kernel>(&self, k: K, ray: &Ray, bray: &BoxRay, t_max: f32) -> bool {
+    fn occluder_with<K: Kernel>(&self, k: K, ray: &Ray, bray: &BoxRay, t_max: f32) -> Option<InstanceId> {
         let mut t_max = t_max;
+        let mut found = None;
         self.wide.traverse::<_, _, ANY_HIT>(
             k,
             &self.bvh,
@@ -193,18 +195,16 @@ impl Top {
             bray,
             &mut t_max,
             &mut |first, count, t_max| {
-                self.live(first, count).any(|(item, motion)| {
+                found = self.live(first, count).find_map(|(item, motion)| {
                     let oray = object_ray(ray, item, motion);
-                    item.blas.occluded_from(
-                        k,
-                        Start::Entered(0),
-                        &BoxRay::new(&oray),
-                        &RayTri::new(&oray),
-                        *t_max,
-                    )
-                })
+                    item.blas
+                        .occluded_from(k, Start::Entered(0), &BoxRay::new(&oray), &RayTri::new(&oray), *t_max)
+                        .then_some(InstanceId(item.id))
+                });
+                found.is_some()
             },
-        )
+        );
+        found
     }
 }
 
@@ -381,10 +381,14 @@ impl SceneQuery for BvhScene {
     }
 
     fn intersect_p(&self, ray: &Ray) -> bool {
+        self.occluder(ray).is_some()
+    }
+
+    fn occluder(&self, ray: &Ray) -> Option<Occluder> {
         if !interval_is_valid(ray) {
-            return false;
+            return None;
         }
-        dispatch!(|k| self.occluded_k(k, ray))
+        dispatch!(|k| self.occluder_k(k, ray))
     }
 
     /// Groups of up to [`PACKET`] rays walk the trees together (`flat::packet`); a group of
@@ -479,14 +483,18 @@ impl BvhScene {
         blocked
     }
 
-    /// [`SceneQuery::intersect_p`] on SIMD path `K`.
+    /// [`SceneQuery::occluder`] on SIMD path `K`: the static tree, then the resting and top
+    /// levels.
     #[inline(always)]
-    fn occluded_k<K: Kernel>(&self, k: K, ray: &Ray) -> bool {
+    fn occluder_k<K: Kernel>(&self, k: K, ray: &Ray) -> Option<Occluder> {
         let bray = BoxRay::new(ray);
         let tray = RayTri::new(ray);
-        self.statics.occluded_with(k, &bray, &tray, ray.t_max)
-            || [&self.resting, &self.top]
-                .into_iter()
-                .any(|level| level.occluded_with(k, ray, &bray, ray.t_max))
+        if self.statics.occluded_with(k, &bray, &tray, ray.t_max) {
+            return Some(Occluder::Static);
+        }
+        [&self.resting, &self.top]
+            .into_iter()
+            .find_map(|level| level.occluder_with(k, ray, &bray, ray.t_max))
+            .map(Occluder::Instance)
     }
 }
