@@ -71,9 +71,10 @@ pub struct ChangeIndex {
     /// The meshes shapes refer to, ready for exact tests.
     meshes: Vec<ExactMesh>,
     /// Per body, the `visible_at` of its changes in ascending order (`body_changes[b]` are
-    /// `changes[body_changes[b]..body_changes[b + 1]]`).
+    /// `changes[body_changes[b]..body_changes[b + 1]]`), and each change's box (leaf order).
     body_changes: Vec<u32>,
     changes: Vec<u32>,
+    change_boxes: Vec<u32>,
 }
 
 /// Builds change indexes with a cheap build: the index is built once per sequence and its
@@ -97,22 +98,48 @@ impl ChangeIndex {
         let nodes = index_nodes(&bvh.nodes, &mut boxes);
         let meshes: Vec<ExactMesh> = meshes.iter().map(|m| ExactMesh::new(m)).collect();
         let shapes = boxes.iter().map(|b| b.shape.and_then(|s| ShapeTest::new(&s, &meshes))).collect();
-        let (body_changes, changes) = changes_by_body(&boxes);
+        let (body_changes, changes, change_boxes) = changes_by_body(&boxes);
         let boxes = boxes
             .iter()
             .map(|b| LeafBox { min: b.bounds.min, visible_at: b.visible_at, max: b.bounds.max })
             .collect();
-        Self { nodes, boxes, shapes, meshes, body_changes, changes }
+        Self { nodes, boxes, shapes, meshes, body_changes, changes, change_boxes }
     }
 
     /// The earliest `visible_at` greater than `after` of body `body`'s changes, if it has one.
     /// A segment that ends on the body at ordinal `after` changes there at the latest, so its
     /// horizon is no later: a query for it needs to look only before that.
     pub fn next_change_of(&self, body: u32, after: u32) -> Option<u32> {
+        self.changes_after(body, after)?.next().map(|i| self.changes[i])
+    }
+
+    /// For an occlusion ray that body `body` blocks at ordinal `after`: the earliest
+    /// `visible_at` greater than `after` and less than `before` of the body's changes after
+    /// which it may no longer block the ray (its shape is not surely crossed at both poses, or
+    /// is not known), or `before`. While the body blocks the ray nothing else along it
+    /// matters, so no other change is looked at.
+    pub fn blocked_until(&self, body: u32, ray: &Ray, after: u32, before: u32) -> u32 {
+        let Some(range) = self.changes_after(body, after) else { return before };
+        for i in range {
+            let visible_at = self.changes[i];
+            if visible_at >= before {
+                break;
+            }
+            let blocks = self.shapes[self.change_boxes[i] as usize]
+                .is_some_and(|s| s.blocks_at_both(&self.meshes, ray));
+            if !blocks {
+                return visible_at;
+            }
+        }
+        before
+    }
+
+    /// The positions in `changes` of body `body`'s changes later than `after`, if the index
+    /// knows the body.
+    fn changes_after(&self, body: u32, after: u32) -> Option<std::ops::Range<usize>> {
         let b = body as usize;
-        let range = *self.body_changes.get(b)? as usize..*self.body_changes.get(b + 1)? as usize;
-        let changes = &self.changes[range];
-        changes.get(changes.partition_point(|&f| f <= after)).copied()
+        let (start, end) = (*self.body_changes.get(b)? as usize, *self.body_changes.get(b + 1)? as usize);
+        Some(start + self.changes[start..end].partition_point(|&f| f <= after)..end)
     }
 
     /// The earliest `visible_at` greater than `after` and less than `before` of a box that the
@@ -216,20 +243,22 @@ fn index_nodes(nodes: &[Node], boxes: &mut [ChangeBox]) -> Vec<IndexNode> {
     nodes
 }
 
-/// Each body's changes among `boxes`, as offsets per body into the `visible_at` of its
-/// changes, ascending.
-fn changes_by_body(boxes: &[ChangeBox]) -> (Vec<u32>, Vec<u32>) {
-    let mut changed: Vec<(u32, u32)> = boxes.iter().filter_map(|b| Some((b.body?, b.visible_at))).collect();
+/// Each body's changes among `boxes` (in leaf order): offsets per body into the `visible_at`
+/// of its changes, ascending, and each change's box.
+fn changes_by_body(boxes: &[ChangeBox]) -> (Vec<u32>, Vec<u32>, Vec<u32>) {
+    let mut changed: Vec<(u32, u32, u32)> =
+        boxes.iter().enumerate().filter_map(|(k, b)| Some((b.body?, b.visible_at, k as u32))).collect();
     changed.sort_unstable();
     let bodies = changed.last().map_or(0, |c| c.0 as usize + 1);
     let mut offsets = vec![0u32; bodies + 1];
-    for &(b, _) in &changed {
+    for &(b, _, _) in &changed {
         offsets[b as usize + 1] += 1;
     }
     for b in 0..bodies {
         offsets[b + 1] += offsets[b];
     }
-    (offsets, changed.into_iter().map(|c| c.1).collect())
+    let (visible_at, boxes) = changed.into_iter().map(|c| (c.1, c.2)).unzip();
+    (offsets, visible_at, boxes)
 }
 
 /// `b` grown by a margin that absorbs rounding: 1e-4 of its largest side plus 1e-5 of its
@@ -316,5 +345,38 @@ mod tests {
         // A body without changes, and one the index never heard of.
         assert_eq!(index.next_change_of(1, 0), None);
         assert_eq!(index.next_change_of(7, 0), None);
+    }
+
+    #[test]
+    fn a_blocked_ray_stays_blocked_until_its_blocker_may_leave_it() {
+        // A unit cube (body 0) 3 above the origin: it slides along x at ordinal 2 and still
+        // covers a ray straight up (off its faces' diagonals, where the strict test gives up);
+        // at 5 it slides off the ray; at 7 it comes back.
+        let cube = crate::geometry::primitives::cuboid(Vec3::splat(0.5));
+        let mesh: Vec<[Vec3; 3]> = (0..cube.triangle_count()).map(|i| cube.triangle(i)).collect();
+        let at = |x: f32| Some(Affine3A::from_translation(Vec3::new(x, 3.0, 0.0)));
+        let change = |visible_at: u32, from: f32, to: f32| {
+            let (lo, hi) = (from.min(to), from.max(to));
+            ChangeBox {
+                bounds: Aabb { min: Vec3::new(lo - 0.5, 2.5, -0.5), max: Vec3::new(hi + 0.5, 3.5, 0.5) },
+                visible_at,
+                body: Some(0),
+                shape: Some(ChangeShape { mesh: 0, poses: [at(from), at(to)] }),
+            }
+        };
+        let index = ChangeIndex::build(
+            vec![change(2, 0.0, 0.2), change(5, 0.2, 3.0), change(7, 3.0, 0.1)],
+            vec![mesh],
+        );
+        let up = Ray::new(Vec3::new(0.1, 0.0, 0.27), Vec3::Y);
+        assert_eq!(index.blocked_until(0, &up, 0, 10), 5);
+        assert_eq!(index.blocked_until(0, &up, 5, 10), 7);
+        // Nothing to look at before `before`; a body without changes blocks for good.
+        assert_eq!(index.blocked_until(0, &up, 0, 4), 4);
+        assert_eq!(index.blocked_until(3, &up, 0, 10), 10);
+        // A box without a shape may be anything: its change counts.
+        let shapeless = ChangeBox { shape: None, ..change(2, 0.0, 0.2) };
+        let index = ChangeIndex::build(vec![shapeless], Vec::new());
+        assert_eq!(index.blocked_until(0, &up, 0, 10), 2);
     }
 }

@@ -275,6 +275,15 @@ impl ShapeTest {
         }
         !(near == [true, true] && segments.iter().all(|s| meets(s, Margin::Strict)))
     }
+
+    /// Whether the segment of `ray` surely crosses the mesh at both poses (every ray within
+    /// the tolerance does): an occlusion ray it blocks before the change it blocks after.
+    pub(super) fn blocks_at_both(&self, meshes: &[ExactMesh], ray: &Ray) -> bool {
+        let mesh = &meshes[self.mesh as usize];
+        self.poses.iter().all(|p| {
+            p.is_some_and(|p| mesh.meets(&Segment::in_object_space(ray, &p, mesh.reach), Margin::Strict))
+        })
+    }
 }
 
 impl Segment {
