@@ -98,8 +98,12 @@ fn exact_reuse_writes_the_full_renders_bytes_with_motion_blur() {
 
 #[test]
 fn exact_reuse_writes_the_full_renders_bytes_with_adaptive_sampling() {
-    // Adaptive sampling keeps one value per pixel: a due pixel is traced whole.
-    tiny("adaptive", &["--spp", "16", "--noise-threshold", "0.1", "--min-spp", "4", "--aov", "spp"]);
+    // Per sample: stored and retraced samples decide together where a pixel stops.
+    let adaptive = ["--noise-threshold", "0.1", "--min-spp", "4", "--aov", "spp"];
+    let share = tiny("adaptive", &[&["--spp", "16"], &adaptive[..]].concat());
+    assert!(share < 0.9, "exact reuse traced {share} of the samples");
+    // Per pixel (1 MiB holds 64 samples per pixel only as pixels): a due pixel is traced whole.
+    tiny("adaptive-pixels", &[&["--spp", "64", "--reuse-mib", "1"], &adaptive[..]].concat());
 }
 
 #[test]

@@ -10,15 +10,17 @@
 //! the pixel a full render computes. Whether a frame may reuse at all (camera, lights, seed,
 //! the scene's representation) is its caller's to decide ([`FrameReuse::full`]).
 //!
-//! The store keeps every sample when the budget allows and adaptive sampling is off (a pixel
-//! whose path changed in one sample of sixteen retraces one); otherwise one value per pixel,
-//! retraced whole ([`ReuseGranularity`]).
+//! The store keeps every sample when the budget allows (a pixel whose path changed in one
+//! sample of sixteen retraces one; with adaptive sampling, `spp` slots per pixel, of which a
+//! pixel fills as many as it takes); otherwise one value per pixel, retraced whole
+//! ([`ReuseGranularity`]). Adaptive sampling then decides on reused and retraced samples
+//! alike, in index order, as a full frame decides on traced ones.
 
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
 use super::aov::{AovIntegrator, AovPasses};
-use super::tiles::{render_planned, Due, FramePlan, PlannedFrame};
+use super::tiles::{render_planned, Due, FramePlan, PlannedFrame, StoredSamples};
 use super::{Aov, Film, Integrator, RenderError, RenderScene, RenderSettings, RenderStats, SppStats};
 use crate::accel::bvh::ChangeIndex;
 use crate::accel::SceneQuery;
@@ -149,7 +151,7 @@ impl ReuseStore {
     fn fresh(settings: &RenderSettings, aovs: &[Aov], budget: usize, ordinal: u32) -> Self {
         let (w, h, spp) = (settings.width, settings.height, settings.spp);
         let pixels = w as usize * h as usize;
-        let keep_samples = !settings.adaptive.is_on() && Self::sample_bytes_for(w, h, spp, aovs) <= budget;
+        let keep_samples = Self::sample_bytes_for(w, h, spp, aovs) <= budget;
         let samples = if keep_samples { pixels * spp as usize } else { 0 };
         ReuseStore {
             settings: Some((*settings, aovs.to_vec())),
@@ -160,6 +162,22 @@ impl ReuseStore {
             passes: aovs.iter().filter(|a| a.is_traced()).map(|&a| (a, vec![Vec3::ZERO; pixels])).collect(),
             samples: vec![Vec3::ZERO; samples],
             sample_horizons: vec![ordinal; samples],
+        }
+    }
+
+    /// What a frame at `ordinal` traces of the image: the samples (or pixels) `due`.
+    fn beauty_due<'a>(&'a self, due: &'a [bool], ordinal: u32) -> Due<'a> {
+        match self.granularity {
+            ReuseGranularity::Sample => Due::Samples {
+                stored: StoredSamples {
+                    values: &self.samples,
+                    horizons: &self.sample_horizons,
+                    counts: &self.counts,
+                },
+                pixels: due,
+                ordinal,
+            },
+            ReuseGranularity::Pixel => Due::Pixels { due, stored: &self.counts },
         }
     }
 
@@ -188,12 +206,7 @@ pub fn render_reusing(
     let due = store.due(reuse.ordinal);
     let plan = FramePlan {
         samples: None,
-        due: match store.granularity {
-            ReuseGranularity::Sample => {
-                Due::Samples { horizons: &store.sample_horizons, pixels: &due, ordinal: reuse.ordinal }
-            }
-            ReuseGranularity::Pixel => Due::Pixels { due: &due, stored: &store.counts },
-        },
+        due: store.beauty_due(&due, reuse.ordinal),
         horizons: Some((reuse.index, reuse.ordinal, reuse.until)),
     };
     let beauty = render_planned(scene, query, integrator, settings, &plan)?;
@@ -253,10 +266,10 @@ impl ReuseStore {
         traced
     }
 
-    /// Copies the traced samples of `beauty` in and computes the pixels `due` (those with a
-    /// traced sample) again: each the sum of its `spp` samples in index order over `spp`, as
-    /// a full frame computes it, and its horizon the nearest of its samples'. Returns the
-    /// samples traced per pixel.
+    /// Copies the traced samples of `beauty` in and its pixels `due` (those with a traced
+    /// sample): each the sum of its samples in index order over their count, as a full frame
+    /// computes it, and its horizon the nearest of those samples'. Returns the samples traced
+    /// per pixel.
     fn merge_samples(&mut self, beauty: &PlannedFrame, due: &[bool], spp: u32) -> Vec<u32> {
         let n = spp as usize;
         let mut traced = vec![0; due.len()];
@@ -267,11 +280,11 @@ impl ReuseStore {
             traced[s.pixel as usize] += 1;
         }
         for (p, _) in due.iter().enumerate().filter(|(_, d)| **d) {
-            let samples = p * n..(p + 1) * n;
-            let sum = self.samples[samples.clone()].iter().fold(Vec3::ZERO, |sum, &li| sum + li);
-            self.image[p] = sum / spp as f32;
-            self.counts[p] = spp;
-            self.horizons[p] = self.sample_horizons[samples].iter().copied().min().unwrap_or(0);
+            let count = beauty.counts[p];
+            self.image[p] = beauty.film.pixels[p];
+            self.counts[p] = count;
+            let samples = &self.sample_horizons[p * n..p * n + count as usize];
+            self.horizons[p] = samples.iter().copied().min().unwrap_or(0);
         }
         traced
     }

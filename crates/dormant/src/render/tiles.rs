@@ -186,10 +186,21 @@ pub(crate) enum Due<'a> {
     /// Every sample of the pixels marked; the other pixels take their lanes in the camera
     /// packets from their `stored` sample counts. They come back black with no samples.
     Pixels { due: &'a [bool], stored: &'a [u32] },
-    /// The samples whose horizon has come by `ordinal` (`horizons`: `spp` per pixel, pixel by
-    /// pixel; `pixels`: whether a pixel has any). Every pixel has `spp` samples (no adaptive
-    /// sampling); traced samples come back one by one ([`PlannedFrame::samples`]).
-    Samples { horizons: &'a [u32], pixels: &'a [bool], ordinal: u32 },
+    /// The samples whose horizon has come by `ordinal` and those never traced (`pixels`:
+    /// whether a pixel has any); the others are taken from `stored`. Traced samples come
+    /// back one by one ([`PlannedFrame::samples`]); the pixels with any, as values and counts.
+    Samples { stored: StoredSamples<'a>, pixels: &'a [bool], ordinal: u32 },
+}
+
+/// The samples kept from earlier frames: `spp` slots per pixel, pixel by pixel.
+#[derive(Clone, Copy)]
+pub(crate) struct StoredSamples<'a> {
+    /// Each slot's radiance and horizon.
+    pub values: &'a [Vec3],
+    pub horizons: &'a [u32],
+    /// Per pixel, how many of its slots hold samples: all but where adaptive sampling stopped
+    /// the pixel early.
+    pub counts: &'a [u32],
 }
 
 /// A planned frame: the traced pixels' values and sample counts and horizons (row-major; zero
@@ -362,7 +373,12 @@ impl TileRenderer<'_> {
                 }
                 let cells = self.cells(bx, by, x1, y1);
                 let mut logs: [RayLog; BLOCK_PIXELS] = std::array::from_fn(|_| self.new_log());
-                self.render_block(&cells, &mut acc, &mut logs, &mut tile.traced);
+                match self.plan.due {
+                    Due::Samples { stored, .. } => {
+                        self.render_block_samples(&cells, stored, &mut acc, &mut logs, &mut tile.traced)
+                    }
+                    _ => self.render_block(&cells, &mut acc, &mut logs),
+                }
                 for (cell, log) in cells.cells[..cells.len].iter().zip(&logs) {
                     tile.rays += log.rays;
                     let (queries, seconds) = log.query_cost();
@@ -390,8 +406,10 @@ impl TileRenderer<'_> {
     /// Whether sample `i` of `cell`'s pixel is traced.
     fn sample_due(&self, cell: &Cell, i: u32) -> bool {
         match self.plan.due {
-            Due::Samples { horizons, ordinal, .. } => {
-                horizons[cell.pixel as usize * self.settings.spp as usize + i as usize] <= ordinal
+            Due::Samples { stored, ordinal, .. } => {
+                i >= stored.counts[cell.pixel as usize]
+                    || stored.horizons[cell.pixel as usize * self.settings.spp as usize + i as usize]
+                        <= ordinal
             }
             _ => cell.traced,
         }
@@ -440,6 +458,7 @@ impl TileRenderer<'_> {
                 let budget = match (self.plan.samples, self.plan.due) {
                     (Some(s), _) => s[p],
                     (None, Due::Pixels { stored, .. }) if !traced => stored[p],
+                    (None, Due::Samples { stored, .. }) if !traced => stored.counts[p],
                     _ => self.settings.spp,
                 };
                 let sampler = PixelSampler::new(x, y, self.settings.seed);
@@ -454,51 +473,25 @@ impl TileRenderer<'_> {
     /// sampling traced as one packet per index, until each has its budget or has converged;
     /// each pixel's rays go into its log. A pixel not traced keeps its lane in the packets but
     /// its path is not continued.
-    fn render_block(
-        &self,
-        cells: &Cells,
-        acc: &mut Accumulator,
-        logs: &mut [RayLog; BLOCK_PIXELS],
-        traced: &mut Vec<TracedSample>,
-    ) {
+    fn render_block(&self, cells: &Cells, acc: &mut Accumulator, logs: &mut [RayLog; BLOCK_PIXELS]) {
         let block = &cells.cells[..cells.len];
-        let spp = self.settings.spp;
-        let mut camera_rays = [Ray::new(Vec3::ZERO, Vec3::Z); BLOCK_PIXELS];
-        let mut hits = [None; BLOCK_PIXELS];
-        // Which cell each packet slot samples, and which cells stopped early.
-        let mut slots = [0usize; BLOCK_PIXELS];
+        let mut packet = CameraPacket::new();
         let mut done = [false; BLOCK_PIXELS];
         let most = block.iter().map(|c| c.budget).max().unwrap_or(0);
         for i in 0..most {
-            let mut m = 0;
-            for (c, cell) in block.iter().enumerate() {
-                if i < cell.budget && !done[c] {
-                    slots[m] = c;
-                    m += 1;
-                }
-            }
-            if m == 0 {
+            if !packet.select(block, i, &done) {
                 break;
             }
-            // Camera rays are made only for packets with a sample to trace.
-            if !slots[..m].iter().any(|&c| self.sample_due(&block[c], i)) {
+            // Camera rays are made only for packets with a pixel to trace.
+            if !packet.slots().iter().any(|&c| block[c].traced) {
                 continue;
             }
-            for (ray, &c) in camera_rays.iter_mut().zip(&slots[..m]) {
-                let cell = &block[c];
-                *ray = camera_ray(&self.camera, spp, cell.x, cell.y, &cell.sampler, i);
-            }
-            self.query.intersect_packet(&camera_rays[..m], &mut hits[..m]);
-            for ((ray, hit), &c) in camera_rays.iter().zip(hits).zip(&slots[..m]) {
-                let cell = &block[c];
-                if let Due::Samples { .. } = self.plan.due {
-                    self.trace_sample(cell, i, ray, hit, &mut logs[c], traced);
-                    continue;
-                }
-                let log = &mut logs[c];
+            self.trace_camera_packet(block, i, &mut packet);
+            for (k, &c) in packet.slots().iter().enumerate() {
+                let (cell, log, ray) = (&block[c], &mut logs[c], &packet.rays[k]);
                 if cell.traced {
-                    log.closest(ray, hit.as_ref());
-                    let li = self.integrator.li_from_hit(ray, hit, &cell.sampler, i, log);
+                    log.closest(ray, packet.hits[k].as_ref());
+                    let li = self.integrator.li_from_hit(ray, packet.hits[k], &cell.sampler, i, log);
                     done[c] = acc.add(cell, li, self.stopping.as_ref());
                 } else {
                     log.count_untraced();
@@ -506,12 +499,64 @@ impl TileRenderer<'_> {
             }
         }
     }
-}
 
-impl TileRenderer<'_> {
-    /// Under [`Due::Samples`], continues sample `i` of `cell`'s pixel from its camera `ray`
-    /// and `hit` when it is due, recording it with its own horizon in `traced`; its rays count
-    /// into the pixel's `log` (which otherwise only counts the camera ray).
+    /// [`Self::render_block`] under [`Due::Samples`]: a sample is traced when due (recorded
+    /// with its own horizon in `traced`) and otherwise taken from `stored`; either way it is
+    /// added to its pixel, so adaptive sampling stops a pixel where a full frame does. Camera
+    /// packets are traced only for an index with a due sample; a pixel with none keeps its
+    /// lanes in them.
+    fn render_block_samples(
+        &self,
+        cells: &Cells,
+        stored: StoredSamples,
+        acc: &mut Accumulator,
+        logs: &mut [RayLog; BLOCK_PIXELS],
+        traced: &mut Vec<TracedSample>,
+    ) {
+        let block = &cells.cells[..cells.len];
+        let spp = self.settings.spp as usize;
+        let mut packet = CameraPacket::new();
+        let mut done = [false; BLOCK_PIXELS];
+        let most = block.iter().map(|c| c.budget).max().unwrap_or(0);
+        for i in 0..most {
+            if !packet.select(block, i, &done) {
+                break;
+            }
+            let any_due = packet.slots().iter().any(|&c| self.sample_due(&block[c], i));
+            if any_due {
+                self.trace_camera_packet(block, i, &mut packet);
+            }
+            for (k, &c) in packet.slots().iter().enumerate() {
+                let cell = &block[c];
+                let due = any_due && self.sample_due(cell, i);
+                if any_due && !due {
+                    logs[c].count_untraced();
+                }
+                if !cell.traced {
+                    continue;
+                }
+                let li = match due {
+                    true => self.trace_sample(cell, i, &packet.rays[k], packet.hits[k], &mut logs[c], traced),
+                    false => stored.values[cell.pixel as usize * spp + i as usize],
+                };
+                done[c] = acc.add(cell, li, self.stopping.as_ref());
+            }
+        }
+    }
+
+    /// The camera rays of `packet`'s lanes for sample `i`, traced as one packet.
+    fn trace_camera_packet(&self, block: &[Cell], i: u32, packet: &mut CameraPacket) {
+        let spp = self.settings.spp;
+        for k in 0..packet.len {
+            let cell = &block[packet.slots[k]];
+            packet.rays[k] = camera_ray(&self.camera, spp, cell.x, cell.y, &cell.sampler, i);
+        }
+        self.query.intersect_packet(&packet.rays[..packet.len], &mut packet.hits[..packet.len]);
+    }
+
+    /// Continues sample `i` of `cell`'s pixel from its camera `ray` and `hit`, recording it
+    /// with its own horizon in `traced`; its rays count into the pixel's `log`. Returns its
+    /// radiance.
     fn trace_sample(
         &self,
         cell: &Cell,
@@ -520,17 +565,51 @@ impl TileRenderer<'_> {
         hit: Option<Hit>,
         log: &mut RayLog,
         traced: &mut Vec<TracedSample>,
-    ) {
-        if !self.sample_due(cell, i) {
-            log.count_untraced();
-            return;
-        }
+    ) -> Vec3 {
         let mut sample_log = self.new_log();
         sample_log.closest(ray, hit.as_ref());
         let li = self.integrator.li_from_hit(ray, hit, &cell.sampler, i, &mut sample_log);
         let horizon = sample_log.horizon().unwrap_or(0);
         traced.push(TracedSample { pixel: cell.pixel, index: i, li, horizon });
         log.absorb(&sample_log);
+        li
+    }
+}
+
+/// One camera packet of a block: which cells sample at the current index (`slots`, the first
+/// `len`), their rays and hits.
+struct CameraPacket {
+    slots: [usize; BLOCK_PIXELS],
+    len: usize,
+    rays: [Ray; BLOCK_PIXELS],
+    hits: [Option<Hit>; BLOCK_PIXELS],
+}
+
+impl CameraPacket {
+    fn new() -> Self {
+        Self {
+            slots: [0; BLOCK_PIXELS],
+            len: 0,
+            rays: [Ray::new(Vec3::ZERO, Vec3::Z); BLOCK_PIXELS],
+            hits: [None; BLOCK_PIXELS],
+        }
+    }
+
+    /// Takes the cells of `block` that still sample at index `i` (within their budget, not
+    /// converged); whether there is any.
+    fn select(&mut self, block: &[Cell], i: u32, done: &[bool; BLOCK_PIXELS]) -> bool {
+        self.len = 0;
+        for (c, cell) in block.iter().enumerate() {
+            if i < cell.budget && !done[c] {
+                self.slots[self.len] = c;
+                self.len += 1;
+            }
+        }
+        self.len > 0
+    }
+
+    fn slots(&self) -> &[usize] {
+        &self.slots[..self.len]
     }
 }
 
