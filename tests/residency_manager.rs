@@ -17,7 +17,7 @@ use dormant::physics::{
 };
 use dormant::residency::{
     CacheBudget, IntegrationForm, IntegrationPolicy, IntegrationSettings, ManagerOptions, ReactivationPath,
-    ReactivationStrategy, SceneManager,
+    ReactivationStrategy, SceneManager, TraceKind,
 };
 use dormant::scene::{Body, Camera, Material, Prototype, SceneDescription, Sky, StaticMesh, Sun};
 use dormant::sequence::{
@@ -90,7 +90,7 @@ fn integrated_frames_hit_like_all_instanced_frames() {
             let mut check = |f: &ReplayFrame<'_>, managers: &mut [SceneManager]| {
                 let manager = &mut managers[0];
                 let stats = manager.prepare(f).unwrap().clone();
-                manager.record_trace(0.0, 0);
+                manager.record_trace(0.0, 0, TraceKind::Typical);
                 reactivated += stats.islands_reactivated;
                 if f.index % 40 == 0 {
                     let reference = sequence.describe_frame(f);
@@ -276,7 +276,7 @@ fn run_sleep_wake(
             after: &[],
         };
         let stats = manager.prepare(&replayed).unwrap().clone();
-        manager.record_trace(0.0, 0);
+        manager.record_trace(0.0, 0, TraceKind::Typical);
         let from_cache = matches!(stats.reactivation_path, Some(ReactivationPath::Cache(_)));
         served += u32::from(from_cache);
         if from_cache || frame % check_every == 0 {

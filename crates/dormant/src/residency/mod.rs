@@ -20,7 +20,7 @@ mod policy;
 mod stage_times;
 
 pub use cache::{CacheBudget, CacheStats};
-pub use cost_model::{CostModelState, IntegrationForm};
+pub use cost_model::{CostModelState, IntegrationForm, TraceKind};
 pub(crate) use lookahead::Lookahead;
 pub(crate) use manager::Decision;
 pub use manager::{FrameStats, ManagerOptions, ReactivationPath, ReactivationStrategy, SceneManager};

@@ -6,6 +6,7 @@
 //! the same images.
 
 use crate::physics::IslandId;
+use crate::residency::TraceKind;
 
 /// A frame an earlier run finished: its files are complete and its statistics kept.
 #[derive(Clone, Debug, PartialEq)]
@@ -18,6 +19,8 @@ pub struct KeptFrame {
     /// The main image's trace as that run measured it, ms, and its rays.
     pub trace_ms: f64,
     pub rays: u64,
+    /// What that trace said of the frames after it.
+    pub trace_kind: TraceKind,
     /// What the scene held after the frame, checked against the replay.
     pub instances: usize,
     pub integrated_islands: usize,

@@ -9,7 +9,7 @@ use crate::physics::trajectory::ReplayFrame;
 use crate::render::{
     render_with_aovs, Aov, Emitters, Film, PinholeCamera, RenderError, RenderScene, RenderStats,
 };
-use crate::residency::{FrameStats, SceneManager};
+use crate::residency::{FrameStats, SceneManager, TraceKind};
 use crate::scene::Camera;
 
 /// Camera rays (one per pixel of this image) of the manager's trace-penalty probes: enough
@@ -108,7 +108,7 @@ impl Sequence {
                 }
             }
         };
-        manager.record_trace(render.seconds * 1e3, render.rays);
+        manager.record_trace(render.seconds * 1e3, render.rays, trace_kind(exact.as_ref()));
         Ok(RenderedFrame { index: frame.index, film, render, aovs, reused_from: None, reuse: exact })
     }
 
@@ -233,7 +233,7 @@ impl Sequence {
         }
         self.aim_probes(manager, frame, renderer);
         manager.prepare_decided(frame, &kept.decisions)?;
-        let stats: &FrameStats = manager.record_trace(kept.trace_ms, kept.rays);
+        let stats: &FrameStats = manager.record_trace(kept.trace_ms, kept.rays, kept.trace_kind);
         for (what, recorded, replayed) in [
             ("instances", kept.instances, stats.instances),
             ("integrated_islands", kept.integrated_islands, stats.integrated_islands),
@@ -244,5 +244,14 @@ impl Sequence {
             }
         }
         Ok(())
+    }
+}
+
+/// What a frame's trace says of the frames after it: a frame traced in full by exact reuse
+/// stands for frames that trace far less.
+fn trace_kind(exact: Option<&ExactFrame>) -> TraceKind {
+    match exact {
+        Some(ExactFrame { full: Some(_), .. }) => TraceKind::FullBeforeReuse,
+        _ => TraceKind::Typical,
     }
 }

@@ -32,7 +32,7 @@ use std::time::Instant;
 use glam::Mat3;
 
 use super::cache::{CacheBudget, CacheOutcome, CacheStats, GeometryCache};
-use super::cost_model::{CostEstimate, CostModel, CostModelState, IntegrationForm};
+use super::cost_model::{CostEstimate, CostModel, CostModelState, IntegrationForm, TraceKind};
 use super::lookahead::Lookahead;
 use super::policy::IntegrationPolicy;
 use super::stage_times::StageTimes;
@@ -431,11 +431,12 @@ impl SceneManager {
         &self.last
     }
 
-    /// Records the trace stage of the frame just prepared; returns its complete statistics.
-    pub fn record_trace(&mut self, trace_ms: f64, rays: u64) -> &FrameStats {
+    /// Records the trace stage of the frame just prepared, of `kind` for the cost model;
+    /// returns its complete statistics.
+    pub fn record_trace(&mut self, trace_ms: f64, rays: u64, kind: TraceKind) -> &FrameStats {
         self.last.stages.trace_ms = trace_ms;
         self.last.rays = rays;
-        self.cost.record_frame(self.last.instances, self.last_commit_ms, trace_ms);
+        self.cost.record_frame(self.last.instances, self.last_commit_ms, trace_ms, kind);
         &self.last
     }
 
