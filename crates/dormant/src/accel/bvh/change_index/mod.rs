@@ -2,10 +2,11 @@
 //! the horizons of exact temporal reuse. Each [`ChangeBox`] bounds something whose look
 //! differs from one rendered frame to the next (a body that moved, appeared or left, with
 //! motion blur over both shutters) and carries the ordinal of the first rendered frame that
-//! shows the difference. The boxes sit in a binned-SAH BVH whose nodes also carry the range of
-//! their boxes' ordinals, so a query ("the earliest change after ordinal `n` that this ray
-//! segment meets") skips subtrees that lie wholly in the past or no earlier than the best
-//! change found so far.
+//! shows the difference. The boxes sit in a binned-SAH BVH, traversed as its 8-wide copy (the
+//! SIMD path's box kernel, as rays traverse the BVH backend) whose children also carry the
+//! range of their boxes' ordinals, so a query ("the earliest change after ordinal `n` that
+//! this ray segment meets") skips subtrees that lie wholly in the past or no earlier than the
+//! best change found so far.
 //!
 //! A box may also name the geometry it bounds ([`ChangeShape`]: a small mesh at the poses of
 //! the body before and after the change). A segment that crosses such a box then counts only
@@ -20,7 +21,9 @@ use glam::Vec3;
 pub(crate) use shape::{ChangeShape, EXACT_MESH_TRIANGLES};
 use shape::{ExactMesh, ShapeTest};
 
-use super::flat::{build, interval_is_valid, BoxRay, Node, STACK_SIZE};
+use super::flat::{build, interval_is_valid, BoxRay, FlatBvh, Node, Start, Visitor, Wide, WideChild};
+use super::flat::{ANY_HIT, WIDTH};
+use super::simd::dispatch;
 use super::BuildParams;
 use crate::geometry::{Aabb, Ray};
 
@@ -36,18 +39,21 @@ pub struct ChangeBox {
     pub shape: Option<ChangeShape>,
 }
 
-/// A node of the index: bounds, children or boxes as in the flat BVH, and the least and most
-/// `visible_at` below it.
+/// The least and most `visible_at` below each child of a wide node (unused slots: none).
 #[derive(Clone, Copy, Debug)]
-struct IndexNode {
-    min: Vec3,
-    /// Interior: the first child (the second follows it). Leaf: the first box.
-    first: u32,
-    max: Vec3,
-    /// Boxes in the leaf; 0 for interior nodes.
-    count: u32,
-    earliest: u32,
-    latest: u32,
+struct SlotTimes {
+    earliest: [u32; WIDTH],
+    latest: [u32; WIDTH],
+}
+
+impl SlotTimes {
+    const NONE: SlotTimes = SlotTimes { earliest: [u32::MAX; WIDTH], latest: [0; WIDTH] };
+
+    /// The least and most of all slots.
+    fn span(&self) -> (u32, u32) {
+        let earliest = self.earliest.iter().copied().min().unwrap_or(u32::MAX);
+        (earliest, self.latest.iter().copied().max().unwrap_or(0))
+    }
 }
 
 /// What a query reads of a box in a leaf of several: its bounds and frame, 32 bytes (a
@@ -63,7 +69,12 @@ struct LeafBox {
 /// run from many threads at once.
 #[derive(Clone, Debug, Default)]
 pub struct ChangeIndex {
-    nodes: Vec<IndexNode>,
+    bvh: FlatBvh,
+    wide: Wide,
+    /// Per wide node, its children's frame ranges.
+    times: Vec<SlotTimes>,
+    /// The least and most `visible_at` of all boxes.
+    span: (u32, u32),
     /// The boxes in leaf order.
     boxes: Vec<LeafBox>,
     /// Per box (leaf order), the object-space views of its shape's poses.
@@ -95,7 +106,11 @@ impl ChangeIndex {
         let bounds: Vec<Aabb> = boxes.iter().map(|b| b.bounds).collect();
         let (bvh, order) = build(&bounds, INDEX_PARAMS);
         let mut boxes: Vec<ChangeBox> = order.iter().map(|&i| boxes[i as usize]).collect();
-        let nodes = index_nodes(&bvh.nodes, &mut boxes);
+        sort_leaves(&bvh.nodes, &mut boxes);
+        let wide = Wide::new(&bvh, |_, n| (n.first, n.count));
+        let times = slot_times(&wide, &boxes);
+        let span =
+            boxes.iter().fold((u32::MAX, 0), |(lo, hi), b| (lo.min(b.visible_at), hi.max(b.visible_at)));
         let meshes: Vec<ExactMesh> = meshes.iter().map(|m| ExactMesh::new(m)).collect();
         let shapes = boxes.iter().map(|b| b.shape.and_then(|s| ShapeTest::new(&s, &meshes))).collect();
         let (body_changes, changes, change_boxes) = changes_by_body(&boxes);
@@ -103,7 +118,7 @@ impl ChangeIndex {
             .iter()
             .map(|b| LeafBox { min: b.bounds.min, visible_at: b.visible_at, max: b.bounds.max })
             .collect();
-        Self { nodes, boxes, shapes, meshes, body_changes, changes, change_boxes }
+        Self { bvh, wide, times, span, boxes, shapes, meshes, body_changes, changes, change_boxes }
     }
 
     /// The earliest `visible_at` greater than `after` of body `body`'s changes, if it has one.
@@ -150,97 +165,105 @@ impl ChangeIndex {
     /// anything blocks it: a shape it meets at both poses blocks it before and after the
     /// change, so only a shape met at one pose counts.
     pub fn first_change(&self, ray: &Ray, after: u32, before: u32, occlusion: bool) -> u32 {
-        if self.nodes.is_empty() || after.saturating_add(1) >= before || !interval_is_valid(ray) {
+        let (earliest, latest) = self.span;
+        if self.bvh.is_empty()
+            || after.saturating_add(1) >= before
+            || latest <= after
+            || earliest >= before
+            || !interval_is_valid(ray)
+        {
             return before;
         }
         let r = BoxRay::new(ray);
-        let mut best = before;
-        let mut stack = [0u32; STACK_SIZE];
-        let mut top = 1;
-        while top > 0 {
-            top -= 1;
-            let n = &self.nodes[stack[top] as usize];
-            if n.latest <= after
-                || n.earliest >= best
-                || r.hit_bounds(n.min, n.max, ray.t_max) == f32::INFINITY
-            {
-                continue;
-            }
-            if n.count == 1 {
-                // A leaf of one box: the node's bounds and frame are the box's, just tested.
-                let k = n.first as usize;
-                if self.shapes[k].is_none_or(|s| s.changes_for(&self.meshes, ray, occlusion)) {
-                    best = n.earliest;
-                }
-            } else if n.count > 1 {
-                for k in n.first as usize..(n.first + n.count) as usize {
-                    let b = &self.boxes[k];
-                    if b.visible_at >= best {
-                        break;
-                    }
-                    if b.visible_at > after
-                        && r.hit_bounds(b.min, b.max, ray.t_max) != f32::INFINITY
-                        && self.shapes[k].is_none_or(|s| s.changes_for(&self.meshes, ray, occlusion))
-                    {
-                        best = b.visible_at;
-                    }
-                }
-            }
-            if n.count > 0 {
-                // Nothing can come before the frame right after `after`.
-                if best == after + 1 {
-                    return best;
-                }
-                continue;
-            }
-            // The child whose changes come earlier is visited first: finding an early change
-            // first prunes more.
-            let (a, b) = (n.first, n.first + 1);
-            let (near, far) = if self.nodes[a as usize].earliest <= self.nodes[b as usize].earliest {
-                (a, b)
-            } else {
-                (b, a)
-            };
-            debug_assert!(top + 2 <= STACK_SIZE, "the index is deeper than the traversal stack");
-            stack[top] = far;
-            stack[top + 1] = near;
-            top += 2;
-        }
-        best
+        let mut search = ChangeSearch { index: self, ray, r: &r, after, best: before, occlusion };
+        let mut t_max = ray.t_max;
+        dispatch!(|k| self.wide.visit::<_, _, ANY_HIT>(
+            k,
+            &self.bvh,
+            Start::Test(0),
+            &r,
+            &mut t_max,
+            &mut search
+        ));
+        search.best
     }
 }
 
-/// The index's nodes over the flat BVH's `nodes`, with `boxes` (in leaf order) sorted by
-/// `visible_at` within each leaf, so a query stops in a leaf at the first box no earlier than
-/// its best change.
-fn index_nodes(nodes: &[Node], boxes: &mut [ChangeBox]) -> Vec<IndexNode> {
-    let mut nodes: Vec<IndexNode> = nodes
-        .iter()
-        .map(|n| IndexNode {
-            min: n.min,
-            first: n.first,
-            max: n.max,
-            count: n.count,
-            earliest: u32::MAX,
-            latest: 0,
-        })
-        .collect();
-    // Children follow their parents in the array, so one backwards pass fills every interior
-    // node's frame range from its children's.
-    for i in (0..nodes.len()).rev() {
-        let n = nodes[i];
-        let (earliest, latest) = if n.count > 0 {
-            let leaf = &mut boxes[n.first as usize..(n.first + n.count) as usize];
-            leaf.sort_by_key(|b| b.visible_at);
-            (leaf[0].visible_at, leaf[leaf.len() - 1].visible_at)
-        } else {
-            let (a, b) = (nodes[n.first as usize], nodes[n.first as usize + 1]);
-            (a.earliest.min(b.earliest), a.latest.max(b.latest))
-        };
-        nodes[i].earliest = earliest;
-        nodes[i].latest = latest;
+/// One [`ChangeIndex::first_change`] query as it walks the index: the earliest change found
+/// so far that the segment meets (`best`), and the frames it seeks, which turn away every
+/// subtree whose changes all lie at or before `after` or at or after `best`.
+struct ChangeSearch<'a> {
+    index: &'a ChangeIndex,
+    ray: &'a Ray,
+    r: &'a BoxRay,
+    after: u32,
+    best: u32,
+    occlusion: bool,
+}
+
+impl Visitor for ChangeSearch<'_> {
+    /// The leaf's boxes in order of `visible_at` until one the segment meets (the earliest of
+    /// the leaf) or one no earlier than the best; stops the walk once nothing can come sooner.
+    #[inline(always)]
+    fn leaf(&mut self, first: u32, count: u32, _t_max: &mut f32) -> bool {
+        let index = self.index;
+        for k in first as usize..(first + count) as usize {
+            let b = &index.boxes[k];
+            if b.visible_at >= self.best {
+                break;
+            }
+            // A leaf of one box was entered through the box itself, just tested.
+            let enters = count == 1 || self.r.hit_bounds(b.min, b.max, self.ray.t_max) != f32::INFINITY;
+            if b.visible_at > self.after
+                && enters
+                && index.shapes[k].is_none_or(|s| s.changes_for(&index.meshes, self.ray, self.occlusion))
+            {
+                self.best = b.visible_at;
+                break;
+            }
+        }
+        // Nothing can come before the frame right after `after`.
+        self.best == self.after + 1
     }
-    nodes
+
+    #[inline(always)]
+    fn allow(&self, w: u32) -> u32 {
+        let t = &self.index.times[w as usize];
+        let mut mask = 0;
+        for slot in 0..WIDTH {
+            let live = t.earliest[slot] < self.best && t.latest[slot] > self.after;
+            mask |= u32::from(live) << slot;
+        }
+        mask
+    }
+}
+
+/// Sorts each leaf's `boxes` (in leaf order) by `visible_at`, so a query stops in a leaf at
+/// the first box no earlier than its best change.
+fn sort_leaves(nodes: &[Node], boxes: &mut [ChangeBox]) {
+    for n in nodes.iter().filter(|n| n.is_leaf()) {
+        boxes[n.first as usize..(n.first + n.count) as usize].sort_by_key(|b| b.visible_at);
+    }
+}
+
+/// The frame ranges of every wide node's children over `boxes` (leaf order, each leaf
+/// sorted). Children come after their parents, so one backwards pass sees every child's
+/// range before its parent's.
+fn slot_times(wide: &Wide, boxes: &[ChangeBox]) -> Vec<SlotTimes> {
+    let mut times = vec![SlotTimes::NONE; wide.node_count()];
+    for w in (0..wide.node_count()).rev() {
+        let mut t = SlotTimes::NONE;
+        for (slot, child) in wide.children(w as u32) {
+            (t.earliest[slot], t.latest[slot]) = match child {
+                WideChild::Node(c) => times[c as usize].span(),
+                WideChild::Leaf(first, count) => {
+                    (boxes[first as usize].visible_at, boxes[(first + count - 1) as usize].visible_at)
+                }
+            };
+        }
+        times[w] = t;
+    }
+    times
 }
 
 /// Each body's changes among `boxes` (in leaf order): offsets per body into the `visible_at`

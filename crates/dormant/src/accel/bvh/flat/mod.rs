@@ -23,7 +23,7 @@ pub(crate) use sah::subtree_cost;
 #[cfg(test)]
 pub(crate) use traverse::traverse;
 pub(crate) use traverse::{interval_is_valid, BoxRay, STACK_SIZE};
-pub(crate) use wide::{Start, Wide, ANY_HIT, CLOSEST_HIT};
+pub(crate) use wide::{Start, Visitor, Wide, WideChild, ANY_HIT, CLOSEST_HIT, WIDTH};
 
 use glam::Vec3;
 

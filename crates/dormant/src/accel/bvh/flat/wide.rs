@@ -39,6 +39,30 @@ pub(super) const LEAF: u32 = 1 << 31;
 /// by entering a folded subtree): `FOLDED | binary node`.
 const FOLDED: u32 = LEAF | 1 << 30;
 
+/// What a traversal does at the leaves it reaches ([`Wide::visit`]), and which children it
+/// enters of those its box tests let through.
+pub(crate) trait Visitor {
+    /// Visits leaf items `first..first + count`; may lower `t_max`; returns `true` to stop.
+    fn leaf(&mut self, first: u32, count: u32, t_max: &mut f32) -> bool;
+
+    /// Of wide node `w`'s children, those that may be entered: bit `i` for slot `i` (the
+    /// change index turns away subtrees whose changes all lie outside the frames it seeks).
+    #[inline(always)]
+    fn allow(&self, _w: u32) -> u32 {
+        u32::MAX
+    }
+}
+
+/// A leaf closure of [`Wide::traverse`]: every child is entered.
+struct EveryChild<'a, F>(&'a mut F);
+
+impl<F: FnMut(u32, u32, &mut f32) -> bool> Visitor for EveryChild<'_, F> {
+    #[inline(always)]
+    fn leaf(&mut self, first: u32, count: u32, t_max: &mut f32) -> bool {
+        (self.0)(first, count, t_max)
+    }
+}
+
 /// Where a traversal starts: a binary node of the tree, and whether its box is still to be
 /// tested.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -200,6 +224,21 @@ impl Wide {
     where
         F: FnMut(u32, u32, &mut f32) -> bool,
     {
+        self.visit::<K, _, NEAREST_FIRST>(k, bvh, root, ray, t_max, &mut EveryChild(leaf))
+    }
+
+    /// [`Self::traverse`] with a [`Visitor`], which may also turn away children their boxes
+    /// let through.
+    #[inline(always)]
+    pub(crate) fn visit<K: Kernel, V: Visitor, const NEAREST_FIRST: bool>(
+        &self,
+        k: K,
+        bvh: &FlatBvh,
+        root: Start,
+        ray: &BoxRay,
+        t_max: &mut f32,
+        leaf: &mut V,
+    ) -> bool {
         let mut stack = TraversalStack::<(u32, f32), WIDE_STACK>::new();
         // The last entry found is visited first, straight from here: a root with a wide node
         // of its own (most traversals) never goes through the stack.
@@ -222,7 +261,7 @@ impl Wide {
         let Some((first, _)) = first else {
             return false;
         };
-        self.traverse8::<K, F, NEAREST_FIRST>(k, &mut stack, first, ray, t_max, leaf)
+        self.traverse8::<K, V, NEAREST_FIRST>(k, &mut stack, first, ray, t_max, leaf)
     }
 
     /// Where a traversal of the subtree `root` starts. Binary nodes folded into a wide node
@@ -300,7 +339,7 @@ impl Wide {
     /// rays, so time a retry as well as counting it. Each variant and its measurements:
     /// docs/lab/accelerators.md#2026-12-04-where-the-accelerator-targets-end-target-by-target
     #[inline(always)]
-    fn traverse8<K: Kernel, F, const NEAREST_FIRST: bool>(
+    fn traverse8<K: Kernel, V: Visitor, const NEAREST_FIRST: bool>(
         &self,
         k: K,
         // By reference: moving the 7 KiB stack would copy it.
@@ -308,11 +347,8 @@ impl Wide {
         first: u32,
         ray: &BoxRay,
         t_max: &mut f32,
-        leaf: &mut F,
-    ) -> bool
-    where
-        F: FnMut(u32, u32, &mut f32) -> bool,
-    {
+        leaf: &mut V,
+    ) -> bool {
         let kr = k.prepare(&BoxRay8 { org: ray.org.into(), inv: ray.inv.into(), t_min: ray.t_min });
         let mut cur = first;
         // The hit children of the current node, sorted; only `hits[..m]` of this node is read.
@@ -322,7 +358,7 @@ impl Wide {
             if cur & LEAF == 0 {
                 let n = &self.nodes[cur as usize];
                 let (mask, near) = k.box8(&kr, &n.boxes, *t_max);
-                let mut mask = mask & n.used;
+                let mut mask = mask & n.used & leaf.allow(cur);
                 if mask != 0 {
                     if !NEAREST_FIRST {
                         // Any-hit: the first hit child next, the others pushed as found.
@@ -364,7 +400,7 @@ impl Wide {
             } else {
                 let (first, count) = self.leaf_range(cur);
                 // The only call of `leaf` (see `traverse`).
-                if leaf(first, count, t_max) {
+                if leaf.leaf(first, count, t_max) {
                     return true;
                 }
             }
@@ -377,7 +413,31 @@ impl Wide {
     }
 }
 
+/// A child of a wide node: another wide node, or a leaf's item range (first, count).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum WideChild {
+    Node(u32),
+    Leaf(u32, u32),
+}
+
 impl Wide {
+    /// Wide nodes, each after its parent.
+    pub(crate) fn node_count(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// The used children of wide node `w`, by slot.
+    pub(crate) fn children(&self, w: u32) -> impl Iterator<Item = (usize, WideChild)> + '_ {
+        let n = &self.nodes[w as usize];
+        (0..WIDTH).filter(move |&slot| n.used & (1 << slot) != 0).map(move |slot| {
+            let child = match n.count[slot] {
+                0 => WideChild::Node(n.child[slot]),
+                count => WideChild::Leaf(n.child[slot], u32::from(count)),
+            };
+            (slot, child)
+        })
+    }
+
     /// The item range of the leaf with stack code `code` (`LEAF` or `FOLDED`).
     #[inline(always)]
     pub(super) fn leaf_range(&self, code: u32) -> (u32, u32) {
