@@ -128,23 +128,19 @@ impl<'a> RenderScene<'a> {
 
     /// The body a hit lies on (instanced, resting or baked), if it is on one.
     pub(crate) fn body_of(&self, hit: &Hit) -> Option<u32> {
-        self.object(hit)?.body.map(|b| b.0)
+        self.object(hit.object, hit.prim)?.body.map(|b| b.0)
     }
 
     /// The body instance `id` places, if it places one.
     pub(crate) fn body_of_instance(&self, id: InstanceId) -> Option<u32> {
-        let object = HitObject::Instance(id);
-        let resolved = match &self.objects {
-            Objects::Loaded(map) => map.resolve(object, 0),
-            Objects::Mapped(map) => map.resolve(object, 0),
-        };
-        resolved?.body.map(|b| b.0)
+        self.object(HitObject::Instance(id), 0)?.body.map(|b| b.0)
     }
 
-    fn object(&self, hit: &Hit) -> Option<ResolvedHit> {
+    /// What primitive `prim` of `object` is: its mesh, local primitive and body.
+    fn object(&self, object: HitObject, prim: u32) -> Option<ResolvedHit> {
         match &self.objects {
-            Objects::Loaded(map) => map.resolve(hit.object, hit.prim),
-            Objects::Mapped(map) => map.resolve(hit.object, hit.prim),
+            Objects::Loaded(map) => map.resolve(object, prim),
+            Objects::Mapped(map) => map.resolve(object, prim),
         }
     }
 
@@ -163,7 +159,8 @@ impl<'a> RenderScene<'a> {
     pub(crate) fn surface(&self, ray: &Ray, hit: &Hit) -> SurfaceHit {
         let p = ray.at(hit.t);
         let ng = if hit.ng.dot(ray.dir) > 0.0 { -hit.ng } else { hit.ng };
-        let resolved = self.object(hit).and_then(|obj| self.mesh(obj.mesh).map(|m| (obj, m)));
+        let resolved =
+            self.object(hit.object, hit.prim).and_then(|obj| self.mesh(obj.mesh).map(|m| (obj, m)));
         let Some((obj, (mesh, material))) = resolved else {
             debug_assert!(false, "hit on unknown object {:?}", hit.object);
             let material = Material::diffuse(Vec3::splat(0.5));
