@@ -115,7 +115,16 @@ impl<'s> ExactReuse<'s> {
                 debug_assert!(false, "the selected frames lie within the trajectory");
                 break;
             }
+            let (count, start) = (boxes.len(), std::time::Instant::now());
             self.index = ChangeIndex::build(boxes, self.stream.sequence.small_prototypes());
+            let ms = start.elapsed().as_secs_f64() * 1e3;
+            tracing::debug!(
+                window_start,
+                frames = self.full.len() - window_start,
+                boxes = count,
+                ms,
+                "change index"
+            );
         }
     }
 

@@ -17,6 +17,7 @@
 mod shape;
 
 use glam::Vec3;
+use rayon::prelude::*;
 
 pub(crate) use shape::{ChangeShape, EXACT_MESH_TRIANGLES};
 use shape::{ExactMesh, ShapeTest};
@@ -97,25 +98,25 @@ impl ChangeIndex {
     /// size plus 1e-5 of its distance from the origin) so that rounding in the tracers' hit
     /// points and instance transforms never puts a change outside its box. Empty and
     /// non-finite boxes are dropped.
-    pub fn build(boxes: Vec<ChangeBox>, meshes: Vec<Vec<[Vec3; 3]>>) -> Self {
-        let boxes: Vec<ChangeBox> = boxes
-            .into_iter()
-            .filter(|b| !b.bounds.is_empty() && b.bounds.min.is_finite() && b.bounds.max.is_finite())
-            .map(|b| ChangeBox { bounds: padded(b.bounds), ..b })
-            .collect();
-        let bounds: Vec<Aabb> = boxes.iter().map(|b| b.bounds).collect();
+    pub fn build(mut boxes: Vec<ChangeBox>, meshes: Vec<Vec<[Vec3; 3]>>) -> Self {
+        // Built once per window of frames, before the window's first frame, so its passes go
+        // over rayon: the demolition preview's 177,000 boxes took 153 ms serially, 135 ms so
+        // on 2 threads, of which the SAH build about 55 and reordering the boxes about 20.
+        boxes.retain(|b| !b.bounds.is_empty() && b.bounds.min.is_finite() && b.bounds.max.is_finite());
+        boxes.par_iter_mut().for_each(|b| b.bounds = padded(b.bounds));
+        let bounds: Vec<Aabb> = boxes.par_iter().map(|b| b.bounds).collect();
         let (bvh, order) = build(&bounds, INDEX_PARAMS);
-        let mut boxes: Vec<ChangeBox> = order.iter().map(|&i| boxes[i as usize]).collect();
+        let mut boxes: Vec<ChangeBox> = order.par_iter().map(|&i| boxes[i as usize]).collect();
         sort_leaves(&bvh.nodes, &mut boxes);
         let wide = Wide::new(&bvh, |_, n| (n.first, n.count));
         let times = slot_times(&wide, &boxes);
         let span =
             boxes.iter().fold((u32::MAX, 0), |(lo, hi), b| (lo.min(b.visible_at), hi.max(b.visible_at)));
         let meshes: Vec<ExactMesh> = meshes.iter().map(|m| ExactMesh::new(m)).collect();
-        let shapes = boxes.iter().map(|b| b.shape.and_then(|s| ShapeTest::new(&s, &meshes))).collect();
+        let shapes = boxes.par_iter().map(|b| b.shape.and_then(|s| ShapeTest::new(&s, &meshes))).collect();
         let (body_changes, changes, change_boxes) = changes_by_body(&boxes);
         let boxes = boxes
-            .iter()
+            .par_iter()
             .map(|b| LeafBox { min: b.bounds.min, visible_at: b.visible_at, max: b.bounds.max })
             .collect();
         Self { bvh, wide, times, span, boxes, shapes, meshes, body_changes, changes, change_boxes }
@@ -271,7 +272,7 @@ fn slot_times(wide: &Wide, boxes: &[ChangeBox]) -> Vec<SlotTimes> {
 fn changes_by_body(boxes: &[ChangeBox]) -> (Vec<u32>, Vec<u32>, Vec<u32>) {
     let mut changed: Vec<(u32, u32, u32)> =
         boxes.iter().enumerate().filter_map(|(k, b)| Some((b.body?, b.visible_at, k as u32))).collect();
-    changed.sort_unstable();
+    changed.par_sort_unstable();
     let bodies = changed.last().map_or(0, |c| c.0 as usize + 1);
     let mut offsets = vec![0u32; bodies + 1];
     for &(b, _, _) in &changed {
