@@ -9,7 +9,7 @@ use super::RenderArgs;
 use crate::cli::CliError;
 use dormant::accel::Backend;
 use dormant::residency::FrameStats;
-use dormant::sequence::output::{FrameWriter, OutputError, OutputLayout};
+use dormant::sequence::output::{FrameWriter, OutputError, OutputLayout, WrittenFrame};
 use dormant::sequence::RenderedFrame;
 
 /// Writes each rendered frame's files and reports it.
@@ -26,26 +26,67 @@ pub(super) struct FrameOutput<'a> {
     pub records: Vec<serde_json::Value>,
     /// Frames kept from an earlier run (`--resume`), not written again.
     pub kept: usize,
+    /// With `--video`: every frame's image, in order, once written.
+    pub video_frames: Option<Vec<PathBuf>>,
+}
+
+/// A frame whose files are being written on a thread of their own, and what is reported of
+/// it once they are.
+pub(super) struct FrameInFlight {
+    writing: std::thread::JoinHandle<Result<WrittenFrame, OutputError>>,
+    /// The image's path.
+    path: PathBuf,
+    /// Its line on stdout, unless quiet; its `--json` record, when kept.
+    line: Option<String>,
+    record: Option<serde_json::Value>,
 }
 
 impl FrameOutput<'_> {
-    /// Writes `frame`'s files atomically (a reused frame's are copies of its source's);
-    /// returns the image's path.
+    /// Starts writing `frame`'s files atomically (a reused frame's are copies of its
+    /// source's) on a thread of their own, after denoising on this one: the files of one
+    /// frame are written while the next renders, and the run waits on them only at
+    /// [`Self::finish`]. Most of a write is waiting for the disk (each file is synced before
+    /// its rename), which a settled shot's later frames, a tenth of a second of tracing,
+    /// otherwise spent idle.
+    pub fn start(
+        &mut self,
+        frame: &RenderedFrame,
+        scene_stats: Option<&FrameStats>,
+    ) -> Result<FrameInFlight, CliError> {
+        let files = self.writer.prepare(frame).map_err(output_error)?;
+        let path = files.paths()[0].clone();
+        let denoise_seconds = files.denoise_seconds();
+        let line = (!self.quiet).then(|| self.summary(&path, frame, denoise_seconds));
+        let record =
+            self.keep_records.then(|| self.record(frame, scene_stats, files.paths(), denoise_seconds));
+        let writing = std::thread::spawn(move || files.write());
+        Ok(FrameInFlight { writing, path, line, record })
+    }
+
+    /// Waits for a frame's files and reports it.
+    pub fn finish(&mut self, frame: FrameInFlight, progress: &ProgressBar) -> Result<(), CliError> {
+        let written =
+            frame.writing.join().map_err(|_| CliError::Runtime("the frame writer panicked".into()))?;
+        written.map_err(output_error)?;
+        if let Some(line) = frame.line {
+            progress.suspend(|| println!("{line}"));
+        }
+        self.records.extend(frame.record);
+        if let Some(video) = &mut self.video_frames {
+            video.push(frame.path);
+        }
+        Ok(())
+    }
+
+    /// Writes `frame`'s files and reports it, waiting for them.
     pub fn write(
         &mut self,
         frame: &RenderedFrame,
         scene_stats: Option<&FrameStats>,
         progress: &ProgressBar,
-    ) -> Result<PathBuf, CliError> {
-        let written = self.writer.write(frame).map_err(output_error)?;
-        let path = written.files[0].clone();
-        if !self.quiet {
-            progress.suspend(|| println!("{}", self.summary(&path, frame, written.denoise_seconds)));
-        }
-        if self.keep_records {
-            self.records.push(self.record(frame, scene_stats, &written.files, written.denoise_seconds));
-        }
-        Ok(path)
+    ) -> Result<(), CliError> {
+        let in_flight = self.start(frame, scene_stats)?;
+        self.finish(in_flight, progress)
     }
 
     /// The frame's `--json` record.

@@ -266,6 +266,7 @@ pub(super) fn run(
         keep_records: json.is_requested(),
         records: Vec::new(),
         kept: 0,
+        video_frames: None,
     };
     let (scene_name, is_sequence) = match source {
         None => (render_still(&job, &mut output)?, false),

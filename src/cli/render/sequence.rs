@@ -4,7 +4,9 @@
 
 use std::path::{Path, PathBuf};
 
-use super::frame_output::{output_error, FrameOutput};
+use indicatif::ProgressBar;
+
+use super::frame_output::{output_error, FrameInFlight, FrameOutput};
 use super::stop::StopSignals;
 use super::{adaptive_sampling, aov_passes, sequence_error, RenderArgs, RenderJob, RenderMode, Switch};
 use crate::cli::CliError;
@@ -33,36 +35,37 @@ pub(super) fn render_sequence(
     let denoise = output.writer.denoiser.map(Denoiser::label);
     let info = run_info(args, sequence, job.backend, &frames, renderer.adaptive, denoise);
     let kept = kept_frames(output, &info, &frames)?;
-    let mut frame_paths: Vec<PathBuf> = match args.video {
-        true => kept.iter().map(|r| output.writer.layout.frame_files(r.frame).remove(0)).collect(),
-        false => Vec::new(),
-    };
+    output.video_frames = args
+        .video
+        .then(|| kept.iter().map(|r| output.writer.layout.frame_files(r.frame).remove(0)).collect());
     let kept_frames: Vec<_> = kept.iter().map(FrameRecord::kept).collect();
     let mut stats_file = stats_file(args, sequence, &frames, info, kept);
     let progress = crate::cli::progress::frames_bar(quiet, "rendering", Some(u64::from(frames.count())));
     progress.set_position(kept_frames.len() as u64);
     let mut rate = RayRate::default();
     let mut stop = StopSignals::install()?;
+    // A frame's files are written while the next one renders (`FrameOutput::start`).
+    let mut in_flight: Option<InFlight> = None;
     let rendered =
         sequence.render(&frames, &mut manager, &renderer, &kept_frames, &mut |frame, stats, manager| {
-            let path = output.write(frame, Some(stats), &progress)?;
-            if args.video {
-                frame_paths.push(path);
+            if let Some(done) = in_flight.take() {
+                land(done, output, &mut stats_file, manager, &progress)?;
             }
             let physics = sequence.physics_ms.get(frame.index as usize).copied();
-            let record = FrameRecord::of(frame, stats, physics);
-            stats_file.push(record, manager).map_err(|e| runtime(&e))?;
+            in_flight = Some((output.start(frame, Some(stats))?, FrameRecord::of(frame, stats, physics)));
             let mrays = rate.add(&frame.render);
             progress.set_message(format!(
                 "frame {} | {mrays:.1} Mrays/s | {} islands integrated",
                 frame.index, stats.integrated_islands
             ));
-            progress.inc(1);
             stop.after_frame(frame.index)?;
             Ok::<(), LoopError>(())
         });
+    // The last frame, or the one a stop signal came after.
+    let landed = in_flight.map_or(Ok(()), |done| land(done, output, &mut stats_file, &manager, &progress));
     // Stopped by a signal, the run writes its statistics (written at intervals so far) only.
     let stopped = LoopError::stop_of(rendered, &args.out)?;
+    landed?;
     progress.finish_and_clear();
     let run_stats = stats_file.finish(&manager).map_err(|e| runtime(&e))?;
     if let Some(stopped) = stopped {
@@ -71,9 +74,28 @@ pub(super) fn render_sequence(
     crate::report::write_report_png(&run_stats, &args.out.join("report.png")).map_err(|e| runtime(&e))?;
     if args.video {
         let fps = 1.0 / (f64::from(sequence.trajectory.timestep) * f64::from(frames.step()));
+        let frame_paths = output.video_frames.take().unwrap_or_default();
         encode_video(args, &frame_paths, fps, output.quiet)?;
     }
     Ok(sequence.template.name.clone())
+}
+
+/// A frame whose files are being written, and its statistics record.
+type InFlight = (FrameInFlight, FrameRecord);
+
+/// Waits for the files of a frame in flight, then counts it done: reported, and its record
+/// in the statistics, so that a resumed run keeps only frames whose files are complete.
+fn land(
+    (files, record): InFlight,
+    output: &mut FrameOutput<'_>,
+    stats_file: &mut StatsFile,
+    manager: &SceneManager,
+    progress: &ProgressBar,
+) -> Result<(), CliError> {
+    output.finish(files, progress)?;
+    stats_file.push(record, manager).map_err(|e| runtime(&e))?;
+    progress.inc(1);
+    Ok(())
 }
 
 /// How `job` renders each frame of `sequence`, with the AOV `passes`.

@@ -49,8 +49,8 @@ impl StopSignals {
         Ok(Self { arrived, frames: 0 })
     }
 
-    /// Called once frame `last_frame` is written: once a stop signal has arrived, the error
-    /// that ends the frame loop.
+    /// Called once frame `last_frame` is rendered (its files, in flight, are written before
+    /// the run ends): once a stop signal has arrived, the error that ends the frame loop.
     pub(super) fn after_frame(&mut self, last_frame: u32) -> Result<(), CliError> {
         self.frames += 1;
         match self.arrived.load(Ordering::SeqCst) {

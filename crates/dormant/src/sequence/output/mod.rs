@@ -9,7 +9,7 @@ mod writer;
 
 pub use layout::OutputLayout;
 pub use resume::kept_frames;
-pub use writer::FrameWriter;
+pub use writer::{FrameFiles, FrameWriter, WrittenFrame};
 
 use std::path::PathBuf;
 

@@ -1,7 +1,9 @@
 //! [`FrameWriter`]: a rendered frame's files, written atomically; a reused frame's are copies
-//! of the frame it repeats.
+//! of the frame it repeats. Writing is in two steps so that a caller can write one frame's
+//! files while it renders the next: [`FrameWriter::prepare`] does what needs the writer (the
+//! denoiser, which one thread drives) and returns the [`FrameFiles`], owned and `Send`, which
+//! [`FrameFiles::write`] encodes and writes on any thread.
 
-use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 
 use super::{OutputError, OutputLayout};
@@ -28,56 +30,95 @@ pub struct WrittenFrame {
     pub denoise_seconds: Option<f64>,
 }
 
+/// A frame's files, ready to be written: the images to encode (denoised already), or the
+/// files of the frame it repeats to copy.
+#[derive(Debug)]
+pub struct FrameFiles {
+    written: WrittenFrame,
+    content: Content,
+}
+
+#[derive(Debug)]
+enum Content {
+    /// The files of the frame a reused frame repeats, in the same order.
+    Copies(Vec<PathBuf>),
+    /// Each image (the pass it is, `None` for the image and the noisy image) with its tone
+    /// mapping's exposure, and whether an EXR follows each PNG.
+    Images { images: Vec<(Option<Aov>, Film)>, exposure: f32, exr: bool },
+}
+
 impl FrameWriter<'_> {
     /// Writes `frame`'s files.
     pub fn write(&self, frame: &RenderedFrame) -> Result<WrittenFrame, OutputError> {
-        let files = self.layout.frame_files(frame.index);
-        let denoise_seconds = match frame.reused_from {
-            Some(source) => {
-                for (from, to) in self.layout.frame_files(source).iter().zip(&files) {
-                    copy_atomic(from, to)?;
-                }
-                None
-            }
-            None => self.write_images(frame, &files)?,
-        };
-        Ok(WrittenFrame { files, denoise_seconds })
+        self.prepare(frame)?.write()
     }
 
-    /// Encodes the image (denoised with a denoiser), the noisy image (`keep_noisy`) and the
-    /// layout's AOVs of a traced frame to `files`; returns the seconds denoising took.
-    fn write_images(&self, frame: &RenderedFrame, files: &[PathBuf]) -> Result<Option<f64>, OutputError> {
-        let mut files = files.iter();
-        let mut next = || files.next().expect("frame_files lists every file");
-        let exr = self.layout.exr;
+    /// What writing `frame` takes: its image denoised when there is a denoiser (here, on the
+    /// caller's thread), the noisy image (`keep_noisy`) and the layout's AOVs, each copied
+    /// out of the frame; or, for a reused frame, the files to copy.
+    pub fn prepare(&self, frame: &RenderedFrame) -> Result<FrameFiles, OutputError> {
+        let files = self.layout.frame_files(frame.index);
+        if let Some(source) = frame.reused_from {
+            let content = Content::Copies(self.layout.frame_files(source));
+            return Ok(FrameFiles { written: WrittenFrame { files, denoise_seconds: None }, content });
+        }
         let (image, denoise_seconds) = self.denoised(frame)?;
-        let noisy = self.layout.keep_noisy.then_some(&frame.film);
-        for film in std::iter::once(image.as_ref()).chain(noisy) {
-            write_png_atomic(film, self.exposure, next())?;
-            if exr {
-                write_exr_atomic(film, next())?;
-            }
-        }
+        let noisy = self.layout.keep_noisy.then(|| frame.film.clone());
         // The layout's passes come first; a denoiser's extra guides are not written.
-        for (aov, film) in frame.aovs.iter().take(self.layout.aovs.len()) {
-            write_aov_png_atomic(film, *aov, next())?;
-            if exr {
-                write_exr_atomic(film, next())?;
-            }
-        }
-        Ok(denoise_seconds)
+        let aovs =
+            frame.aovs.iter().take(self.layout.aovs.len()).map(|(aov, film)| (Some(*aov), film.clone()));
+        let images = std::iter::once(image).chain(noisy).map(|film| (None, film)).chain(aovs).collect();
+        let content = Content::Images { images, exposure: self.exposure, exr: self.layout.exr };
+        Ok(FrameFiles { written: WrittenFrame { files, denoise_seconds }, content })
     }
 
     /// The frame's image, denoised when there is a denoiser, and the seconds that took.
-    fn denoised<'f>(&self, frame: &'f RenderedFrame) -> Result<(Cow<'f, Film>, Option<f64>), OutputError> {
+    fn denoised(&self, frame: &RenderedFrame) -> Result<(Film, Option<f64>), OutputError> {
         let Some(denoiser) = self.denoiser else {
-            return Ok((Cow::Borrowed(&frame.film), None));
+            return Ok((frame.film.clone(), None));
         };
         let guide = |kind: Aov| {
             frame.aovs.iter().find(|(a, _)| *a == kind).map(|(_, f)| f).expect("--denoise renders its guides")
         };
         let (film, seconds) = denoiser.denoise(&frame.film, guide(Aov::Albedo), guide(Aov::Normal))?;
-        Ok((Cow::Owned(film), Some(seconds)))
+        Ok((film, Some(seconds)))
+    }
+}
+
+impl FrameFiles {
+    /// The files it writes, in [`OutputLayout::frame_files`] order; the image first.
+    pub fn paths(&self) -> &[PathBuf] {
+        &self.written.files
+    }
+
+    /// Seconds the denoiser took (`None` without one, or for a reused frame).
+    pub fn denoise_seconds(&self) -> Option<f64> {
+        self.written.denoise_seconds
+    }
+
+    /// Encodes and writes the files, each atomically.
+    pub fn write(self) -> Result<WrittenFrame, OutputError> {
+        let mut files = self.written.files.iter();
+        match &self.content {
+            Content::Copies(sources) => {
+                for (from, to) in sources.iter().zip(files) {
+                    copy_atomic(from, to)?;
+                }
+            }
+            Content::Images { images, exposure, exr } => {
+                let mut next = || files.next().expect("frame_files lists every file");
+                for (aov, film) in images {
+                    match aov {
+                        None => write_png_atomic(film, *exposure, next())?,
+                        Some(aov) => write_aov_png_atomic(film, *aov, next())?,
+                    }
+                    if *exr {
+                        write_exr_atomic(film, next())?;
+                    }
+                }
+            }
+        }
+        Ok(self.written)
     }
 }
 
