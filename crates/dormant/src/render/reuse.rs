@@ -62,8 +62,13 @@ pub struct ReuseStore {
     image: Vec<Vec3>,
     counts: Vec<u32>,
     horizons: Vec<u32>,
-    /// Per traced AOV pass (not `spp` or `traced`, which come from the counts), its pixels.
+    /// Per traced AOV pass (not `spp` or `traced`, which come from the counts), its pixels;
+    /// and per pixel the passes' own horizon. A pass sees only its samples' camera rays
+    /// (first hits), so it changes only where those meet a change or the pixel's sample count
+    /// changes: with `--denoise` (albedo and normal guides), retracing the passes wherever a
+    /// path changed made them two thirds of a later demolition frame at 64 spp.
     passes: Vec<(Aov, Vec<Vec3>)>,
+    pass_horizons: Vec<u32>,
     /// With [`ReuseGranularity::Sample`], per sample (`spp` per pixel, pixel by pixel): its
     /// radiance and horizon.
     samples: Vec<Vec3>,
@@ -121,7 +126,9 @@ impl ReuseStore {
     /// and pass (the least the store works with).
     pub fn bytes_for(width: u32, height: u32, aovs: &[Aov]) -> usize {
         let traced_passes = aovs.iter().filter(|a| a.is_traced()).count();
-        width as usize * height as usize * (PIXEL_BYTES + 12 * traced_passes)
+        // The passes' values, and their horizon when there are any.
+        let passes = 12 * traced_passes + if traced_passes > 0 { 4 } else { 0 };
+        width as usize * height as usize * (PIXEL_BYTES + passes)
     }
 
     /// The bytes a store that keeps every one of `spp` samples per pixel needs.
@@ -133,7 +140,7 @@ impl ReuseStore {
     pub fn memory_bytes(&self) -> usize {
         let pixels = self.image.len() * (12 + 4 + 4);
         let passes: usize = self.passes.iter().map(|(_, p)| p.len() * 12).sum();
-        pixels + passes + self.samples.len() * SAMPLE_BYTES
+        pixels + passes + self.pass_horizons.len() * 4 + self.samples.len() * SAMPLE_BYTES
     }
 
     /// Whether the store holds nothing yet.
@@ -151,6 +158,8 @@ impl ReuseStore {
     fn fresh(settings: &RenderSettings, aovs: &[Aov], budget: usize, ordinal: u32) -> Self {
         let (w, h, spp) = (settings.width, settings.height, settings.spp);
         let pixels = w as usize * h as usize;
+        let passes: Vec<(Aov, Vec<Vec3>)> =
+            aovs.iter().filter(|a| a.is_traced()).map(|&a| (a, vec![Vec3::ZERO; pixels])).collect();
         let keep_samples = Self::sample_bytes_for(w, h, spp, aovs) <= budget;
         let samples = if keep_samples { pixels * spp as usize } else { 0 };
         ReuseStore {
@@ -159,7 +168,8 @@ impl ReuseStore {
             image: vec![Vec3::ZERO; pixels],
             counts: vec![0; pixels],
             horizons: vec![ordinal; pixels],
-            passes: aovs.iter().filter(|a| a.is_traced()).map(|&a| (a, vec![Vec3::ZERO; pixels])).collect(),
+            pass_horizons: if passes.is_empty() { Vec::new() } else { vec![ordinal; pixels] },
+            passes,
             samples: vec![Vec3::ZERO; samples],
             sample_horizons: vec![ordinal; samples],
         }
@@ -210,21 +220,14 @@ pub fn render_reusing(
         horizons: Some((reuse.index, reuse.ordinal, reuse.until)),
     };
     let beauty = render_planned(scene, query, integrator, settings, &plan)?;
+    let counts_before = (!store.passes.is_empty()).then(|| store.counts.clone());
     let traced = match store.granularity {
         ReuseGranularity::Sample => store.merge_samples(&beauty, &due, settings.spp),
         ReuseGranularity::Pixel => store.merge_pixels(&beauty, &due),
     };
     let mut seconds = beauty.seconds;
-    for i in 0..store.passes.len() {
-        let aov = store.passes[i].0;
-        let plan = FramePlan {
-            samples: Some(&store.counts),
-            due: Due::Pixels { due: &due, stored: &store.counts },
-            horizons: None,
-        };
-        let pass = render_planned(scene, query, &AovIntegrator(aov), settings, &plan)?;
-        seconds += pass.seconds;
-        copy_due(&mut store.passes[i].1, &pass.film.pixels, &due);
+    if let Some(before) = counts_before {
+        seconds += store.render_passes(scene, query, settings, reuse, &before)?;
     }
     let total: u64 = store.counts.iter().map(|&n| u64::from(n)).sum();
     let samples_traced: u64 = traced.iter().map(|&n| u64::from(n)).sum();
@@ -244,7 +247,7 @@ pub fn render_reusing(
 }
 
 /// Copies the values of the pixels `due` from `from` into `to`.
-fn copy_due(to: &mut [Vec3], from: &[Vec3], due: &[bool]) {
+fn copy_due<T: Copy>(to: &mut [T], from: &[T], due: &[bool]) {
     for ((to, from), &due) in to.iter_mut().zip(from).zip(due) {
         if due {
             *to = *from;
@@ -253,6 +256,36 @@ fn copy_due(to: &mut [Vec3], from: &[Vec3], due: &[bool]) {
 }
 
 impl ReuseStore {
+    /// Traces the AOV passes of the pixels whose passes' horizon has come or whose sample
+    /// count differs from `counts_before` (the beauty pass's, before this frame); returns the
+    /// seconds taken.
+    fn render_passes(
+        &mut self,
+        scene: &RenderScene,
+        query: &dyn SceneQuery,
+        settings: &RenderSettings,
+        reuse: FrameReuse,
+        counts_before: &[u32],
+    ) -> Result<f64, RenderError> {
+        let due: Vec<bool> = (self.pass_horizons.iter().zip(&self.counts).zip(counts_before))
+            .map(|((&h, &now), &before)| h <= reuse.ordinal || now != before)
+            .collect();
+        let mut seconds = 0.0;
+        for i in 0..self.passes.len() {
+            let plan = FramePlan {
+                samples: Some(&self.counts),
+                due: Due::Pixels { due: &due, stored: &self.counts },
+                horizons: Some((reuse.index, reuse.ordinal, reuse.until)),
+            };
+            let pass = render_planned(scene, query, &AovIntegrator(self.passes[i].0), settings, &plan)?;
+            seconds += pass.seconds;
+            copy_due(&mut self.passes[i].1, &pass.film.pixels, &due);
+            // Every pass traces the same camera rays, so each finds the same horizons.
+            copy_due(&mut self.pass_horizons, &pass.horizons, &due);
+        }
+        Ok(seconds)
+    }
+
     /// Copies the traced pixels of `beauty` (image, counts, horizons) in; returns the camera
     /// samples traced per pixel.
     fn merge_pixels(&mut self, beauty: &PlannedFrame, due: &[bool]) -> Vec<u32> {
