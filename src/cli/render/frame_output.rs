@@ -44,10 +44,8 @@ pub(super) struct FrameInFlight {
 impl FrameOutput<'_> {
     /// Starts writing `frame`'s files atomically (a reused frame's are copies of its
     /// source's) on a thread of their own, after denoising on this one: the files of one
-    /// frame are written while the next renders, and the run waits on them only at
-    /// [`Self::finish`]. Most of a write is waiting for the disk (each file is synced before
-    /// its rename), which a settled shot's later frames, a tenth of a second of tracing,
-    /// otherwise spent idle.
+    /// frame (encoding, and each file's sync before its rename) are written while the next
+    /// renders, and the run waits on them only at [`Self::finish`].
     pub fn start(
         &mut self,
         frame: &RenderedFrame,

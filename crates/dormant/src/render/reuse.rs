@@ -65,8 +65,7 @@ pub struct ReuseStore {
     /// Per traced AOV pass (not `spp` or `traced`, which come from the counts), its pixels;
     /// and per pixel the passes' own horizon. A pass sees only its samples' camera rays
     /// (first hits), so it changes only where those meet a change or the pixel's sample count
-    /// changes: with `--denoise` (albedo and normal guides), retracing the passes wherever a
-    /// path changed made them two thirds of a later demolition frame at 64 spp.
+    /// changes, not wherever a path does (docs/lab/reuse.md, 2026-12-06).
     passes: Vec<(Aov, Vec<Vec3>)>,
     pass_horizons: Vec<u32>,
     /// With [`ReuseGranularity::Sample`], per sample (`spp` per pixel, pixel by pixel): its
@@ -272,16 +271,18 @@ impl ReuseStore {
             .collect();
         let mut seconds = 0.0;
         for i in 0..self.passes.len() {
+            // Every pass traces the same camera rays: the first finds their horizons.
             let plan = FramePlan {
                 samples: Some(&self.counts),
                 due: Due::Pixels { due: &due, stored: &self.counts },
-                horizons: Some((reuse.index, reuse.ordinal, reuse.until)),
+                horizons: (i == 0).then_some((reuse.index, reuse.ordinal, reuse.until)),
             };
             let pass = render_planned(scene, query, &AovIntegrator(self.passes[i].0), settings, &plan)?;
             seconds += pass.seconds;
             copy_due(&mut self.passes[i].1, &pass.film.pixels, &due);
-            // Every pass traces the same camera rays, so each finds the same horizons.
-            copy_due(&mut self.pass_horizons, &pass.horizons, &due);
+            if i == 0 {
+                copy_due(&mut self.pass_horizons, &pass.horizons, &due);
+            }
         }
         Ok(seconds)
     }

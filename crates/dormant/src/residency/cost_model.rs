@@ -118,9 +118,8 @@ pub enum TraceKind {
     /// They trace about as much: it joins the running mean.
     Typical,
     /// Traced in full in a run that reuses samples (`--reuse exact`), where the frames after
-    /// it trace only what changed: it stands for them only until one is measured. Averaged
-    /// in, the demolition's first production frame (4 s, against 0.15 s for the frames after
-    /// it) kept `auto` from integrating for 17 frames, each committing 80,000 instances.
+    /// it trace only what changed: it stands for them only until one is measured (averaged
+    /// in, its seconds kept `auto` from integrating for many frames: docs/lab/reuse.md).
     FullBeforeReuse,
 }
 

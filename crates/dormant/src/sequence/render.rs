@@ -3,13 +3,13 @@
 //! manager's cost model.
 
 use super::frame_renderer::{FrameRenderer, ReuseMode, SeedMode};
-use super::reuse::{ExactFrame, ExactReuse};
+use super::reuse::{ExactFrame, ExactReuse, FullFrame};
 use super::{FrameSelection, KeptFrame, Sequence, SequenceError};
 use crate::physics::trajectory::ReplayFrame;
 use crate::render::{
     render_with_aovs, Aov, Emitters, Film, PinholeCamera, RenderError, RenderScene, RenderStats,
 };
-use crate::residency::{FrameStats, SceneManager, TraceKind};
+use crate::residency::{FrameStats, SceneManager};
 use crate::scene::Camera;
 
 /// Camera rays (one per pixel of this image) of the manager's trace-penalty probes: enough
@@ -108,7 +108,8 @@ impl Sequence {
                 }
             }
         };
-        manager.record_trace(render.seconds * 1e3, render.rays, trace_kind(exact.as_ref()));
+        let full = exact.as_ref().and_then(|e| e.full);
+        manager.record_trace(render.seconds * 1e3, render.rays, FullFrame::trace_kind(full));
         Ok(RenderedFrame { index: frame.index, film, render, aovs, reused_from: None, reuse: exact })
     }
 
@@ -244,14 +245,5 @@ impl Sequence {
             }
         }
         Ok(())
-    }
-}
-
-/// What a frame's trace says of the frames after it: a frame traced in full by exact reuse
-/// stands for frames that trace far less.
-fn trace_kind(exact: Option<&ExactFrame>) -> TraceKind {
-    match exact {
-        Some(ExactFrame { full: Some(_), .. }) => TraceKind::FullBeforeReuse,
-        _ => TraceKind::Typical,
     }
 }

@@ -19,7 +19,7 @@ use crate::render::{
     render_reusing, render_with_aovs, AovPasses, Emitters, Film, FrameReuse, RenderError, RenderScene,
     RenderStats, ReuseStats, ReuseStore,
 };
-use crate::residency::{FrameStats, IntegrationForm};
+use crate::residency::{FrameStats, IntegrationForm, TraceKind};
 
 /// Why a frame traced every sample instead of reusing samples of earlier frames.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, serde::Deserialize)]
@@ -37,6 +37,15 @@ pub enum FullFrame {
 }
 
 impl FullFrame {
+    /// What the trace of a frame of an exact-reuse run that was traced in full for `full`
+    /// (`None`: it reused samples, or reuse was off) says of the frames after it.
+    pub(crate) fn trace_kind(full: Option<FullFrame>) -> TraceKind {
+        match full {
+            Some(_) => TraceKind::FullBeforeReuse,
+            None => TraceKind::Typical,
+        }
+    }
+
     pub fn name(self) -> &'static str {
         match self {
             FullFrame::First => "first",

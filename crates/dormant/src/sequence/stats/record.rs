@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 
 use super::StatsError;
 use crate::render::{RenderStats, ReuseGranularity, SppStats};
-use crate::residency::{CacheStats, CostModelState, Decision, FrameStats, StageTimes, TraceKind};
+use crate::residency::{CacheStats, CostModelState, Decision, FrameStats, StageTimes};
 use crate::sequence::{FullFrame, KeptFrame, PhysicsSource, RenderedFrame};
 
 /// `format` field of stats.json.
@@ -163,10 +163,7 @@ impl FrameRecord {
             decisions: self.decisions.iter().map(|d| (d.island, d.integrate)).collect(),
             trace_ms: self.stages.trace_ms,
             rays: self.rays,
-            trace_kind: match self.reuse.full_frame {
-                Some(_) => TraceKind::FullBeforeReuse,
-                None => TraceKind::Typical,
-            },
+            trace_kind: FullFrame::trace_kind(self.reuse.full_frame),
             instances: self.instances,
             integrated_islands: self.integrated_islands,
             sleeping_islands: self.sleeping_islands,

@@ -99,9 +99,8 @@ impl ChangeIndex {
     /// points and instance transforms never puts a change outside its box. Empty and
     /// non-finite boxes are dropped.
     pub fn build(mut boxes: Vec<ChangeBox>, meshes: Vec<Vec<[Vec3; 3]>>) -> Self {
-        // Built once per window of frames, before the window's first frame, so its passes go
-        // over rayon: the demolition preview's 177,000 boxes took 153 ms serially, 135 ms so
-        // on 2 threads, of which the SAH build about 55 and reordering the boxes about 20.
+        // Built before a window's first frame, which waits for it: its passes go over rayon
+        // (what each costs: docs/lab/reuse.md, 2026-12-06).
         boxes.retain(|b| !b.bounds.is_empty() && b.bounds.min.is_finite() && b.bounds.max.is_finite());
         boxes.par_iter_mut().for_each(|b| b.bounds = padded(b.bounds));
         let bounds: Vec<Aabb> = boxes.par_iter().map(|b| b.bounds).collect();
