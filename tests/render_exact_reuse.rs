@@ -98,8 +98,10 @@ fn exact_reuse_writes_the_full_renders_bytes_with_motion_blur() {
 
 #[test]
 fn exact_reuse_writes_the_full_renders_bytes_with_adaptive_sampling() {
-    // Per sample: stored and retraced samples decide together where a pixel stops.
-    let adaptive = ["--noise-threshold", "0.1", "--min-spp", "4", "--aov", "spp"];
+    // Per sample: stored and retraced samples decide together where a pixel stops. The
+    // albedo pass is shaded beside the image where a pixel is traced whole and traced on its
+    // own, at the pixel's sample count, where its passes' horizon came or the count changed.
+    let adaptive = ["--noise-threshold", "0.1", "--min-spp", "4", "--aov", "spp", "--aov", "albedo"];
     let share = tiny("adaptive", &[&["--spp", "16"], &adaptive[..]].concat());
     assert!(share < 0.9, "exact reuse traced {share} of the samples");
     // Per pixel (1 MiB holds 64 samples per pixel only as pixels): a due pixel is traced whole.

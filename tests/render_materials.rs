@@ -528,6 +528,35 @@ fn aov_passes_record_albedo_normal_and_depth() {
 }
 
 #[test]
+fn aov_passes_shaded_beside_the_image_equal_passes_traced_on_their_own() {
+    use dormant::accel;
+    use dormant::render::{
+        render_with_aovs, AdaptiveSampling, Aov, AovIntegrator, RenderScene, RenderSettings,
+    };
+    let dir = tempfile::tempdir().unwrap();
+    write_checker(dir.path());
+    let path = textured_quad(dir.path(), "checker.png", |_| {});
+    // Wide enough that the corners see past the quad.
+    let camera = top_down(4.0, 70.0);
+    let desc = quad_scene(&path, camera, WHITE_SKY);
+    let aovs = [Aov::Albedo, Aov::Spp, Aov::Normal, Aov::Depth, Aov::Baked];
+    let mut a = accel::create(backend(), None).unwrap();
+    let scene = RenderScene::build(&desc, a.as_mut()).unwrap();
+    let settings = RenderSettings { width: 24, height: 16, spp: 5, seed: 0, adaptive: AdaptiveSampling::OFF };
+    let (_, _, passes) =
+        render_with_aovs(&scene, a.query().unwrap(), &PathTracer::default(), &settings, &aovs).unwrap();
+    assert_eq!(passes.iter().map(|(aov, _)| *aov).collect::<Vec<_>>(), aovs);
+    for (aov, film) in passes.iter().filter(|(aov, _)| *aov != Aov::Spp) {
+        let alone = render(&desc, backend(), &AovIntegrator(*aov), 24, 16, 5);
+        let bits = |f: &dormant::render::Film| {
+            f.pixels.iter().flat_map(|p| p.to_array().map(f32::to_bits)).collect::<Vec<_>>()
+        };
+        assert_eq!(bits(film), bits(&alone), "{}", aov.name());
+    }
+    assert!(passes[1].1.pixels.iter().all(|&p| p == Vec3::splat(5.0)));
+}
+
+#[test]
 fn gltf_punctual_lights_and_sampler_wrap_modes_are_imported() {
     use dormant::scene::texture::Wrap;
     let dir = tempfile::tempdir().unwrap();

@@ -1,14 +1,16 @@
 //! Arbitrary output variables: per-pixel albedo (the textured base colour), shading normal
-//! and depth at the first hit, rendered as integrators so they share tiles, sampling and the
-//! film with the beauty pass; and the samples each pixel got.
+//! and depth at the first hit, and the samples each pixel got. A frame's passes are shaded at
+//! the beauty pass's camera hits as it traces them (no second trace of the camera rays); a
+//! pass alone, as exact reuse retraces where only the passes changed, is an integrator
+//! ([`AovIntegrator`]) over the same tiles, sampling and film, so both give the same bits
+//! ([`render_with_aovs`](super::render_with_aovs) renders a frame's image with its passes).
 
 use glam::Vec3;
 
 use super::{
-    render_frame_counted, Film, FrameContext, FrameIntegrator, Integrator, PixelSampler, RayLog, RenderError,
-    RenderScene, RenderSettings, RenderStats, SurfaceKind,
+    Film, FrameContext, FrameIntegrator, Integrator, PixelSampler, RayLog, RenderScene, SurfaceKind,
 };
-use crate::accel::{Hit, SceneQuery};
+use crate::accel::Hit;
 use crate::geometry::Ray;
 
 /// What an AOV pass records. Pixels whose camera ray escapes are 0.
@@ -55,29 +57,27 @@ impl Aov {
 /// AOV passes of a frame, each with what it records.
 pub(crate) type AovPasses = Vec<(Aov, Film)>;
 
-/// A frame's image with `integrator` and its `aovs` passes, in order. The passes see the
-/// image's camera samples: with adaptive sampling, each pixel as many as the image gave it.
-pub fn render_with_aovs(
-    scene: &RenderScene,
-    query: &dyn SceneQuery,
-    integrator: &dyn Integrator,
-    settings: &RenderSettings,
-    aovs: &[Aov],
-) -> Result<(Film, RenderStats, AovPasses), RenderError> {
-    let (film, stats, samples) = render_frame_counted(scene, query, integrator, settings, None)?;
-    let mut passes = Vec::with_capacity(aovs.len());
-    for &aov in aovs {
-        let pass = match aov {
-            Aov::Spp | Aov::Traced => Film {
-                width: film.width,
-                height: film.height,
-                pixels: samples.iter().map(|&n| Vec3::splat(n as f32)).collect(),
-            },
-            aov => render_frame_counted(scene, query, &AovIntegrator(aov), settings, Some(&samples))?.0,
-        };
-        passes.push((aov, pass));
+/// What `aov` records of camera ray `ray`'s first hit `first` (0 where it escapes).
+pub(crate) fn aov_at_hit(aov: Aov, scene: &RenderScene, ray: &Ray, first: Option<&Hit>) -> Vec3 {
+    let Some(hit) = first else {
+        return Vec3::ZERO;
+    };
+    let s = scene.surface(ray, hit);
+    match aov {
+        Aov::Albedo => s.material.base_color,
+        Aov::Normal => s.ns,
+        Aov::Depth => Vec3::splat((s.p - ray.origin).length()),
+        Aov::Baked => {
+            let colour = match s.kind {
+                SurfaceKind::Environment => Vec3::splat(0.5),
+                SurfaceKind::Instanced => Vec3::new(0.15, 0.35, 0.9),
+                SurfaceKind::Baked => Vec3::new(0.95, 0.55, 0.1),
+            };
+            colour * (0.35 + 0.65 * s.ns.dot(-ray.dir).abs())
+        }
+        // Filled from the sample counts, never traced.
+        Aov::Spp | Aov::Traced => Vec3::ZERO,
     }
-    Ok((film, stats, passes))
 }
 
 /// An [`Integrator`] that returns one AOV at the camera ray's first hit.
@@ -105,24 +105,6 @@ impl FrameIntegrator for AovFrame<'_> {
         _index: u32,
         _log: &mut RayLog,
     ) -> Vec3 {
-        let Some(hit) = first else {
-            return Vec3::ZERO;
-        };
-        let s = self.scene.surface(ray, &hit);
-        match self.aov {
-            Aov::Albedo => s.material.base_color,
-            Aov::Normal => s.ns,
-            Aov::Depth => Vec3::splat((s.p - ray.origin).length()),
-            Aov::Baked => {
-                let colour = match s.kind {
-                    SurfaceKind::Environment => Vec3::splat(0.5),
-                    SurfaceKind::Instanced => Vec3::new(0.15, 0.35, 0.9),
-                    SurfaceKind::Baked => Vec3::new(0.95, 0.55, 0.1),
-                };
-                colour * (0.35 + 0.65 * s.ns.dot(-ray.dir).abs())
-            }
-            // Filled from the sample counts by `render_with_aovs`, never traced.
-            Aov::Spp | Aov::Traced => Vec3::ZERO,
-        }
+        aov_at_hit(self.aov, self.scene, ray, first.as_ref())
     }
 }

@@ -28,6 +28,12 @@ impl Film {
         Self { width, height, pixels: vec![Vec3::ZERO; width as usize * height as usize] }
     }
 
+    /// A pass showing per-pixel counts (`counts` row-major), each in all three channels.
+    pub(crate) fn from_counts(width: u32, height: u32, counts: &[u32]) -> Self {
+        debug_assert_eq!(counts.len(), width as usize * height as usize);
+        Self { width, height, pixels: counts.iter().map(|&n| Vec3::splat(n as f32)).collect() }
+    }
+
     /// Tone-mapped, sRGB-encoded 8-bit pixels. Non-finite radiance maps to black.
     pub(super) fn to_srgb8(&self, exposure: f32) -> Vec<u8> {
         self.pixels

@@ -22,7 +22,7 @@ mod tiles;
 pub use adaptive::AdaptiveSampling;
 pub(crate) use adaptive::SppStats;
 pub(crate) use aov::AovPasses;
-pub use aov::{render_with_aovs, Aov, AovIntegrator};
+pub use aov::{Aov, AovIntegrator};
 pub use bsdf::{sample_cone, sample_cosine};
 pub use camera::PinholeCamera;
 pub(crate) use emitters::Emitters;
@@ -39,8 +39,7 @@ pub(crate) use render_scene::{SurfaceHit, SurfaceKind};
 pub(crate) use reuse::{render_reusing, FrameReuse, ReuseStore};
 pub(crate) use reuse::{ReuseGranularity, ReuseStats};
 pub(crate) use sampler::PixelSampler;
-pub(crate) use tiles::render_frame_counted;
-pub use tiles::{render_frame, RenderSettings, RenderStats};
+pub use tiles::{render_frame, render_with_aovs, RenderSettings, RenderStats};
 
 use std::path::PathBuf;
 

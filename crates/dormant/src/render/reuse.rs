@@ -217,6 +217,7 @@ pub fn render_reusing(
         samples: None,
         due: store.beauty_due(&due, reuse.ordinal),
         horizons: Some((reuse.index, reuse.ordinal, reuse.until)),
+        aovs: &store.first_hit_passes(),
     };
     let beauty = render_planned(scene, query, integrator, settings, &plan)?;
     let counts_before = (!store.passes.is_empty()).then(|| store.counts.clone());
@@ -226,7 +227,8 @@ pub fn render_reusing(
     };
     let mut seconds = beauty.seconds;
     if let Some(before) = counts_before {
-        seconds += store.render_passes(scene, query, settings, reuse, &before)?;
+        let shaded = store.merge_first_hit_passes(&beauty, &traced);
+        seconds += store.render_passes(scene, query, settings, reuse, &before, &shaded)?;
     }
     let total: u64 = store.counts.iter().map(|&n| u64::from(n)).sum();
     let samples_traced: u64 = traced.iter().map(|&n| u64::from(n)).sum();
@@ -255,9 +257,34 @@ fn copy_due<T: Copy>(to: &mut [T], from: &[T], due: &[bool]) {
 }
 
 impl ReuseStore {
-    /// Traces the AOV passes of the pixels whose passes' horizon has come or whose sample
-    /// count differs from `counts_before` (the beauty pass's, before this frame); returns the
-    /// seconds taken.
+    /// The AOV passes the beauty pass shades at its camera hits: every traced pass when the
+    /// store keeps samples, whose per-sample logs give each camera ray's own horizon (a
+    /// pixel's log, kept per pixel, mixes it with the paths'); none otherwise.
+    fn first_hit_passes(&self) -> Vec<Aov> {
+        match self.granularity {
+            ReuseGranularity::Sample => self.passes.iter().map(|(aov, _)| *aov).collect(),
+            ReuseGranularity::Pixel => Vec::new(),
+        }
+    }
+
+    /// Takes the passes of the pixels whose every sample `beauty` traced (`traced` per pixel)
+    /// from its first-hit passes, with their camera horizons: the values and horizons a pass
+    /// of their own would give. Returns which pixels it took (all of them in a full frame).
+    fn merge_first_hit_passes(&mut self, beauty: &PlannedFrame, traced: &[u32]) -> Vec<bool> {
+        if beauty.aovs.is_empty() {
+            return vec![false; traced.len()];
+        }
+        let shaded: Vec<bool> = traced.iter().zip(&self.counts).map(|(&t, &n)| t > 0 && t == n).collect();
+        for ((_, pass), film) in self.passes.iter_mut().zip(&beauty.aovs) {
+            copy_due(pass, &film.pixels, &shaded);
+        }
+        copy_due(&mut self.pass_horizons, &beauty.camera_horizons, &shaded);
+        shaded
+    }
+
+    /// Traces the AOV passes of the pixels not `shaded` by the beauty pass whose passes'
+    /// horizon has come or whose sample count differs from `counts_before` (the beauty
+    /// pass's, before this frame); returns the seconds taken.
     fn render_passes(
         &mut self,
         scene: &RenderScene,
@@ -265,10 +292,14 @@ impl ReuseStore {
         settings: &RenderSettings,
         reuse: FrameReuse,
         counts_before: &[u32],
+        shaded: &[bool],
     ) -> Result<f64, RenderError> {
-        let due: Vec<bool> = (self.pass_horizons.iter().zip(&self.counts).zip(counts_before))
-            .map(|((&h, &now), &before)| h <= reuse.ordinal || now != before)
+        let due: Vec<bool> = (self.pass_horizons.iter().zip(&self.counts).zip(counts_before).zip(shaded))
+            .map(|(((&h, &now), &before), &shaded)| !shaded && (h <= reuse.ordinal || now != before))
             .collect();
+        if !due.contains(&true) {
+            return Ok(0.0);
+        }
         let mut seconds = 0.0;
         for i in 0..self.passes.len() {
             // Every pass traces the same camera rays: the first finds their horizons.
@@ -276,6 +307,7 @@ impl ReuseStore {
                 samples: Some(&self.counts),
                 due: Due::Pixels { due: &due, stored: &self.counts },
                 horizons: (i == 0).then_some((reuse.index, reuse.ordinal, reuse.until)),
+                aovs: &[],
             };
             let pass = render_planned(scene, query, &AovIntegrator(self.passes[i].0), settings, &plan)?;
             seconds += pass.seconds;
@@ -328,21 +360,21 @@ impl ReuseStore {
     fn frame(&self, aovs: &[Aov], traced: &[u32], settings: &RenderSettings) -> (Film, AovPasses) {
         let (w, h) = (settings.width, settings.height);
         let film = |pixels: Vec<Vec3>| Film { width: w, height: h, pixels };
-        let counts = |counts: &[u32]| counts.iter().map(|&n| Vec3::splat(n as f32)).collect();
         let passes = aovs
             .iter()
             .map(|&aov| {
-                let pixels = match aov {
-                    Aov::Spp => counts(&self.counts),
-                    Aov::Traced => counts(traced),
-                    aov => self
-                        .passes
-                        .iter()
-                        .find(|(a, _)| *a == aov)
-                        .map(|(_, p)| p.clone())
-                        .unwrap_or_default(),
+                let film = match aov {
+                    Aov::Spp => Film::from_counts(w, h, &self.counts),
+                    Aov::Traced => Film::from_counts(w, h, traced),
+                    aov => film(
+                        self.passes
+                            .iter()
+                            .find(|(a, _)| *a == aov)
+                            .map(|(_, p)| p.clone())
+                            .unwrap_or_default(),
+                    ),
                 };
-                (aov, film(pixels))
+                (aov, film)
             })
             .collect();
         (film(self.image.clone()), passes)

@@ -1,6 +1,6 @@
-//! One frame from camera to film: camera rays per pixel sample (tent filter), 16x16 tiles
-//! over rayon, camera rays of each pixel block traced as one packet, and the integrator bound
-//! to the frame finishing each sample.
+//! One frame from camera to film: camera rays per pixel sample (tent filter), 16x16 tiles over
+//! rayon, camera rays of each pixel block traced as one packet, the integrator bound to the
+//! frame finishing each sample, and the AOV passes shaded at the camera hits.
 
 use std::time::Instant;
 
@@ -8,9 +8,10 @@ use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
 use super::adaptive::{AdaptiveSampling, SppStats, Stopping};
+use super::aov::{aov_at_hit, AovPasses};
 use super::integrator::dims;
 use super::{
-    Film, FrameContext, FrameIntegrator, Integrator, PinholeCamera, PixelSampler, RayLog, RenderError,
+    Aov, Film, FrameContext, FrameIntegrator, Integrator, PinholeCamera, PixelSampler, RayLog, RenderError,
     RenderScene,
 };
 use crate::accel::bvh::ChangeIndex;
@@ -142,24 +143,33 @@ pub fn render_frame(
     integrator: &dyn Integrator,
     settings: &RenderSettings,
 ) -> Result<(Film, RenderStats), RenderError> {
-    render_frame_counted(scene, query, integrator, settings, None).map(|(film, stats, _)| (film, stats))
+    let out = render_planned(scene, query, integrator, settings, &FramePlan::default())?;
+    let stats = out.stats();
+    Ok((out.film, stats))
 }
 
-/// [`render_frame`], also returning the camera samples each pixel got (row-major). With
-/// `samples` (one count per pixel, at most `spp`), pixel `p` gets exactly its first
-/// `samples[p]` samples and adaptive sampling is not applied: the AOV passes of an adaptive
-/// frame see the beauty pass's camera samples.
-pub(crate) fn render_frame_counted(
+/// A frame's image with `integrator` and its `aovs` passes, in order. The passes see the
+/// image's camera samples: with adaptive sampling, each pixel as many as the image gave it.
+pub fn render_with_aovs(
     scene: &RenderScene,
     query: &dyn SceneQuery,
     integrator: &dyn Integrator,
     settings: &RenderSettings,
-    samples: Option<&[u32]>,
-) -> Result<(Film, RenderStats, Vec<u32>), RenderError> {
-    let plan = FramePlan { samples, ..FramePlan::default() };
+    aovs: &[Aov],
+) -> Result<(Film, RenderStats, AovPasses), RenderError> {
+    let traced: Vec<Aov> = aovs.iter().copied().filter(|a| a.is_traced()).collect();
+    let plan = FramePlan { aovs: &traced, ..FramePlan::default() };
     let out = render_planned(scene, query, integrator, settings, &plan)?;
-    let stats = RenderStats { rays: out.rays, seconds: out.seconds, spp: SppStats::of(&out.counts) };
-    Ok((out.film, stats, out.counts))
+    let stats = out.stats();
+    let mut shaded = traced.iter().copied().zip(out.aovs);
+    let passes = aovs
+        .iter()
+        .map(|&aov| match aov {
+            Aov::Spp | Aov::Traced => (aov, Film::from_counts(settings.width, settings.height, &out.counts)),
+            _ => shaded.next().expect("one film per traced pass, in order"),
+        })
+        .collect();
+    Ok((out.film, stats, passes))
 }
 
 /// Which of a frame's pixels (or samples) to render, and how. For exact temporal reuse a
@@ -175,6 +185,10 @@ pub(crate) struct FramePlan<'a> {
     /// Find each traced pixel's (or sample's) horizon against this index: the frame's ordinal
     /// and the horizon of what meets no change (the run's number of rendered frames).
     pub horizons: Option<(&'a ChangeIndex, u32, u32)>,
+    /// AOV passes shaded at the traced samples' camera hits as they are traced, each pixel
+    /// averaged over its traced samples ([`PlannedFrame::aovs`]): a pixel whose every sample
+    /// is traced gets the value an [`AovIntegrator`](super::AovIntegrator) pass would give.
+    pub aovs: &'a [Aov],
 }
 
 /// Which samples a frame traces (row-major pixels).
@@ -210,6 +224,11 @@ pub(crate) struct PlannedFrame {
     pub film: Film,
     pub counts: Vec<u32>,
     pub horizons: Vec<u32>,
+    /// The plan's AOV passes, in order, over the traced samples.
+    pub aovs: Vec<Film>,
+    /// With AOV passes, horizons and [`Due::Samples`]: per pixel, the horizon of its traced
+    /// samples' camera rays alone (what the passes see).
+    pub camera_horizons: Vec<u32>,
     /// With [`Due::Samples`], the traced samples tile by tile: kept apart, since a full
     /// frame's (8.3 M at 960x540, 16 spp) would be copied into ever larger buffers to join.
     pub samples: Vec<Vec<TracedSample>>,
@@ -262,6 +281,8 @@ pub(crate) fn render_planned(
         film: Film::new(w, h),
         counts: vec![0; (w * h) as usize],
         horizons: vec![0; (w * h) as usize],
+        aovs: plan.aovs.iter().map(|_| Film::new(w, h)).collect(),
+        camera_horizons: if plan.aovs.is_empty() { Vec::new() } else { vec![0; (w * h) as usize] },
         samples: Vec::new(),
         rays: 0,
         seconds: 0.0,
@@ -276,6 +297,11 @@ pub(crate) fn render_planned(
 }
 
 impl PlannedFrame {
+    /// The frame's rays, time and samples per pixel.
+    pub(crate) fn stats(&self) -> RenderStats {
+        RenderStats { rays: self.rays, seconds: self.seconds, spp: SppStats::of(&self.counts) }
+    }
+
     /// Copies a rendered tile whose top-left pixel is `(x0, y0)` into the frame.
     fn add_tile(&mut self, x0: u32, y0: u32, tile: Tile) {
         let w = self.film.width;
@@ -286,6 +312,12 @@ impl PlannedFrame {
             self.film.pixels[at] = p;
             self.counts[at] = n;
             self.horizons[at] = horizon;
+            for (k, film) in self.aovs.iter_mut().enumerate() {
+                film.pixels[at] = tile.aovs[i * tile.aov_count + k];
+            }
+            if let Some(&camera) = tile.camera_horizons.get(i) {
+                self.camera_horizons[at] = camera;
+            }
         }
         if !tile.traced.is_empty() {
             self.samples.push(tile.traced);
@@ -302,6 +334,10 @@ struct Tile {
     pixels: Vec<Vec3>,
     samples: Vec<u32>,
     horizons: Vec<u32>,
+    /// The plan's AOV passes, `aov_count` values per pixel, and their camera rays' horizons.
+    aovs: Vec<Vec3>,
+    aov_count: usize,
+    camera_horizons: Vec<u32>,
     /// With [`Due::Samples`], the samples traced.
     traced: Vec<TracedSample>,
     rays: u64,
@@ -356,11 +392,15 @@ impl TileRenderer<'_> {
             sums: vec![Vec3::ZERO; n],
             squares: if self.stopping.is_some() { vec![Vec3::ZERO; n] } else { Vec::new() },
             samples: vec![0; n],
+            first_hits: FirstHits::new(self.plan.aovs.len(), n),
         };
         let mut tile = Tile {
             pixels: Vec::new(),
             samples: Vec::new(),
             horizons: vec![0; n],
+            aovs: Vec::new(),
+            aov_count: self.plan.aovs.len(),
+            camera_horizons: Vec::new(),
             traced: Vec::new(),
             rays: 0,
             horizon_queries: 0,
@@ -392,6 +432,7 @@ impl TileRenderer<'_> {
         }
         tile.pixels = acc.sums.iter().zip(&acc.samples).map(|(&sum, &k)| sum / k.max(1) as f32).collect();
         tile.samples = acc.samples;
+        (tile.aovs, tile.camera_horizons) = acc.first_hits.finish();
         tile
     }
 
@@ -491,6 +532,7 @@ impl TileRenderer<'_> {
                 let (cell, log, ray) = (&block[c], &mut logs[c], &packet.rays[k]);
                 if cell.traced {
                     log.closest(ray, packet.hits[k].as_ref());
+                    self.shade_aovs(acc, cell, ray, packet.hits[k].as_ref(), None);
                     let li = self.integrator.li_from_hit(ray, packet.hits[k], &cell.sampler, i, log);
                     done[c] = acc.add(cell, li, self.stopping.as_ref());
                 } else {
@@ -536,7 +578,13 @@ impl TileRenderer<'_> {
                     continue;
                 }
                 let li = match due {
-                    true => self.trace_sample(cell, i, &packet.rays[k], packet.hits[k], &mut logs[c], traced),
+                    true => {
+                        let (ray, hit) = (&packet.rays[k], packet.hits[k]);
+                        let (sample, camera) = self.trace_sample(cell, i, ray, hit, &mut logs[c]);
+                        self.shade_aovs(acc, cell, ray, hit.as_ref(), camera);
+                        traced.push(sample);
+                        sample.li
+                    }
                     false => stored.values[cell.pixel as usize * spp + i as usize],
                 };
                 done[c] = acc.add(cell, li, self.stopping.as_ref());
@@ -554,9 +602,9 @@ impl TileRenderer<'_> {
         self.query.intersect_packet(&packet.rays[..packet.len], &mut packet.hits[..packet.len]);
     }
 
-    /// Continues sample `i` of `cell`'s pixel from its camera `ray` and `hit`, recording it
-    /// with its own horizon in `traced`; its rays count into the pixel's `log`. Returns its
-    /// radiance.
+    /// Continues sample `i` of `cell`'s pixel from its camera `ray` and `hit`; its rays
+    /// count into the pixel's `log`. Returns the sample with its own horizon, and the horizon
+    /// of its camera ray alone (when horizons are found).
     fn trace_sample(
         &self,
         cell: &Cell,
@@ -564,15 +612,33 @@ impl TileRenderer<'_> {
         ray: &Ray,
         hit: Option<Hit>,
         log: &mut RayLog,
-        traced: &mut Vec<TracedSample>,
-    ) -> Vec3 {
+    ) -> (TracedSample, Option<u32>) {
         let mut sample_log = self.new_log();
         sample_log.closest(ray, hit.as_ref());
+        let camera = sample_log.horizon();
         let li = self.integrator.li_from_hit(ray, hit, &cell.sampler, i, &mut sample_log);
         let horizon = sample_log.horizon().unwrap_or(0);
-        traced.push(TracedSample { pixel: cell.pixel, index: i, li, horizon });
         log.absorb(&sample_log);
-        li
+        (TracedSample { pixel: cell.pixel, index: i, li, horizon }, camera)
+    }
+
+    /// Adds the plan's AOV passes at the camera `ray`'s `hit` to `cell`'s pixel, and the
+    /// ray's own horizon (`camera`) to the pixel's passes' horizon.
+    #[inline]
+    fn shade_aovs(
+        &self,
+        acc: &mut Accumulator,
+        cell: &Cell,
+        ray: &Ray,
+        hit: Option<&Hit>,
+        camera: Option<u32>,
+    ) {
+        if self.plan.aovs.is_empty() {
+            return;
+        }
+        let values = self.plan.aovs.iter().map(|&aov| aov_at_hit(aov, self.scene, ray, hit));
+        let at = acc.at(cell);
+        acc.first_hits.add(at, values, camera);
     }
 }
 
@@ -623,6 +689,55 @@ struct Accumulator {
     /// Sums of squared samples; only with adaptive sampling.
     squares: Vec<Vec3>,
     samples: Vec<u32>,
+    first_hits: FirstHits,
+}
+
+/// A tile's AOV passes shaded at traced samples' camera hits: per pixel, `passes` running
+/// sums in index order, the samples added, and the least horizon of their camera rays.
+struct FirstHits {
+    passes: usize,
+    sums: Vec<Vec3>,
+    samples: Vec<u32>,
+    camera_horizons: Vec<u32>,
+}
+
+impl FirstHits {
+    /// Room for `passes` passes of `pixels` pixels (nothing without passes).
+    fn new(passes: usize, pixels: usize) -> Self {
+        let pixels = if passes == 0 { 0 } else { pixels };
+        FirstHits {
+            passes,
+            sums: vec![Vec3::ZERO; passes * pixels],
+            samples: vec![0; pixels],
+            camera_horizons: vec![u32::MAX; pixels],
+        }
+    }
+
+    /// Adds one sample's pass `values` to pixel `at`, with its camera ray's horizon.
+    fn add(&mut self, at: usize, values: impl Iterator<Item = Vec3>, camera: Option<u32>) {
+        for (sum, value) in self.sums[at * self.passes..(at + 1) * self.passes].iter_mut().zip(values) {
+            *sum += value;
+        }
+        self.samples[at] += 1;
+        if let Some(camera) = camera {
+            self.camera_horizons[at] = self.camera_horizons[at].min(camera);
+        }
+    }
+
+    /// The passes' pixel values (the sums over their samples, as the image's pixels are
+    /// computed) and camera horizons.
+    fn finish(self) -> (Vec<Vec3>, Vec<u32>) {
+        if self.passes == 0 {
+            return (Vec::new(), Vec::new());
+        }
+        let values = self
+            .sums
+            .chunks_exact(self.passes)
+            .zip(&self.samples)
+            .flat_map(|(sums, &k)| sums.iter().map(move |&sum| sum / k.max(1) as f32))
+            .collect();
+        (values, self.camera_horizons)
+    }
 }
 
 impl Accumulator {
