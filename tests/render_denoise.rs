@@ -1,7 +1,8 @@
 //! `render --denoise` end to end: the denoised image is closer to a high-spp reference than
 //! the noisy image it came from (relative MSE), the noisy image is kept beside it on request,
-//! and a missing Open Image Denoise (a build without the `oidn` feature, or a library without
-//! its CPU device) exits 2 with a message naming what is missing.
+//! `bench reuse --denoise` counts the denoiser in both modes' frame times, and a missing Open
+//! Image Denoise (a build without the `oidn` feature, or a library without its CPU device)
+//! exits 2 with a message naming what is missing.
 
 mod common;
 
@@ -35,6 +36,29 @@ fn denoised_image_is_closer_to_the_reference_than_the_noisy_one() {
     assert!(denoised < 0.9 * before, "denoised relMSE {denoised} is not below noisy {before}");
     // The guides are rendered for the denoiser but written only when asked for.
     assert!(!noisy.join("frame_0000.albedo.png").exists());
+}
+
+#[cfg(feature = "oidn")]
+#[test]
+fn bench_reuse_denoises_both_modes_within_their_frame_times() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("reuse.json");
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/tiny.toml");
+    succeeds(
+        dormant()
+            .args(["bench", "reuse", scene, "--size", "64x36", "--spp", "2", "--frames", "0..6"])
+            .args(["--runs", "1", "--denoise", "--quiet", "--json"])
+            .arg(&json),
+    );
+    let report: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    assert_eq!(report["denoise"], "oidn", "{report:#}");
+    assert_eq!(report["identical"], true, "{report:#}");
+    for frame in report["per_frame"].as_array().unwrap() {
+        for (denoise, total) in [("off_denoise_ms", "off_ms"), ("exact_denoise_ms", "exact_ms")] {
+            let (d, t) = (frame[denoise].as_f64().unwrap(), frame[total].as_f64().unwrap());
+            assert!(d > 0.0 && d < t, "{denoise} {d} of {total} {t}");
+        }
+    }
 }
 
 #[test]

@@ -5,16 +5,21 @@
 //! bound (1 / the share of camera samples traced), the first, fully traced frame against the
 //! same frame without reuse, the horizon queries' share of the tracing they decide about, the
 //! store's memory, and whether every frame's image and AOVs are the same bits in both modes.
+//! With a denoiser, every frame is also denoised as `dormant render --denoise` does, within
+//! its frame's time.
 
 use std::time::Instant;
 
 use serde::Serialize;
 
 use dormant::accel::Backend;
+use dormant::render::denoise::{Denoiser, GUIDE_AOVS};
 use dormant::render::{AdaptiveSampling, Aov, Film, Integrator};
 use dormant::residency::IntegrationSettings;
 use dormant::sequence::stats::ReuseRecord;
-use dormant::sequence::{FrameRenderer, FrameSelection, ReuseMode, SeedMode, Sequence, SequenceError};
+use dormant::sequence::{
+    FrameRenderer, FrameSelection, RenderedFrame, ReuseMode, SeedMode, Sequence, SequenceError,
+};
 
 /// What to run.
 pub struct ReuseBenchOptions {
@@ -34,6 +39,8 @@ pub struct ReuseBenchOptions {
     pub threads: Option<usize>,
     /// Runs of each mode (the spread of the speed-up is over these).
     pub runs: usize,
+    /// Denoise every frame (its guides are rendered with it).
+    pub denoiser: Option<Denoiser>,
 }
 
 /// One frame of one mode's run.
@@ -47,6 +54,8 @@ pub struct ReuseFrame {
     pub samples_reused: u64,
     pub horizon_ms: f64,
     pub store_bytes: u64,
+    /// Seconds the denoiser took, within `frame_ms`.
+    pub denoise_ms: f64,
     /// FNV-1a of the image's and the AOVs' float bits.
     #[serde(skip)]
     pub digest: u64,
@@ -113,6 +122,8 @@ pub struct ReuseBenchReport {
     pub identical: bool,
     /// Per frame of the last run: the share of samples traced, and both modes' frame times.
     pub per_frame: Vec<FrameComparison>,
+    /// With a denoiser, its label; the frame times include denoising.
+    pub denoise: Option<&'static str>,
 }
 
 #[derive(Clone, Copy, Debug, Serialize)]
@@ -121,6 +132,9 @@ pub struct FrameComparison {
     pub traced_share: f64,
     pub off_ms: f64,
     pub exact_ms: f64,
+    /// Of which the denoiser's, with one.
+    pub off_denoise_ms: f64,
+    pub exact_denoise_ms: f64,
     /// The image and AOVs are the same bits in both modes.
     pub identical: bool,
 }
@@ -168,8 +182,12 @@ fn render_mode(
     };
     let manager_options = sequence.manager_options(&options.frames, integration);
     let mut manager = sequence.manager(options.backend, options.threads, manager_options)?;
+    // A denoiser's guides are rendered when the passes asked for do not include them.
+    let guides = options.denoiser.as_ref().map_or(&[][..], |_| &GUIDE_AOVS[..]);
+    let aovs: Vec<Aov> =
+        options.aovs.iter().chain(guides.iter().filter(|g| !options.aovs.contains(g))).copied().collect();
     let renderer = FrameRenderer {
-        aovs: &options.aovs,
+        aovs: &aovs,
         adaptive: options.adaptive,
         seed: SeedMode::Fixed,
         reuse: mode,
@@ -180,6 +198,10 @@ fn render_mode(
     let mut frames = Vec::new();
     let mut since = Instant::now();
     sequence.render::<SequenceError>(&options.frames, &mut manager, &renderer, &[], &mut |f, _, _| {
+        let denoise_ms = match &options.denoiser {
+            Some(denoiser) => denoise(denoiser, f)? * 1e3,
+            None => 0.0,
+        };
         let reuse = ReuseRecord::of(f);
         frames.push(ReuseFrame {
             frame: f.index,
@@ -189,6 +211,7 @@ fn render_mode(
             samples_reused: reuse.samples_reused,
             horizon_ms: reuse.horizon_ms,
             store_bytes: reuse.reuse_store_bytes,
+            denoise_ms,
             digest: digest(&f.film, &f.aovs),
         });
         progress(frames.len());
@@ -196,6 +219,15 @@ fn render_mode(
         Ok(())
     })?;
     Ok(frames)
+}
+
+/// `frame`'s image through `denoiser`, guided by its albedo and normal passes: the seconds
+/// that took (the image is dropped, as the frame times are what is measured).
+fn denoise(denoiser: &Denoiser, frame: &RenderedFrame) -> Result<f64, SequenceError> {
+    let guide = |kind: Aov| {
+        frame.aovs.iter().find(|(a, _)| *a == kind).map(|(_, f)| f).expect("render_mode adds the guides")
+    };
+    Ok(denoiser.denoise(&frame.film, guide(Aov::Albedo), guide(Aov::Normal))?.1)
 }
 
 /// FNV-1a over the float bits of `film` and every AOV but `traced`, which differs by design.
@@ -247,6 +279,8 @@ fn report(
             traced_share: e.samples_traced as f64 / (e.samples_traced + e.samples_reused).max(1) as f64,
             off_ms: o.frame_ms,
             exact_ms: e.frame_ms,
+            off_denoise_ms: o.denoise_ms,
+            exact_denoise_ms: e.denoise_ms,
             identical: o.digest == e.digest,
         })
         .collect();
@@ -270,5 +304,6 @@ fn report(
         horizon_share: if trace_cpu > horizon { horizon / (trace_cpu - horizon) } else { f64::NAN },
         store_bytes: exact.iter().map(|f| f.store_bytes).max().unwrap_or(0),
         per_frame,
+        denoise: options.denoiser.as_ref().map(Denoiser::label),
     }
 }

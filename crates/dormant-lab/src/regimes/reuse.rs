@@ -66,6 +66,7 @@ pub(super) fn reuse_cell(
             reuse_budget: DEFAULT_REUSE_BYTES,
             threads: options.threads,
             runs: 1,
+            denoiser: None,
         };
         bench_reuse(sequence, integrator, &bench, &mut |_, _, _| {})
     };

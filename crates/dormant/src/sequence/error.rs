@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use crate::accel::AccelError;
 use crate::physics::trajectory::TrajectoryError;
 use crate::physics::PhysicsError;
+use crate::render::denoise::DenoiseError;
 use crate::render::RenderError;
 use crate::scene::file::SceneError;
 
@@ -60,12 +61,14 @@ pub enum SequenceError {
     Render(#[from] RenderError),
     #[error(transparent)]
     Accel(#[from] AccelError),
+    #[error(transparent)]
+    Denoise(#[from] DenoiseError),
 }
 
 impl SequenceError {
     /// Whether the input (scene, trajectory, options) was at fault rather than the run.
     pub fn is_input(&self) -> bool {
         // A trajectory that cannot be read is input too, like a missing scene file.
-        !matches!(self, SequenceError::Render(_) | SequenceError::Accel(_))
+        !matches!(self, SequenceError::Render(_) | SequenceError::Accel(_) | SequenceError::Denoise(_))
     }
 }
