@@ -119,10 +119,24 @@ fn a_change_index_rebuilt_window_by_window_keeps_the_full_renders_bytes() {
 #[test]
 fn a_budget_without_room_for_samples_reuses_whole_pixels_exactly() {
     // 64x36 pixels need 45 KiB per pixel but 576 KiB per sample at 256 spp: 1 MiB holds
-    // pixels only.
+    // pixels only. Two passes: the store traces both at once for the pixels due.
     let dir = tempfile::tempdir().unwrap();
-    let flags =
-        ["--size", "64x36", "--frames", "0..24", "--spp", "256", "--mode", "shaded", "--reuse-mib", "1"];
+    let flags = [
+        "--size",
+        "64x36",
+        "--frames",
+        "0..24",
+        "--spp",
+        "256",
+        "--mode",
+        "shaded",
+        "--reuse-mib",
+        "1",
+        "--aov",
+        "albedo",
+        "--aov",
+        "depth",
+    ];
     let out = render(dir.path(), "pixels", "exact", &scenes::shipped("tiny"), &flags);
     let frames = read_stats(&out)["frames"].as_array().unwrap().clone();
     assert!(frames.iter().all(|f| f["reuse_granularity"] == "pixel"), "{frames:?}");

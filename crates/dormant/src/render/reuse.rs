@@ -300,23 +300,22 @@ impl ReuseStore {
         if !due.contains(&true) {
             return Ok(0.0);
         }
-        let mut seconds = 0.0;
-        for i in 0..self.passes.len() {
-            // Every pass traces the same camera rays: the first finds their horizons.
-            let plan = FramePlan {
-                samples: Some(&self.counts),
-                due: Due::Pixels { due: &due, stored: &self.counts },
-                horizons: (i == 0).then_some((reuse.index, reuse.ordinal, reuse.until)),
-                aovs: &[],
-            };
-            let pass = render_planned(scene, query, &AovIntegrator(self.passes[i].0), settings, &plan)?;
-            seconds += pass.seconds;
-            copy_due(&mut self.passes[i].1, &pass.film.pixels, &due);
-            if i == 0 {
-                copy_due(&mut self.pass_horizons, &pass.horizons, &due);
-            }
+        // One trace of the due camera rays shades every pass: the first as the frame's
+        // integrator (its camera rays give the horizons), the others at the same hits.
+        let rest: Vec<Aov> = self.passes[1..].iter().map(|(aov, _)| *aov).collect();
+        let plan = FramePlan {
+            samples: Some(&self.counts),
+            due: Due::Pixels { due: &due, stored: &self.counts },
+            horizons: Some((reuse.index, reuse.ordinal, reuse.until)),
+            aovs: &rest,
+        };
+        let traced = render_planned(scene, query, &AovIntegrator(self.passes[0].0), settings, &plan)?;
+        copy_due(&mut self.passes[0].1, &traced.film.pixels, &due);
+        for ((_, stored), film) in self.passes[1..].iter_mut().zip(&traced.aovs) {
+            copy_due(stored, &film.pixels, &due);
         }
-        Ok(seconds)
+        copy_due(&mut self.pass_horizons, &traced.horizons, &due);
+        Ok(traced.seconds)
     }
 
     /// Copies the traced pixels of `beauty` (image, counts, horizons) in; returns the camera

@@ -191,6 +191,13 @@ pub(crate) struct FramePlan<'a> {
     pub aovs: &'a [Aov],
 }
 
+impl FramePlan<'_> {
+    /// Whether the frame keeps its AOV passes' camera horizons ([`PlannedFrame::camera_horizons`]).
+    fn keeps_camera_horizons(&self) -> bool {
+        !self.aovs.is_empty() && self.horizons.is_some() && matches!(self.due, Due::Samples { .. })
+    }
+}
+
 /// Which samples a frame traces (row-major pixels).
 #[derive(Clone, Copy, Default)]
 pub(crate) enum Due<'a> {
@@ -282,7 +289,7 @@ pub(crate) fn render_planned(
         counts: vec![0; (w * h) as usize],
         horizons: vec![0; (w * h) as usize],
         aovs: plan.aovs.iter().map(|_| Film::new(w, h)).collect(),
-        camera_horizons: if plan.aovs.is_empty() { Vec::new() } else { vec![0; (w * h) as usize] },
+        camera_horizons: if plan.keeps_camera_horizons() { vec![0; (w * h) as usize] } else { Vec::new() },
         samples: Vec::new(),
         rays: 0,
         seconds: 0.0,
@@ -392,7 +399,7 @@ impl TileRenderer<'_> {
             sums: vec![Vec3::ZERO; n],
             squares: if self.stopping.is_some() { vec![Vec3::ZERO; n] } else { Vec::new() },
             samples: vec![0; n],
-            first_hits: FirstHits::new(self.plan.aovs.len(), n),
+            first_hits: FirstHits::new(self.plan.aovs.len(), n, self.plan.keeps_camera_horizons()),
         };
         let mut tile = Tile {
             pixels: Vec::new(),
@@ -702,14 +709,15 @@ struct FirstHits {
 }
 
 impl FirstHits {
-    /// Room for `passes` passes of `pixels` pixels (nothing without passes).
-    fn new(passes: usize, pixels: usize) -> Self {
+    /// Room for `passes` passes of `pixels` pixels (nothing without passes), and their camera
+    /// horizons when `horizons`.
+    fn new(passes: usize, pixels: usize, horizons: bool) -> Self {
         let pixels = if passes == 0 { 0 } else { pixels };
         FirstHits {
             passes,
             sums: vec![Vec3::ZERO; passes * pixels],
             samples: vec![0; pixels],
-            camera_horizons: vec![u32::MAX; pixels],
+            camera_horizons: if horizons { vec![u32::MAX; pixels] } else { Vec::new() },
         }
     }
 
@@ -719,8 +727,8 @@ impl FirstHits {
             *sum += value;
         }
         self.samples[at] += 1;
-        if let Some(camera) = camera {
-            self.camera_horizons[at] = self.camera_horizons[at].min(camera);
+        if let (Some(camera), Some(least)) = (camera, self.camera_horizons.get_mut(at)) {
+            *least = (*least).min(camera);
         }
     }
 

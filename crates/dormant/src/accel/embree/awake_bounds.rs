@@ -33,17 +33,17 @@ impl AwakeBounds {
     /// The box around the world bounds `instances`, and inside it: each one if there are at
     /// most [`MAX_BOXES`], else the occupied cells of a 4x4x4 (or, if more than [`MAX_BOXES`]
     /// are occupied, 2x2x2) grid over their union, each cell bounding the instances whose
-    /// centre lies in it. A non-finite box gives the box around all alone (which the test then
-    /// treats as meeting every ray: Embree decides).
+    /// centre lies in it. A non-finite box gives one box that meets every ray alone: Embree
+    /// decides.
     pub(crate) fn around(instances: &[Aabb]) -> Self {
         let union = instances.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
         if union.is_empty() {
             return Self::NONE;
         }
-        let all = AwakeBox::new(union);
         if !union.min.is_finite() || !union.max.is_finite() {
-            return Self { all, boxes: Vec::new() };
+            return Self { all: AwakeBox::EVERYWHERE, boxes: Vec::new() };
         }
+        let all = AwakeBox::new(union);
         if instances.len() <= MAX_BOXES {
             return Self { all, boxes: instances.iter().map(|b| AwakeBox::new(*b)).collect() };
         }
@@ -90,6 +90,8 @@ struct AwakeBox {
 impl AwakeBox {
     /// Meets nothing.
     const NONE: AwakeBox = AwakeBox { lo: Vec3A::INFINITY, hi: Vec3A::NEG_INFINITY };
+    /// Meets every ray ([`AwakeBox::new`] gives `NONE` for a non-finite box).
+    const EVERYWHERE: AwakeBox = AwakeBox { lo: Vec3A::NEG_INFINITY, hi: Vec3A::INFINITY };
 
     /// `b` widened by [`SLACK`] of its size and distance from the origin; `NONE` for an empty
     /// or non-finite box.
@@ -208,5 +210,14 @@ mod grouping_tests {
         let b = AwakeBounds::around(&bodies);
         assert_eq!(b.boxes.len(), 8);
         assert!(!AwakeBounds::around(&[]).may_hit(&Ray::new(Vec3::ZERO, Vec3::X), f32::INFINITY));
+    }
+
+    #[test]
+    fn a_body_with_non_finite_bounds_leaves_every_ray_to_embree() {
+        let far = Aabb { min: Vec3::splat(f32::NEG_INFINITY), max: Vec3::splat(1.0) };
+        let b = AwakeBounds::around(&[cube(Vec3::ZERO), far]);
+        for (o, d) in [(Vec3::splat(50.0), Vec3::Y), (Vec3::new(-3.0, 7.0, 2.0), Vec3::NEG_X)] {
+            assert!(b.may_hit(&Ray::new(o, d), f32::INFINITY) && b.may_hit(&Ray::new(o, d), 1.0));
+        }
     }
 }
