@@ -1,5 +1,6 @@
 //! `render --denoise` end to end: the denoised image is closer to a high-spp reference than
 //! the noisy image it came from (relative MSE), the noisy image is kept beside it on request,
+//! a frame denoised by the filter kept from earlier frames is the one a fresh filter gives,
 //! `bench reuse --denoise` counts the denoiser in both modes' frame times, and a missing Open
 //! Image Denoise (a build without the `oidn` feature, or a library without its CPU device)
 //! exits 2 with a message naming what is missing.
@@ -18,6 +19,33 @@ fn render(out: &Path, spp: &str, extra: &[&str]) -> Command {
     let mut cmd = dormant();
     cmd.args(["render", "--size", "160x90", "--spp", spp, "--exr", "--quiet", "--out"]).arg(out).args(extra);
     cmd
+}
+
+#[cfg(feature = "oidn")]
+#[test]
+fn a_frame_denoised_by_the_kept_filter_equals_one_denoised_by_a_fresh_filter() {
+    let dir = tempfile::tempdir().unwrap();
+    let tiny = common::scenes::shipped("tiny");
+    let tiny = tiny.to_str().unwrap();
+    for prefilter in [&[][..], &["--denoise-prefilter"][..]] {
+        let (run, alone) = (dir.path().join("run"), dir.path().join("alone"));
+        let denoised = |out: &Path, frames: &str| {
+            succeeds(&mut render(
+                out,
+                "4",
+                &[&[tiny, "--denoise", "--frames", frames][..], prefilter].concat(),
+            ))
+        };
+        denoised(&run, "0..3");
+        denoised(&alone, "2..3");
+        let file = "frame_0002.exr";
+        assert!(
+            std::fs::read(run.join(file)).unwrap() == std::fs::read(alone.join(file)).unwrap(),
+            "{file} {prefilter:?}"
+        );
+        std::fs::remove_dir_all(&run).unwrap();
+        std::fs::remove_dir_all(&alone).unwrap();
+    }
 }
 
 #[cfg(feature = "oidn")]

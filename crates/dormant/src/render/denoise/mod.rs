@@ -150,7 +150,7 @@ impl Denoiser {
                 albedo = self.device.filter_rt(size, &[(c"albedo", &albedo)], false, false)?;
                 normal = self.device.filter_rt(size, &[(c"normal", &normal)], false, false)?;
             }
-            let inputs: [(&std::ffi::CStr, &[f32]); 3] =
+            let inputs: [(&'static std::ffi::CStr, &[f32]); 3] =
                 [(c"color", &color), (c"albedo", &albedo), (c"normal", &normal)];
             let output = self.device.filter_rt(size, &inputs, true, self.prefilter)?;
             let pixels =

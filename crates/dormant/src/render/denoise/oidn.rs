@@ -1,6 +1,12 @@
 //! The only `unsafe` code of denoising: an owned OIDN CPU device and `RT` filters over
 //! caller-owned pixel buffers, every call checked with `oidnGetDeviceError`.
+//!
+//! A filter is made and committed once per kind of run (its inputs, size and flags) and kept
+//! for the next frames: committing a new filter sets its network up again, which OIDN skips
+//! when only the image pointers change (measured: docs/lab/reuse.md, "the denoiser's filter
+//! kept").
 
+use std::cell::RefCell;
 use std::ffi::{c_void, CStr};
 use std::ptr;
 
@@ -41,16 +47,29 @@ fn take_error(device: sys::OIDNDevice) -> Option<(sys::OIDNError, String)> {
     Some((code, text))
 }
 
-/// An OIDN CPU device; released on drop. Raw pointers keep it `!Send` and `!Sync`, which
-/// suits OIDN's per-thread error reporting.
+/// An OIDN CPU device and the filters made on it; released on drop. Raw pointers keep it
+/// `!Send` and `!Sync`, which suits OIDN's per-thread error reporting.
 pub(super) struct OidnDevice {
     raw: sys::OIDNDevice,
+    filters: RefCell<Vec<(FilterKey, Filter)>>,
+}
+
+/// What a committed filter was set up for: its input names, image size, `hdr` and
+/// `cleanAux`.
+#[derive(Clone, PartialEq, Eq)]
+struct FilterKey {
+    inputs: Vec<&'static CStr>,
+    size: (usize, usize),
+    hdr: bool,
+    clean_aux: bool,
 }
 
 impl Drop for OidnDevice {
     fn drop(&mut self) {
+        // Filters first: each holds a reference to the device.
+        self.filters.get_mut().clear();
         // SAFETY: `raw` is a live device this struct holds the only reference to; every filter
-        // made from it was released before `filter_rt` returned.
+        // made from it is released above.
         unsafe { sys::oidnReleaseDevice(self.raw) };
     }
 }
@@ -65,7 +84,7 @@ impl OidnDevice {
             let message = take_error(ptr::null_mut()).map(|(_, m)| m).unwrap_or_default();
             return Err(DenoiseError::NoDevice { message, lib_dir: sys::LIB_DIR.to_string() });
         }
-        let device = OidnDevice { raw };
+        let device = OidnDevice { raw, filters: RefCell::new(Vec::new()) };
         let threads = threads.map_or(0, |n| i32::try_from(n).unwrap_or(i32::MAX));
         // SAFETY: `raw` is a live, not yet committed device; the names are NUL-terminated.
         unsafe {
@@ -103,32 +122,38 @@ impl OidnDevice {
     pub(super) fn filter_rt(
         &self,
         (width, height): (usize, usize),
-        inputs: &[(&CStr, &[f32])],
+        inputs: &[(&'static CStr, &[f32])],
         hdr: bool,
         clean_aux: bool,
     ) -> Result<Vec<f32>, DenoiseError> {
         let len = width * height * 3;
         assert!(inputs.iter().all(|(_, data)| data.len() == len), "images of {width}x{height} RGB");
+        let key = FilterKey {
+            inputs: inputs.iter().map(|(name, _)| *name).collect(),
+            size: (width, height),
+            hdr,
+            clean_aux,
+        };
+        let mut filters = self.filters.borrow_mut();
+        let filter = match filters.iter().position(|(k, _)| *k == key) {
+            Some(at) => &filters[at].1,
+            None => {
+                let filter = self.new_rt_filter(hdr, clean_aux)?;
+                filters.push((key, filter));
+                &filters.last().expect("just pushed").1
+            }
+        };
         let mut output = vec![0.0f32; len];
-        // SAFETY: `raw` is a live, committed device.
-        let filter = Filter { raw: unsafe { sys::oidnNewFilter(self.raw, c"RT".as_ptr()) } };
-        self.check("oidnNewFilter")?;
-        if filter.raw.is_null() {
-            return Err(DenoiseError::Oidn {
-                call: "oidnNewFilter",
-                code: "null filter",
-                message: String::new(),
-            });
-        }
         // Inputs are only read by OIDN; the pointer type of the C API is not const.
         let images = inputs
             .iter()
             .map(|(name, data)| (*name, data.as_ptr() as *mut c_void))
             .chain([(c"output", output.as_mut_ptr() as *mut c_void)]);
-        // SAFETY: `filter.raw` is a live filter; every image pointer addresses `len` floats
-        // (width * height packed FLOAT3 pixels, strides computed by OIDN) that outlive the
-        // filter, which is released before this function returns; only `output` is written,
-        // and nothing else reads or writes it meanwhile.
+        // SAFETY: `filter.raw` is a live filter; every image it reads or writes is set here,
+        // each pointer addressing `len` floats (width * height packed FLOAT3 pixels, strides
+        // computed by OIDN) that outlive the execution below; only `output` is written, and
+        // nothing else reads or writes it meanwhile. The pointers left in the filter after
+        // this call are never used: the next call sets every image again before executing.
         unsafe {
             for (name, data) in images {
                 sys::oidnSetSharedFilterImage(
@@ -143,22 +168,38 @@ impl OidnDevice {
                     0,
                 );
             }
-            sys::oidnSetFilterBool(filter.raw, c"hdr".as_ptr(), hdr);
-            sys::oidnSetFilterBool(filter.raw, c"cleanAux".as_ptr(), clean_aux);
-            sys::oidnSetFilterInt(filter.raw, c"quality".as_ptr(), sys::OIDN_QUALITY_HIGH);
             sys::oidnCommitFilter(filter.raw);
         }
         self.check("oidnCommitFilter")?;
         // SAFETY: a committed filter whose images are valid (above).
         unsafe { sys::oidnExecuteFilter(filter.raw) };
         self.check("oidnExecuteFilter")?;
-        drop(filter);
         Ok(output)
+    }
+
+    /// A new `RT` filter with `hdr`, `cleanAux` and high quality set, its images not yet.
+    fn new_rt_filter(&self, hdr: bool, clean_aux: bool) -> Result<Filter, DenoiseError> {
+        // SAFETY: `raw` is a live, committed device.
+        let filter = Filter { raw: unsafe { sys::oidnNewFilter(self.raw, c"RT".as_ptr()) } };
+        self.check("oidnNewFilter")?;
+        if filter.raw.is_null() {
+            return Err(DenoiseError::Oidn {
+                call: "oidnNewFilter",
+                code: "null filter",
+                message: String::new(),
+            });
+        }
+        // SAFETY: `filter.raw` is a live filter; the names are NUL-terminated.
+        unsafe {
+            sys::oidnSetFilterBool(filter.raw, c"hdr".as_ptr(), hdr);
+            sys::oidnSetFilterBool(filter.raw, c"cleanAux".as_ptr(), clean_aux);
+            sys::oidnSetFilterInt(filter.raw, c"quality".as_ptr(), sys::OIDN_QUALITY_HIGH);
+        }
+        Ok(filter)
     }
 }
 
-/// An OIDN filter; released on drop (also on early error returns, before the images it
-/// points at go away).
+/// An OIDN filter; released on drop.
 struct Filter {
     raw: sys::OIDNFilter,
 }
