@@ -1,6 +1,7 @@
 //! `render --denoise` end to end: the denoised image is closer to a high-spp reference than
 //! the noisy image it came from (relative MSE), the noisy image is kept beside it on request,
 //! a frame denoised by the filter kept from earlier frames is the one a fresh filter gives,
+//! `--denoise-quality fast` filters with its own network,
 //! `bench reuse --denoise` counts the denoiser in both modes' frame times, and a missing Open
 //! Image Denoise (a build without the `oidn` feature, or a library without its CPU device)
 //! exits 2 with a message naming what is missing.
@@ -87,6 +88,35 @@ fn bench_reuse_denoises_both_modes_within_their_frame_times() {
             assert!(d > 0.0 && d < t, "{denoise} {d} of {total} {t}");
         }
     }
+}
+
+/// `--denoise-quality fast` filters with OIDN's smallest network: another image than `high`'s,
+/// still closer to the reference than the noisy one, and named in the statistics.
+#[cfg(feature = "oidn")]
+#[test]
+fn fast_denoise_quality_filters_with_its_own_network_and_is_recorded() {
+    let dir = tempfile::tempdir().unwrap();
+    let (fast, high, reference) = (dir.path().join("fast"), dir.path().join("high"), dir.path().join("ref"));
+    succeeds(&mut render(&fast, "16", &["--denoise", "--keep-noisy", "--denoise-quality", "fast"]));
+    succeeds(&mut render(&high, "16", &["--denoise"]));
+    succeeds(&mut render(&reference, "256", &[]));
+    let image = "frame_0000.exr";
+    assert!(std::fs::read(fast.join(image)).unwrap() != std::fs::read(high.join(image)).unwrap());
+    let reference = reference.join(image);
+    let denoised = relative_mse_of_files(&fast.join(image), &reference);
+    let before = relative_mse_of_files(&fast.join("frame_0000.noisy.exr"), &reference);
+    assert!(denoised < before, "fast denoised relMSE {denoised} is not below noisy {before}");
+    let tiny = common::scenes::shipped("tiny");
+    let run = dir.path().join("run");
+    succeeds(render(&run, "1", &["--denoise", "--denoise-quality", "fast", "--frames", "0..1"]).arg(&tiny));
+    assert_eq!(common::cli::read_stats(&run)["run"]["denoise"], "oidn-fast");
+}
+
+#[test]
+fn denoise_quality_needs_denoise() {
+    let dir = tempfile::tempdir().unwrap();
+    let stderr = exits_with(&mut render(dir.path(), "1", &["--denoise-quality", "fast"]), 2);
+    assert!(stderr.contains("--denoise"));
 }
 
 #[test]

@@ -2,6 +2,7 @@
 //! domains together. No rendering or geometry logic lives here.
 
 mod bench;
+mod denoise;
 mod export;
 mod info;
 mod progress;

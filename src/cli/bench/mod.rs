@@ -7,6 +7,7 @@ use clap::{Args, Subcommand};
 
 mod reuse;
 
+use super::denoise::DenoiseArgs;
 use super::{CliError, JsonOutput, SceneSource};
 use dormant::scene::limits::MAX_SAMPLES_PER_PIXEL;
 use dormant::sequence::{FrameRange, SequenceSource};
@@ -263,13 +264,9 @@ pub struct AdaptiveBenchArgs {
     /// Adaptive sampling's minimum (default: as `render --min-spp`).
     #[arg(long, value_name = "N")]
     pub min_spp: Option<u32>,
-    /// Also denoise every frame (OIDN) and report its error.
-    #[arg(long)]
-    pub denoise: bool,
-    /// With --denoise: denoise the albedo and normal guides first, as `render
-    /// --denoise-prefilter` does.
-    #[arg(long, requires = "denoise")]
-    pub denoise_prefilter: bool,
+    // Also denoise every frame (`--denoise`, as `render`'s) and report its error.
+    #[command(flatten)]
+    pub denoising: DenoiseArgs,
 }
 
 pub(super) fn run(
@@ -514,14 +511,7 @@ fn adaptive(
     if args.min_spp.is_some_and(|m| m == 0 || m > args.adaptive_spp) {
         return input("--min-spp", "must be from 1 to --adaptive-spp");
     }
-    let denoiser = match args.denoise {
-        true => Some(
-            dormant::render::denoise::Denoiser::new(threads)
-                .map_err(|e| CliError::Input(e.to_string()))?
-                .prefilter(args.denoise_prefilter),
-        ),
-        false => None,
-    };
+    let denoiser = args.denoising.denoiser(threads)?;
     let opts = AdaptiveBenchOptions {
         backend: super::render::choose_backend(args.backend)?,
         width: args.size.width,

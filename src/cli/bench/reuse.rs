@@ -4,13 +4,13 @@ use std::path::PathBuf;
 
 use clap::Args;
 
+use super::super::denoise::DenoiseArgs;
 use super::super::render::{
     check_shutter, choose_backend, integrator, load_sequence, sequence_error, RenderMode,
 };
 use super::super::simulate::PhysicsScene;
 use super::super::{CliError, JsonOutput};
 use super::emit;
-use dormant::render::denoise::Denoiser;
 use dormant::render::{AdaptiveSampling, Aov, ImageSize};
 use dormant::residency::{IntegrationForm, IntegrationPolicy, IntegrationSettings};
 use dormant::scene::limits::MAX_SAMPLES_PER_PIXEL;
@@ -71,12 +71,9 @@ pub struct ReuseArgs {
     /// Exact reuse's memory, in MiB, as `render --reuse-mib`.
     #[arg(long, value_name = "MIB", default_value_t = DEFAULT_REUSE_BYTES >> 20)]
     pub reuse_mib: usize,
-    /// Denoise every frame (OIDN, as `render --denoise`), within its frame's time.
-    #[arg(long)]
-    pub denoise: bool,
-    /// With --denoise: as `render --denoise-prefilter`.
-    #[arg(long, requires = "denoise")]
-    pub denoise_prefilter: bool,
+    // Denoise every frame (`--denoise`, as `render`'s), within its frame's time.
+    #[command(flatten)]
+    pub denoising: DenoiseArgs,
     /// Runs of each mode; the speed-up's spread is over them.
     #[arg(long, value_name = "N", default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
     pub runs: u32,
@@ -127,7 +124,7 @@ pub(super) fn reuse(
         reuse_budget,
         threads,
         runs: args.runs as usize,
-        denoiser: denoiser(args, threads)?,
+        denoiser: args.denoising.denoiser(threads)?,
     };
     let integrator = integrator(args.mode, 6);
     let total = options.frames.count();
@@ -140,10 +137,4 @@ pub(super) fn reuse(
     let report = bench_reuse(&sequence, integrator.as_ref(), &options, &mut progress)
         .map_err(|e| sequence_error(e, "--frames"))?;
     emit(&bench_json(&report), json, quiet)
-}
-
-/// The denoiser of `--denoise` (`None` without).
-fn denoiser(args: &ReuseArgs, threads: Option<usize>) -> Result<Option<Denoiser>, CliError> {
-    let make = || Denoiser::new(threads).map(|d| d.prefilter(args.denoise_prefilter));
-    args.denoise.then(make).transpose().map_err(|e| CliError::Input(e.to_string()))
 }

@@ -14,11 +14,11 @@ use std::path::{Path, PathBuf};
 use clap::Args;
 use indicatif::ProgressBar;
 
+use super::denoise::DenoiseArgs;
 use super::CliError;
 use dormant::accel::{self, Backend};
 use dormant::physics::SimulateOptions;
 use dormant::render;
-use dormant::render::denoise::{DenoiseError, Denoiser};
 use dormant::render::{
     AdaptiveSampling, AmbientOcclusion, Aov, DirectLighting, ImageSize, Integrator, PathTracer, RenderScene,
     RenderSettings,
@@ -166,19 +166,12 @@ pub struct RenderArgs {
     /// Exposure multiplier applied before tone mapping.
     #[arg(long, default_value_t = 1.0)]
     pub exposure: f32,
-    /// Denoise each image with Intel Open Image Denoise (OIDN 2, CPU), guided by the albedo and
-    /// normal passes (rendered for it even when --aov does not ask for them). Needs the
-    /// `oidn` feature, which `scripts/setup.sh` makes available.
-    #[arg(long)]
-    pub denoise: bool,
+    #[command(flatten)]
+    pub denoising: DenoiseArgs,
     /// With --denoise: also write the image before denoising as frame_NNNN.noisy.png (and
     /// .noisy.exr with --exr), like Cycles' "Noisy Image" pass.
     #[arg(long, requires = "denoise")]
     pub keep_noisy: bool,
-    /// With --denoise: denoise the albedo and normal guides first (like Cycles' "Accurate"
-    /// prefilter): less error on fine texture edges, about six times the denoising time.
-    #[arg(long, requires = "denoise")]
-    pub denoise_prefilter: bool,
 }
 
 /// The requested backend, or the first compiled in.
@@ -244,11 +237,7 @@ pub(super) fn run(
 ) -> Result<(), CliError> {
     let backend = choose_backend(args.backend)?;
     check_flags(args)?;
-    let denoiser = args
-        .denoise
-        .then(|| Denoiser::new(threads).map(|d| d.prefilter(args.denoise_prefilter)))
-        .transpose()
-        .map_err(denoise_error)?;
+    let denoiser = args.denoising.denoiser(threads)?;
     // The scene file is read (and a bad one refused) before anything is written.
     let source = sequence_source(args)?;
     std::fs::create_dir_all(&args.out).map_err(|e| {
@@ -284,28 +273,18 @@ pub(super) fn run(
         "noise_threshold": args.noise_threshold,
         "min_spp": args.min_spp,
         "mode": args.mode,
-        "denoise": args.denoise,
+        "denoise": args.denoising.denoise,
         "integration": is_sequence.then_some(args.integration),
         "frames": output.records,
         "kept_frames": output.kept,
     }))
 }
 
-/// A denoiser that cannot start: a missing library (or a build without it) is the user's to
-/// fix (exit 2), anything else a runtime failure.
-fn denoise_error(e: DenoiseError) -> CliError {
-    if e.is_missing_library() {
-        CliError::Input(e.to_string())
-    } else {
-        CliError::Runtime(e.to_string())
-    }
-}
-
 /// The AOV passes a frame renders: the requested ones in order, then the denoiser's guides
 /// that were not requested.
 fn aov_passes(args: &RenderArgs) -> Vec<Aov> {
     let mut passes = args.aov.clone();
-    if args.denoise {
+    if args.denoising.denoise {
         passes.extend(render::denoise::GUIDE_AOVS.iter().filter(|g| !args.aov.contains(g)));
     }
     passes

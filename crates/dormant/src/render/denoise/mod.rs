@@ -67,12 +67,29 @@ pub(crate) const OIDN_VERSION: &str = "2.5.1";
 /// The AOVs the denoiser takes as guides, rendered whenever a frame is denoised.
 pub const GUIDE_AOVS: [Aov; 2] = [Aov::Albedo, Aov::Normal];
 
+/// OIDN's filter quality (`--denoise-quality`, Cycles' "Denoising Quality"): which of its
+/// networks filters the image. Prefiltered guides are filtered at `balanced` when `fast` is
+/// asked for (OIDN has no fast guide filter).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum DenoiseQuality {
+    /// The largest network: for final frames.
+    #[default]
+    High,
+    /// A smaller network, faster (OIDN: for interactive and real-time rendering).
+    Balanced,
+    /// The smallest: fastest, for previews.
+    Fast,
+}
+
 /// An OIDN CPU device, made once and used for every frame of a run. Not `Sync`: OIDN reports
 /// errors per thread, so one thread drives it.
 pub struct Denoiser {
     /// Denoise the guides first and tell the filter they are clean (see [`Denoiser::prefilter`]).
     #[cfg_attr(not(feature = "oidn"), allow(dead_code))]
     prefilter: bool,
+    #[cfg_attr(not(feature = "oidn"), allow(dead_code))]
+    quality: DenoiseQuality,
     #[cfg(feature = "oidn")]
     device: oidn::OidnDevice,
     #[cfg(not(feature = "oidn"))]
@@ -84,7 +101,11 @@ impl Denoiser {
     pub fn new(threads: Option<usize>) -> Result<Self, DenoiseError> {
         #[cfg(feature = "oidn")]
         {
-            Ok(Self { prefilter: false, device: oidn::OidnDevice::new(threads)? })
+            Ok(Self {
+                prefilter: false,
+                quality: DenoiseQuality::High,
+                device: oidn::OidnDevice::new(threads)?,
+            })
         }
         #[cfg(not(feature = "oidn"))]
         {
@@ -102,13 +123,22 @@ impl Denoiser {
         self
     }
 
-    /// How frames are denoised, as stats and bench reports name it: `oidn`, or `oidn-prefilter`
-    /// with [`Denoiser::prefilter`].
+    /// Filters with OIDN's `quality` network (high by default).
+    pub fn quality(mut self, quality: DenoiseQuality) -> Self {
+        self.quality = quality;
+        self
+    }
+
+    /// How frames are denoised, as stats and bench reports name it: `oidn`, `-prefilter` added
+    /// with [`Denoiser::prefilter`] and `-balanced` or `-fast` with that [`Denoiser::quality`].
     pub fn label(&self) -> &'static str {
-        if self.prefilter {
-            "oidn-prefilter"
-        } else {
-            "oidn"
+        match (self.prefilter, self.quality) {
+            (false, DenoiseQuality::High) => "oidn",
+            (false, DenoiseQuality::Balanced) => "oidn-balanced",
+            (false, DenoiseQuality::Fast) => "oidn-fast",
+            (true, DenoiseQuality::High) => "oidn-prefilter",
+            (true, DenoiseQuality::Balanced) => "oidn-prefilter-balanced",
+            (true, DenoiseQuality::Fast) => "oidn-prefilter-fast",
         }
     }
 
@@ -146,13 +176,19 @@ impl Denoiser {
             let color = packed(&beauty.pixels, |p| p.max(Vec3::ZERO));
             let mut albedo = packed(&albedo.pixels, |p| p.clamp(Vec3::ZERO, Vec3::ONE));
             let mut normal = packed(&normal.pixels, |p| p.clamp(-Vec3::ONE, Vec3::ONE));
+            let filter = |inputs: &[(&'static std::ffi::CStr, &[f32])], hdr, clean_aux| {
+                let options = oidn::FilterOptions { hdr, clean_aux, quality: self.quality };
+                self.device.filter_rt(size, inputs, options)
+            };
             if self.prefilter {
-                albedo = self.device.filter_rt(size, &[(c"albedo", &albedo)], false, false)?;
-                normal = self.device.filter_rt(size, &[(c"normal", &normal)], false, false)?;
+                albedo = filter(&[(c"albedo", &albedo)], false, false)?;
+                normal = filter(&[(c"normal", &normal)], false, false)?;
             }
-            let inputs: [(&'static std::ffi::CStr, &[f32]); 3] =
-                [(c"color", &color), (c"albedo", &albedo), (c"normal", &normal)];
-            let output = self.device.filter_rt(size, &inputs, true, self.prefilter)?;
+            let output = filter(
+                &[(c"color", &color), (c"albedo", &albedo), (c"normal", &normal)],
+                true,
+                self.prefilter,
+            )?;
             let pixels =
                 output.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2]).max(Vec3::ZERO)).collect();
             Ok((Film { width: beauty.width, height: beauty.height, pixels }, start.elapsed().as_secs_f64()))

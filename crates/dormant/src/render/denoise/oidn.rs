@@ -12,7 +12,7 @@ use std::ptr;
 
 use oidn_sys as sys;
 
-use super::DenoiseError;
+use super::{DenoiseError, DenoiseQuality};
 
 /// OIDN's name for an error code.
 fn code_name(code: sys::OIDNError) -> &'static str {
@@ -54,14 +54,21 @@ pub(super) struct OidnDevice {
     filters: RefCell<Vec<(FilterKey, Filter)>>,
 }
 
-/// What a committed filter was set up for: its input names, image size, `hdr` and
-/// `cleanAux`.
+/// An `RT` filter's parameters: `hdr` says the color image is HDR, `clean_aux` that the guides
+/// are noise-free; `quality` picks the network.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub(super) struct FilterOptions {
+    pub hdr: bool,
+    pub clean_aux: bool,
+    pub quality: DenoiseQuality,
+}
+
+/// What a committed filter was set up for: its input names, image size and options.
 #[derive(Clone, PartialEq, Eq)]
 struct FilterKey {
     inputs: Vec<&'static CStr>,
     size: (usize, usize),
-    hdr: bool,
-    clean_aux: bool,
+    options: FilterOptions,
 }
 
 impl Drop for OidnDevice {
@@ -116,29 +123,27 @@ impl OidnDevice {
         format!("{}.{}.{}", v / 10000, v / 100 % 100, v % 100)
     }
 
-    /// Runs the `RT` filter on `width` x `height` images of packed RGB floats: `inputs` names
-    /// each (`color`, `albedo`, `normal`; a guide alone is prefiltered); `hdr` says the color
-    /// image is HDR, `clean_aux` that the guides are noise-free. Returns the output image.
+    /// Runs the `RT` filter with `options` on `width` x `height` images of packed RGB floats:
+    /// `inputs` names each (`color`, `albedo`, `normal`; a guide alone is prefiltered).
+    /// Returns the output image.
     pub(super) fn filter_rt(
         &self,
         (width, height): (usize, usize),
         inputs: &[(&'static CStr, &[f32])],
-        hdr: bool,
-        clean_aux: bool,
+        options: FilterOptions,
     ) -> Result<Vec<f32>, DenoiseError> {
         let len = width * height * 3;
         assert!(inputs.iter().all(|(_, data)| data.len() == len), "images of {width}x{height} RGB");
         let key = FilterKey {
             inputs: inputs.iter().map(|(name, _)| *name).collect(),
             size: (width, height),
-            hdr,
-            clean_aux,
+            options,
         };
         let mut filters = self.filters.borrow_mut();
         let filter = match filters.iter().position(|(k, _)| *k == key) {
             Some(at) => &filters[at].1,
             None => {
-                let filter = self.new_rt_filter(hdr, clean_aux)?;
+                let filter = self.new_rt_filter(options)?;
                 filters.push((key, filter));
                 &filters.last().expect("just pushed").1
             }
@@ -177,8 +182,8 @@ impl OidnDevice {
         Ok(output)
     }
 
-    /// A new `RT` filter with `hdr`, `cleanAux` and high quality set, its images not yet.
-    fn new_rt_filter(&self, hdr: bool, clean_aux: bool) -> Result<Filter, DenoiseError> {
+    /// A new `RT` filter with `options` set, its images not yet.
+    fn new_rt_filter(&self, options: FilterOptions) -> Result<Filter, DenoiseError> {
         // SAFETY: `raw` is a live, committed device.
         let filter = Filter { raw: unsafe { sys::oidnNewFilter(self.raw, c"RT".as_ptr()) } };
         self.check("oidnNewFilter")?;
@@ -191,11 +196,20 @@ impl OidnDevice {
         }
         // SAFETY: `filter.raw` is a live filter; the names are NUL-terminated.
         unsafe {
-            sys::oidnSetFilterBool(filter.raw, c"hdr".as_ptr(), hdr);
-            sys::oidnSetFilterBool(filter.raw, c"cleanAux".as_ptr(), clean_aux);
-            sys::oidnSetFilterInt(filter.raw, c"quality".as_ptr(), sys::OIDN_QUALITY_HIGH);
+            sys::oidnSetFilterBool(filter.raw, c"hdr".as_ptr(), options.hdr);
+            sys::oidnSetFilterBool(filter.raw, c"cleanAux".as_ptr(), options.clean_aux);
+            sys::oidnSetFilterInt(filter.raw, c"quality".as_ptr(), quality_code(options.quality));
         }
         Ok(filter)
+    }
+}
+
+/// OIDN's code for `quality`.
+fn quality_code(quality: DenoiseQuality) -> sys::OIDNQuality {
+    match quality {
+        DenoiseQuality::High => sys::OIDN_QUALITY_HIGH,
+        DenoiseQuality::Balanced => sys::OIDN_QUALITY_BALANCED,
+        DenoiseQuality::Fast => sys::OIDN_QUALITY_FAST,
     }
 }
 

@@ -229,8 +229,9 @@ pub struct RunInfo {
     /// Extra passes (`--aov`), in request order.
     pub aovs: Vec<String>,
     pub exr: bool,
-    /// `--denoise`: `null` off, `oidn`, or `oidn-prefilter` (`--denoise-prefilter`). Absent in
-    /// runs from before denoising, which did not denoise.
+    /// `--denoise`: `null` off, `oidn`, or `oidn-prefilter` (`--denoise-prefilter`), either
+    /// followed by `-balanced` or `-fast` (`--denoise-quality`). Absent in runs from before
+    /// denoising, which did not denoise.
     #[serde(default)]
     pub denoise: Option<String>,
     /// `--keep-noisy`.
