@@ -76,7 +76,8 @@ pub enum DenoiseQuality {
     /// The largest network: for final frames.
     #[default]
     High,
-    /// A smaller network, faster (OIDN: for interactive and real-time rendering).
+    /// OIDN's middle setting (for interactive rendering). On the CPU device it gives `high`'s
+    /// result unless the guides are prefiltered, where `high` takes a larger network.
     Balanced,
     /// The smallest: fastest, for previews.
     Fast,
