@@ -34,6 +34,8 @@ impl Sequence {
             }
             if selection.selects(frame.index) {
                 on_frame(&frame, managers)?;
+                // The managers were prepared for this frame: the next one changes from here.
+                replay.restart_changes();
             }
         }
         Ok(())

@@ -2,6 +2,7 @@
 //! into a [`TrajectoryFrame`] of what changed, and [`Replay`] applies those changes to give
 //! every body's state and pose frame by frame.
 
+use bit_set::BitSet;
 use glam::{Quat, Vec3};
 
 use crate::geometry::{InstanceMotion, RigidTransform};
@@ -16,32 +17,50 @@ use crate::physics::island::IslandEvent;
 struct BodyTable {
     states: Vec<BodyState>,
     poses: Vec<BodyPose>,
+    /// How many bodies are present ([`is_present`]), kept as changes apply: counting them
+    /// afresh each frame read every state and pose (a scan of megabytes on the demolition).
+    present: usize,
+}
+
+/// Whether a body in `state` at `pose` is in the world: spawned, not removed, at a finite
+/// pose. The one place that decides which bodies a frame shows.
+fn is_present(state: BodyState, pose: &BodyPose) -> bool {
+    state != BodyState::Absent && pose.translation.is_finite()
 }
 
 impl BodyTable {
     fn new(body_count: usize) -> Self {
         let origin = BodyPose { translation: Vec3::ZERO, rotation: Quat::IDENTITY };
-        Self { states: vec![BodyState::Absent; body_count], poses: vec![origin; body_count] }
+        Self { states: vec![BodyState::Absent; body_count], poses: vec![origin; body_count], present: 0 }
+    }
+
+    fn present(&self, b: usize) -> bool {
+        is_present(self.states[b], &self.poses[b])
     }
 
     fn apply(&mut self, frame: &TrajectoryFrame) {
         for &(body, state) in &frame.state_changes {
-            self.states[body.0 as usize] = state;
+            let b = body.0 as usize;
+            let was = self.present(b);
+            self.states[b] = state;
+            self.present = self.present + usize::from(self.present(b)) - usize::from(was);
         }
         for &(body, pose) in &frame.pose_changes {
-            self.poses[body.0 as usize] = pose;
+            let b = body.0 as usize;
+            let was = self.present(b);
+            self.poses[b] = pose;
+            self.present = self.present + usize::from(self.present(b)) - usize::from(was);
         }
     }
 
     /// The poses `frame` replaces of bodies present before it (ascending), into `before`.
     fn replaced(&self, frame: &TrajectoryFrame, before: &mut Vec<(BodyId, BodyPose)>) {
         before.clear();
-        let present = |b: usize| self.states[b] != BodyState::Absent && self.poses[b].translation.is_finite();
         before.extend(
             frame
                 .pose_changes
                 .iter()
-                .filter(|(b, _)| present(b.0 as usize))
+                .filter(|(b, _)| self.present(b.0 as usize))
                 .map(|&(b, _)| (b, self.poses[b.0 as usize])),
         );
     }
@@ -92,12 +111,16 @@ fn pose_bits(p: &BodyPose) -> [u32; 7] {
     [x, y, z, i, j, k, w].map(f32::to_bits)
 }
 
-/// A cursor over a trajectory's frames that keeps every body's current state and pose.
+/// A cursor over a trajectory's frames that keeps every body's current state and pose, and
+/// which bodies changed since a frame its owner chose ([`restart_changes`](Self::restart_changes)).
 pub struct Replay<'a> {
     frames: &'a [TrajectoryFrame],
     next: usize,
     table: BodyTable,
     before: Vec<(BodyId, BodyPose)>,
+    /// The bodies whose state or pose changed in frames `changed_since..next`.
+    changed: BitSet,
+    changed_since: u32,
 }
 
 /// One replayed frame: every body's state and pose at its end (`poses[i]` is meaningless
@@ -113,18 +136,52 @@ pub struct ReplayFrame<'a> {
     pub events: &'a [IslandEvent],
     pub before: &'a [(BodyId, BodyPose)],
     pub after: &'a [(BodyId, BodyPose)],
+    /// `present_bodies().count()`.
+    present: usize,
+    /// The first frame of a run of frames up to this one, and the bodies whose state or pose
+    /// changed in them.
+    changed: Option<(u32, &'a BitSet)>,
+}
+
+impl<'a> ReplayFrame<'a> {
+    /// A frame of every body's `states` and `poses` (of equal length) with island `events`
+    /// and no poses around it (no motion blur): for driving a scene manager from a world
+    /// other than a trajectory's replay.
+    pub fn still(
+        index: u32,
+        states: &'a [BodyState],
+        poses: &'a [BodyPose],
+        events: &'a [IslandEvent],
+    ) -> Self {
+        debug_assert_eq!(states.len(), poses.len());
+        let present = states.iter().zip(poses).filter(|(s, p)| is_present(**s, p)).count();
+        Self { index, states, poses, events, before: &[], after: &[], present, changed: None }
+    }
 }
 
 impl ReplayFrame<'_> {
     /// Whether body `b` is in the world this frame: spawned, not removed, at a finite pose.
-    /// The one place that decides which bodies a frame shows.
     pub(crate) fn is_present(&self, b: usize) -> bool {
-        self.states[b] != BodyState::Absent && self.poses[b].translation.is_finite()
+        is_present(self.states[b], &self.poses[b])
     }
 
     /// The bodies present this frame, ascending.
     pub fn present_bodies(&self) -> impl Iterator<Item = BodyId> + '_ {
         (0..self.states.len()).filter(|&b| self.is_present(b)).map(|b| BodyId(b as u32))
+    }
+
+    /// The bodies whose state or pose changed after frame `earlier` up to this one, when the
+    /// replay kept them from there ([`Sequence::replay`](crate::sequence::Sequence::replay)
+    /// keeps them from one selected frame to the next); `None` otherwise.
+    pub(crate) fn changed_after(&self, earlier: u32) -> Option<&BitSet> {
+        self.changed.filter(|(since, _)| earlier.checked_add(1) == Some(*since)).map(|(_, set)| set)
+    }
+
+    /// How many bodies are present this frame (`present_bodies().count()`, without reading
+    /// every body).
+    pub fn present_count(&self) -> usize {
+        debug_assert_eq!(self.present, self.present_bodies().count());
+        self.present
     }
 
     /// The motion over a shutter of `shutter` frame intervals centred on this frame of each present
@@ -164,13 +221,30 @@ impl ReplayFrame<'_> {
 
 impl<'a> Replay<'a> {
     pub(super) fn new(frames: &'a [TrajectoryFrame], body_count: usize) -> Self {
-        Self { frames, next: 0, table: BodyTable::new(body_count), before: Vec::new() }
+        Self {
+            frames,
+            next: 0,
+            table: BodyTable::new(body_count),
+            before: Vec::new(),
+            changed: BitSet::with_capacity(body_count),
+            changed_since: 0,
+        }
+    }
+
+    /// Forgets which bodies changed: the frames from the next one on start a new run of them.
+    pub fn restart_changes(&mut self) {
+        self.changed.make_empty();
+        self.changed_since = self.next as u32;
     }
 
     pub fn next_frame(&mut self) -> Option<ReplayFrame<'_>> {
         let frame = self.frames.get(self.next)?;
         self.table.replaced(frame, &mut self.before);
         self.table.apply(frame);
+        let changed = frame.state_changes.iter().map(|c| c.0).chain(frame.pose_changes.iter().map(|c| c.0));
+        for body in changed {
+            self.changed.insert(body.0 as usize);
+        }
         self.next += 1;
         Some(ReplayFrame {
             index: (self.next - 1) as u32,
@@ -179,6 +253,8 @@ impl<'a> Replay<'a> {
             events: &frame.events,
             before: &self.before,
             after: self.frames.get(self.next).map_or(&[], |f| &f.pose_changes),
+            present: self.table.present,
+            changed: Some((self.changed_since, &self.changed)),
         })
     }
 }

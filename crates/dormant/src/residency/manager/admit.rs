@@ -8,7 +8,6 @@ use std::time::Instant;
 use super::reactivate::triangles_in;
 use super::slots::{InstanceOwner, Integrated, Placement, StaticOwner};
 use super::{ms, Decision, FrameStats, SceneManager};
-use crate::accel::normal_matrix;
 use crate::accel::AccelError;
 use crate::physics::trajectory::ReplayFrame;
 use crate::physics::IslandId;
@@ -76,7 +75,7 @@ impl SceneManager {
             return Ok(false);
         }
         let moved: usize = chosen.iter().map(|i| self.sleeping[i].bodies.len()).sum();
-        let present = frame.present_bodies().count();
+        let present = frame.present_count();
         self.probe.start(self.options.form, moved, present, self.resting.is_empty(), self.accel.query().ok());
         match self.options.form {
             IntegrationForm::Baked => self.bake_islands(&chosen, stats)?,
@@ -156,7 +155,7 @@ impl SceneManager {
         };
         let situation = Situation {
             form: self.options.form,
-            present_bodies: frame.present_bodies().count(),
+            present_bodies: frame.present_count(),
             resting_instances: self.resting.values().map(Vec::len).sum(),
             frames_left,
         };
@@ -181,17 +180,12 @@ impl SceneManager {
                     _ => self.accel.add_instance(self.prototype_ids[slot.prototype as usize], xf)?,
                 };
                 self.accel.set_instance_resting(id, true)?;
-                let owner = InstanceOwner {
-                    body: *b,
-                    prototype: slot.prototype,
-                    normal_matrix: normal_matrix(&xf),
-                    transform: xf,
-                    resting: true,
-                };
-                self.instance_owner.set(id, Some(owner));
+                self.instance_owner.set(id, Some(InstanceOwner::at(*b, slot.prototype, xf, true)));
                 slot.placement = Placement::Resting { island: *island, id, pose: *pose };
             }
-            self.resting.insert(*island, s.bodies.clone());
+            let bodies = s.bodies.clone();
+            self.touch(bodies.iter().copied());
+            self.resting.insert(*island, bodies);
             stats.islands_integrated += 1;
         }
         self.commit_static_timed(stats)
@@ -231,6 +225,7 @@ impl SceneManager {
                 }
                 slot.placement = Placement::Baked(*island);
             }
+            self.touch(baked.parts.iter().map(|p| p.body));
             self.static_owner.insert(id, StaticOwner::Island(baked.clone()));
             stats.built_triangles += baked.triangle_count();
             batch += baked.triangle_count();

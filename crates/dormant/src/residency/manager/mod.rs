@@ -23,12 +23,15 @@ mod admit;
 mod probe;
 mod reactivate;
 mod slots;
+#[cfg(test)]
+mod tests;
 mod update;
 
 use std::collections::BTreeMap;
 use std::sync::Arc;
 use std::time::Instant;
 
+use bit_set::BitSet;
 use glam::Mat3;
 
 use super::cache::{CacheBudget, CacheOutcome, CacheStats, GeometryCache};
@@ -208,6 +211,11 @@ pub struct SceneManager {
     last_commit_ms: Option<f64>,
     /// Bodies whose instances moved over the last prepared frame's shutter, ascending.
     blurred: Vec<u32>,
+    /// Bodies whose placement integration or reactivation changed in the frame being
+    /// prepared: the update stage visits them with those the frame changed.
+    touched: BitSet,
+    /// The update stage's set of bodies to visit, kept to reuse its memory.
+    visit: BitSet,
 }
 
 impl SceneManager {
@@ -260,6 +268,8 @@ impl SceneManager {
             pending_events: (0, 0),
             last_commit_ms: None,
             blurred: Vec::new(),
+            touched: BitSet::new(),
+            visit: BitSet::new(),
         })
     }
 
@@ -370,6 +380,7 @@ impl SceneManager {
         decided: Option<&[(IslandId, bool)]>,
     ) -> Result<&FrameStats, AccelError> {
         debug_assert_eq!(frame.states.len(), self.bodies.len());
+        let previous = (self.rendered > 0).then_some(self.frame);
         self.frame = frame.index;
         let mut stats = FrameStats {
             frame: frame.index,
@@ -389,7 +400,7 @@ impl SceneManager {
         stats.stages.integrate_ms = ms(t);
 
         let t = Instant::now();
-        let moved = self.update(frame, &mut stats)?;
+        let moved = self.update(frame, previous, &mut stats)?;
         stats.stages.update_ms = ms(t);
 
         let t = Instant::now();

@@ -6,7 +6,7 @@ use std::time::Instant;
 use super::slots::{CachedScene, Integrated, Placement, StaticOwner};
 use super::{ms, FrameStats, ReactivationPath, ReactivationStrategy, SceneManager};
 use crate::accel::AccelError;
-use crate::physics::IslandId;
+use crate::physics::{BodyId, IslandId};
 use crate::residency::cache::CacheOutcome;
 
 impl SceneManager {
@@ -36,13 +36,12 @@ impl SceneManager {
     /// (the update stage moves them on).
     fn wake_resting(&mut self, island: IslandId) -> Result<(), AccelError> {
         let bodies = self.resting.remove(&island).unwrap_or_default();
+        self.touch(bodies.iter().copied());
         for b in bodies {
             let slot = &mut self.bodies[b.0 as usize];
             if let Placement::Resting { id, pose, .. } = slot.placement {
                 self.accel.set_instance_resting(id, false)?;
-                if let Some(owner) = self.instance_owner.get_mut(id) {
-                    owner.resting = false;
-                }
+                self.instance_owner.set_resting(id, false);
                 slot.placement = Placement::Instance { id, pose };
             }
         }
@@ -55,6 +54,10 @@ impl SceneManager {
     fn reactivate_baked(&mut self, woken: &[IslandId], stats: &mut FrameStats) -> Result<(), AccelError> {
         let request: BTreeSet<IslandId> =
             self.integrated.keys().copied().filter(|i| !woken.contains(i)).collect();
+        // The update stage turns their bodies back into instances.
+        let bodies: Vec<BodyId> =
+            woken.iter().flat_map(|i| self.integrated[i].baked.parts.iter().map(|p| p.body)).collect();
+        self.touch(bodies);
         // Removing from the live scene costs what the accelerator says (a detach or an unlink
         // is free; removing from a shared structure rebuilds it) ...
         let removal_cost =

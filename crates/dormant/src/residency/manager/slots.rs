@@ -6,7 +6,7 @@ use std::sync::Arc;
 
 use glam::{Affine3A, Mat3};
 
-use crate::accel::{InstanceId, StaticId, StaticSceneSnapshot};
+use crate::accel::{normal_matrix, InstanceId, StaticId, StaticSceneSnapshot};
 use crate::physics::{BodyId, BodyPose, IslandId};
 use crate::residency::baked::BakedIsland;
 
@@ -101,30 +101,47 @@ pub(super) struct InstanceOwner {
     pub resting: bool,
 }
 
-/// Owners by instance id (dense, like [`StaticOwners`]).
+impl InstanceOwner {
+    /// Body `body`, an instance of `prototype` placed by `transform`.
+    pub(crate) fn at(body: BodyId, prototype: u32, transform: Affine3A, resting: bool) -> Self {
+        Self { body, prototype, normal_matrix: normal_matrix(&transform), transform, resting }
+    }
+}
+
+/// Owners by instance id (dense, like [`StaticOwners`]), with how many are awake: every frame
+/// reports that count, and counting it afresh read every owner (megabytes on the demolition).
 #[derive(Default)]
-pub(super) struct InstanceOwners(Vec<Option<InstanceOwner>>);
+pub(super) struct InstanceOwners {
+    owners: Vec<Option<InstanceOwner>>,
+    awake: usize,
+}
 
 impl InstanceOwners {
     pub(crate) fn set(&mut self, id: InstanceId, owner: Option<InstanceOwner>) {
         let i = id.0 as usize;
-        if self.0.len() <= i {
-            self.0.resize(i + 1, None);
+        if self.owners.len() <= i {
+            self.owners.resize(i + 1, None);
         }
-        self.0[i] = owner;
+        let awake = |o: &Option<InstanceOwner>| usize::from(o.is_some_and(|o| !o.resting));
+        self.awake = self.awake + awake(&owner) - awake(&self.owners[i]);
+        self.owners[i] = owner;
     }
 
     pub(crate) fn get(&self, id: InstanceId) -> Option<&InstanceOwner> {
-        self.0.get(id.0 as usize)?.as_ref()
+        self.owners.get(id.0 as usize)?.as_ref()
     }
 
-    pub(crate) fn get_mut(&mut self, id: InstanceId) -> Option<&mut InstanceOwner> {
-        self.0.get_mut(id.0 as usize)?.as_mut()
+    /// Marks instance `id` (if it has an owner) as resting or awake.
+    pub(crate) fn set_resting(&mut self, id: InstanceId, resting: bool) {
+        if let Some(owner) = self.owners.get(id.0 as usize).copied().flatten() {
+            self.set(id, Some(InstanceOwner { resting, ..owner }));
+        }
     }
 
     /// Instances in the per-frame top level.
     pub(crate) fn awake(&self) -> usize {
-        self.0.iter().flatten().filter(|o| !o.resting).count()
+        debug_assert_eq!(self.awake, self.owners.iter().flatten().filter(|o| !o.resting).count());
+        self.awake
     }
 }
 
