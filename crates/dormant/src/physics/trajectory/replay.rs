@@ -17,9 +17,6 @@ use crate::physics::island::IslandEvent;
 struct BodyTable {
     states: Vec<BodyState>,
     poses: Vec<BodyPose>,
-    /// How many bodies are present ([`is_present`]), kept as changes apply: counting them
-    /// afresh each frame read every state and pose (a scan of megabytes on the demolition).
-    present: usize,
 }
 
 /// Whether a body in `state` at `pose` is in the world: spawned, not removed, at a finite
@@ -28,28 +25,50 @@ fn is_present(state: BodyState, pose: &BodyPose) -> bool {
     state != BodyState::Absent && pose.translation.is_finite()
 }
 
+/// What a replay keeps, once its owner first restarts its changes, besides every body's
+/// state and pose.
+#[derive(Clone, Debug)]
+struct Tracked {
+    /// The bodies whose state or pose changed in frames `since..` the replay's next.
+    changed: BitSet,
+    since: u32,
+    /// How many bodies are present, kept as changes apply: counting them afresh for each
+    /// rendered frame read every state and pose (megabytes on the demolition).
+    present: usize,
+}
+
 impl BodyTable {
     fn new(body_count: usize) -> Self {
         let origin = BodyPose { translation: Vec3::ZERO, rotation: Quat::IDENTITY };
-        Self { states: vec![BodyState::Absent; body_count], poses: vec![origin; body_count], present: 0 }
+        Self { states: vec![BodyState::Absent; body_count], poses: vec![origin; body_count] }
     }
 
     fn present(&self, b: usize) -> bool {
         is_present(self.states[b], &self.poses[b])
     }
 
-    fn apply(&mut self, frame: &TrajectoryFrame) {
+    /// Applies `frame`'s changes, keeping `tracked` up to date with them.
+    fn apply(&mut self, frame: &TrajectoryFrame, tracked: Option<&mut Tracked>) {
+        let Some(t) = tracked else {
+            for &(body, state) in &frame.state_changes {
+                self.states[body.0 as usize] = state;
+            }
+            for &(body, pose) in &frame.pose_changes {
+                self.poses[body.0 as usize] = pose;
+            }
+            return;
+        };
         for &(body, state) in &frame.state_changes {
-            let b = body.0 as usize;
-            let was = self.present(b);
+            let (b, was) = (body.0 as usize, self.present(body.0 as usize));
             self.states[b] = state;
-            self.present = self.present + usize::from(self.present(b)) - usize::from(was);
+            t.present = t.present + usize::from(self.present(b)) - usize::from(was);
+            t.changed.insert(b);
         }
         for &(body, pose) in &frame.pose_changes {
-            let b = body.0 as usize;
-            let was = self.present(b);
+            let (b, was) = (body.0 as usize, self.present(body.0 as usize));
             self.poses[b] = pose;
-            self.present = self.present + usize::from(self.present(b)) - usize::from(was);
+            t.present = t.present + usize::from(self.present(b)) - usize::from(was);
+            t.changed.insert(b);
         }
     }
 
@@ -111,16 +130,17 @@ fn pose_bits(p: &BodyPose) -> [u32; 7] {
     [x, y, z, i, j, k, w].map(f32::to_bits)
 }
 
-/// A cursor over a trajectory's frames that keeps every body's current state and pose, and
-/// which bodies changed since a frame its owner chose ([`restart_changes`](Self::restart_changes)).
+/// A cursor over a trajectory's frames that keeps every body's current state and pose and,
+/// from the first time its owner restarts its changes ([`restart_changes`](Self::restart_changes)),
+/// which bodies changed since the last restart and how many are present. Until then applying
+/// a frame costs no more than its changes: a run that renders a slice late in a trajectory
+/// replays every frame before it.
 pub struct Replay<'a> {
     frames: &'a [TrajectoryFrame],
     next: usize,
     table: BodyTable,
     before: Vec<(BodyId, BodyPose)>,
-    /// The bodies whose state or pose changed in frames `changed_since..next`.
-    changed: BitSet,
-    changed_since: u32,
+    tracked: Option<Tracked>,
 }
 
 /// One replayed frame: every body's state and pose at its end (`poses[i]` is meaningless
@@ -136,8 +156,8 @@ pub struct ReplayFrame<'a> {
     pub events: &'a [IslandEvent],
     pub before: &'a [(BodyId, BodyPose)],
     pub after: &'a [(BodyId, BodyPose)],
-    /// `present_bodies().count()`.
-    present: usize,
+    /// `present_bodies().count()`, when the replay keeps it.
+    present: Option<usize>,
     /// The first frame of a run of frames up to this one, and the bodies whose state or pose
     /// changed in them.
     changed: Option<(u32, &'a BitSet)>,
@@ -154,8 +174,7 @@ impl<'a> ReplayFrame<'a> {
         events: &'a [IslandEvent],
     ) -> Self {
         debug_assert_eq!(states.len(), poses.len());
-        let present = states.iter().zip(poses).filter(|(s, p)| is_present(**s, p)).count();
-        Self { index, states, poses, events, before: &[], after: &[], present, changed: None }
+        Self { index, states, poses, events, before: &[], after: &[], present: None, changed: None }
     }
 }
 
@@ -178,10 +197,10 @@ impl ReplayFrame<'_> {
     }
 
     /// How many bodies are present this frame (`present_bodies().count()`, without reading
-    /// every body).
+    /// every body when the replay keeps the count).
     pub fn present_count(&self) -> usize {
-        debug_assert_eq!(self.present, self.present_bodies().count());
-        self.present
+        debug_assert!(self.present.is_none_or(|n| n == self.present_bodies().count()));
+        self.present.unwrap_or_else(|| self.present_bodies().count())
     }
 
     /// The motion over a shutter of `shutter` frame intervals centred on this frame of each present
@@ -221,30 +240,29 @@ impl ReplayFrame<'_> {
 
 impl<'a> Replay<'a> {
     pub(super) fn new(frames: &'a [TrajectoryFrame], body_count: usize) -> Self {
-        Self {
-            frames,
-            next: 0,
-            table: BodyTable::new(body_count),
-            before: Vec::new(),
-            changed: BitSet::with_capacity(body_count),
-            changed_since: 0,
-        }
+        Self { frames, next: 0, table: BodyTable::new(body_count), before: Vec::new(), tracked: None }
     }
 
     /// Forgets which bodies changed: the frames from the next one on start a new run of them.
     pub fn restart_changes(&mut self) {
-        self.changed.make_empty();
-        self.changed_since = self.next as u32;
+        let since = self.next as u32;
+        match &mut self.tracked {
+            Some(t) => {
+                t.changed.make_empty();
+                t.since = since;
+            }
+            None => {
+                let n = self.table.states.len();
+                let present = (0..n).filter(|&b| self.table.present(b)).count();
+                self.tracked = Some(Tracked { changed: BitSet::with_capacity(n), since, present });
+            }
+        }
     }
 
     pub fn next_frame(&mut self) -> Option<ReplayFrame<'_>> {
         let frame = self.frames.get(self.next)?;
         self.table.replaced(frame, &mut self.before);
-        self.table.apply(frame);
-        let changed = frame.state_changes.iter().map(|c| c.0).chain(frame.pose_changes.iter().map(|c| c.0));
-        for body in changed {
-            self.changed.insert(body.0 as usize);
-        }
+        self.table.apply(frame, self.tracked.as_mut());
         self.next += 1;
         Some(ReplayFrame {
             index: (self.next - 1) as u32,
@@ -253,8 +271,8 @@ impl<'a> Replay<'a> {
             events: &frame.events,
             before: &self.before,
             after: self.frames.get(self.next).map_or(&[], |f| &f.pose_changes),
-            present: self.table.present,
-            changed: Some((self.changed_since, &self.changed)),
+            present: self.tracked.as_ref().map(|t| t.present),
+            changed: self.tracked.as_ref().map(|t| (t.since, &t.changed)),
         })
     }
 }
