@@ -40,6 +40,12 @@ impl SceneManager {
         if self.options.policy == IntegrationPolicy::Never {
             return Ok(false);
         }
+        // Every sleeping island integrated (those that woke left in stage 1), as in a settled
+        // shot: nothing to decide, and no outlook to price (it sorts every sleep so far).
+        debug_assert!(self.integrated_islands().all(|i| self.sleeping.contains_key(&i)));
+        if self.sleeping.len() == self.integrated.len() + self.resting.len() {
+            return Ok(false);
+        }
         let verdicts = match decided {
             Some(decided) => self
                 .consider(frame, None)
