@@ -12,6 +12,7 @@ use crate::geometry::primitives;
 use crate::physics::trajectory::{FrameRecorder, Trajectory};
 use crate::physics::{BodyId, BodyInfo, BodyKind, BodyPose, BodyState, IslandEvent, IslandId};
 use crate::residency::{IntegrationForm, IntegrationPolicy, TraceKind};
+use crate::rng::SplitMix64;
 use crate::scene::{Camera, Material, Prototype, SceneDescription, Sky, StaticMesh, Sun};
 
 const BODIES: usize = 24;
@@ -21,7 +22,7 @@ const BODIES: usize = 24;
 /// bodies often not moving in that frame), by regrouping as another island, or with its
 /// bodies still asleep. Only awake bodies move.
 struct RandomWorld {
-    rng: u64,
+    rng: SplitMix64,
     states: [BodyState; BODIES],
     poses: [BodyPose; BODIES],
     islands: Vec<(IslandId, Vec<BodyId>)>,
@@ -30,7 +31,7 @@ struct RandomWorld {
 
 impl RandomWorld {
     fn draw(&mut self, n: u64) -> u64 {
-        splitmix(&mut self.rng) % n
+        self.rng.below(n as usize) as u64
     }
 
     fn move_bodies(&mut self) {
@@ -101,7 +102,7 @@ impl RandomWorld {
 fn random_trajectory(seed: u64, frames: u32) -> Trajectory {
     let origin = BodyPose { translation: Vec3::ZERO, rotation: Quat::IDENTITY };
     let mut world = RandomWorld {
-        rng: seed,
+        rng: SplitMix64::new(seed),
         states: [BodyState::Absent; BODIES],
         poses: [origin; BODIES],
         islands: Vec::new(),
@@ -127,14 +128,6 @@ fn random_trajectory(seed: u64, frames: u32) -> Trajectory {
         bodies: vec![info; BODIES],
         frames,
     }
-}
-
-fn splitmix(state: &mut u64) -> u64 {
-    *state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-    let mut z = *state;
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
 }
 
 fn template() -> SceneDescription {
