@@ -37,6 +37,14 @@ struct Tracked {
     present: usize,
 }
 
+impl Tracked {
+    /// Body `b` changed, present before as `was` and now as `is`.
+    fn record(&mut self, b: usize, was: bool, is: bool) {
+        self.present = self.present + usize::from(is) - usize::from(was);
+        self.changed.insert(b);
+    }
+}
+
 impl BodyTable {
     fn new(body_count: usize) -> Self {
         let origin = BodyPose { translation: Vec3::ZERO, rotation: Quat::IDENTITY };
@@ -61,14 +69,12 @@ impl BodyTable {
         for &(body, state) in &frame.state_changes {
             let (b, was) = (body.0 as usize, self.present(body.0 as usize));
             self.states[b] = state;
-            t.present = t.present + usize::from(self.present(b)) - usize::from(was);
-            t.changed.insert(b);
+            t.record(b, was, self.present(b));
         }
         for &(body, pose) in &frame.pose_changes {
             let (b, was) = (body.0 as usize, self.present(body.0 as usize));
             self.poses[b] = pose;
-            t.present = t.present + usize::from(self.present(b)) - usize::from(was);
-            t.changed.insert(b);
+            t.record(b, was, self.present(b));
         }
     }
 

@@ -189,9 +189,8 @@ impl SceneManager {
                 self.instance_owner.set(id, Some(InstanceOwner::at(*b, slot.prototype, xf, true)));
                 slot.placement = Placement::Resting { island: *island, id, pose: *pose };
             }
-            let bodies = s.bodies.clone();
-            self.touch(bodies.iter().copied());
-            self.resting.insert(*island, bodies);
+            self.touched.extend(s.bodies.iter().map(|b| b.0 as usize));
+            self.resting.insert(*island, s.bodies.clone());
             stats.islands_integrated += 1;
         }
         self.commit_static_timed(stats)
@@ -231,7 +230,7 @@ impl SceneManager {
                 }
                 slot.placement = Placement::Baked(*island);
             }
-            self.touch(baked.parts.iter().map(|p| p.body));
+            self.touched.extend(baked.parts.iter().map(|p| p.body.0 as usize));
             self.static_owner.insert(id, StaticOwner::Island(baked.clone()));
             stats.built_triangles += baked.triangle_count();
             batch += baked.triangle_count();

@@ -212,7 +212,8 @@ pub struct SceneManager {
     /// Bodies whose instances moved over the last prepared frame's shutter, ascending.
     blurred: Vec<u32>,
     /// Bodies whose placement integration or reactivation changed in the frame being
-    /// prepared: the update stage visits them with those the frame changed.
+    /// prepared (the replay's changed bodies do not show them): the update stage visits them
+    /// with those the frame changed, then empties the set.
     touched: BitSet,
     /// The update stage's set of bodies to visit, kept to reuse its memory.
     visit: BitSet,

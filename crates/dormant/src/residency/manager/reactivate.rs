@@ -6,7 +6,7 @@ use std::time::Instant;
 use super::slots::{CachedScene, Integrated, Placement, StaticOwner};
 use super::{ms, FrameStats, ReactivationPath, ReactivationStrategy, SceneManager};
 use crate::accel::AccelError;
-use crate::physics::{BodyId, IslandId};
+use crate::physics::IslandId;
 use crate::residency::cache::CacheOutcome;
 
 impl SceneManager {
@@ -36,7 +36,7 @@ impl SceneManager {
     /// (the update stage moves them on).
     fn wake_resting(&mut self, island: IslandId) -> Result<(), AccelError> {
         let bodies = self.resting.remove(&island).unwrap_or_default();
-        self.touch(bodies.iter().copied());
+        self.touched.extend(bodies.iter().map(|b| b.0 as usize));
         for b in bodies {
             let slot = &mut self.bodies[b.0 as usize];
             if let Placement::Resting { id, pose, .. } = slot.placement {
@@ -55,9 +55,8 @@ impl SceneManager {
         let request: BTreeSet<IslandId> =
             self.integrated.keys().copied().filter(|i| !woken.contains(i)).collect();
         // The update stage turns their bodies back into instances.
-        let bodies: Vec<BodyId> =
-            woken.iter().flat_map(|i| self.integrated[i].baked.parts.iter().map(|p| p.body)).collect();
-        self.touch(bodies);
+        let parts = woken.iter().flat_map(|i| &self.integrated[i].baked.parts);
+        self.touched.extend(parts.map(|p| p.body.0 as usize));
         // Removing from the live scene costs what the accelerator says (a detach or an unlink
         // is free; removing from a shared structure rebuilds it) ...
         let removal_cost =

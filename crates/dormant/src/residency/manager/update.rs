@@ -23,12 +23,11 @@ impl SceneManager {
     ) -> Result<bool, AccelError> {
         let motions = frame.shutter_motions(self.options.shutter);
         let was_blurred = std::mem::take(&mut self.blurred);
-        let touched = std::mem::take(&mut self.touched);
         let changed = match previous.and_then(|p| frame.changed_after(p)) {
             Some(changed) => {
                 let mut visit = std::mem::take(&mut self.visit);
                 visit.clone_from(changed);
-                visit.union_with(&touched);
+                visit.union_with(&self.touched);
                 visit.extend(motions.iter().map(|(b, _)| *b).chain(was_blurred.iter().map(|&b| b as usize)));
                 let changed = self.update_bodies(visit.iter(), frame, &motions, &was_blurred, stats);
                 self.visit = visit;
@@ -36,7 +35,6 @@ impl SceneManager {
             }
             None => self.update_bodies(0..self.bodies.len(), frame, &motions, &was_blurred, stats),
         };
-        self.touched = touched;
         self.touched.make_empty();
         changed
     }
@@ -122,11 +120,5 @@ impl SceneManager {
             Placement::Absent | Placement::Baked(_) => slot.placement = Placement::Absent,
         }
         Ok(changed)
-    }
-
-    /// Marks `bodies` for this frame's update: their placement was changed by integration
-    /// or reactivation, which the replay's changed bodies do not show.
-    pub(super) fn touch(&mut self, bodies: impl IntoIterator<Item = BodyId>) {
-        self.touched.extend(bodies.into_iter().map(|b| b.0 as usize));
     }
 }
