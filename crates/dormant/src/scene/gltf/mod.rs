@@ -74,7 +74,7 @@ pub struct GltfAsset {
 /// A glTF perspective camera where its node puts it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct GltfCamera {
-    /// `camera N`, by its index in the file (the gltf crate is built without names).
+    /// `camera N`, by its index in the file.
     pub name: String,
     pub position: Vec3,
     /// Unit direction the camera looks (its node's -Z).
