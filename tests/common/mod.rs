@@ -2,6 +2,7 @@
 //! `mod common;`. Each test file is its own crate, so what one file does not use is dead code
 //! there (hence the `allow`).
 //!
+//! - [`animated`]: a small animated glTF (a rigid-body bake) built by hand;
 //! - [`cli`]: the `dormant` binary, running it, reading what it writes;
 //! - [`scenes`]: the scene fixtures (shipped scenes, `tests/data/`, [`scenes::BOXES`]);
 //! - [`scene_errors`]: parsing scene text and expecting an error that names file, field, line;
@@ -11,6 +12,7 @@
 
 #![allow(dead_code)]
 
+pub mod animated;
 pub mod cli;
 pub mod encoding;
 pub mod images;

@@ -4,12 +4,14 @@
 //! statistics. Rapier's types stay inside this module; everything
 //! public speaks glam.
 
+mod animated;
 mod body;
 mod colliders;
 mod error;
 mod island;
 mod island_stats;
 mod kinematic;
+mod observed;
 mod options;
 mod simulation;
 mod spawn;
@@ -21,5 +23,6 @@ pub use colliders::ColliderChoice;
 pub use error::PhysicsError;
 pub use island::{IslandEvent, IslandId};
 pub use island_stats::IslandStats;
+pub use observed::SimulatedFrame;
 pub use options::SimulateOptions;
-pub use simulation::{simulate, simulate_observed, SimulatedFrame, Simulation};
+pub use simulation::{simulate, simulate_observed, Simulation};

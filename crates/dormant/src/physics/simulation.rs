@@ -22,12 +22,14 @@ use super::body::{
 use super::colliders::{environment_shapes, prototype_shape, ColliderChoice, PrototypeShape};
 use super::island::{IslandCounters, IslandId, IslandTracker, SleepObservation};
 use super::kinematic::KinematicPath;
+use super::observed::SimulatedFrame;
 use super::options::SimulateOptions;
 use super::spawn::{spawn_schedule, SpawnOrder};
 use super::structures::{RestingContacts, StructureSet};
 use super::trajectory::{FrameRecorder, RecordedScene, Trajectory, TrajectoryFrame};
 use super::PhysicsError;
 use crate::scene::file::{environment_mesh, DisturbanceDef, DisturbanceKind, SceneFile};
+use crate::scene::AnimatedScene;
 
 /// Per-stage wall-clock counters, in seconds, and work counts.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
@@ -410,16 +412,6 @@ fn static_world(file: &SceneFile) -> Result<PhysicsWorld, PhysicsError> {
     Ok(world)
 }
 
-/// One simulated frame, as [`simulate_observed`] reports it.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SimulatedFrame {
-    pub index: u32,
-    /// Frames the whole run simulates.
-    pub frames: u32,
-    /// Wall-clock milliseconds of this frame's physics step.
-    pub(crate) step_ms: f64,
-}
-
 /// Simulates `file` with `options` and records every frame.
 pub fn simulate(file: &SceneFile, options: &SimulateOptions) -> Result<Trajectory, PhysicsError> {
     simulate_observed(file, options, &mut |_| {})
@@ -433,6 +425,9 @@ pub fn simulate_observed(
 ) -> Result<Trajectory, PhysicsError> {
     let recorded = RecordedScene::new(file, options);
     let file = options.effective_scene(file)?;
+    if let Some(animated) = AnimatedScene::load(&file)? {
+        return super::animated::animated_trajectory(&file, &animated, recorded, on_frame);
+    }
     let mut sim = Simulation::new(&file)?;
     let frames = file.spec().scene.frames;
     let mut records = Vec::with_capacity(frames as usize);

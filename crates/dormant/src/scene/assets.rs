@@ -6,6 +6,7 @@ use std::sync::Arc;
 
 use glam::Vec3;
 
+use super::animated::AnimatedScene;
 use super::file::{
     environment_asset, prototype_asset, CameraDef, CameraPlacement, EnvironmentSource, LightDef, LightKind,
     SceneError, SceneFile, Shape, SkyDef,
@@ -21,17 +22,17 @@ pub struct SceneAssets {
     /// The glTF materials of the environment (first) and of every prototype; empty where the
     /// mesh has none, which then gets a grey (environment), or the file's or a palette colour
     /// (prototypes).
-    materials: Vec<Vec<Material>>,
+    pub(super) materials: Vec<Vec<Material>>,
     /// Each prototype's colour from the scene file, if it gives one.
-    colors: Vec<Option<[f32; 3]>>,
-    textures: Vec<Arc<Texture>>,
+    pub(super) colors: Vec<Option<[f32; 3]>>,
+    pub(super) textures: Vec<Arc<Texture>>,
     /// Point, spot and extra directional lights: the scene file's and the environment glTF's.
-    lights: Vec<Light>,
+    pub(super) lights: Vec<Light>,
     /// The scene's chosen camera (`render.camera`, else the first); `None`: frame the
     /// environment.
-    camera: Option<CameraDef>,
-    sun: Sun,
-    sky: Sky,
+    pub(super) camera: Option<CameraDef>,
+    pub(super) sun: Sun,
+    pub(super) sky: Sky,
     /// Where the environment's mesh came from (first), then every prototype's.
     pub(crate) sources: Vec<MeshSource>,
 }
@@ -52,11 +53,18 @@ pub struct MeshSource {
 }
 
 impl MeshSource {
+    /// The animated glTF file of an `[animation]` scene (its environment and every prototype
+    /// come from it).
+    pub(super) fn animation(gltf: std::path::PathBuf) -> Self {
+        Self { gltf: Some(gltf), builtin: None, scale: 1.0, offset: [0.0; 3] }
+    }
+
     fn environment(file: &SceneFile) -> Self {
         let env = &file.spec().environment;
         let (gltf, builtin) = match &env.source {
             EnvironmentSource::Gltf(path) => (Some(file.resolve(path)), None),
             EnvironmentSource::Generator(kind) => (None, Some(format!("{kind:?}").to_lowercase())),
+            EnvironmentSource::Animation => (None, None),
         };
         Self { gltf, builtin, scale: env.scale, offset: env.offset }
     }
@@ -86,6 +94,9 @@ const PALETTE: [Vec3; 6] = [
 
 impl SceneAssets {
     pub fn load(file: &SceneFile) -> Result<Self, SceneError> {
+        if let Some(animated) = AnimatedScene::load(file)? {
+            return Self::load_animated(file, &animated);
+        }
         let doc = file.spec();
         let mut textures = Vec::new();
         let mut environment = environment_asset(file)?;
@@ -167,7 +178,7 @@ fn camera_at(cam: Option<&CameraDef>, environment: &TriangleMesh, t: f32) -> Cam
 }
 
 /// The scene file's `[sky]`, or the daylight gradient.
-fn sky(file: &SceneFile) -> Sky {
+pub(super) fn sky(file: &SceneFile) -> Sky {
     match file.spec().sky {
         None => Sky::DAYLIGHT,
         Some(SkyDef::Constant { color, intensity }) => Sky::constant(Vec3::from(color) * intensity),
@@ -183,7 +194,7 @@ fn sky(file: &SceneFile) -> Sky {
 }
 
 /// The first directional light as the sun (its `direction` is where light travels).
-fn sun(file: &SceneFile) -> Sun {
+pub(super) fn sun(file: &SceneFile) -> Sun {
     let sun = file.spec().lights.iter().find_map(|l| match l.kind {
         LightKind::Directional { direction } => Some((l, direction)),
         _ => None,
@@ -204,7 +215,7 @@ fn sun(file: &SceneFile) -> Sun {
 
 /// The scene file's point and spot lights, and its directional lights after the first (which
 /// is the sun).
-fn file_lights(file: &SceneFile) -> Vec<Light> {
+pub(super) fn file_lights(file: &SceneFile) -> Vec<Light> {
     let color = |l: &LightDef| Vec3::from(l.color) * l.intensity;
     let direction = |d: [f32; 3]| Vec3::from(d).normalize_or(Vec3::NEG_Y);
     let mut suns = 0;

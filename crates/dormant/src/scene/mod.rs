@@ -1,6 +1,8 @@
 //! Scene descriptions: plain data saying what is in a scene (meshes, materials, bodies,
 //! camera, lights). Nothing here builds physics, acceleration or render objects.
 
+mod animated;
+mod animated_assets;
 mod assets;
 mod builtin;
 mod description;
@@ -10,6 +12,7 @@ pub mod limits;
 mod pile;
 pub mod texture;
 
+pub(crate) use animated::AnimatedScene;
 pub(crate) use assets::MeshSource;
 pub use assets::SceneAssets;
 pub use builtin::default_scene;

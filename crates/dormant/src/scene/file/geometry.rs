@@ -47,6 +47,11 @@ fn environment(file: &SceneFile, with_materials: bool) -> Result<GltfAsset, Scen
     let asset = match &env.source {
         EnvironmentSource::Gltf(path) => gltf_asset(file, "environment.gltf", path, with_materials)?,
         EnvironmentSource::Generator(kind) => GltfAsset::from_mesh(generate(*kind)),
+        // Its static nodes are known only over the sampled frames: `scene::AnimatedScene`.
+        EnvironmentSource::Animation => {
+            let message = "an [animation] scene's environment is read with its animation, not simulated";
+            return Err(file.error("animation", message));
+        }
     };
     let xf = Affine3A::from_scale_rotation_translation(
         Vec3::splat(env.scale),

@@ -5,6 +5,7 @@
 //! into blocks and launches. Parsing builds plain data, never physics or render objects; see
 //! docs/scene-format.md for the format.
 
+mod animated_gltf;
 mod asset_dir;
 mod count;
 mod error;
@@ -23,7 +24,7 @@ pub use geometry::{environment_mesh, prototype_mesh};
 pub(crate) use parse::fnv1a64;
 pub use parse::SceneFile;
 pub(crate) use spec::{
-    CameraDef, CameraPlacement, ColliderKind, EnvironmentSource, LightDef, LightKind, Shape, SkyDef,
-    SpawnPattern, SpawnerDef, StructureDef,
+    AnimationDef, CameraDef, CameraKeyframeDef, CameraPlacement, ColliderKind, EnvironmentSource, LightDef,
+    LightKind, Shape, SkyDef, SpawnPattern, SpawnerDef, StructureDef,
 };
 pub(crate) use spec::{DisturbanceDef, DisturbanceKind, KeyframeDef};

@@ -5,6 +5,7 @@
 use std::num::NonZeroU32;
 use std::path::{Path, PathBuf};
 
+use super::animated_gltf::{is_gltf, scene_text_of_gltf};
 use super::asset_dir::AssetDir;
 use super::count::spread_count;
 use super::location::{line_of, syntax_error};
@@ -32,8 +33,13 @@ impl SceneFile {
 
     /// Like [`Self::load`], resolving relative asset paths against `assets` (when given)
     /// instead of the scene's `scene.assets` directory.
+    /// A `.glb` or `.gltf` file stands for the scene recorded in it (see
+    /// `animated_gltf`).
     pub fn load_with_assets(path: impl AsRef<Path>, assets: Option<&Path>) -> Result<Self, SceneError> {
         let path = path.as_ref();
+        if is_gltf(path) {
+            return Self::parse_with_assets(path, scene_text_of_gltf(path)?, assets.or(path.parent()));
+        }
         let text = std::fs::read_to_string(path)
             .map_err(|source| SceneError::Io { file: path.to_path_buf(), source })?;
         Self::parse_with_assets(path, text, assets)
@@ -56,7 +62,10 @@ impl SceneFile {
         let raw: SceneToml = toml::from_str(&source).map_err(|e| syntax_error(&path, &source, &e))?;
         let assets = AssetDir::new(&path, raw.scene.assets.as_deref(), assets);
         match validate(&raw, &assets) {
-            Ok(spec) => Ok(SceneFile { source_hash: fnv1a64(source.as_bytes()), path, source, assets, spec }),
+            Ok(spec) => {
+                let source_hash = with_animation_bytes(fnv1a64(source.as_bytes()), &spec, &assets)?;
+                Ok(SceneFile { source_hash, path, source, assets, spec })
+            }
             Err(Problem { field, message }) => {
                 Err(SceneError::Invalid { file: path, line: line_of(&source, &field), field, message })
             }
@@ -115,12 +124,12 @@ impl SceneFile {
 
     /// The 1-based line where the field at `path` (e.g. `spawners[1].count`) is written, if
     /// it is written at all.
-    pub(super) fn line_of(&self, path: &str) -> Option<usize> {
+    pub(crate) fn line_of(&self, path: &str) -> Option<usize> {
         line_of(&self.source, path)
     }
 
     /// A [`SceneError::Invalid`] for `field`, with its line.
-    pub(super) fn error(&self, field: impl Into<String>, message: impl Into<String>) -> SceneError {
+    pub(crate) fn error(&self, field: impl Into<String>, message: impl Into<String>) -> SceneError {
         let field = field.into();
         SceneError::Invalid {
             file: self.path.clone(),
@@ -169,6 +178,15 @@ impl SceneFile {
         let scene = SceneInfo { frames, ..self.spec.scene };
         SceneFile { spec: SceneSpec { scene, ..self.spec }, source_hash, ..self }
     }
+}
+
+/// `hash` with the bytes of an `[animation]` scene's glTF file folded in: the file is the
+/// simulation, so a trajectory of it must not replay after it changed.
+fn with_animation_bytes(hash: u64, spec: &SceneSpec, assets: &AssetDir) -> Result<u64, SceneError> {
+    let Some(animation) = &spec.animation else { return Ok(hash) };
+    let file = assets.resolve(&animation.gltf);
+    let bytes = std::fs::read(&file).map_err(|source| SceneError::Io { file, source })?;
+    Ok(fnv1a64_extend(fnv1a64_extend(hash, b"animation"), &bytes))
 }
 
 /// FNV-1a, 64 bit: a small stable hash for scene identity (not for security).

@@ -19,7 +19,8 @@ pub(super) struct SceneToml {
     pub scene: SceneInfo,
     #[serde(default)]
     pub physics: PhysicsSettings,
-    pub environment: EnvironmentToml,
+    pub environment: Option<EnvironmentToml>,
+    pub animation: Option<AnimationToml>,
     #[serde(default)]
     pub prototypes: Vec<PrototypeToml>,
     #[serde(default)]
@@ -51,6 +52,19 @@ pub(super) struct SkyToml {
     pub ground: Option<[f32; 3]>,
     #[serde(default = "one")]
     pub intensity: f32,
+}
+
+/// `[animation]`: an animated glTF file whose static nodes are the environment and whose
+/// moving mesh nodes are the bodies.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(rename = "AnimationDef", deny_unknown_fields)]
+pub(super) struct AnimationToml {
+    pub gltf: String,
+    pub fps: Option<f64>,
+    pub name: Option<String>,
+    pub rest_tolerance: Option<f32>,
+    #[serde(default = "two_u32")]
+    pub min_rest_frames: u32,
 }
 
 /// `[environment]`: exactly one of `gltf` and `generator` (checked later).
@@ -303,4 +317,8 @@ fn default_fov() -> f32 {
 }
 fn white() -> [f32; 3] {
     [1.0; 3]
+}
+
+fn two_u32() -> u32 {
+    2
 }

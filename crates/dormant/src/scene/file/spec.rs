@@ -12,6 +12,9 @@ pub struct SceneSpec {
     pub scene: SceneInfo,
     pub physics: PhysicsSettings,
     pub environment: EnvironmentDef,
+    /// `[animation]`: the bodies (and the environment) come from an animated glTF file
+    /// instead of a simulation.
+    pub animation: Option<AnimationDef>,
     pub prototypes: Vec<PrototypeDef>,
     pub spawners: Vec<SpawnerDef>,
     pub(crate) kinematics: Vec<KinematicDef>,
@@ -43,7 +46,9 @@ pub struct SceneInfo {
     #[serde(default)]
     pub seed: u64,
     /// Number of recorded frames (at least 1); each frame advances the world by
-    /// `physics.timestep`.
+    /// `physics.timestep`. In an `[animation]` scene it may be left out (0): the animation's
+    /// own length.
+    #[serde(default)]
     pub frames: u32,
     /// Directory that relative asset paths (glTF files) are resolved against, itself
     /// relative to the scene file; the scene file's directory when absent. A command line
@@ -115,6 +120,30 @@ impl EnvironmentDef {
     pub(crate) const MAX_COLLIDER_CELLS: u32 = 256;
 }
 
+/// `[animation]`: an animated glTF file (rigid-body bake) sampled at a frame rate.
+#[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
+pub struct AnimationDef {
+    /// The file as written (it existed when the scene was parsed).
+    pub gltf: String,
+    /// Frames per second to sample at (positive); `None`: the file's `dormant` extras give it.
+    pub fps: Option<f64>,
+    /// Play only the animation of this name (else all together).
+    pub name: Option<String>,
+    /// How far (scene units) any corner of a body's bounds may drift from where its rest
+    /// began while it still counts as resting; `None`: the file's extras, else
+    /// [`AnimationDef::DEFAULT_REST_TOLERANCE`].
+    pub rest_tolerance: Option<f32>,
+    /// A rest lasts at least this many frames (at least 2).
+    pub min_rest_frames: u32,
+}
+
+impl AnimationDef {
+    /// 0.1 mm for a scene in metres: above the 1e-6 to 1e-5 per frame that settled bodies
+    /// drift by in Blender's rigid-body bakes.
+    pub const DEFAULT_REST_TOLERANCE: f32 = 1e-4;
+}
+
 /// Where the environment's triangles come from.
 #[derive(Clone, Debug, PartialEq)]
 pub enum EnvironmentSource {
@@ -123,6 +152,8 @@ pub enum EnvironmentSource {
     Gltf(String),
     /// A built-in procedural set.
     Generator(GeneratorKind),
+    /// The static mesh nodes of the `[animation]` file.
+    Animation,
 }
 
 /// Built-in procedural environments.

@@ -44,12 +44,56 @@ pub(super) fn check_position_accessors(path: &Path, json: &gltf::json::Root) -> 
     Ok(())
 }
 
+/// Refuses an animation whose channels or samplers name a sampler, node or accessor that does
+/// not exist (the gltf crate's accessors for them index unchecked).
+pub(super) fn check_animation_indices(path: &Path, json: &gltf::json::Root) -> Result<(), GltfError> {
+    let (nodes, accessors) = (json.nodes.len(), json.accessors.len());
+    let missing = |element: String, what: &str, index: usize, count: usize| {
+        GltfError::new(path, element, format!("{what} {index} does not exist ({count} {what}s)"))
+    };
+    for (a, animation) in json.animations.iter().enumerate() {
+        for (c, channel) in animation.channels.iter().enumerate() {
+            let element = format!("animations[{a}].channels[{c}]");
+            if channel.sampler.value() >= animation.samplers.len() {
+                return Err(missing(element, "sampler", channel.sampler.value(), animation.samplers.len()));
+            }
+            if channel.target.node.value() >= nodes {
+                return Err(missing(element, "node", channel.target.node.value(), nodes));
+            }
+        }
+        for (s, sampler) in animation.samplers.iter().enumerate() {
+            for index in [sampler.input.value(), sampler.output.value()] {
+                if index >= accessors {
+                    return Err(missing(
+                        format!("animations[{a}].samplers[{s}]"),
+                        "accessor",
+                        index,
+                        accessors,
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
 /// What the importer reads from an accessor: the element's dimensions and the component
 /// types it accepts.
 pub(super) struct AccessorLayout {
     what: &'static str,
     dimensions: Dimensions,
     types: &'static [DataType],
+}
+
+impl AccessorLayout {
+    pub(super) const fn new(what: &'static str, dimensions: Dimensions, types: &'static [DataType]) -> Self {
+        Self { what, dimensions, types }
+    }
+
+    /// What the accessor is to the importer (`POSITION`, `input`), as messages name it.
+    pub(super) fn what(&self) -> &'static str {
+        self.what
+    }
 }
 
 pub(super) const POSITIONS: AccessorLayout =

@@ -14,6 +14,7 @@
 //! before anything is read, `materials` and `textures` turn materials and images into scene
 //! data.
 
+pub(crate) mod animated;
 mod checks;
 mod materials;
 mod nodes;
@@ -24,7 +25,7 @@ use std::path::{Path, PathBuf};
 
 use glam::{Affine3A, Vec3};
 
-use checks::{check_extensions, check_glb_length, check_position_accessors};
+use checks::{check_animation_indices, check_extensions, check_glb_length, check_position_accessors};
 use materials::material;
 use nodes::{perspective_camera, punctual_light, walk_nodes};
 use textures::TextureLoader;
@@ -229,6 +230,7 @@ fn read_document(
     check_extensions(path, &document)?;
     let json = document.into_json();
     check_position_accessors(path, &json)?;
+    check_animation_indices(path, &json)?;
     let document =
         gltf::Document::from_json(json).map_err(|e| GltfError::new(path, "(document)", e.to_string()))?;
     let buffers =

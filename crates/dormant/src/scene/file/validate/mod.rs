@@ -5,6 +5,7 @@
 //! projectiles; `view`: cameras, sky, lights and render settings. [`validate`] checks them in that order and stops at the first problem,
 //! which it reports by field path (the parser adds file and line).
 
+mod animation;
 mod motion;
 mod structures;
 mod view;
@@ -30,12 +31,12 @@ type Checked<T> = Result<T, Problem>;
 /// Checks `raw` section by section and builds the spec; relative asset paths resolve
 /// against `assets`.
 pub(super) fn validate(raw: &SceneToml, assets: &AssetDir) -> Result<SceneSpec, Problem> {
-    let scene = scene(&raw.scene)?;
+    let scene = scene(&raw.scene, raw.animation.is_some())?;
     let physics = physics(&raw.physics)?;
     if raw.scene.assets.is_some() && !assets.is_overridden() && !assets.path().is_dir() {
         return Err(problem("scene.assets", format!("directory not found: {}", assets.path().display())));
     }
-    let environment = world::environment(&raw.environment, assets)?;
+    let (environment, animation) = animation::world_source(raw, assets)?;
     let prototypes = world::prototypes(&raw.prototypes, assets)?;
     let spawners = motion::spawners(&raw.spawners, &prototypes)?;
     let kinematics = motion::kinematics(&raw.kinematics, &prototypes)?;
@@ -50,6 +51,7 @@ pub(super) fn validate(raw: &SceneToml, assets: &AssetDir) -> Result<SceneSpec, 
         scene,
         physics,
         environment,
+        animation,
         prototypes,
         spawners,
         kinematics,
@@ -96,12 +98,15 @@ pub(super) fn within_body_budget(spec: &SceneSpec) -> Checked<()> {
     Ok(())
 }
 
-/// `[scene]`: a name and at least one frame.
-fn scene(s: &SceneInfo) -> Checked<SceneInfo> {
+/// `[scene]`: a name and at least one frame (or, in an `[animation]` scene, none given: the
+/// animation's length).
+fn scene(s: &SceneInfo, animated: bool) -> Checked<SceneInfo> {
     if s.name.trim().is_empty() {
         return Err(problem("scene.name", "must not be empty"));
     }
-    at_most("scene.frames", at_least_one("scene.frames", s.frames)?, MAX_FRAMES)?;
+    if !(animated && s.frames == 0) {
+        at_most("scene.frames", at_least_one("scene.frames", s.frames)?, MAX_FRAMES)?;
+    }
     Ok(s.clone())
 }
 

@@ -1,0 +1,59 @@
+//! What `dormant export --gltf` records in a file's `extras` for an exact round trip, read
+//! back: in the asset's extras `{"dormant": {"format", "fps", "frames", "rest_tolerance",
+//! "scene"}}` (the scene file's cameras, lights, sky and render settings as TOML), and in a
+//! body node's extras `{"dormant": {"body": N}}`. Files from other tools have none of it.
+
+use std::path::Path;
+
+use serde::Deserialize;
+
+use super::super::GltfError;
+
+/// The asset's `dormant` extras (every field optional).
+#[derive(Clone, Debug, Default, PartialEq, Deserialize)]
+#[serde(default)]
+pub(crate) struct DormantExtras {
+    pub(crate) format: Option<String>,
+    /// Frames per second the file was sampled at.
+    pub(crate) fps: Option<f64>,
+    /// Frames the sequence has.
+    pub(crate) frames: Option<u32>,
+    /// The rest tolerance to detect rest with (0 for a dormant simulation: exact).
+    pub(crate) rest_tolerance: Option<f32>,
+    /// The scene file's text without its bodies, environment and physics.
+    pub(crate) scene: Option<String>,
+}
+
+#[derive(Deserialize)]
+struct Wrapper<T> {
+    dormant: Option<T>,
+}
+
+#[derive(Deserialize)]
+struct BodyExtras {
+    body: u32,
+}
+
+impl DormantExtras {
+    /// The asset's extras; other keys and other tools' extras are ignored.
+    pub(super) fn of(path: &Path, document: &gltf::Document) -> Result<Self, GltfError> {
+        let Some(raw) = &document.as_json().asset.extras else { return Ok(Self::default()) };
+        match serde_json::from_str::<Wrapper<Self>>(raw.get()) {
+            Ok(w) => Ok(w.dormant.unwrap_or_default()),
+            // Other tools' extras (Blender writes custom properties there) are not ours.
+            Err(_) if !raw.get().contains("\"dormant\"") => Ok(Self::default()),
+            Err(e) => Err(GltfError::new(path, "asset.extras.dormant", e.to_string())),
+        }
+    }
+}
+
+/// The body id a node's `dormant` extras give it, if any.
+pub(super) fn body_of(path: &Path, node: &gltf::Node) -> Result<Option<u32>, GltfError> {
+    let Some(raw) = node.extras() else { return Ok(None) };
+    match serde_json::from_str::<Wrapper<BodyExtras>>(raw.get()) {
+        Ok(w) => Ok(w.dormant.map(|b| b.body)),
+        // Other tools' extras (Blender writes custom properties there) are not ours.
+        Err(_) if !raw.get().contains("\"dormant\"") => Ok(None),
+        Err(e) => Err(GltfError::new(path, format!("nodes[{}].extras.dormant", node.index()), e.to_string())),
+    }
+}

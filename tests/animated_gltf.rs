@@ -1,0 +1,170 @@
+//! Animated glTF in (issue 40): a rigid-body bake from another tool becomes a trajectory with
+//! its rests found from the motion, and renders; malformed animations are input errors that
+//! name the file, the animation and the channel.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use common::animated::{falling_cubes, scene_toml, time, AnimatedFile, APPEARS, FRAMES, LANDING};
+use common::cli::{dormant, exits_with, succeeds};
+use dormant::physics::trajectory::Trajectory;
+use dormant::physics::{simulate, BodyId, BodyState, IslandEvent, SimulateOptions};
+use dormant::scene::file::SceneFile;
+
+/// Writes `file` as `dir/cubes.glb` and a scene file for it (with `extra` in `[animation]`);
+/// returns the scene file's path.
+fn write_scene(dir: &Path, file: &AnimatedFile, extra: &str) -> PathBuf {
+    file.write(&dir.join("cubes.glb"));
+    let scene = dir.join("cubes.toml");
+    std::fs::write(&scene, scene_toml(extra)).unwrap();
+    scene
+}
+
+fn trajectory_of(file: &AnimatedFile, extra: &str) -> Trajectory {
+    let dir = tempfile::TempDir::new().unwrap();
+    let scene = SceneFile::load(write_scene(dir.path(), file, extra)).unwrap();
+    simulate(&scene, &SimulateOptions::default()).unwrap()
+}
+
+/// (frame, bodies) of every `Slept` event, and the number of `Woke` events.
+fn rests(t: &Trajectory) -> (Vec<(usize, Vec<u32>)>, usize) {
+    let mut slept = Vec::new();
+    let mut woke = 0;
+    for (f, frame) in t.frames.iter().enumerate() {
+        for e in &frame.events {
+            match e {
+                IslandEvent::Slept { bodies, .. } => slept.push((f, bodies.iter().map(|b| b.0).collect())),
+                IslandEvent::Woke { .. } => woke += 1,
+            }
+        }
+    }
+    (slept, woke)
+}
+
+#[test]
+fn bodies_that_stop_together_rest_as_one_island_from_the_frame_they_stop() {
+    let t = trajectory_of(&falling_cubes(), "");
+    assert_eq!(t.frames.len(), FRAMES as usize);
+    assert_eq!(t.prototypes, ["cube"]);
+    assert_eq!(t.bodies.len(), 4, "the ground is environment; left, right, spinner and late are bodies");
+    assert_eq!(t.timestep, (1.0 / common::animated::FPS) as f32);
+    let (slept, woke) = rests(&t);
+    assert_eq!(slept, [(APPEARS as usize, vec![3]), (LANDING as usize, vec![0, 1])]);
+    assert_eq!(woke, 0);
+    assert_eq!(t.bodies[3].spawn_frame, APPEARS);
+}
+
+#[test]
+fn replayed_poses_are_the_keys_as_stored_and_resting_bodies_hold_the_first_pose_of_their_rest() {
+    let t = trajectory_of(&falling_cubes(), "");
+    let mut replay = t.replay();
+    while let Some(frame) = replay.next_frame() {
+        let i = frame.index;
+        let y = (3.0 - 5.0 * time(i) * time(i)).max(0.5);
+        assert_eq!(frame.poses[0].translation.to_array(), [-1.5, y, 0.0], "frame {i}");
+        assert_eq!(frame.states[2], BodyState::Awake, "the spinner never rests (frame {i})");
+        let late = if i < APPEARS { BodyState::Absent } else { BodyState::Asleep };
+        assert_eq!(frame.states[3], late, "frame {i}");
+        let left = if i < LANDING { BodyState::Awake } else { BodyState::Asleep };
+        assert_eq!(frame.states[BodyId(0).0 as usize], left, "frame {i}");
+    }
+}
+
+#[test]
+fn float_noise_below_the_rest_tolerance_still_rests_and_a_tolerance_of_zero_does_not() {
+    let mut file = falling_cubes();
+    // The left cube drifts by 2e-6 a frame once landed, as bodies in Blender's bakes do.
+    let drift: Vec<f32> = (0..FRAMES)
+        .flat_map(|i| {
+            let t = time(i);
+            let settled = i.saturating_sub(LANDING) as f32 * 2e-6;
+            [-1.5 + settled, (3.0 - 5.0 * t * t).max(0.5), 0.0]
+        })
+        .collect();
+    file.set_output(0, &drift);
+    let (slept, _) = rests(&trajectory_of(&file, ""));
+    assert_eq!(slept, [(APPEARS as usize, vec![3]), (LANDING as usize, vec![0, 1])]);
+    let (slept, _) = rests(&trajectory_of(&file, "rest_tolerance = 0.0"));
+    assert_eq!(slept, [(APPEARS as usize, vec![3]), (LANDING as usize, vec![1])]);
+}
+
+#[test]
+fn an_animated_scene_renders_and_a_glb_without_a_frame_rate_is_refused() {
+    let dir = tempfile::TempDir::new().unwrap();
+    let scene = write_scene(dir.path(), &falling_cubes(), "");
+    let out = dir.path().join("frames");
+    succeeds(
+        dormant()
+            .args(["--quiet", "render"])
+            .arg(&scene)
+            .args(["--frames", "16..19", "--size", "32x18", "--spp", "1", "--out"])
+            .arg(&out),
+    );
+    let mut images: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|name| name.starts_with("frame_"))
+        .collect();
+    images.sort();
+    assert_eq!(images, ["frame_0016.png", "frame_0017.png", "frame_0018.png"]);
+    let stderr = exits_with(
+        dormant().args(["--quiet", "render"]).arg(dir.path().join("cubes.glb")).args(["--out"]).arg(&out),
+        2,
+    );
+    assert!(stderr.contains("cubes.glb") && stderr.contains("animation.fps"), "{stderr}");
+}
+
+/// `file` broken by `break_it`, simulated: exits 2 with a message naming the file and
+/// containing every one of `expected`.
+fn refused(break_it: impl FnOnce(&mut AnimatedFile), expected: &[&str]) {
+    let dir = tempfile::TempDir::new().unwrap();
+    let mut file = falling_cubes();
+    break_it(&mut file);
+    let scene = write_scene(dir.path(), &file, "");
+    let stderr = exits_with(
+        dormant().args(["--quiet", "simulate"]).arg(&scene).arg("--out").arg(dir.path().join("t.traj")),
+        2,
+    );
+    assert!(stderr.contains("cubes.glb"), "{stderr}");
+    for e in expected {
+        assert!(stderr.contains(e), "expected {e:?} in: {stderr}");
+    }
+    assert!(!dir.path().join("t.traj").exists());
+}
+
+#[test]
+fn malformed_animations_are_input_errors_naming_the_file_animation_and_channel() {
+    let channel0 = "animations[0] (\"bake\").channels[0]";
+    // One key's output dropped: 48 times, 47 values.
+    refused(
+        |f| {
+            let output = f.output_accessor(0);
+            f.json["accessors"][output]["count"] = 47.into();
+        },
+        &[channel0, "47 output values for 48 input times"],
+    );
+    refused(
+        |f| {
+            f.channel(1, "scale", "LINEAR", &[0.0, 0.5, 0.5], &[1.0; 9]);
+        },
+        &["animations[0] (\"bake\").channels[4]", "not increasing at key 2"],
+    );
+    refused(
+        |f| {
+            f.channel(4, "translation", "LINEAR", &[0.0, 1.0], &[0.0, f32::NAN, 0.0, 0.0, 0.0, 0.0]);
+        },
+        &["channels[4]", "output value 0 is not finite"],
+    );
+    refused(|f| f.json["animations"][0]["channels"][0]["target"]["node"] = 99.into(), &["node"]);
+    refused(
+        |f| f.json["animations"][0]["samplers"][0]["interpolation"] = "QUADRATIC".into(),
+        &["interpolation"],
+    );
+    refused(
+        |f| {
+            f.channel(1, "translation", "LINEAR", &[0.0], &[0.0, 0.0, 0.0]);
+        },
+        &["channels[4]", "animates the translation of nodes[1] a second time"],
+    );
+}
