@@ -124,7 +124,11 @@ impl SceneFile {
 
     /// The 1-based line where the field at `path` (e.g. `spawners[1].count`) is written, if
     /// it is written at all.
+    /// A glTF file given as the scene has no lines of its own to point at.
     pub(crate) fn line_of(&self, path: &str) -> Option<usize> {
+        if is_gltf(&self.path) {
+            return None;
+        }
         line_of(&self.source, path)
     }
 
