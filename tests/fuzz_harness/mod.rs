@@ -14,7 +14,7 @@ use std::path::Path;
 use dormant::physics::trajectory::Trajectory;
 use dormant::render::ImageSize;
 use dormant::scene::file::SceneFile;
-use dormant::scene::gltf::load_gltf_slice;
+use dormant::scene::gltf::{inspect_animated_slice, load_gltf_slice};
 use dormant::scene::SceneAssets;
 use dormant::sequence::stats::{RunInfo, StatsFile};
 use dormant::sequence::FrameRange;
@@ -45,9 +45,13 @@ pub fn scene_toml(data: &[u8]) -> Result<(), String> {
     Ok(())
 }
 
-/// The bytes of a `.glb` (or any glTF) imported from memory with materials and textures.
+/// The bytes of a `.glb` (or any glTF) imported from memory with materials and textures,
+/// then read as an animation (an `[animation]` scene's file) and sampled at 16 frames.
 pub fn gltf_glb(data: &[u8]) -> Result<(), String> {
-    load_gltf_slice(data, Path::new("fuzz.glb")).map(|_| ()).map_err(|e| e.to_string())
+    let name = Path::new("fuzz.glb");
+    let mesh = load_gltf_slice(data, name).map(|_| ()).map_err(|e| e.to_string());
+    let animation = inspect_animated_slice(data, name, 24.0, 16).map(|_| ()).map_err(|e| e.to_string());
+    mesh.and(animation)
 }
 
 /// Where [`gltf_json`] puts its binary buffer: every occurrence in the JSON is replaced by a
@@ -56,7 +60,8 @@ pub const BIN_PLACEHOLDER: &str = "@BIN@";
 
 /// A `.gltf` JSON document with one binary buffer: the bytes before the first NUL are the
 /// JSON, the bytes after it the buffer, which the JSON references as
-/// `"uri": "@BIN@"` ([`BIN_PLACEHOLDER`], replaced by a base64 `data:` URI).
+/// `"uri": "@BIN@"` ([`BIN_PLACEHOLDER`], replaced by a base64 `data:` URI). Imported, then
+/// read as an animation and sampled, as [`gltf_glb`] does.
 pub fn gltf_json(data: &[u8]) -> Result<(), String> {
     let (json, bin) = match data.iter().position(|&b| b == 0) {
         Some(i) => (&data[..i], &data[i + 1..]),
@@ -64,7 +69,11 @@ pub fn gltf_json(data: &[u8]) -> Result<(), String> {
     };
     let uri = format!("data:application/octet-stream;base64,{}", base64(bin));
     let text = String::from_utf8_lossy(json).replace(BIN_PLACEHOLDER, &uri);
-    load_gltf_slice(text.as_bytes(), Path::new("fuzz.gltf")).map(|_| ()).map_err(|e| e.to_string())
+    let name = Path::new("fuzz.gltf");
+    let mesh = load_gltf_slice(text.as_bytes(), name).map(|_| ()).map_err(|e| e.to_string());
+    let animation =
+        inspect_animated_slice(text.as_bytes(), name, 24.0, 16).map(|_| ()).map_err(|e| e.to_string());
+    mesh.and(animation)
 }
 
 /// A trajectory file's bytes, read as they are and then with their trailing checksum made

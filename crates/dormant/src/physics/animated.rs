@@ -70,6 +70,11 @@ fn track(file: &SceneFile, scene: &AnimatedScene, b: usize) -> Result<BodyTrack,
     for i in 0..scene.frames {
         let (translation, rotation, scale) = scene.gltf.trs_at(body.node, scene.time(i));
         let pose = BodyPose { translation, rotation };
+        if !(translation.is_finite() && rotation.is_finite() && scale.is_finite()) {
+            let message =
+                format!("nodes[{}]: its world transform at frame {i} is degenerate (not finite)", body.node);
+            return Err(file.error("animation.gltf", message).into());
+        }
         let present = scale.x != 0.0 && scale.y != 0.0 && scale.z != 0.0;
         if present && (scale - expected).abs().max_element() > 1e-3 * expected.abs().max_element() {
             let message = format!(

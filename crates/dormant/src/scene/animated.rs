@@ -34,7 +34,10 @@ impl AnimatedScene {
         };
         let gltf = AnimatedGltf::read(&file.resolve(&def.gltf), def.name.as_deref()).map_err(asset_error)?;
         let fps = def.fps.or(gltf.extras.fps).filter(|f| f.is_finite() && *f > 0.0).ok_or_else(|| {
-            file.error("animation.fps", "the glTF file records no frame rate: give `fps` in the [animation] of a scene file")
+            file.error(
+                "animation.fps",
+                "the glTF file records no frame rate: give `fps` in the [animation] of a scene file",
+            )
         })?;
         let frames = match file.spec().scene.frames {
             0 => gltf.extras.frames.unwrap_or_else(|| (gltf.duration() as f64 * fps).round() as u32 + 1),

@@ -15,6 +15,8 @@
 //! data.
 
 pub(crate) mod animated;
+
+pub use animated::{inspect_animated_slice, AnimationInventory};
 mod checks;
 mod materials;
 mod nodes;

@@ -43,6 +43,44 @@ pub(crate) fn scene_extras(path: &Path) -> Result<Option<String>, GltfError> {
     Ok(DormantExtras::of(path, &gltf.document)?.scene)
 }
 
+/// What an animated glTF file holds when sampled: see [`inspect_animated_slice`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct AnimationInventory {
+    /// Mesh nodes that move (or that the file marks as bodies).
+    pub bodies: usize,
+    /// Prototypes: distinct meshes and scales among the bodies.
+    pub prototypes: usize,
+    /// Mesh nodes that never move.
+    pub static_meshes: usize,
+    /// The last key time of the animations, in seconds.
+    pub duration: f32,
+}
+
+/// Reads an animated `.glb` (or `.gltf` with embedded buffers) from memory, as an
+/// `[animation]` scene would, and samples every body at `frames` frames of `fps`; `name`
+/// names it in errors. Nothing is read from disk.
+pub fn inspect_animated_slice(
+    bytes: &[u8],
+    name: &Path,
+    fps: f64,
+    frames: u32,
+) -> Result<AnimationInventory, GltfError> {
+    let file = AnimatedGltf::from_bytes(bytes, &Source { name, base: None }, None)?;
+    let times: Vec<f32> = (0..frames).map(|i| frame_time(i, fps)).collect();
+    let roles = file.roles(&times)?;
+    for body in &roles.bodies {
+        for &t in &times {
+            std::hint::black_box(file.trs_at(body.node, t));
+        }
+    }
+    Ok(AnimationInventory {
+        bodies: roles.bodies.len(),
+        prototypes: roles.prototypes.len(),
+        static_meshes: roles.environment.len(),
+        duration: file.duration(),
+    })
+}
+
 /// An animated glTF file read and checked; see the module docs.
 pub(crate) struct AnimatedGltf {
     pub(crate) path: PathBuf,
@@ -61,7 +99,12 @@ impl AnimatedGltf {
     /// Reads `path` with the animations that play (all, or the one named `only`).
     pub(crate) fn read(path: &Path, only: Option<&str>) -> Result<Self, GltfError> {
         let bytes = std::fs::read(path).map_err(|e| GltfError::new(path, "(file)", e.to_string()))?;
-        let (document, buffers) = read_document(&bytes, &Source { name: path, base: path.parent() })?;
+        Self::from_bytes(&bytes, &Source { name: path, base: path.parent() }, only)
+    }
+
+    fn from_bytes(bytes: &[u8], source: &Source, only: Option<&str>) -> Result<Self, GltfError> {
+        let path = source.name;
+        let (document, buffers) = read_document(bytes, source)?;
         let motions = channels::read_motions(path, &document, &buffers, only)?;
         let mut parents = vec![None; document.nodes().len()];
         for node in document.nodes() {

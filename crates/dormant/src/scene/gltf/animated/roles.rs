@@ -95,7 +95,7 @@ impl AnimatedGltf {
         times
             .iter()
             .map(|&t| self.trs_at(n, t).2)
-            .find(|s| s.x != 0.0 && s.y != 0.0 && s.z != 0.0)
+            .find(|s| s.is_finite() && s.x != 0.0 && s.y != 0.0 && s.z != 0.0)
             .map_or(Vec3::ONE, |s| Vec3::from_array(s.to_array().map(quantize)))
     }
 

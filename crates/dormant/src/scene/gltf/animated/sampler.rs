@@ -25,6 +25,10 @@ pub(crate) trait Animated: Copy {
     fn scaled(self, k: f32) -> Self;
     fn is_zero(&self) -> bool;
     fn is_finite(&self) -> bool;
+    /// Whether a key value (not a tangent) is one glTF allows.
+    fn is_valid_key(&self) -> bool;
+    /// What a valid key is, for messages.
+    const VALID_KEY: &'static str;
 }
 
 impl Animated for Vec3 {
@@ -55,6 +59,12 @@ impl Animated for Vec3 {
     fn is_finite(&self) -> bool {
         Vec3::is_finite(*self)
     }
+
+    fn is_valid_key(&self) -> bool {
+        Vec3::is_finite(*self)
+    }
+
+    const VALID_KEY: &'static str = "finite";
 }
 
 impl Animated for Quat {
@@ -69,7 +79,12 @@ impl Animated for Quat {
             + v(m0) * (s3 - 2.0 * s2 + s)
             + v(p1) * (-2.0 * s3 + 3.0 * s2)
             + v(m1) * (s3 - s2);
-        Quat::from_vec4(r).normalize()
+        let r = r.normalize_or_zero();
+        if r == glam::Vec4::ZERO {
+            Quat::IDENTITY
+        } else {
+            Quat::from_vec4(r)
+        }
     }
 
     fn bits_equal(a: &Self, b: &Self) -> bool {
@@ -88,6 +103,13 @@ impl Animated for Quat {
     fn is_finite(&self) -> bool {
         Quat::is_finite(*self)
     }
+
+    /// A rotation key must be a unit quaternion (as glTF requires), give or take rounding.
+    fn is_valid_key(&self) -> bool {
+        Quat::is_finite(*self) && (self.length() - 1.0).abs() < 1e-3
+    }
+
+    const VALID_KEY: &'static str = "a finite unit quaternion";
 }
 
 /// A checked sampler: at least one key, strictly increasing finite times, finite values,
@@ -119,6 +141,10 @@ impl<T: Animated> Sampler<T> {
         }
         if let Some(i) = values.iter().position(|v| !v.is_finite()) {
             return Err(format!("output value {i} is not finite"));
+        }
+        let key = |i: usize| if per_key == 3 { 3 * i + 1 } else { i };
+        if let Some(i) = (0..times.len()).map(key).find(|&i| !values[i].is_valid_key()) {
+            return Err(format!("output value {i} is not {}", T::VALID_KEY));
         }
         if let Some(i) = times.windows(2).position(|w| w[1] <= w[0]) {
             return Err(format!(
