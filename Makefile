@@ -4,7 +4,7 @@
 CARGO ?= cargo
 RELEASE_BIN := target/release/dormant
 
-.PHONY: setup build demo test test-no-embree lint arch-check fmt bench bench-check instruction-check soak slurm-check fuzz fuzz-check compare-cycles clean
+.PHONY: setup build demo test test-no-embree lint arch-check fmt bench bench-check instruction-check soak slurm-check fuzz fuzz-check compare-cycles blender-roundtrip clean
 
 setup:
 	bash scripts/setup.sh
@@ -53,6 +53,13 @@ compare-cycles: build
 	test -x $(BPY_VENV)/bin/python || python3.11 -m venv $(BPY_VENV)
 	$(BPY_VENV)/bin/python -c "import bpy" 2>/dev/null || $(BPY_VENV)/bin/pip install -q bpy==$(BPY_VERSION)
 	$(BPY_VENV)/bin/python scripts/compare-cycles.py --threads $(COMPARE_THREADS) $(COMPARE_ARGS)
+
+# A Blender rigid-body bake rendered by dormant and Cycles, and dormant's glTF export imported
+# into Blender (scripts/blender-roundtrip.py; not in CI). Uses the bpy venv of compare-cycles.
+blender-roundtrip: build
+	test -x $(BPY_VENV)/bin/python || python3.11 -m venv $(BPY_VENV)
+	$(BPY_VENV)/bin/python -c "import bpy" 2>/dev/null || $(BPY_VENV)/bin/pip install -q bpy==$(BPY_VERSION)
+	$(BPY_VENV)/bin/python scripts/blender-roundtrip.py --threads $(COMPARE_THREADS)
 
 # The module arrows inside each crate: no import cycle, nothing imported against the layer order
 # (geometry < scene < physics < accel < {render, residency} < sequence; Cargo enforces the crates'
