@@ -104,6 +104,8 @@ def build_scene(count, frames, seed):
         bodies.append(add_shape(kind, location, rotation, mats[i % 3]))
     select(bodies)
     bpy.ops.rigidbody.objects_add(type="ACTIVE")
+    for o in bodies:
+        o.rigid_body.use_deactivation = True  # Bullet puts settled bodies to sleep, as users set it
     select([ground])
     bpy.ops.rigidbody.objects_add(type="PASSIVE")
     cam_data = bpy.data.cameras.new("camera")
@@ -274,7 +276,7 @@ def main():
     ap.add_argument("--dormant", type=Path, default=ROOT / "target" / "release" / "dormant")
     ap.add_argument("--out", type=Path, default=ROOT / "out" / "blender-roundtrip")
     ap.add_argument("--count", type=int, default=300)
-    ap.add_argument("--frames", type=int, default=150)
+    ap.add_argument("--frames", type=int, default=300)
     ap.add_argument("--spp", type=int, default=64)
     ap.add_argument("--size", default="320x180")
     ap.add_argument("--max-depth", type=int, default=4)

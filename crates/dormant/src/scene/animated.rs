@@ -56,7 +56,7 @@ impl AnimatedScene {
             frames,
             roles,
             rest_tolerance: rest_tolerance(def, &gltf),
-            min_rest_frames: def.min_rest_frames,
+            min_rest_frames: min_rest_frames(def, &gltf),
             gltf,
         }))
     }
@@ -92,4 +92,10 @@ impl AnimatedScene {
 /// the default.
 fn rest_tolerance(def: &AnimationDef, gltf: &AnimatedGltf) -> f32 {
     def.rest_tolerance.or(gltf.extras.rest_tolerance).unwrap_or(AnimationDef::DEFAULT_REST_TOLERANCE)
+}
+
+/// The scene file's shortest rest, else the glTF file's, else the default (never below 2).
+fn min_rest_frames(def: &AnimationDef, gltf: &AnimatedGltf) -> u32 {
+    let frames = def.min_rest_frames.or(gltf.extras.min_rest_frames);
+    frames.unwrap_or(AnimationDef::DEFAULT_MIN_REST_FRAMES).max(2)
 }

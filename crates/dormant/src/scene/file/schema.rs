@@ -63,8 +63,7 @@ pub(super) struct AnimationToml {
     pub fps: Option<f64>,
     pub name: Option<String>,
     pub rest_tolerance: Option<f32>,
-    #[serde(default = "two_u32")]
-    pub min_rest_frames: u32,
+    pub min_rest_frames: Option<u32>,
 }
 
 /// `[environment]`: exactly one of `gltf` and `generator` (checked later).
@@ -317,8 +316,4 @@ fn default_fov() -> f32 {
 }
 fn white() -> [f32; 3] {
     [1.0; 3]
-}
-
-fn two_u32() -> u32 {
-    2
 }

@@ -134,14 +134,19 @@ pub struct AnimationDef {
     /// began while it still counts as resting; `None`: the file's extras, else
     /// [`AnimationDef::DEFAULT_REST_TOLERANCE`].
     pub rest_tolerance: Option<f32>,
-    /// A rest lasts at least this many frames (at least 2).
-    pub min_rest_frames: u32,
+    /// A rest lasts at least this many frames (at least 2); `None`: the file's extras, else
+    /// [`AnimationDef::DEFAULT_MIN_REST_FRAMES`].
+    pub min_rest_frames: Option<u32>,
 }
 
 impl AnimationDef {
-    /// 0.1 mm for a scene in metres: above the 1e-6 to 1e-5 per frame that settled bodies
-    /// drift by in Blender's rigid-body bakes.
-    pub const DEFAULT_REST_TOLERANCE: f32 = 1e-4;
+    /// 1 mm for a scene in metres: settled bodies in Blender's rigid-body bakes still drift
+    /// by 1e-6 to 1e-5 a frame, which adds up over a rest of a hundred frames; a resting body
+    /// is shown at most this far from where it is.
+    pub const DEFAULT_REST_TOLERANCE: f32 = 1e-3;
+    /// A third of a second at 24 frames per second: shorter pauses (a body at the top of a
+    /// bounce, a pile still shifting) are not worth taking out of the per-frame build.
+    pub const DEFAULT_MIN_REST_FRAMES: u32 = 8;
 }
 
 /// Where the environment's triangles come from.

@@ -45,11 +45,11 @@ fn animation(a: &AnimationToml, assets: &AssetDir) -> Checked<AnimationDef> {
     if let Some(tolerance) = a.rest_tolerance {
         non_negative("animation.rest_tolerance", tolerance)?;
     }
-    if at_least_one("animation.min_rest_frames", a.min_rest_frames)? < 2 {
-        return Err(problem(
-            "animation.min_rest_frames",
-            "must be at least 2 (a rest is a pose held from one frame to the next)",
-        ));
+    if let Some(frames) = a.min_rest_frames {
+        if at_least_one("animation.min_rest_frames", frames)? < 2 {
+            let message = "must be at least 2 (a rest is a pose held from one frame to the next)";
+            return Err(problem("animation.min_rest_frames", message));
+        }
     }
     Ok(AnimationDef {
         gltf: a.gltf.clone(),

@@ -1,6 +1,6 @@
 //! What `dormant export --gltf` records in a file's `extras` for an exact round trip, read
 //! back: in the asset's extras `{"dormant": {"format", "fps", "frames", "rest_tolerance",
-//! "scene"}}` (the scene file's cameras, lights, sky and render settings as TOML), and in a
+//! "min_rest_frames", "scene"}}` (the scene file's cameras, lights, sky and render settings as TOML), and in a
 //! body node's extras `{"dormant": {"body": N}}`. Files from other tools have none of it.
 
 use std::path::Path;
@@ -20,6 +20,8 @@ pub(crate) struct DormantExtras {
     pub(crate) frames: Option<u32>,
     /// The rest tolerance to detect rest with (0 for a dormant simulation: exact).
     pub(crate) rest_tolerance: Option<f32>,
+    /// The shortest rest (2 for a dormant simulation: every sleep that holds a pose).
+    pub(crate) min_rest_frames: Option<u32>,
     /// The scene file's text without its bodies, environment and physics.
     pub(crate) scene: Option<String>,
 }
