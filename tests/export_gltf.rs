@@ -229,3 +229,52 @@ fn export_gltf_to_a_bad_path_fails_clearly_and_leaves_no_file() {
     );
     assert!(stderr.contains("--frames"), "{stderr}");
 }
+
+/// A glTF prototype's materials and textures (the duck's base colour texture) come back
+/// identical through dormant's own glTF import. Skips without `../shared/assets`.
+#[test]
+fn export_gltf_materials_and_textures_import_back_identical() {
+    let Some(assets) = common::shared_assets() else { return };
+    let dir = tempfile::TempDir::new().unwrap();
+    let scene = dir.path().join("ducks.toml");
+    let text = format!(
+        "[scene]\nname = \"ducks\"\nframes = 20\nassets = {:?}\n\n[environment]\ngenerator = \"ground\"\n\n\
+         [[prototypes]]\nname = \"duck\"\nshape = \"gltf\"\ngltf = \"duck.glb\"\nscale = 0.5\n\n\
+         [[prototypes]]\nname = \"crate\"\nshape = \"box\"\nhalf_extents = [0.2, 0.2, 0.2]\n\n\
+         [[spawners]]\nprototypes = [\"duck\", \"crate\"]\ncount = 4\n\
+         region = {{ min = [-1.0, 1.0, -1.0], max = [1.0, 1.0, 1.0] }}\n",
+        assets.to_str().unwrap()
+    );
+    std::fs::write(&scene, text).unwrap();
+    let file = dormant::scene::file::SceneFile::load(&scene).unwrap();
+    let source = SequenceSource::scene(file, dormant::physics::SimulateOptions::default(), None);
+    let sequence = Sequence::load(source, &mut |_| {}).unwrap();
+    let glb = dir.path().join("ducks.glb");
+    sequence.write_gltf(&glb).unwrap();
+    let back = dormant::scene::gltf::load_gltf(&glb).unwrap();
+    let template = &sequence.template;
+    assert_eq!(back.materials.len(), template.materials.len());
+    assert!(!template.textures.is_empty(), "the duck has a base colour texture");
+    let texture =
+        |t: Option<u32>, all: &[&dormant::scene::texture::Texture]| t.map(|i| all[i as usize].clone());
+    let exported: Vec<_> = template.textures.iter().map(|t| t.as_ref()).collect();
+    let imported: Vec<_> = back.textures.iter().collect();
+    for (m, original) in back.materials.iter().zip(&template.materials) {
+        let plain = |m: &dormant::scene::Material| dormant::scene::Material {
+            base_color_texture: None,
+            metallic_roughness_texture: None,
+            emissive_texture: None,
+            ..*m
+        };
+        assert_eq!(plain(m), plain(original));
+        for (a, b) in [
+            (m.base_color_texture, original.base_color_texture),
+            (m.metallic_roughness_texture, original.metallic_roughness_texture),
+            (m.emissive_texture, original.emissive_texture),
+        ] {
+            let (a, b) = (texture(a, &imported), texture(b, &exported));
+            // Names differ (the image's file); texels and wrap modes do not.
+            assert_eq!(a.map(|t| (t.texels, t.wrap_s, t.wrap_t)), b.map(|t| (t.texels, t.wrap_s, t.wrap_t)));
+        }
+    }
+}
