@@ -2,7 +2,7 @@
 //! scale (STEP), and the camera node's translation and rotation, keyed at the frames where a
 //! value changes (a stretch of bit-identical values keeps only its first and last key).
 
-use serde_json::{json, Value};
+use serde::Serialize;
 
 use super::buffer::{BufferBuilder, Kind};
 use super::frame_time;
@@ -98,11 +98,39 @@ fn run_keys(runs: &[(u32, Pose)], frames: u32) -> Vec<(u32, Pose)> {
     keys
 }
 
+/// An animation sampler (typed: a large export has hundreds of thousands).
+#[derive(Debug, Serialize)]
+struct Sampler {
+    input: usize,
+    output: usize,
+    interpolation: &'static str,
+}
+
+#[derive(Debug, Serialize)]
+struct Target {
+    node: usize,
+    path: &'static str,
+}
+
+#[derive(Debug, Serialize)]
+struct Channel {
+    sampler: usize,
+    target: Target,
+}
+
+/// The glTF animation `dormant`.
+#[derive(Debug, Serialize)]
+pub(super) struct Animation {
+    name: &'static str,
+    samplers: Vec<Sampler>,
+    channels: Vec<Channel>,
+}
+
 /// The samplers and channels of the animation, added node by node.
 pub(super) struct AnimationBuilder {
     fps: f64,
-    samplers: Vec<Value>,
-    channels: Vec<Value>,
+    samplers: Vec<Sampler>,
+    channels: Vec<Channel>,
 }
 
 impl AnimationBuilder {
@@ -135,16 +163,25 @@ impl AnimationBuilder {
         buffer.shared_floats(Kind::Scalar, &times)
     }
 
-    fn channel(&mut self, node: usize, path: &str, input: usize, output: usize, interpolation: &str) {
-        self.samplers.push(json!({ "input": input, "output": output, "interpolation": interpolation }));
-        self.channels
-            .push(json!({ "sampler": self.samplers.len() - 1, "target": { "node": node, "path": path } }));
+    fn channel(
+        &mut self,
+        node: usize,
+        path: &'static str,
+        input: usize,
+        output: usize,
+        interpolation: &'static str,
+    ) {
+        self.samplers.push(Sampler { input, output, interpolation });
+        self.channels.push(Channel { sampler: self.samplers.len() - 1, target: Target { node, path } });
     }
 
     /// The animation, or `None` when it has no channel.
-    pub(super) fn finish(self) -> Option<Value> {
-        (!self.channels.is_empty())
-            .then(|| json!({ "name": "dormant", "samplers": self.samplers, "channels": self.channels }))
+    pub(super) fn finish(self) -> Option<Animation> {
+        (!self.channels.is_empty()).then_some(Animation {
+            name: "dormant",
+            samplers: self.samplers,
+            channels: self.channels,
+        })
     }
 }
 

@@ -6,7 +6,7 @@ use std::collections::hash_map::DefaultHasher;
 use std::collections::HashMap;
 use std::hash::{Hash, Hasher};
 
-use serde_json::{json, Value};
+use serde::Serialize;
 
 const FLOAT: u32 = 5126;
 const UNSIGNED_INT: u32 = 5125;
@@ -40,12 +40,37 @@ impl Kind {
     }
 }
 
+/// A glTF buffer view (of buffer 0). Typed rather than a JSON value: a large export has
+/// hundreds of thousands of them.
+#[derive(Debug, Serialize)]
+#[serde(rename_all = "camelCase")]
+pub(super) struct View {
+    buffer: u32,
+    byte_offset: usize,
+    byte_length: usize,
+}
+
+/// A glTF accessor over one buffer view.
+#[derive(Debug, Serialize)]
+#[serde(rename_all = "camelCase")]
+pub(super) struct Accessor {
+    buffer_view: usize,
+    component_type: u32,
+    count: usize,
+    #[serde(rename = "type")]
+    kind: &'static str,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    min: Option<Vec<f32>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    max: Option<Vec<f32>>,
+}
+
 /// The GLB's binary chunk, its buffer views and accessors, built in order.
 #[derive(Default)]
 pub(super) struct BufferBuilder {
     bin: Vec<u8>,
-    views: Vec<Value>,
-    accessors: Vec<Value>,
+    views: Vec<View>,
+    accessors: Vec<Accessor>,
     /// Accessors [`Self::shared_floats`] made, by kind and hash of their bytes.
     shared: HashMap<(Kind, u64), Vec<usize>>,
 }
@@ -56,7 +81,7 @@ impl BufferBuilder {
         let offset = self.bin.len();
         self.bin.extend_from_slice(bytes);
         self.bin.resize(self.bin.len().next_multiple_of(4), 0);
-        self.views.push(json!({ "buffer": 0, "byteOffset": offset, "byteLength": bytes.len() }));
+        self.views.push(View { buffer: 0, byte_offset: offset, byte_length: bytes.len() });
         self.views.len() - 1
     }
 
@@ -66,14 +91,14 @@ impl BufferBuilder {
         let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
         let view = self.view(&bytes);
         let (min, max) = bounds(kind.components(), values);
-        self.accessors.push(json!({
-            "bufferView": view,
-            "componentType": FLOAT,
-            "count": values.len() / kind.components(),
-            "type": kind.name(),
-            "min": min,
-            "max": max,
-        }));
+        self.accessors.push(Accessor {
+            buffer_view: view,
+            component_type: FLOAT,
+            count: values.len() / kind.components(),
+            kind: kind.name(),
+            min: Some(min),
+            max: Some(max),
+        });
         self.accessors.len() - 1
     }
 
@@ -98,28 +123,28 @@ impl BufferBuilder {
     pub(super) fn indices(&mut self, values: &[u32]) -> usize {
         let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
         let view = self.view(&bytes);
-        self.accessors.push(json!({
-            "bufferView": view,
-            "componentType": UNSIGNED_INT,
-            "count": values.len(),
-            "type": "SCALAR",
-        }));
+        self.accessors.push(Accessor {
+            buffer_view: view,
+            component_type: UNSIGNED_INT,
+            count: values.len(),
+            kind: "SCALAR",
+            min: None,
+            max: None,
+        });
         self.accessors.len() - 1
     }
 
     /// The floats of accessor `index` (one [`Self::floats`] made), read back from the buffer.
     fn float_data(&self, index: usize) -> Vec<f32> {
-        let view = self.accessors[index]["bufferView"].as_u64().unwrap_or(0) as usize;
-        let offset = self.views[view]["byteOffset"].as_u64().unwrap_or(0) as usize;
-        let length = self.views[view]["byteLength"].as_u64().unwrap_or(0) as usize;
-        self.bin[offset..offset + length]
+        let view = &self.views[self.accessors[index].buffer_view];
+        self.bin[view.byte_offset..view.byte_offset + view.byte_length]
             .chunks_exact(4)
             .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
             .collect()
     }
 
     /// The binary chunk (a multiple of 4 bytes), the buffer views and the accessors.
-    pub(super) fn finish(self) -> (Vec<u8>, Vec<Value>, Vec<Value>) {
+    pub(super) fn finish(self) -> (Vec<u8>, Vec<View>, Vec<Accessor>) {
         (self.bin, self.views, self.accessors)
     }
 }

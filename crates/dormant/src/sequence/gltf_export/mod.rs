@@ -21,10 +21,11 @@ mod nodes;
 use std::borrow::Cow;
 use std::path::Path;
 
+use serde::Serialize;
 use serde_json::{json, Map, Value};
 
-use self::animation::{AnimationBuilder, Track};
-use self::buffer::BufferBuilder;
+use self::animation::{Animation, AnimationBuilder, Track};
+use self::buffer::{Accessor, BufferBuilder, View};
 use self::meshes::MaterialRange;
 use super::Sequence;
 use crate::geometry::MeshError;
@@ -83,33 +84,38 @@ impl Sequence {
 
     /// The whole sequence as a glTF binary (GLB) written atomically to `path`.
     pub fn write_gltf(&self, path: &Path) -> Result<GltfSummary, GltfExportError> {
-        let (bytes, nodes) = self.gltf_bytes()?;
-        crate::atomic_file::write_atomic(path, &bytes)
-            .map_err(|source| GltfExportError::Write { path: path.to_path_buf(), source })?;
+        let (json, bin, nodes) = self.gltf_parts()?;
+        let glb = glb(json, bin)?;
+        let write_error = |source| GltfExportError::Write { path: path.to_path_buf(), source };
+        crate::atomic_file::write_atomic_with(path, |w| glb.to_writer(w).map_err(std::io::Error::other))
+            .map_err(write_error)?;
         Ok(GltfSummary {
-            bytes: bytes.len() as u64,
+            bytes: u64::from(glb.header.length),
             frames: self.frame_count(),
             bodies: self.trajectory.bodies.len(),
             nodes,
         })
     }
 
-    /// The GLB file's bytes and its node count.
-    pub fn gltf_bytes(&self) -> Result<(Vec<u8>, usize), GltfExportError> {
+    /// The GLB file's JSON chunk (checked: it is valid glTF), binary chunk and node count.
+    pub fn gltf_parts(&self) -> Result<(Vec<u8>, Vec<u8>, usize), GltfExportError> {
         let mut buffer = BufferBuilder::default();
-        let mut root = Map::new();
-        root.insert("asset".into(), extras::asset(self.fps(), self.frame_count(), &self.scene_source)?);
-        self.add_meshes(&mut root, &mut buffer)?;
-        let nodes = self.add_nodes(&mut root, &mut buffer);
-        root.insert("scene".into(), json!(0));
-        root.insert("scenes".into(), json!([{ "nodes": (0..nodes).collect::<Vec<_>>() }]));
-        let (bin, views, accessors) = buffer.finish();
-        insert_array(&mut root, "accessors", accessors);
-        insert_array(&mut root, "bufferViews", views);
+        let mut rest = Map::new();
+        rest.insert("asset".into(), extras::asset(self.fps(), self.frame_count(), &self.scene_source)?);
+        self.add_meshes(&mut rest, &mut buffer)?;
+        let (nodes, animation) = self.add_nodes(&mut rest, &mut buffer);
+        rest.insert("scene".into(), json!(0));
+        rest.insert("scenes".into(), json!([{ "nodes": (0..nodes.len()).collect::<Vec<_>>() }]));
+        let (bin, buffer_views, accessors) = buffer.finish();
         if !bin.is_empty() {
-            root.insert("buffers".into(), json!([{ "byteLength": bin.len() }]));
+            rest.insert("buffers".into(), json!([{ "byteLength": bin.len() }]));
         }
-        Ok((glb(&Value::Object(root), bin)?, nodes))
+        let count = nodes.len();
+        let document =
+            Document { rest, nodes, animations: animation.into_iter().collect(), accessors, buffer_views };
+        let json = serde_json::to_vec(&document).map_err(|e| GltfExportError::Invalid(e.to_string()))?;
+        check(&json)?;
+        Ok((json, bin, count))
     }
 
     /// Meshes (prototypes, then the environment), materials and textures.
@@ -156,23 +162,27 @@ impl Sequence {
             .collect()
     }
 
-    /// Body, environment, camera and light nodes, the camera and lights, and the animation;
-    /// returns the node count.
-    fn add_nodes(&self, root: &mut Map<String, Value>, buffer: &mut BufferBuilder) -> usize {
+    /// Body, environment, camera and light nodes (returned), the camera and lights (into
+    /// `root`), and the animation (returned).
+    fn add_nodes(
+        &self,
+        root: &mut Map<String, Value>,
+        buffer: &mut BufferBuilder,
+    ) -> (Vec<nodes::Node>, Option<Animation>) {
         let environment_mesh = self.assets.prototypes.len();
-        let mut nodes: Vec<Value> = (self.trajectory.bodies.iter().enumerate())
+        let mut nodes: Vec<nodes::Node> = (self.trajectory.bodies.iter().enumerate())
             .map(|(b, body)| nodes::body_node(b, body.prototype))
             .collect();
-        nodes.push(nodes::environment_node(environment_mesh));
+        nodes.push(nodes::Node::Other(nodes::environment_node(environment_mesh)));
         let (body_tracks, camera_track) = self.tracks();
         let camera_keys = camera_track.pose_keys(self.frame_count());
         let first_camera =
             camera_keys.first().map_or_else(|| nodes::camera_pose(&self.template.camera), |k| k.1);
-        nodes.push(nodes::camera_node(&first_camera));
+        nodes.push(nodes::Node::Other(nodes::camera_node(&first_camera)));
         let camera_node = nodes.len() - 1;
         root.insert("cameras".into(), json!([nodes::perspective(&self.template.camera, self.render_size)]));
-        let (lights, mut light_nodes) = nodes::lights(&self.template.sun, &self.template.lights);
-        nodes.append(&mut light_nodes);
+        let (lights, light_nodes) = nodes::lights(&self.template.sun, &self.template.lights);
+        nodes.extend(light_nodes.into_iter().map(nodes::Node::Other));
         root.insert("extensions".into(), json!({ "KHR_lights_punctual": { "lights": lights } }));
         extension_used(root, "KHR_lights_punctual");
         let mut animation = AnimationBuilder::new(self.fps());
@@ -183,12 +193,7 @@ impl Sequence {
         if !camera_keys.is_empty() {
             animation.pose(camera_node, &camera_keys, buffer);
         }
-        if let Some(animation) = animation.finish() {
-            root.insert("animations".into(), json!([animation]));
-        }
-        let count = nodes.len();
-        root.insert("nodes".into(), Value::Array(nodes));
-        count
+        (nodes, animation.finish())
     }
 
     /// Every body's pose and presence and the camera's pose over all frames, replayed.
@@ -228,17 +233,35 @@ fn extension_used(root: &mut Map<String, Value>, name: &str) {
     }
 }
 
-/// The GLB container of `document` and `bin`, checked by parsing it back.
-fn glb(document: &Value, bin: Vec<u8>) -> Result<Vec<u8>, GltfExportError> {
-    let json = serde_json::to_vec(document).map_err(|e| GltfExportError::Invalid(e.to_string()))?;
-    let total = 12 + 8 + json.len().next_multiple_of(4) + 8 + bin.len();
-    if total > u32::MAX as usize {
-        return Err(GltfExportError::TooLarge(total));
-    }
-    let header = ::gltf::binary::Header { magic: *b"glTF", version: 2, length: total as u32 };
+/// The glTF document: its large arrays typed (a value per accessor would take gigabytes for
+/// the demolition), the rest JSON values.
+#[derive(Serialize)]
+struct Document {
+    #[serde(flatten)]
+    rest: Map<String, Value>,
+    nodes: Vec<nodes::Node>,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    animations: Vec<Animation>,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    accessors: Vec<Accessor>,
+    #[serde(rename = "bufferViews", skip_serializing_if = "Vec::is_empty")]
+    buffer_views: Vec<View>,
+}
+
+/// Parses `json` back as a glTF document and validates it.
+fn check(json: &[u8]) -> Result<(), GltfExportError> {
+    let invalid = |e: String| GltfExportError::Invalid(e);
+    let root: ::gltf::json::Root = serde_json::from_slice(json).map_err(|e| invalid(e.to_string()))?;
+    ::gltf::Document::from_json(root).map_err(|e| invalid(e.to_string()))?;
+    Ok(())
+}
+
+/// The GLB container of `json` and `bin`, or an error past GLB's 4 GiB.
+fn glb(json: Vec<u8>, bin: Vec<u8>) -> Result<::gltf::binary::Glb<'static>, GltfExportError> {
+    let bin_chunk = if bin.is_empty() { 0 } else { 8 + bin.len().next_multiple_of(4) };
+    let total = 12 + 8 + json.len().next_multiple_of(4) + bin_chunk;
+    let length = u32::try_from(total).map_err(|_| GltfExportError::TooLarge(total))?;
+    let header = ::gltf::binary::Header { magic: *b"glTF", version: 2, length };
     let bin = (!bin.is_empty()).then_some(Cow::Owned(bin));
-    let glb = ::gltf::binary::Glb { header, json: Cow::Owned(json), bin };
-    let bytes = glb.to_vec().map_err(|e| GltfExportError::Invalid(e.to_string()))?;
-    ::gltf::Gltf::from_slice(&bytes).map_err(|e| GltfExportError::Invalid(e.to_string()))?;
-    Ok(bytes)
+    Ok(::gltf::binary::Glb { header, json: Cow::Owned(json), bin })
 }

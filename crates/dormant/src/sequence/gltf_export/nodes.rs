@@ -4,14 +4,46 @@
 //! TOML; these are for other tools (Blender).
 
 use glam::{Mat3, Quat, Vec3};
+use serde::Serialize;
 use serde_json::{json, Value};
 
 use super::animation::Pose;
 use crate::scene::{Camera, Light, Sun};
 
+/// A node of the document: a body's (typed: a large export has tens of thousands) or
+/// another as JSON.
+#[derive(Debug, Serialize)]
+#[serde(untagged)]
+pub(super) enum Node {
+    Body(BodyNode),
+    Other(Value),
+}
+
+/// `{"name": "body N", "mesh": M, "extras": {"dormant": {"body": N}}}`.
+#[derive(Debug, Serialize)]
+pub(super) struct BodyNode {
+    name: String,
+    mesh: u32,
+    extras: BodyExtras,
+}
+
+#[derive(Debug, Serialize)]
+struct BodyExtras {
+    dormant: BodyId,
+}
+
+#[derive(Debug, Serialize)]
+struct BodyId {
+    body: usize,
+}
+
 /// A body's node: its prototype's mesh, its id in the extras.
-pub(super) fn body_node(body: usize, mesh: u32) -> Value {
-    json!({ "name": format!("body {body}"), "mesh": mesh, "extras": { "dormant": { "body": body } } })
+pub(super) fn body_node(body: usize, mesh: u32) -> Node {
+    Node::Body(BodyNode {
+        name: format!("body {body}"),
+        mesh,
+        extras: BodyExtras { dormant: BodyId { body } },
+    })
 }
 
 /// The environment's node (identity transform).
