@@ -138,8 +138,12 @@ impl AnimationBuilder {
         Self { fps, samplers: Vec::new(), channels: Vec::new() }
     }
 
-    /// Translation and rotation channels (LINEAR) of `node` through `keys`.
+    /// Translation and rotation channels (LINEAR) of `node` through `keys` (none without
+    /// keys: a trajectory without frames).
     pub(super) fn pose(&mut self, node: usize, keys: &[(u32, Pose)], buffer: &mut BufferBuilder) {
+        if keys.is_empty() {
+            return;
+        }
         let input = self.times(keys.iter().map(|k| k.0), buffer);
         let translations: Vec<f32> = keys.iter().flat_map(|(_, p)| p[..3].to_vec()).collect();
         let rotations: Vec<f32> = keys.iter().flat_map(|(_, p)| p[3..].to_vec()).collect();
@@ -151,6 +155,9 @@ impl AnimationBuilder {
 
     /// The presence channel of `node`: scale 0 while absent, 1 while present (STEP).
     pub(super) fn presence(&mut self, node: usize, keys: &[(u32, bool)], buffer: &mut BufferBuilder) {
+        if keys.is_empty() {
+            return;
+        }
         let input = self.times(keys.iter().map(|k| k.0), buffer);
         let scales: Vec<f32> =
             keys.iter().flat_map(|&(_, present)| [f32::from(u8::from(present)); 3]).collect();

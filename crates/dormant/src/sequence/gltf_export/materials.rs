@@ -125,7 +125,22 @@ fn png(texture: &Texture) -> Result<Vec<u8>, GltfExportError> {
 
 #[cfg(test)]
 mod tests {
-    use super::emissive;
+    use glam::Vec3;
+
+    use super::{emissive, material_json};
+    use crate::scene::Material;
+
+    #[test]
+    fn a_specular_other_than_one_is_kept_in_the_extras() {
+        let (lambertian, _) = material_json(0, &Material::lambertian(Vec3::splat(0.5)));
+        assert_eq!(lambertian["extras"]["dormant"]["specular"], 0.0);
+        let (diffuse, strength) = material_json(1, &Material::diffuse(Vec3::splat(0.5)));
+        assert!(diffuse.get("extras").is_none() && !strength);
+        let bright = Material { emissive: Vec3::new(5.0, 0.5, 0.0), ..Material::diffuse(Vec3::ZERO) };
+        let (value, strength) = material_json(2, &bright);
+        assert!(strength);
+        assert_eq!(value["extensions"]["KHR_materials_emissive_strength"]["emissiveStrength"], 8.0);
+    }
 
     #[test]
     fn emissive_strength_gives_back_the_exact_emission() {

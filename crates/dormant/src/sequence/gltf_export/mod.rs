@@ -190,9 +190,7 @@ impl Sequence {
             animation.pose(b, &track.pose_keys(self.frame_count()), buffer);
             animation.presence(b, &track.presence_keys(), buffer);
         }
-        if !camera_keys.is_empty() {
-            animation.pose(camera_node, &camera_keys, buffer);
-        }
+        animation.pose(camera_node, &camera_keys, buffer);
         (nodes, animation.finish())
     }
 
