@@ -409,6 +409,23 @@ fn cli_export_without_a_sequence() {
 }
 
 #[test]
+fn cli_export_gltf_with_frames_or_without_an_output() {
+    let dir = TempDir::new().unwrap();
+    let tiny = scenes::shipped("tiny");
+    expect_exit(
+        dormant()
+            .arg("export")
+            .arg(&tiny)
+            .args(["--frames", "0..10", "--gltf"])
+            .arg(dir.path().join("e.glb")),
+        2,
+        &["--frames: the glTF export has every frame"],
+        Some(dir.path()),
+    );
+    expect_exit(dormant().arg("export").arg(&tiny), 2, &["--out <FILE>"], Some(dir.path()));
+}
+
+#[test]
 fn cli_threads_out_of_range() {
     expect_usage_error(&["--threads", "0", "render"], &["--threads"]);
     expect_usage_error(&["--threads", "many", "render"], &["--threads"]);

@@ -108,9 +108,10 @@ pub(crate) enum Command {
     /// Benchmarks, run side by side in one process; results as JSON.
     Bench(bench::BenchArgs),
     /// Write a sequence's frames (mesh sources, sun, sky, lights, camera and every body's
-    /// pose) as JSON for another renderer (scripts/compare-cycles.py builds it in Blender).
+    /// pose) as JSON for another renderer (scripts/compare-cycles.py builds it in Blender),
+    /// and/or the whole sequence as an animated glTF binary (--gltf).
     #[command(
-        after_help = "Examples:\n  dormant export --trajectory out/rain.traj --frames 0..120 --out out/rain.json"
+        after_help = "Examples:\n  dormant export --trajectory out/rain.traj --frames 0..120 --out out/rain.json\n  dormant export scenes/tiny.toml --gltf out/tiny.glb"
     )]
     Export(export::ExportArgs),
     /// Print dormant's version, the Embree library and header versions, the Open Image

@@ -14,7 +14,9 @@
 //! - [`Sequence::describe_frame`]: a frame with every present body an instance, the
 //!   reference integrated scenes are checked against;
 //! - [`Sequence::export`]: the selected frames' poses, camera, lights and mesh sources as
-//!   plain data for another renderer (`dormant export`, `scripts/compare-cycles.py`).
+//!   plain data for another renderer (`dormant export`, `scripts/compare-cycles.py`);
+//! - [`Sequence::write_gltf`]: every frame as one animated glTF binary (`dormant export
+//!   --gltf`, module `gltf_export`).
 //!
 //! The CLI, `dormant verify` and the integration benchmarks all replay through here.
 
@@ -22,6 +24,7 @@ mod describe;
 mod error;
 pub mod export;
 mod frame_renderer;
+pub mod gltf_export;
 mod kept;
 pub mod output;
 mod render;

@@ -63,6 +63,10 @@ pub struct Sequence {
     pub physics: PhysicsSource,
     /// Wall-clock ms of each simulated frame's physics step (empty when replayed).
     pub physics_ms: Vec<f64>,
+    /// The scene file's text as read (before overrides): the glTF export records it.
+    pub(crate) scene_source: String,
+    /// The scene file's `render.width` and `render.height`: the glTF camera's aspect ratio.
+    pub(crate) render_size: (u32, u32),
 }
 
 impl Sequence {
@@ -122,6 +126,8 @@ impl Sequence {
             shutter: file.spec().render.shutter,
             physics,
             physics_ms,
+            scene_source: file.source().to_owned(),
+            render_size: (file.spec().render.width, file.spec().render.height),
         })
     }
 
