@@ -14,7 +14,7 @@ use rayon::prelude::*;
 use super::body::{BodyId, BodyInfo, BodyKind, BodyPose, BodyState};
 use super::island::{IslandEvent, IslandId};
 use super::observed::SimulatedFrame;
-use super::trajectory::{FrameRecorder, RecordedScene, Trajectory, TrajectoryFrame};
+use super::trajectory::{pose_bits, FrameRecorder, RecordedScene, Trajectory, TrajectoryFrame};
 use super::PhysicsError;
 use crate::scene::file::SceneFile;
 use crate::scene::AnimatedScene;
@@ -120,7 +120,11 @@ fn within(a: &BodyPose, b: &BodyPose, tolerance: f32, radius: f32) -> bool {
     if a.translation == b.translation && a.rotation == b.rotation {
         return true;
     }
-    let angle = a.rotation.angle_between(b.rotation);
+    // The rotation angle from the chord between the quaternions (q and -q are one rotation):
+    // exact for small angles, where `angle_between`'s arccosine rounds them to 0.
+    let (p, q) = (glam::Vec4::from(a.rotation), glam::Vec4::from(b.rotation));
+    let chord = (p - q).length().min((p + q).length());
+    let angle = 4.0 * (chord / 2.0).min(1.0).asin();
     a.translation.distance(b.translation) + angle * radius <= tolerance
 }
 
@@ -152,12 +156,6 @@ fn displayed(poses: &[Option<BodyPose>], rests: Vec<(u32, u32)>) -> BodyTrack {
     }
     let spawn = poses.iter().position(Option::is_some).unwrap_or(0) as u32;
     BodyTrack { changes, rests, spawn }
-}
-
-fn pose_bits(p: &BodyPose) -> [u32; 7] {
-    let [x, y, z] = p.translation.to_array();
-    let [i, j, k, w] = p.rotation.to_array();
-    [x, y, z, i, j, k, w].map(f32::to_bits)
 }
 
 /// The frames as a trajectory records them: each body's changes, and an island per group of

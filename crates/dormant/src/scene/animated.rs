@@ -26,12 +26,7 @@ impl AnimatedScene {
     /// The animation of `file`, or `None` when it has no `[animation]`.
     pub(crate) fn load(file: &SceneFile) -> Result<Option<Self>, SceneError> {
         let Some(def) = &file.spec().animation else { return Ok(None) };
-        let asset_error = |source: GltfError| SceneError::Asset {
-            file: file.path().to_path_buf(),
-            line: file.line_of("animation.gltf"),
-            field: "animation.gltf".into(),
-            source: Box::new(source),
-        };
+        let asset_error = |source| animation_error(file, source);
         let gltf = AnimatedGltf::read(&file.resolve(&def.gltf), def.name.as_deref()).map_err(asset_error)?;
         let fps = def.fps.or(gltf.extras.fps).filter(|f| f.is_finite() && *f > 0.0).ok_or_else(|| {
             file.error(
@@ -98,4 +93,14 @@ fn rest_tolerance(def: &AnimationDef, gltf: &AnimatedGltf) -> f32 {
 fn min_rest_frames(def: &AnimationDef, gltf: &AnimatedGltf) -> u32 {
     let frames = def.min_rest_frames.or(gltf.extras.min_rest_frames);
     frames.unwrap_or(AnimationDef::DEFAULT_MIN_REST_FRAMES).max(2)
+}
+
+/// The error for `[animation]`'s file that `source` says is wrong.
+pub(super) fn animation_error(file: &SceneFile, source: GltfError) -> SceneError {
+    SceneError::Asset {
+        file: file.path().to_path_buf(),
+        line: file.line_of("animation.gltf"),
+        field: "animation.gltf".into(),
+        source: Box::new(source),
+    }
 }

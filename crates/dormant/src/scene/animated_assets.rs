@@ -8,10 +8,9 @@ use std::sync::Arc;
 
 use glam::{Mat4, Vec3};
 
-use super::animated::AnimatedScene;
+use super::animated::{animation_error, AnimatedScene};
 use super::assets::{file_lights, sky, sun, MeshSource, SceneAssets};
 use super::file::{CameraDef, CameraKeyframeDef, CameraPlacement, SceneError, SceneFile};
-use super::gltf::GltfError;
 use super::Material;
 
 impl SceneAssets {
@@ -19,12 +18,7 @@ impl SceneAssets {
     /// prototype per mesh and scale, the file's materials once; the scene file's camera and
     /// lights, else the glTF file's (when its extras hold no scene of dormant's).
     pub(super) fn load_animated(file: &SceneFile, scene: &AnimatedScene) -> Result<Self, SceneError> {
-        let asset_error = |source: GltfError| SceneError::Asset {
-            file: file.path().to_path_buf(),
-            line: file.line_of("animation.gltf"),
-            field: "animation.gltf".into(),
-            source: Box::new(source),
-        };
+        let asset_error = |source| animation_error(file, source);
         let (file_materials, textures) = scene.gltf.materials();
         let pick = |used: &[u32]| used.iter().map(|&i| file_materials[i as usize]).collect::<Vec<Material>>();
         let roles = &scene.roles;

@@ -39,9 +39,9 @@ use super::island::IslandEvent;
 use super::options::SimulateOptions;
 use crate::scene::file::{SceneError, SceneFile};
 
-pub(crate) use replay::FrameRecorder;
 pub use replay::Replay;
 pub use replay::ReplayFrame;
+pub(crate) use replay::{pose_bits, FrameRecorder};
 
 const MAGIC: &[u8; 8] = b"DORMTRAJ";
 

@@ -130,7 +130,8 @@ impl FrameRecorder {
     }
 }
 
-fn pose_bits(p: &BodyPose) -> [u32; 7] {
+/// A pose as the bits of its seven floats (equal bits: the same pose, bit for bit).
+pub(crate) fn pose_bits(p: &BodyPose) -> [u32; 7] {
     let [x, y, z] = p.translation.to_array();
     let [i, j, k, w] = p.rotation.to_array();
     [x, y, z, i, j, k, w].map(f32::to_bits)

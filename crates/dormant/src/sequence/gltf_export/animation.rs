@@ -5,7 +5,7 @@
 use serde::Serialize;
 
 use super::buffer::{BufferBuilder, Kind};
-use super::frame_time;
+use crate::scene::gltf::animated::frame_time;
 
 /// A pose as glTF writes it: translation xyz, then rotation quaternion xyzw.
 pub(super) type Pose = [f32; 7];

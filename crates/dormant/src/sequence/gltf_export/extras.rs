@@ -31,6 +31,7 @@ pub(super) fn asset(fps: f64, frames: u32, scene_source: &str) -> Result<Value, 
             "fps": fps,
             "frames": frames,
             "rest_tolerance": 0.0,
+            "min_rest_frames": 2,
             "scene": scene_toml(scene_source)?,
         } },
     }))

@@ -34,12 +34,6 @@ use crate::geometry::MeshError;
 /// contract in docs/design.md changes.
 pub const GLTF_FORMAT: &str = "dormant-gltf-1";
 
-/// Seconds from the start to frame `i` at `fps` frames per second: the key time of frame `i`
-/// in the exported animation (the importer maps key times back to frames with it).
-pub(crate) fn frame_time(i: u32, fps: f64) -> f32 {
-    (i as f64 / fps) as f32
-}
-
 /// What stops a glTF export.
 #[derive(Debug, thiserror::Error)]
 pub enum GltfExportError {
