@@ -8,7 +8,7 @@ use std::path::Path;
 
 use common::cli::{dormant, simulate_tiny, succeeds};
 use dormant::physics::trajectory::Trajectory;
-use dormant::physics::{simulate, BodyState, SimulateOptions};
+use dormant::physics::{simulate, BodyState, IslandEvent, SimulateOptions};
 use dormant::scene::file::SceneFile;
 
 /// Every frame's presence and pose of every body, poses as bits.
@@ -27,6 +27,23 @@ fn frames_of(t: &Trajectory) -> Vec<Vec<Option<[u32; 7]>>> {
     out
 }
 
+/// Every frame's island events with ids numbered in the order islands first appear (the
+/// recorded ids need not be the same, only which events they tie together).
+fn events_of(t: &Trajectory) -> Vec<Vec<(bool, usize, Vec<u32>)>> {
+    let mut order = std::collections::HashMap::new();
+    let mut number = |id| {
+        let next = order.len();
+        *order.entry(id).or_insert(next)
+    };
+    let event = |e: &IslandEvent, number: &mut dyn FnMut(u64) -> usize| match e {
+        IslandEvent::Slept { island, bodies, .. } => {
+            (true, number(island.0), bodies.iter().map(|b| b.0).collect())
+        }
+        IslandEvent::Woke { island } => (false, number(island.0), Vec::new()),
+    };
+    t.frames.iter().map(|f| f.events.iter().map(|e| event(e, &mut number)).collect()).collect()
+}
+
 fn export_tiny(dir: &Path) -> (Trajectory, std::path::PathBuf) {
     let traj = simulate_tiny(dir, &[]);
     let glb = dir.join("tiny.glb");
@@ -35,7 +52,7 @@ fn export_tiny(dir: &Path) -> (Trajectory, std::path::PathBuf) {
 }
 
 #[test]
-fn an_exported_simulation_read_back_from_its_gltf_places_every_body_bit_for_bit() {
+fn an_exported_simulation_read_back_from_its_gltf_places_every_body_bit_for_bit_with_its_islands() {
     let dir = tempfile::TempDir::new().unwrap();
     let (original, glb) = export_tiny(dir.path());
     let file = SceneFile::load(&glb).unwrap();
@@ -47,6 +64,9 @@ fn an_exported_simulation_read_back_from_its_gltf_places_every_body_bit_for_bit(
     for (f, (a, b)) in a.iter().zip(&b).enumerate() {
         assert_eq!(a, b, "frame {f}");
     }
+    // The file carries the simulation's islands and kinds: the same rests, bodies and events.
+    assert_eq!(read_back.bodies, original.bodies);
+    assert_eq!(events_of(&read_back), events_of(&original));
 }
 
 #[test]
@@ -75,5 +95,48 @@ fn an_exported_simulation_renders_the_same_images_from_its_gltf() {
         let name = format!("frame_{frame:04}.png");
         let (a, b) = (dir.path().join("a").join(&name), dir.path().join("b").join(&name));
         assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap(), "{name}");
+    }
+}
+
+/// `glb` with its JSON chunk changed by `edit`.
+fn with_json(glb: &[u8], edit: impl FnOnce(&mut serde_json::Value)) -> Vec<u8> {
+    let length = u32::from_le_bytes(glb[12..16].try_into().unwrap()) as usize;
+    let mut json: serde_json::Value = serde_json::from_slice(&glb[20..20 + length]).unwrap();
+    edit(&mut json);
+    let mut text = serde_json::to_vec(&json).unwrap();
+    text.resize(text.len().next_multiple_of(4), b' ');
+    let rest = &glb[20 + length..];
+    let mut out = b"glTF".to_vec();
+    out.extend(2u32.to_le_bytes());
+    out.extend(((20 + text.len() + rest.len()) as u32).to_le_bytes());
+    out.extend((text.len() as u32).to_le_bytes());
+    out.extend(b"JSON");
+    out.extend(text);
+    out.extend(rest);
+    out
+}
+
+#[test]
+fn recorded_islands_that_cannot_be_are_an_input_error() {
+    let dir = tempfile::TempDir::new().unwrap();
+    let (_, glb) = export_tiny(dir.path());
+    let bytes = std::fs::read(&glb).unwrap();
+    let broken = dir.path().join("broken.glb");
+    for (island, expected) in [
+        (serde_json::json!([0, null, [99999]]), "bodies must be distinct ids below 21"),
+        (serde_json::json!([5, 3, [1]]), "frames 5..3 are not within"),
+    ] {
+        let edited = with_json(&bytes, |j| {
+            j["asset"]["extras"]["dormant"]["simulation"]["islands"].as_array_mut().unwrap().push(island)
+        });
+        std::fs::write(&broken, edited).unwrap();
+        let stderr = common::cli::exits_with(
+            dormant().args(["--quiet", "simulate"]).arg(&broken).arg("--out").arg(dir.path().join("t.traj")),
+            2,
+        );
+        assert!(
+            stderr.contains("broken.glb") && stderr.contains("simulation") && stderr.contains(expected),
+            "{stderr}"
+        );
     }
 }

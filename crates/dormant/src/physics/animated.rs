@@ -4,7 +4,8 @@
 //! `rest_tolerance` (no point of its bounds farther than that from where the rest began),
 //! and holds the rest's first pose until it next moves. Bodies whose rests begin and end at
 //! the same frames form one island, so the residency engine sees the file's rest exactly as
-//! it sees a simulation's sleep, wake frames included.
+//! it sees a simulation's sleep, wake frames included. A file that records its simulation's
+//! islands (dormant's own export) gets those instead (`given_islands`).
 
 use std::collections::BTreeMap;
 use std::time::Instant;
@@ -12,6 +13,7 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use super::body::{BodyId, BodyInfo, BodyKind, BodyPose, BodyState};
+use super::given_islands::given_islands;
 use super::island::{IslandEvent, IslandId};
 use super::observed::SimulatedFrame;
 use super::trajectory::{pose_bits, FrameRecorder, RecordedScene, Trajectory, TrajectoryFrame};
@@ -35,11 +37,22 @@ pub(crate) fn animated_trajectory(
     on_frame: &mut dyn FnMut(SimulatedFrame),
 ) -> Result<Trajectory, PhysicsError> {
     let start = Instant::now();
+    let given = match &scene.gltf.extras.simulation {
+        Some(simulation) => Some(
+            given_islands(simulation, scene.roles.bodies.len(), scene.frames)
+                .map_err(|m| file.error("animation.gltf", format!("asset.extras.dormant.simulation: {m}")))?,
+        ),
+        None => None,
+    };
     let tracks: Vec<BodyTrack> = (0..scene.roles.bodies.len())
         .into_par_iter()
-        .map(|b| track(file, scene, b))
+        .map(|b| track(file, scene, b, given.as_ref().map(|g| g.rests[b].as_slice())))
         .collect::<Result<_, _>>()?;
-    let frames = record_frames(scene.frames, &tracks);
+    let groups = match &given {
+        Some(g) => g.groups.clone(),
+        None => groups_resting_together(&tracks),
+    };
+    let frames = record_frames(scene.frames, &tracks, groups);
     let ms = start.elapsed().as_secs_f64() * 1e3 / scene.frames.max(1) as f64;
     for index in 0..scene.frames {
         on_frame(SimulatedFrame { index, frames: scene.frames, step_ms: ms });
@@ -49,7 +62,12 @@ pub(crate) fn animated_trajectory(
         .bodies
         .iter()
         .zip(&tracks)
-        .map(|(b, t)| BodyInfo { prototype: b.prototype, kind: BodyKind::Dynamic, spawn_frame: t.spawn })
+        .enumerate()
+        .map(|(i, (b, t))| {
+            let kinematic = given.as_ref().is_some_and(|g| g.kinematic[i]);
+            let kind = if kinematic { BodyKind::Kinematic } else { BodyKind::Dynamic };
+            BodyInfo { prototype: b.prototype, kind, spawn_frame: t.spawn }
+        })
         .collect();
     Ok(Trajectory {
         scene_hash: file.source_hash(),
@@ -61,9 +79,14 @@ pub(crate) fn animated_trajectory(
     })
 }
 
-/// Body `b`'s poses sampled at every frame, its rests found and its displayed frames kept
-/// where they change.
-fn track(file: &SceneFile, scene: &AnimatedScene, b: usize) -> Result<BodyTrack, PhysicsError> {
+/// Body `b`'s poses sampled at every frame, its rests found (or `given`) and its displayed
+/// frames kept where they change.
+fn track(
+    file: &SceneFile,
+    scene: &AnimatedScene,
+    b: usize,
+    given: Option<&[(u32, u32)]>,
+) -> Result<BodyTrack, PhysicsError> {
     let body = scene.roles.bodies[b];
     let expected = scene.roles.prototypes[body.prototype as usize].scale;
     let mut poses = Vec::with_capacity(scene.frames as usize);
@@ -86,7 +109,16 @@ fn track(file: &SceneFile, scene: &AnimatedScene, b: usize) -> Result<BodyTrack,
         }
         poses.push(present.then_some(pose));
     }
-    let rests = find_rests(&poses, scene.rest_tolerance, body.radius, scene.min_rest_frames);
+    let rests = match given {
+        Some(rests) => rests.to_vec(),
+        None => find_rests(&poses, scene.rest_tolerance, body.radius, scene.min_rest_frames),
+    };
+    if let Some(&(start, _)) =
+        rests.iter().find(|r| r.0 as usize >= poses.len() || poses[r.0 as usize].is_none())
+    {
+        let message = format!("nodes[{}]: rests from frame {start}, where it is absent", body.node);
+        return Err(file.error("animation.gltf", message).into());
+    }
     Ok(displayed(&poses, rests))
 }
 
@@ -158,18 +190,28 @@ fn displayed(poses: &[Option<BodyPose>], rests: Vec<(u32, u32)>) -> BodyTrack {
     BodyTrack { changes, rests, spawn }
 }
 
-/// The frames as a trajectory records them: each body's changes, and an island per group of
-/// bodies whose rests begin and end together (`Woke` before `Slept` within a frame).
-fn record_frames(frame_count: u32, tracks: &[BodyTrack]) -> Vec<TrajectoryFrame> {
-    let mut by_frame: Vec<Vec<(BodyId, BodyState, BodyPose)>> = vec![Vec::new(); frame_count as usize];
+/// The groups of bodies whose rests begin and end at the same frames, by first frame.
+fn groups_resting_together(tracks: &[BodyTrack]) -> Vec<((u32, u32), Vec<BodyId>)> {
     let mut groups: BTreeMap<(u32, u32), Vec<BodyId>> = BTreeMap::new();
     for (b, track) in tracks.iter().enumerate() {
-        let body = BodyId(b as u32);
-        for &(f, state, pose) in &track.changes {
-            by_frame[f as usize].push((body, state, pose));
-        }
         for &rest in &track.rests {
-            groups.entry(rest).or_default().push(body);
+            groups.entry(rest).or_default().push(BodyId(b as u32));
+        }
+    }
+    groups.into_iter().collect()
+}
+
+/// The frames as a trajectory records them: each body's changes, and an island per group
+/// (`Woke` before `Slept` within a frame; ids in the groups' order).
+fn record_frames(
+    frame_count: u32,
+    tracks: &[BodyTrack],
+    groups: Vec<((u32, u32), Vec<BodyId>)>,
+) -> Vec<TrajectoryFrame> {
+    let mut by_frame: Vec<Vec<(BodyId, BodyState, BodyPose)>> = vec![Vec::new(); frame_count as usize];
+    for (b, track) in tracks.iter().enumerate() {
+        for &(f, state, pose) in &track.changes {
+            by_frame[f as usize].push((BodyId(b as u32), state, pose));
         }
     }
     let mut slept: Vec<Vec<IslandEvent>> = vec![Vec::new(); frame_count as usize];

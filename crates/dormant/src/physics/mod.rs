@@ -8,6 +8,7 @@ mod animated;
 mod body;
 mod colliders;
 mod error;
+mod given_islands;
 mod island;
 mod island_stats;
 mod kinematic;

@@ -1,10 +1,13 @@
 //! The `asset` object with dormant's extras: the format, frame rate and count, and the scene
 //! file's TOML without what the glTF file itself holds (meshes, bodies and their physics), so
-//! that the importer takes the exact cameras, lights, sky and render settings from it.
+//! that the importer takes the exact cameras, lights, sky and render settings from it; and the
+//! simulation's islands and kinematic bodies, so that it replays the same rests.
 
 use serde_json::{json, Value};
 
 use super::{GltfExportError, GLTF_FORMAT};
+use crate::physics::trajectory::Trajectory;
+use crate::physics::{BodyKind, IslandEvent};
 
 /// Top-level tables of the scene file the glTF file replaces.
 const REMOVED_TABLES: [&str; 8] = [
@@ -21,8 +24,39 @@ const REMOVED_TABLES: [&str; 8] = [
 /// Keys of the `[scene]` table the glTF file replaces.
 const REMOVED_SCENE_KEYS: [&str; 2] = ["frames", "assets"];
 
+/// The simulation's islands as `[first frame, frame it woke or null, [bodies]]`, and its
+/// kinematic bodies: rests and kinds the glTF animation alone cannot give back exactly.
+pub(super) fn simulation(trajectory: &Trajectory) -> Value {
+    let mut islands: Vec<(u32, Option<u32>, Vec<u32>)> = Vec::new();
+    let mut index_of = std::collections::HashMap::new();
+    for (f, frame) in trajectory.frames.iter().enumerate() {
+        for event in &frame.events {
+            match event {
+                IslandEvent::Slept { island, bodies, .. } => {
+                    index_of.insert(*island, islands.len());
+                    islands.push((f as u32, None, bodies.iter().map(|b| b.0).collect()));
+                }
+                IslandEvent::Woke { island } => {
+                    if let Some(&i) = index_of.get(island) {
+                        islands[i].1 = Some(f as u32);
+                    }
+                }
+            }
+        }
+    }
+    let kinematic: Vec<u32> = (0..trajectory.bodies.len() as u32)
+        .filter(|&b| trajectory.bodies[b as usize].kind == BodyKind::Kinematic)
+        .collect();
+    json!({ "islands": islands, "kinematic": kinematic })
+}
+
 /// The glTF `asset` object.
-pub(super) fn asset(fps: f64, frames: u32, scene_source: &str) -> Result<Value, GltfExportError> {
+pub(super) fn asset(
+    fps: f64,
+    frames: u32,
+    scene_source: &str,
+    simulation: Value,
+) -> Result<Value, GltfExportError> {
     Ok(json!({
         "version": "2.0",
         "generator": concat!("dormant ", env!("CARGO_PKG_VERSION")),
@@ -33,6 +67,7 @@ pub(super) fn asset(fps: f64, frames: u32, scene_source: &str) -> Result<Value, 
             "rest_tolerance": 0.0,
             "min_rest_frames": 2,
             "scene": scene_toml(scene_source)?,
+            "simulation": simulation,
         } },
     }))
 }

@@ -95,7 +95,15 @@ impl Sequence {
     pub fn gltf_parts(&self) -> Result<(Vec<u8>, Vec<u8>, usize), GltfExportError> {
         let mut buffer = BufferBuilder::default();
         let mut rest = Map::new();
-        rest.insert("asset".into(), extras::asset(self.fps(), self.frame_count(), &self.scene_source)?);
+        rest.insert(
+            "asset".into(),
+            extras::asset(
+                self.fps(),
+                self.frame_count(),
+                &self.scene_source,
+                extras::simulation(&self.trajectory),
+            )?,
+        );
         self.add_meshes(&mut rest, &mut buffer)?;
         let (nodes, animation) = self.add_nodes(&mut rest, &mut buffer);
         rest.insert("scene".into(), json!(0));

@@ -1,6 +1,6 @@
 //! What `dormant export --gltf` records in a file's `extras` for an exact round trip, read
 //! back: in the asset's extras `{"dormant": {"format", "fps", "frames", "rest_tolerance",
-//! "min_rest_frames", "scene"}}` (the scene file's cameras, lights, sky and render settings as TOML), and in a
+//! "min_rest_frames", "scene", "simulation"}}` (the scene file's cameras, lights, sky and render settings as TOML), and in a
 //! body node's extras `{"dormant": {"body": N}}`. Files from other tools have none of it.
 
 use std::path::Path;
@@ -24,6 +24,17 @@ pub(crate) struct DormantExtras {
     pub(crate) min_rest_frames: Option<u32>,
     /// The scene file's text without its bodies, environment and physics.
     pub(crate) scene: Option<String>,
+    /// The simulation's islands and kinematic bodies.
+    pub(crate) simulation: Option<SimulationExtras>,
+}
+
+/// A simulation's islands (`[first frame, frame it woke or null, [bodies]]`, in the order
+/// they fell asleep) and kinematic bodies, as dormant's export records them.
+#[derive(Clone, Debug, Default, PartialEq, Deserialize)]
+#[serde(default)]
+pub(crate) struct SimulationExtras {
+    pub(crate) islands: Vec<(u32, Option<u32>, Vec<u32>)>,
+    pub(crate) kinematic: Vec<u32>,
 }
 
 #[derive(Deserialize)]

@@ -20,7 +20,7 @@ use std::path::{Path, PathBuf};
 use glam::{Mat4, Quat, Vec3};
 
 pub(crate) use channels::NodeMotion;
-pub(crate) use extras::DormantExtras;
+pub(crate) use extras::{DormantExtras, SimulationExtras};
 pub(crate) use roles::Roles;
 
 use super::nodes::{perspective_camera, punctual_light, walk_nodes};
