@@ -90,7 +90,7 @@ fn float_noise_below_the_rest_tolerance_still_rests_and_a_tolerance_of_zero_does
 }
 
 #[test]
-fn an_animated_scene_renders_and_a_glb_without_a_frame_rate_is_refused() {
+fn an_animated_scene_renders_and_a_glb_without_a_frame_rate_needs_fps_on_the_command_line() {
     let dir = tempfile::TempDir::new().unwrap();
     let scene = write_scene(dir.path(), &falling_cubes(), "");
     let out = dir.path().join("frames");
@@ -113,6 +113,28 @@ fn an_animated_scene_renders_and_a_glb_without_a_frame_rate_is_refused() {
         2,
     );
     assert!(stderr.contains("cubes.glb") && stderr.contains("animation.fps"), "{stderr}");
+    // The command line gives the rate a bake from another tool does not record.
+    let glb = dir.path().join("cubes.glb");
+    let from_glb = dir.path().join("from-glb");
+    succeeds(
+        dormant()
+            .args(["--quiet", "render"])
+            .arg(&glb)
+            .args(["--fps", "24", "--frames", "17..18", "--size", "32x18", "--spp", "1", "--out"])
+            .arg(&from_glb),
+    );
+    assert_eq!(
+        std::fs::read(from_glb.join("frame_0017.png")).unwrap(),
+        std::fs::read(out.join("frame_0017.png")).unwrap()
+    );
+    let stderr = exits_with(
+        dormant().args(["--quiet", "render"]).arg(&scene).args(["--fps", "24", "--out"]).arg(&out),
+        2,
+    );
+    assert!(
+        stderr.contains("--fps") && stderr.contains("a scene file gives `fps` in [animation]"),
+        "{stderr}"
+    );
 }
 
 /// `file` broken by `break_it`, simulated: exits 2 with a message naming the file and

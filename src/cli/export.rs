@@ -28,6 +28,9 @@ pub struct ExportArgs {
     /// With SCENE: total dynamic objects, as `dormant simulate --count`.
     #[arg(long, value_name = "N")]
     pub count: Option<u32>,
+    /// With a glTF file as SCENE: frames per second to sample its animation at.
+    #[arg(long, value_name = "FPS", requires = "scene_file")]
+    pub fps: Option<f64>,
     /// JSON file to write (format `dormant-export-1`, see docs/design.md).
     #[arg(long, value_name = "FILE", required_unless_present = "gltf")]
     pub out: Option<PathBuf>,
@@ -44,8 +47,9 @@ pub(super) fn run(args: &ExportArgs, quiet: bool, json_out: &JsonOutput) -> Resu
                 .into(),
         ));
     }
-    let source = sequence_source_of(args.scene_file.as_deref(), args.trajectory.as_ref(), args.count)?
-        .ok_or_else(|| CliError::Input("export needs a SCENE file or --trajectory".into()))?;
+    let source =
+        sequence_source_of(args.scene_file.as_deref(), args.trajectory.as_ref(), args.count, args.fps)?
+            .ok_or_else(|| CliError::Input("export needs a SCENE file or --trajectory".into()))?;
     let sequence = load_sequence(source, quiet)?;
     let mut summary = serde_json::Map::new();
     if let Some(out) = &args.out {

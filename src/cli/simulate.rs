@@ -9,7 +9,7 @@ use dormant::scene::file::SceneFile;
 /// A scene file plus the overrides every physics command accepts.
 #[derive(Debug, Args)]
 pub struct PhysicsScene {
-    /// Scene file (TOML; see docs/scene-format.md).
+    /// Scene file (TOML; see docs/scene-format.md), or an animated glTF file.
     #[arg(value_name = "SCENE")]
     pub scene: PathBuf,
     /// Total dynamic objects, spread over the scene's spawners and structures (whole copies)
@@ -22,11 +22,15 @@ pub struct PhysicsScene {
     /// Directory that relative asset paths in the scene resolve against.
     #[arg(long, value_name = "DIR")]
     pub assets: Option<PathBuf>,
+    /// With a glTF file as SCENE: frames per second to sample its animation at (files from
+    /// dormant's export record it; Blender's do not).
+    #[arg(long, value_name = "FPS")]
+    pub fps: Option<f64>,
 }
 
 impl PhysicsScene {
     pub fn load(&self) -> Result<(SceneFile, SimulateOptions), CliError> {
-        let file = SceneFile::load_with_assets(&self.scene, self.assets.as_deref())
+        let file = SceneFile::load_with_fps(&self.scene, self.assets.as_deref(), self.fps)
             .map_err(|e| CliError::Input(e.to_string()))?;
         Ok((file, SimulateOptions { count: self.count, frames: self.frame_count }))
     }

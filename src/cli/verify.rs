@@ -24,6 +24,10 @@ pub struct VerifyArgs {
     /// With SCENE: how many frames, evenly spaced and ending with the last, to check.
     #[arg(long, value_name = "N", default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=1000))]
     pub check_frames: u32,
+    /// With a glTF file as SCENE: frames per second to sample its animation at (files from
+    /// dormant's export record it; Blender's do not).
+    #[arg(long, value_name = "FPS", requires = "scene_file")]
+    pub fps: Option<f64>,
     #[command(flatten)]
     pub scene: SceneSource,
     /// Camera rays: one per pixel of an image of this size.
@@ -207,7 +211,7 @@ fn simulated_frames(
     args: &VerifyArgs,
     quiet: bool,
 ) -> Result<(Vec<CheckedFrame>, Vec<u32>, f32), CliError> {
-    let file = SceneFile::load(path).map_err(|e| CliError::Input(e.to_string()))?;
+    let file = SceneFile::load_with_fps(path, None, args.fps).map_err(|e| CliError::Input(e.to_string()))?;
     let options = SimulateOptions { count: args.scene.count, frames: args.frame_count };
     let sequence = super::render::load_sequence(SequenceSource::scene(file, options, None), quiet)?;
     let shutter = args.shutter.unwrap_or(sequence.shutter);

@@ -68,6 +68,10 @@ pub struct RenderArgs {
     /// the scene's render.frame_step).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     pub frame_step: Option<u32>,
+    /// With a glTF file as SCENE: frames per second to sample its animation at (files from
+    /// dormant's export record it; Blender's do not).
+    #[arg(long, value_name = "FPS", requires = "scene_file")]
+    pub fps: Option<f64>,
     #[command(flatten)]
     pub scene: super::SceneSource,
     /// Output directory; frames are written as frame_NNNN.png.
@@ -386,7 +390,8 @@ pub(super) fn check_shutter(shutter: Option<f32>) -> Result<(), CliError> {
 /// A sequence: a scene file, maybe with a trajectory of it, or a trajectory alone with the
 /// scene recorded in it; `None` for a still.
 fn sequence_source(args: &RenderArgs) -> Result<Option<SequenceSource>, CliError> {
-    let source = sequence_source_of(args.scene_file.as_deref(), args.trajectory.as_ref(), args.scene.count)?;
+    let source =
+        sequence_source_of(args.scene_file.as_deref(), args.trajectory.as_ref(), args.scene.count, args.fps)?;
     match (source, &args.camera) {
         (Some(SequenceSource::Scene { file, options, trajectory }), Some(name)) => {
             let file = file.with_render_camera(name).map_err(|e| CliError::Input(e.to_string()))?;
@@ -396,16 +401,18 @@ fn sequence_source(args: &RenderArgs) -> Result<Option<SequenceSource>, CliError
     }
 }
 
-/// The sequence a SCENE file (with `count` objects), a trajectory, or both give; `None` for
-/// neither.
+/// The sequence a SCENE file (with `count` objects; a glTF file sampled at `fps`), a
+/// trajectory, or both give; `None` for neither.
 pub(super) fn sequence_source_of(
     scene_file: Option<&Path>,
     trajectory: Option<&PathBuf>,
     count: Option<u32>,
+    fps: Option<f64>,
 ) -> Result<Option<SequenceSource>, CliError> {
     Ok(match (scene_file, trajectory) {
         (Some(path), trajectory) => {
-            let file = SceneFile::load(path).map_err(|e| CliError::Input(e.to_string()))?;
+            let file =
+                SceneFile::load_with_fps(path, None, fps).map_err(|e| CliError::Input(e.to_string()))?;
             let options = SimulateOptions { count, frames: None };
             Some(SequenceSource::scene(file, options, trajectory.cloned()))
         }

@@ -15,8 +15,9 @@ pub(super) fn is_gltf(path: &Path) -> bool {
         .is_some_and(|e| e.eq_ignore_ascii_case("glb") || e.eq_ignore_ascii_case("gltf"))
 }
 
-/// The text of the scene file `path` (a glTF file) stands for.
-pub(super) fn scene_text_of_gltf(path: &Path) -> Result<String, SceneError> {
+/// The text of the scene file `path` (a glTF file) stands for; `fps`, when given, is its
+/// `[animation]`'s frame rate (the command line's `--fps`).
+pub(super) fn scene_text_of_gltf(path: &Path, fps: Option<f64>) -> Result<String, SceneError> {
     let asset_error = |source| SceneError::Asset {
         file: path.to_path_buf(),
         line: None,
@@ -28,6 +29,9 @@ pub(super) fn scene_text_of_gltf(path: &Path) -> Result<String, SceneError> {
     let file_name = path.file_name().map_or(String::new(), |s| s.to_string_lossy().into_owned());
     let mut text = recorded.unwrap_or_else(|| format!("[scene]\nname = {}\n", toml_string(&name)));
     text.push_str(&format!("\n[animation]\ngltf = {}\n", toml_string(&file_name)));
+    if let Some(fps) = fps {
+        text.push_str(&format!("fps = {}\n", toml::Value::Float(fps)));
+    }
     Ok(text)
 }
 

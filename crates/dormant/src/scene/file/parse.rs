@@ -38,11 +38,35 @@ impl SceneFile {
     pub fn load_with_assets(path: impl AsRef<Path>, assets: Option<&Path>) -> Result<Self, SceneError> {
         let path = path.as_ref();
         if is_gltf(path) {
-            return Self::parse_with_assets(path, scene_text_of_gltf(path)?, assets.or(path.parent()));
+            return Self::parse_with_assets(path, scene_text_of_gltf(path, None)?, assets.or(path.parent()));
         }
         let text = std::fs::read_to_string(path)
             .map_err(|source| SceneError::Io { file: path.to_path_buf(), source })?;
         Self::parse_with_assets(path, text, assets)
+    }
+
+    /// [`Self::load_with_assets`] with the frame rate of a glTF file given as the scene
+    /// (`--fps`), which goes into its `[animation]` as a scene file would give it. A scene file
+    /// states its own rate: `fps` with one is an error.
+    pub fn load_with_fps(
+        path: impl AsRef<Path>,
+        assets: Option<&Path>,
+        fps: Option<f64>,
+    ) -> Result<Self, SceneError> {
+        let path = path.as_ref();
+        match fps {
+            None => Self::load_with_assets(path, assets),
+            Some(fps) if is_gltf(path) => {
+                Self::parse_with_assets(path, scene_text_of_gltf(path, Some(fps))?, assets.or(path.parent()))
+            }
+            Some(_) => Err(SceneError::Invalid {
+                file: path.to_path_buf(),
+                line: None,
+                field: "--fps".into(),
+                message: "applies to a glTF file given as the scene; a scene file gives `fps` in [animation]"
+                    .into(),
+            }),
+        }
     }
 
     /// Parses and validates scene text; `path` names it in messages and anchors relative
