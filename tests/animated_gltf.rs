@@ -190,3 +190,15 @@ fn malformed_animations_are_input_errors_naming_the_file_animation_and_channel()
         &["channels[4]", "animates the translation of nodes[1] a second time"],
     );
 }
+
+#[test]
+fn the_specular_layer_reads_from_khr_materials_specular_and_from_dormants_own_extras() {
+    let mut file = falling_cubes();
+    file.json["extensionsUsed"] = serde_json::json!(["KHR_materials_specular"]);
+    file.json["materials"][0]["extensions"] =
+        serde_json::json!({"KHR_materials_specular": {"specularFactor": 0.25}});
+    file.json["materials"][1]["extras"] = serde_json::json!({"dormant": {"specular": 0.0}});
+    let asset = dormant::scene::gltf::load_gltf_slice(&file.glb(), Path::new("cubes.glb")).unwrap();
+    let specular: Vec<f32> = asset.materials.iter().map(|m| m.specular).collect();
+    assert_eq!(specular, [0.25, 0.0]);
+}

@@ -1,5 +1,6 @@
-//! glTF metallic-roughness materials (with KHR_materials_emissive_strength) as the scene's
-//! [`Material`]s, their textures loaded through the [`TextureLoader`].
+//! glTF metallic-roughness materials (with KHR_materials_emissive_strength and
+//! KHR_materials_specular's factor) as the scene's [`Material`]s, their textures loaded
+//! through the [`TextureLoader`].
 
 use std::path::Path;
 
@@ -29,10 +30,44 @@ pub(super) fn material(path: &Path, m: &gltf::Material, textures: &mut TextureLo
         base_color: Vec3::new(r, g, b).max(Vec3::ZERO),
         roughness: pbr.roughness_factor().clamp(0.0, 1.0),
         metallic: pbr.metallic_factor().clamp(0.0, 1.0),
-        specular: 1.0,
+        specular: specular(path, m),
         emissive: Vec3::from_array(m.emissive_factor()).max(Vec3::ZERO) * strength,
         base_color_texture: texture(pbr.base_color_texture(), "baseColorTexture"),
         metallic_roughness_texture: texture(pbr.metallic_roughness_texture(), "metallicRoughnessTexture"),
         emissive_texture: texture(m.emissive_texture(), "emissiveTexture"),
+    }
+}
+
+/// The strength of the dielectric specular layer: dormant's own export's exact value (the
+/// material's `dormant` extras), else KHR_materials_specular's `specularFactor` (its colour
+/// and textures are not read: a warning), else glTF's 1.
+fn specular(path: &Path, m: &gltf::Material) -> f32 {
+    #[derive(serde::Deserialize)]
+    struct Own {
+        specular: f32,
+    }
+    #[derive(serde::Deserialize)]
+    struct Extras {
+        dormant: Own,
+    }
+    if let Some(own) = m.extras().as_ref().and_then(|raw| serde_json::from_str::<Extras>(raw.get()).ok()) {
+        return own.dormant.specular.clamp(0.0, 1.0);
+    }
+    let Some(s) = m.specular() else { return 1.0 };
+    if s.specular_color_factor() != [1.0; 3]
+        || s.specular_texture().is_some()
+        || s.specular_color_texture().is_some()
+    {
+        tracing::warn!(
+            file = %path.display(),
+            "materials[{}]: KHR_materials_specular's colour and textures are not supported; only its factor is used",
+            m.index().unwrap_or(0)
+        );
+    }
+    let factor = s.specular_factor();
+    if factor.is_finite() {
+        factor.clamp(0.0, 1.0)
+    } else {
+        1.0
     }
 }

@@ -55,7 +55,8 @@ impl GltfError {
 
 /// Extensions whose meaning the importer implements; any other one is ignored with a warning
 /// (or refused when required).
-pub(crate) const SUPPORTED_EXTENSIONS: &[&str] = &["KHR_lights_punctual", "KHR_materials_emissive_strength"];
+pub(crate) const SUPPORTED_EXTENSIONS: &[&str] =
+    &["KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_materials_specular"];
 
 /// A glTF file as plain data.
 #[derive(Clone, Debug, Default, PartialEq)]
