@@ -35,10 +35,11 @@ impl AnimatedGltf {
 
     /// The meshes `parts` (mesh index, transform) gathered into one.
     pub(crate) fn gather(&self, parts: &[(usize, Mat4)]) -> Result<GatheredMesh, GltfError> {
-        let meshes: Vec<gltf::Mesh> = self.document.meshes().collect();
         let mut triangles = Triangles::default();
         for (m, xf) in parts {
-            triangles.add_mesh(&self.path, &meshes[*m], xf, &self.buffers, true)?;
+            // The gltf crate's `nth` indexes its slice: no walk over every mesh per call.
+            let mesh = self.document.meshes().nth(*m).expect("roles name existing meshes");
+            triangles.add_mesh(&self.path, &mesh, xf, &self.buffers, true)?;
         }
         let Triangles { mut mesh, normals, uvs, material_ids, any_normals, any_uvs, any_material } =
             triangles;
