@@ -8,6 +8,8 @@
 //! packets from about 1.15x to 1.05x the all-instanced scene's trace. The other orders, the
 //! resting scene at other qualities and a box test of whole packets did not pay:
 //! docs/lab/accelerators.md#2026-12-01-how-rays-meet-the-resting-level-the-bvhs-order-embrees-skipped-top-level
+//! One scene per ray (Embree's two-level builder over arrays of bodies) traced no faster:
+//! docs/lab/accelerators.md#2026-12-07-one-scene-for-the-resting-form-embrees-two-level-builder-over-arrays-of-bodies-not-kept
 //!
 //! [`AwakeBounds`]: super::awake_bounds::AwakeBounds
 
