@@ -213,7 +213,7 @@ def images(args, out, glb, frames):
         subprocess.run([str(args.dormant), "--quiet", "--threads", str(args.threads), "render", str(out / "scene.toml"),
                         "--frames", f"{i}..{i + 1}", "--spp", str(half), "--size", args.size, "--max-depth",
                         str(args.max_depth), "--seed", "per-frame", "--reuse", "off", "--exr", "--out",
-                        str(out / "dormant")], check=True)
+                        str(out / "dormant"), *cc.MATCHING_FLAGS], check=True)
     cycles_world()
     cc.match_materials()
     scene = bpy.context.scene

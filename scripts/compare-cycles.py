@@ -25,9 +25,10 @@ docs/performance.md#against-blender-cycles for what still differs):
   - Principled BSDF with single-scattering GGX (dormant has no multiple-scattering term), no
     normal maps and opaque (dormant reads neither normal textures nor alpha);
   - no tone mapping (Standard view transform, linear EXR), no denoising, no adaptive sampling,
-    no light threshold, no glossy filter, no Cycles clamping;
-  - pixel filter: dormant's tent of radius one pixel against Cycles' Gaussian of the same
-    variance (Cycles has no tent);
+    no light threshold, no glossy filter, no clamping on either side (dormant's
+    --clamp-indirect 0);
+  - pixel filter: Cycles' own, Blackman-Harris of width 1.5, on both sides (dormant's
+    --filter blackman-harris);
   - bounces: dormant's --max-depth N traces N segments, Cycles' max_bounces N-1.
 """
 
@@ -73,12 +74,18 @@ def run_dormant(args, *cmd):
     return time.perf_counter() - t
 
 
+# What dormant renders with so that it computes Cycles' image (`configure_render`): Cycles'
+# pixel filter, no clamping.
+MATCHING_FLAGS = ["--filter", "blackman-harris", "--filter-width", "1.5", "--clamp-indirect", "0"]
+
+
 def dormant_render(args, traj, frames, out, spp, size, seed="fixed", reuse="on"):
     """Renders frames A..B of `traj` into `out` with EXRs; returns (wall s, the frames' records
     from out/stats.json: stage times in ms, `trace_ms` and `frame_ms` among them)."""
     wall = run_dormant(
         args, "render", "--trajectory", traj, "--frames", frames, "--spp", spp, "--size", size,
         "--max-depth", args.max_depth, "--seed", seed, "--reuse", reuse, "--exr", "--out", out,
+        *MATCHING_FLAGS,
     )
     a, b = map(int, frames.split(".."))
     records = json.loads((out / "stats.json").read_text())["frames"]
@@ -285,10 +292,9 @@ def configure_render(args, spp, size, seed, persistent):
     c.blur_glossy = 0.0
     c.caustics_reflective = True
     c.caustics_refractive = True
-    c.pixel_filter_type = "GAUSSIAN"
-    # Cycles' Gaussian has sigma = width / 4 (its table spans 3 widths of exp(-2 (6v / 3w)^2));
-    # dormant's tent of radius 1 has sigma 1 / sqrt(6).
-    c.filter_width = 4.0 / math.sqrt(6.0)
+    # Cycles' default filter, which dormant renders too (MATCHING_FLAGS).
+    c.pixel_filter_type = "BLACKMAN_HARRIS"
+    c.filter_width = 1.5
     scene.view_settings.view_transform = "Standard"
     scene.view_settings.look = "None"
     scene.view_settings.exposure = 0.0

@@ -397,6 +397,20 @@ fn cli_shutter_outside_zero_to_one() {
 }
 
 #[test]
+fn cli_filter_width_or_clamp_indirect_out_of_range() {
+    let width = "must be a number above 0 and at most 16 pixels";
+    expect_usage_error(&["render", "--filter-width", "0"], &["--filter-width", "width 0", width]);
+    expect_usage_error(
+        &["render", "--filter", "gaussian", "--filter-width", "100"],
+        &["--filter-width", "100"],
+    );
+    expect_usage_error(&["render", "--filter", "mitchell"], &["--filter", "mitchell", "blackman-harris"]);
+    let clamp = "must be a number, 0 (off) or more";
+    expect_usage_error(&["render", "--clamp-indirect=-1"], &["--clamp-indirect -1", clamp]);
+    expect_usage_error(&["render", "--clamp-indirect", "NaN"], &["--clamp-indirect NaN", clamp]);
+}
+
+#[test]
 fn cli_export_without_a_sequence() {
     let dir = TempDir::new().unwrap();
     let out = dir.path().join("e.json");

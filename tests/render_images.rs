@@ -9,8 +9,7 @@ use common::render::{backend, empty_scene, render, BLACK_SKY, NO_SUN, WHITE_SKY}
 use dormant::accel::{self, Backend, Hit, SceneQuery};
 use dormant::geometry::{primitives, Ray};
 use dormant::render::{
-    render_frame, AdaptiveSampling, AmbientOcclusion, DirectLighting, Integrator, PathTracer, RenderScene,
-    RenderSettings,
+    render_frame, AmbientOcclusion, DirectLighting, Integrator, PathTracer, RenderScene, RenderSettings,
 };
 use dormant::scene::{Body, Camera, Material, Prototype, StaticMesh, Sun};
 use glam::{Affine3A, Vec3};
@@ -123,8 +122,7 @@ fn camera_ray_packets_give_the_same_image_as_single_rays() {
         let q = a.query().unwrap();
         // Odd sizes leave partial 16x16 tiles and partial packets at the borders.
         for (integrator, spp) in integrators.into_iter().zip([3, 1, 2]) {
-            let settings =
-                RenderSettings { width: 37, height: 23, spp, seed: 1, adaptive: AdaptiveSampling::OFF };
+            let settings = RenderSettings { seed: 1, ..RenderSettings::new(37, 23, spp) };
             let (packets, p_stats) = render_frame(&scene, q, integrator, &settings).unwrap();
             let (single, s_stats) = render_frame(&scene, &SingleRays(q), integrator, &settings).unwrap();
             assert!(packets.pixels == single.pixels, "{backend}: packets changed the image");

@@ -530,9 +530,7 @@ fn aov_passes_record_albedo_normal_and_depth() {
 #[test]
 fn aov_passes_shaded_beside_the_image_equal_passes_traced_on_their_own() {
     use dormant::accel;
-    use dormant::render::{
-        render_with_aovs, AdaptiveSampling, Aov, AovIntegrator, RenderScene, RenderSettings,
-    };
+    use dormant::render::{render_with_aovs, Aov, AovIntegrator, RenderScene, RenderSettings};
     let dir = tempfile::tempdir().unwrap();
     write_checker(dir.path());
     let path = textured_quad(dir.path(), "checker.png", |_| {});
@@ -542,7 +540,7 @@ fn aov_passes_shaded_beside_the_image_equal_passes_traced_on_their_own() {
     let aovs = [Aov::Albedo, Aov::Spp, Aov::Normal, Aov::Depth, Aov::Baked];
     let mut a = accel::create(backend(), None).unwrap();
     let scene = RenderScene::build(&desc, a.as_mut()).unwrap();
-    let settings = RenderSettings { width: 24, height: 16, spp: 5, seed: 0, adaptive: AdaptiveSampling::OFF };
+    let settings = RenderSettings::new(24, 16, 5);
     let (_, _, passes) =
         render_with_aovs(&scene, a.query().unwrap(), &PathTracer::default(), &settings, &aovs).unwrap();
     assert_eq!(passes.iter().map(|(aov, _)| *aov).collect::<Vec<_>>(), aovs);

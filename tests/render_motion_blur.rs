@@ -15,10 +15,7 @@ use dormant::physics::SimulateOptions;
 use dormant::render::{DirectLighting, Film};
 use dormant::residency::{IntegrationPolicy, ManagerOptions};
 use dormant::scene::file::SceneFile;
-use dormant::sequence::{
-    FrameRange, FrameRenderer, ReuseMode, SeedMode, Sequence, SequenceError, SequenceSource,
-    DEFAULT_REUSE_BYTES,
-};
+use dormant::sequence::{FrameRange, FrameRenderer, ReuseMode, Sequence, SequenceError, SequenceSource};
 use glam::Vec3;
 
 const SIZE: (u32, u32) = (320, 180);
@@ -38,16 +35,9 @@ fn render(sequence: &Sequence, backend: Backend, shutter: f32, first: u32, count
     let frames = sequence.select(Some(FrameRange { start: first, end: first + count }), Some(1)).unwrap();
     let integrator = DirectLighting;
     let renderer = FrameRenderer {
-        integrator: &integrator,
-        aovs: &[],
-        width: SIZE.0,
-        height: SIZE.1,
-        spp: SPP,
-        adaptive: dormant::render::AdaptiveSampling::OFF,
-        seed: SeedMode::Fixed,
         reuse: ReuseMode::Off,
-        reuse_budget: DEFAULT_REUSE_BYTES,
         shutter,
+        ..FrameRenderer::new(&integrator, SIZE.0, SIZE.1, SPP)
     };
     let options = ManagerOptions { policy: IntegrationPolicy::Never, shutter, ..ManagerOptions::default() };
     let mut manager = sequence.manager(backend, Some(2), options).unwrap();

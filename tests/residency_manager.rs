@@ -22,7 +22,6 @@ use dormant::residency::{
 use dormant::scene::{Body, Camera, Material, Prototype, SceneDescription, Sky, StaticMesh, Sun};
 use dormant::sequence::{
     FrameRange, FrameRenderer, ReuseMode, SeedMode, Sequence, SequenceError, SequenceSource,
-    DEFAULT_REUSE_BYTES,
 };
 use dormant_lab::crosscheck::{camera_rays, compare, surface_rays, MappedQuery, VerifyReport};
 use glam::{Quat, Vec3};
@@ -380,16 +379,9 @@ fn never_always_and_auto_render_the_same_images() {
     let frames = sequence.select(Some(FrameRange { start: 0, end: 480 }), Some(40)).unwrap();
     let integrator = PathTracer::default();
     let renderer = FrameRenderer {
-        integrator: &integrator,
-        aovs: &[],
-        width: 64,
-        height: 36,
-        spp: 4,
-        adaptive: dormant::render::AdaptiveSampling::OFF,
         seed: SeedMode::PerFrame,
         reuse: ReuseMode::Off,
-        reuse_budget: DEFAULT_REUSE_BYTES,
-        shutter: 0.0,
+        ..FrameRenderer::new(&integrator, 64, 36, 4)
     };
     for backend in backends() {
         let mut films: Vec<Vec<Film>> = Vec::new();
@@ -439,16 +431,9 @@ fn baked_debug_view_shows_integrated_bodies_in_orange() {
     let frames = sequence.select(Some(FrameRange { start: 0, end: 480 }), Some(60)).unwrap();
     let integrator = AovIntegrator(Aov::Baked);
     let renderer = FrameRenderer {
-        integrator: &integrator,
-        aovs: &[],
-        width: 96,
-        height: 54,
-        spp: 1,
-        adaptive: dormant::render::AdaptiveSampling::OFF,
         seed: SeedMode::PerFrame,
         reuse: ReuseMode::Off,
-        reuse_budget: DEFAULT_REUSE_BYTES,
-        shutter: 0.0,
+        ..FrameRenderer::new(&integrator, 96, 54, 1)
     };
     let orange = |p: glam::Vec3| p.x > 1.5 * p.z && p.x > 0.1;
     for (policy, expect_baked) in [(IntegrationPolicy::Never, false), (IntegrationPolicy::Always, true)] {

@@ -1,7 +1,7 @@
 //! Rendering a scene description in process, without the command line.
 
 use dormant::accel::{self, Backend};
-use dormant::render::{render_frame, AdaptiveSampling, Film, Integrator, RenderScene, RenderSettings};
+use dormant::render::{render_frame, Film, Integrator, RenderScene, RenderSettings};
 use dormant::scene::{Camera, SceneDescription, Sky, Sun};
 use glam::Vec3;
 
@@ -45,6 +45,6 @@ pub fn render(
 ) -> Film {
     let mut a = accel::create(backend, None).unwrap();
     let scene = RenderScene::build(desc, a.as_mut()).unwrap();
-    let settings = RenderSettings { width, height, spp, seed: 0, adaptive: AdaptiveSampling::OFF };
+    let settings = RenderSettings::new(width, height, spp);
     render_frame(&scene, a.query().unwrap(), integrator, &settings).unwrap().0
 }

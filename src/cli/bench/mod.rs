@@ -340,7 +340,7 @@ fn integration(
         cache_variants: args.cache_variants,
         shutter: args.shutter,
     };
-    let integrator = super::render::integrator(args.mode, 6);
+    let integrator = super::render::integrator(args.mode, dormant::render::PathTracer::default());
     let mut progress = |done: u32, total: u32| {
         if !quiet && (done % 50 == 0 || done == total) {
             eprintln!("bench integration: frame {done} of {total}");

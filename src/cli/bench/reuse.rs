@@ -126,7 +126,7 @@ pub(super) fn reuse(
         runs: args.runs as usize,
         denoiser: args.denoising.denoiser(threads)?,
     };
-    let integrator = integrator(args.mode, 6);
+    let integrator = integrator(args.mode, dormant::render::PathTracer::default());
     let total = options.frames.count();
     let mut progress = |run: usize, mode: ReuseMode, done: usize| {
         if !quiet && (done % 20 == 0 || done == total as usize) {

@@ -20,8 +20,8 @@ use dormant::accel::{self, Backend};
 use dormant::physics::SimulateOptions;
 use dormant::render;
 use dormant::render::{
-    AdaptiveSampling, AmbientOcclusion, Aov, DirectLighting, ImageSize, Integrator, PathTracer, RenderScene,
-    RenderSettings,
+    AdaptiveSampling, AmbientOcclusion, Aov, DirectLighting, FilterKind, ImageSize, Integrator, PathTracer,
+    PixelFilter, RenderScene, RenderSettings,
 };
 use dormant::residency::{CacheBudget, IntegrationForm, IntegrationPolicy};
 use dormant::scene::file::SceneFile;
@@ -100,6 +100,19 @@ pub struct RenderArgs {
     /// Longest path (bounces) in `path` mode.
     #[arg(long, value_name = "N", default_value_t = 6, value_parser = clap::value_parser!(u32).range(1..=64))]
     pub max_depth: u32,
+    /// Largest radiance one indirect contribution may add in `path` mode (like Cycles' Clamp
+    /// Indirect, which measures a contribution by the sum of its channels, this one by its
+    /// largest); 0 turns clamping off, which keeps the estimator unbiased.
+    #[arg(long, value_name = "RADIANCE", default_value_t = 4.0)]
+    pub clamp_indirect: f32,
+    /// Pixel filter: where each pixel's samples land around its centre (docs/design.md,
+    /// "Renderer"). Cycles' default is blackman-harris of width 1.5.
+    #[arg(long, value_enum, default_value_t = FilterKind::Tent)]
+    pub filter: FilterKind,
+    /// The pixel filter's width in pixels (default: tent 1, box 1, gaussian 1.5,
+    /// blackman-harris 1.5; Cycles' Pixel Filter Width).
+    #[arg(long, value_name = "PX")]
+    pub filter_width: Option<f32>,
     /// Ray tracing backend (default: the first compiled in, Embree preferred).
     #[arg(long)]
     pub backend: Option<Backend>,
@@ -195,10 +208,10 @@ pub(super) fn choose_backend(requested: Option<Backend>) -> Result<Backend, CliE
     }
 }
 
-/// The integrator for a mode.
-pub(super) fn integrator(mode: RenderMode, max_depth: u32) -> Box<dyn Integrator> {
+/// The integrator for a mode; `path` the path tracer's settings in `path` mode.
+pub(super) fn integrator(mode: RenderMode, path: PathTracer) -> Box<dyn Integrator> {
     match mode {
-        RenderMode::Path => Box::new(PathTracer { max_depth, ..PathTracer::default() }),
+        RenderMode::Path => Box::new(path),
         RenderMode::Shaded => Box::new(DirectLighting),
         RenderMode::Ao => Box::new(AmbientOcclusion { radius: 1.0 }),
     }
@@ -248,7 +261,7 @@ pub(super) fn run(
         CliError::Runtime(format!("cannot create output directory {}: {e}", args.out.display()))
     })?;
     let _lock = output_lock::OutputLock::acquire(&args.out)?;
-    let integrator = integrator(args.mode, args.max_depth);
+    let integrator = integrator(args.mode, path_tracer(args));
     let job = RenderJob { args, backend, threads, integrator: integrator.as_ref() };
     let layout = frame_output::layout(args);
     let mut output = FrameOutput {
@@ -277,6 +290,9 @@ pub(super) fn run(
         "noise_threshold": args.noise_threshold,
         "min_spp": args.min_spp,
         "mode": args.mode,
+        "filter": args.filter.name(),
+        "filter_width": pixel_filter(args)?.width(),
+        "clamp_indirect": args.clamp_indirect,
         "denoise": args.denoising.denoise,
         "integration": is_sequence.then_some(args.integration),
         "frames": output.records,
@@ -294,11 +310,30 @@ fn aov_passes(args: &RenderArgs) -> Vec<Aov> {
     passes
 }
 
+/// The path tracer of `--max-depth` and `--clamp-indirect` (0: no clamping).
+fn path_tracer(args: &RenderArgs) -> PathTracer {
+    let clamp = if args.clamp_indirect == 0.0 { f32::INFINITY } else { args.clamp_indirect };
+    PathTracer { max_depth: args.max_depth, clamp_indirect: clamp }
+}
+
+/// `--filter` of `--filter-width`.
+pub(super) fn pixel_filter(args: &RenderArgs) -> Result<PixelFilter, CliError> {
+    PixelFilter::new(args.filter, args.filter_width)
+        .map_err(|e| CliError::Input(format!("--filter-width: {e}")))
+}
+
 /// Flags that are wrong whatever the scene.
 fn check_flags(args: &RenderArgs) -> Result<(), CliError> {
     if !args.exposure.is_finite() || args.exposure <= 0.0 {
         return Err(CliError::Input(format!("--exposure {}: must be a positive number", args.exposure)));
     }
+    if !(args.clamp_indirect.is_finite() && args.clamp_indirect >= 0.0) {
+        return Err(CliError::Input(format!(
+            "--clamp-indirect {}: must be a number, 0 (off) or more",
+            args.clamp_indirect
+        )));
+    }
+    pixel_filter(args)?;
     check_shutter(args.shutter)?;
     check_reuse(args)?;
     let sequence = args.scene_file.is_some() || args.trajectory.is_some();
@@ -435,6 +470,7 @@ fn render_still(job: &RenderJob<'_>, output: &mut FrameOutput<'_>) -> Result<Str
         spp: args.spp,
         seed: 0,
         adaptive: adaptive_sampling(args, None)?,
+        filter: pixel_filter(args)?,
     };
     let (film, stats, aovs) =
         render::render_with_aovs(&scene, query, job.integrator, &settings, &aov_passes(args))

@@ -8,11 +8,13 @@ use indicatif::ProgressBar;
 
 use super::frame_output::{output_error, FrameInFlight, FrameOutput};
 use super::stop::StopSignals;
-use super::{adaptive_sampling, aov_passes, sequence_error, RenderArgs, RenderJob, RenderMode, Switch};
+use super::{
+    adaptive_sampling, aov_passes, pixel_filter, sequence_error, RenderArgs, RenderJob, RenderMode, Switch,
+};
 use crate::cli::CliError;
 use dormant::accel::Backend;
 use dormant::render::denoise::Denoiser;
-use dormant::render::{AdaptiveSampling, Aov, RenderStats};
+use dormant::render::{Aov, RenderStats};
 use dormant::residency::{CacheBudget, IntegrationSettings, SceneManager};
 use dormant::sequence::output;
 use dormant::sequence::stats::{FrameRecord, RunInfo, StatsFile};
@@ -33,7 +35,7 @@ pub(super) fn render_sequence(
     let passes = aov_passes(args);
     let renderer = frame_renderer(job, sequence, &passes)?;
     let denoise = output.writer.denoiser.map(Denoiser::label);
-    let info = run_info(args, sequence, job.backend, &frames, renderer.adaptive, denoise);
+    let info = run_info(args, sequence, job.backend, &frames, &renderer, denoise);
     let kept = kept_frames(output, &info, &frames)?;
     output.video_frames = args
         .video
@@ -112,6 +114,7 @@ fn frame_renderer<'a>(
         height: args.size.height,
         spp: args.spp,
         adaptive: adaptive_sampling(args, Some(sequence))?,
+        filter: pixel_filter(args)?,
         seed: args.seed,
         reuse: args.reuse,
         reuse_budget: reuse_budget(args)?,
@@ -258,9 +261,10 @@ fn run_info(
     sequence: &Sequence,
     backend: Backend,
     frames: &FrameSelection,
-    adaptive: AdaptiveSampling,
+    renderer: &FrameRenderer<'_>,
     denoise: Option<&str>,
 ) -> RunInfo {
+    let adaptive = renderer.adaptive;
     RunInfo {
         scene: sequence.template.name.clone(),
         backend: backend.to_string(),
@@ -281,6 +285,9 @@ fn run_info(
         frame_end: frames.end(),
         frame_step: frames.step(),
         max_depth: (args.mode == RenderMode::Path).then_some(args.max_depth),
+        clamp_indirect: args.clamp_indirect,
+        filter: renderer.filter.kind().name().to_string(),
+        filter_width: renderer.filter.width(),
         seed: json_name(&args.seed),
         reuse: args.reuse != ReuseMode::Off,
         reuse_mode: json_name(&args.reuse),

@@ -147,8 +147,8 @@ pub fn bench_adaptive(
     let scene = RenderScene::build(desc, accel.as_mut())?;
     let query = accel.query()?;
     let integrator = PathTracer { max_depth: opts.max_depth, ..PathTracer::default() };
-    let settings =
-        |spp, seed, adaptive| RenderSettings { width: opts.width, height: opts.height, spp, seed, adaptive };
+    let base = RenderSettings::new(opts.width, opts.height, 1);
+    let settings = |spp, seed, adaptive| RenderSettings { spp, seed, adaptive, ..base };
     let reference =
         || render_frame(&scene, query, &integrator, &settings(opts.reference_spp, 1, AdaptiveSampling::OFF));
     let (reference, reference_seconds) = reference_film(opts, reference, log)?;

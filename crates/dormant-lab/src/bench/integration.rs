@@ -21,7 +21,7 @@ use super::persistent_tree::{FragmentedTree, MostFragmented};
 use crate::crosscheck::camera_rays;
 use dormant::accel::{self, AccelError, Backend};
 use dormant::physics::{BodyKind, BodyState};
-use dormant::render::{AdaptiveSampling, Integrator};
+use dormant::render::{AdaptiveSampling, Integrator, PixelFilter};
 use dormant::residency::{
     CacheStats, CostModelState, FrameStats, IntegrationForm, IntegrationPolicy, IntegrationSettings,
     ManagerOptions, ReactivationPath, SceneManager, StageTimes,
@@ -469,6 +469,7 @@ fn renderer<'a>(integrator: &'a dyn Integrator, options: &IntegrationBenchOption
         height: options.height,
         spp: options.spp,
         adaptive: AdaptiveSampling::OFF,
+        filter: PixelFilter::default(),
         // Every frame traced, and noise decorrelated as in a per-frame-seeded render.
         seed: SeedMode::PerFrame,
         reuse: ReuseMode::Off,

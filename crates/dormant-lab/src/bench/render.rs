@@ -25,8 +25,7 @@ use crate::crosscheck::camera_rays;
 use dormant::accel::{self, AccelError, Accelerator, Backend, SceneQuery};
 use dormant::geometry::Ray;
 use dormant::render::{
-    render_frame, sample_cone, sample_cosine, AdaptiveSampling, PathTracer, RenderError, RenderScene,
-    RenderSettings,
+    render_frame, sample_cone, sample_cosine, PathTracer, RenderError, RenderScene, RenderSettings,
 };
 use dormant::rng::SplitMix64;
 use dormant::scene::SceneDescription;
@@ -405,13 +404,7 @@ pub fn bench_render(
     desc: &SceneDescription,
     opts: &RenderBenchOptions,
 ) -> Result<RenderBenchReport, RenderError> {
-    let settings = RenderSettings {
-        width: opts.width,
-        height: opts.height,
-        spp: opts.spp,
-        seed: 0,
-        adaptive: AdaptiveSampling::OFF,
-    };
+    let settings = RenderSettings::new(opts.width, opts.height, opts.spp);
     settings.validate()?;
     let mut sets: Option<RaySets> = None;
     let mut backends = Vec::new();

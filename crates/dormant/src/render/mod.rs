@@ -12,6 +12,7 @@ mod film;
 mod image_file;
 mod image_size;
 mod integrator;
+mod pixel_filter;
 mod ray_log;
 mod render_scene;
 mod reuse;
@@ -33,6 +34,7 @@ pub use image_size::ImageSize;
 pub use integrator::path::PathTracer;
 pub use integrator::preview::{AmbientOcclusion, DirectLighting};
 pub use integrator::{FrameContext, FrameIntegrator, Integrator};
+pub use pixel_filter::{FilterKind, PixelFilter, MAX_FILTER_WIDTH};
 pub use ray_log::RayLog;
 pub use render_scene::RenderScene;
 pub(crate) use render_scene::{SurfaceHit, SurfaceKind};
@@ -53,6 +55,8 @@ pub enum RenderError {
     InvalidSpp,
     #[error("noise threshold {0}: must be a number, 0 (off) or more")]
     InvalidNoiseThreshold(f32),
+    #[error("pixel filter width {0}: must be a number above 0 and at most {max} pixels", max = MAX_FILTER_WIDTH)]
+    InvalidFilterWidth(f32),
     #[error("minimum samples per pixel {min}: must be from 1 to the samples per pixel ({spp})")]
     InvalidMinSpp { min: u32, spp: u32 },
     #[error("cannot write {path}: {source}")]

@@ -1,4 +1,4 @@
-//! One frame from camera to film: camera rays per pixel sample (tent filter), 16x16 tiles over
+//! One frame from camera to film: camera rays per pixel sample (placed by the pixel filter), 16x16 tiles over
 //! rayon, camera rays of each pixel block traced as one packet, the integrator bound to the
 //! frame finishing each sample, and the AOV passes shaded at the camera hits.
 
@@ -11,32 +11,13 @@ use super::adaptive::{AdaptiveSampling, SppStats, Stopping};
 use super::aov::{aov_at_hit, AovPasses};
 use super::integrator::dims;
 use super::{
-    Aov, Film, FrameContext, FrameIntegrator, Integrator, PinholeCamera, PixelSampler, RayLog, RenderError,
-    RenderScene,
+    Aov, Film, FrameContext, FrameIntegrator, Integrator, PinholeCamera, PixelFilter, PixelSampler, RayLog,
+    RenderError, RenderScene,
 };
 use crate::accel::bvh::ChangeIndex;
 use crate::accel::{Hit, SceneQuery};
 use crate::geometry::Ray;
 use crate::scene::limits::{image_size_problem, MAX_SAMPLES_PER_PIXEL};
-
-/// Pixel offset distributed as a tent filter of radius one pixel per axis. Filter importance
-/// sampling (as in pbrt-v4): each sample is weighted 1 and lands where the filter puts it, so
-/// every pixel is computed alone (no splatting across tile borders) and the result is the
-/// tent-filtered image.
-fn tent_offset(u: Vec2) -> Vec2 {
-    // One square root and two selects rather than a branch on `u`, which is random, so such
-    // a branch mispredicts often (same values).
-    let tent = |u: f32| {
-        let low = u < 0.5;
-        let r = (if low { 2.0 * u } else { 2.0 - 2.0 * u }).sqrt();
-        if low {
-            r - 1.0
-        } else {
-            1.0 - r
-        }
-    };
-    Vec2::new(tent(u.x), tent(u.y))
-}
 
 /// Side of the square tiles rayon distributes.
 const TILE: u32 = 16;
@@ -60,9 +41,17 @@ pub struct RenderSettings {
     pub seed: u32,
     /// When a pixel may stop before `spp` samples (off: never).
     pub adaptive: AdaptiveSampling,
+    /// Where a pixel's samples land around its centre (filter importance sampling).
+    pub filter: PixelFilter,
 }
 
 impl RenderSettings {
+    /// `width` x `height` at `spp` samples per pixel, seed 0, no adaptive sampling, the
+    /// default tent filter.
+    pub fn new(width: u32, height: u32, spp: u32) -> Self {
+        Self { width, height, spp, seed: 0, adaptive: AdaptiveSampling::OFF, filter: PixelFilter::default() }
+    }
+
     /// Checks the size, the samples per pixel and adaptive sampling.
     pub fn validate(&self) -> Result<(), RenderError> {
         if let Some(problem) = image_size_problem(self.width, self.height) {
@@ -104,13 +93,20 @@ struct FrameCamera {
 }
 
 /// Sample `i` of pixel `(x, y)`'s camera ray.
-fn camera_ray(camera: &FrameCamera, spp: u32, x: u32, y: u32, sampler: &PixelSampler, i: u32) -> Ray {
-    // Tent reconstruction by filter importance sampling (see `tent_offset`); a single sample
-    // goes through the pixel's centre.
-    let jitter = if spp == 1 {
+fn camera_ray(
+    camera: &FrameCamera,
+    settings: &RenderSettings,
+    x: u32,
+    y: u32,
+    sampler: &PixelSampler,
+    i: u32,
+) -> Ray {
+    // Filter importance sampling (`PixelFilter`); a single sample goes through the pixel's
+    // centre.
+    let jitter = if settings.spp == 1 {
         Vec2::splat(0.5)
     } else {
-        Vec2::splat(0.5) + tent_offset(sampler.get_2d(i, dims::PIXEL))
+        Vec2::splat(0.5) + settings.filter.sample_offset(sampler.get_2d(i, dims::PIXEL))
     };
     let (px, py) = (x as f32 + jitter.x, y as f32 + jitter.y);
     let lens = |c: &PinholeCamera| through_lens(c, px, py, sampler, i);
@@ -606,10 +602,9 @@ impl TileRenderer<'_> {
 
     /// The camera rays of `packet`'s lanes for sample `i`, traced as one packet.
     fn trace_camera_packet(&self, block: &[Cell], i: u32, packet: &mut CameraPacket) {
-        let spp = self.settings.spp;
         for k in 0..packet.len {
             let cell = &block[packet.slots[k]];
-            packet.rays[k] = camera_ray(&self.camera, spp, cell.x, cell.y, &cell.sampler, i);
+            packet.rays[k] = camera_ray(&self.camera, self.settings, cell.x, cell.y, &cell.sampler, i);
         }
         self.query.intersect_packet(&packet.rays[..packet.len], &mut packet.hits[..packet.len]);
     }

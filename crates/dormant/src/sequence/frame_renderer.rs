@@ -1,7 +1,7 @@
 //! [`FrameRenderer`]: how every frame of a run is rendered (integrator, passes, size and
-//! samples, sampling, seed, reuse, shutter).
+//! samples, sampling, pixel filter, seed, reuse, shutter).
 
-use crate::render::{AdaptiveSampling, Aov, Integrator, RenderSettings};
+use crate::render::{AdaptiveSampling, Aov, Integrator, PixelFilter, RenderSettings};
 
 /// How frames reuse earlier frames' work (`--reuse`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
@@ -48,6 +48,8 @@ pub struct FrameRenderer<'a> {
     /// Samples per pixel; with adaptive sampling, the most a pixel gets.
     pub spp: u32,
     pub adaptive: AdaptiveSampling,
+    /// Where each pixel's samples land around its centre.
+    pub filter: PixelFilter,
     pub seed: SeedMode,
     /// With a fixed seed, how frames reuse earlier frames' work (see [`ReuseMode`]).
     pub reuse: ReuseMode,
@@ -61,7 +63,8 @@ pub struct FrameRenderer<'a> {
 
 impl<'a> FrameRenderer<'a> {
     /// `integrator` at `width` x `height` and `spp` samples per pixel; no AOVs, no adaptive
-    /// sampling, one seed for every frame with exact temporal reuse, no motion blur.
+    /// sampling, the default tent filter, one seed for every frame with exact temporal reuse,
+    /// no motion blur.
     pub fn new(integrator: &'a dyn Integrator, width: u32, height: u32, spp: u32) -> Self {
         Self {
             integrator,
@@ -70,6 +73,7 @@ impl<'a> FrameRenderer<'a> {
             height,
             spp,
             adaptive: AdaptiveSampling::OFF,
+            filter: PixelFilter::default(),
             seed: SeedMode::Fixed,
             reuse: ReuseMode::Exact,
             reuse_budget: DEFAULT_REUSE_BYTES,
@@ -88,6 +92,7 @@ impl<'a> FrameRenderer<'a> {
             spp: self.spp,
             seed,
             adaptive: self.adaptive,
+            filter: self.filter,
         }
     }
 }

@@ -217,6 +217,16 @@ pub struct RunInfo {
     pub frame_step: u32,
     /// Longest path in `path` mode; `None` in the other modes.
     pub max_depth: Option<u32>,
+    /// `--clamp-indirect` (0: off; used in `path` mode only). Absent in runs from before it,
+    /// which clamped at 4.
+    #[serde(default = "default_clamp_indirect")]
+    pub clamp_indirect: f32,
+    /// `--filter` and its width in pixels. Absent in runs from before them: the tent of
+    /// radius 1.
+    #[serde(default = "default_filter")]
+    pub filter: String,
+    #[serde(default = "default_filter_width")]
+    pub filter_width: f32,
     /// `fixed` or `per-frame`.
     pub seed: String,
     /// Any reuse: `--reuse static` or `exact`.
@@ -241,6 +251,21 @@ pub struct RunInfo {
     /// before motion blur, which had none.
     #[serde(default)]
     pub shutter: f32,
+}
+
+/// `clamp_indirect` of runs from before `--clamp-indirect`.
+fn default_clamp_indirect() -> f32 {
+    4.0
+}
+
+/// `filter` of runs from before `--filter`.
+fn default_filter() -> String {
+    "tent".into()
+}
+
+/// `filter_width` of runs from before `--filter-width`.
+fn default_filter_width() -> f32 {
+    1.0
 }
 
 /// `reuse_mode` of runs from before exact reuse.
@@ -520,6 +545,9 @@ mod tests {
             frame_end: 3,
             frame_step: 1,
             max_depth: Some(6),
+            clamp_indirect: 4.0,
+            filter: "tent".into(),
+            filter_width: 1.0,
             seed: "fixed".into(),
             reuse: true,
             reuse_mode: "exact".into(),
