@@ -353,6 +353,43 @@ class CyclesScene:
                     obj.hide_render = False
         set_camera(self.camera, frame["camera"])
 
+    def break_light(self, factor):
+        """The negative control's broken light: the sun's strength times `factor`; returns
+        what restores it."""
+        sun = bpy.data.lights["sun"]
+        energy = sun.energy
+        sun.energy = energy * factor
+
+        def restore():
+            sun.energy = energy
+        return restore
+
+    def break_material(self, prototype):
+        """The negative control's wrong body material: every material of prototype
+        `prototype`'s meshes becomes flat magenta; returns what restores them."""
+        saved = []
+        mats = {s.material for o in self.collections[prototype].all_objects if o.type == "MESH"
+                for s in o.material_slots if s.material is not None}
+        for mat in mats:
+            copy = mat.copy()
+            bsdf = next((n for n in copy.node_tree.nodes if n.type == "BSDF_PRINCIPLED"), None)
+            if bsdf is None:
+                continue
+            sock = bsdf.inputs["Base Color"]
+            for link in list(sock.links):
+                copy.node_tree.links.remove(link)
+            sock.default_value = (1.0, 0.0, 1.0, 1.0)
+            for o in self.collections[prototype].all_objects:
+                for slot in getattr(o, "material_slots", []):
+                    if slot.material == mat:
+                        saved.append((slot, mat))
+                        slot.material = copy
+
+        def restore():
+            for slot, mat in saved:
+                slot.material = mat
+        return restore
+
     def render(self, path):
         """Renders to `path`; returns (wall s, sync s, path-tracing s) from Cycles' status."""
         marks = []
@@ -418,6 +455,51 @@ def compare_images(a1, a2, b1, b2):
         "rel_mse_noise_a": rel(a1, a2) / 4,
         "rel_mse_noise_b": rel(b1, b2) / 4,
     }, (la - lb) / np.maximum(se, 1e-6)
+
+
+# Image checks with teeth (issue 38): thresholds that do not depend on the pixel count.
+MAX_MEAN_LUMINANCE_ERROR = 0.01  # |mean luminance dormant / Cycles - 1|
+TILE = 16
+MAX_TILE_ERROR = 0.03  # a 16x16 tile's mean luminance, relative
+MIN_TILES_WITHIN = 0.99  # share of tiles within MAX_TILE_ERROR
+# Pixels whose largest channel differs by more than 6 standard errors: the tile means miss a
+# wrong material on bodies a few pixels wide (the duck prototype made magenta, 160x90: tiles
+# 100% within, 0.22% of pixels beyond 6 s.e. against 0.02% for the renderers as they are).
+Z_OUTLIER = 6.0
+MAX_Z_OUTLIERS = 0.001
+
+
+def tile_check(a, b, tile=TILE):
+    """Mean luminance ratio of `a` over `b`, and the share of `tile` x `tile` tiles whose mean
+    luminances agree within MAX_TILE_ERROR (relative to `b`'s)."""
+    lum = np.array([0.2126, 0.7152, 0.0722])
+    la, lb = a @ lum, b @ lum
+    h, w = (la.shape[0] // tile) * tile, (la.shape[1] // tile) * tile
+    ta = la[:h, :w].reshape(h // tile, tile, w // tile, tile).mean(axis=(1, 3))
+    tb = lb[:h, :w].reshape(h // tile, tile, w // tile, tile).mean(axis=(1, 3))
+    within = np.abs(ta - tb) <= MAX_TILE_ERROR * np.maximum(np.abs(tb), 1e-3)
+    return float(la.mean() / lb.mean()), float(within.mean())
+
+
+def image_checks(a1, a2, b1, b2):
+    """The thresholds on the means of the halves, and the per pixel-channel z (difference of
+    the means over its standard error, each half's variance pooled over 3x3 pixels): its mean
+    square and the share beyond 3."""
+    a, b = (a1 + a2) / 2, (b1 + b2) / 2
+    ratio, tiles = tile_check(a, b)
+
+    def box3(x):
+        p = np.pad(x, ((1, 1), (1, 1), (0, 0)), mode="edge")
+        return sum(p[i:i + x.shape[0], j:j + x.shape[1]] for i in range(3) for j in range(3)) / 9
+
+    se = np.sqrt(box3((a1 - a2) ** 2 / 4) + box3((b1 - b2) ** 2 / 4))
+    z = (a - b) / np.maximum(se, 1e-6)
+    outliers = float((np.abs(z).max(axis=2) > Z_OUTLIER).mean())
+    passed = (abs(ratio - 1) <= MAX_MEAN_LUMINANCE_ERROR and tiles >= MIN_TILES_WITHIN
+              and outliers <= MAX_Z_OUTLIERS)
+    return {"mean_luminance_ratio": ratio, "tiles_within": tiles, "mean_z2": float((z ** 2).mean()),
+            "share_z_over_3": float((np.abs(z) > 3).mean()), "pixels_beyond_6se": outliers,
+            "passed": bool(passed)}
 
 
 def write_png(path, rgb):
@@ -491,6 +573,9 @@ def correctness(args, out):
     c = [read_exr(out / "cycles" / f"frame_{i:04}.exr") for i in res["frames"]]
     metrics, z = compare_images(d[0], d[1], c[0], c[1])
     res.update(metrics)
+    res["checks"] = image_checks(d[0], d[1], c[0], c[1])
+    res["negative_controls"] = negative_controls(args, out, exp, cycles, d)
+    res["passed"] = res["checks"]["passed"] and not any(n["passed"] for n in res["negative_controls"].values())
     write_png(out / "dormant.png", (d[0] + d[1]) / 2)
     write_png(out / "cycles.png", (c[0] + c[1]) / 2)
     zc = np.clip(z / 6 + 0.5, 0, 1)
@@ -546,6 +631,27 @@ def speed(args, out):
     return res
 
 
+def negative_controls(args, out, exp, cycles, dormant_halves):
+    """Cycles' halves again with the sun 5% dimmer, and with prototype 0's material wrong:
+    the image checks must fail both, or they would not catch such a bug."""
+    half = args.spp // 2
+    controls = {}
+    for name, breaker in [("sun_5pct_dimmer", lambda: cycles.break_light(0.95)),
+                          ("prototype_0_magenta", lambda: cycles.break_material(0))]:
+        restore = breaker()
+        broken = []
+        for k, fr in enumerate(exp["frames"]):
+            cycles.pose(fr)
+            configure_render(args, half, args.correct_size, seed=k + 1, persistent=False)
+            path = out / f"cycles-{name}" / f"frame_{fr['index']:04}.exr"
+            cycles.render(path)
+            broken.append(read_exr(path))
+        restore()
+        controls[name] = image_checks(dormant_halves[0], dormant_halves[1], broken[0], broken[1])
+        log(f"negative control {name}: {controls[name]}")
+    return controls
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--dormant", default=ROOT / "target/release/dormant", type=Path)
@@ -580,6 +686,8 @@ def main():
         report["speed"] = speed(args, args.out / "speed")
     (args.out / "report.json").write_text(json.dumps(report, indent=2, default=str))
     summarize(report)
+    if not report.get("correctness", {}).get("passed", True):
+        sys.exit("compare-cycles: the image checks failed (or a negative control passed): see report.json")
 
 
 def summarize(report):
@@ -589,6 +697,12 @@ def summarize(report):
             f"{c['within_3se']:.1%} of pixels within 3 s.e., mean dormant/cycles {c['mean_ratio']:.4f}; "
             f"rel. MSE between {c['rel_mse_between']:.2e}, noise dormant {c['rel_mse_noise_a']:.2e}, "
             f"cycles {c['rel_mse_noise_b']:.2e}; time dormant {sum(c['dormant_s']):.1f} s, cycles {sum(c['cycles_s']):.1f} s")
+        k = c["checks"]
+        log(f"image checks: mean luminance {k['mean_luminance_ratio']:.4f} (limit 1 +- {MAX_MEAN_LUMINANCE_ERROR}), "
+            f"{k['tiles_within']:.1%} of {TILE}x{TILE} tiles within {MAX_TILE_ERROR:.0%} (limit {MIN_TILES_WITHIN:.0%}), "
+            f"pixels beyond {Z_OUTLIER:.0f} s.e. {k['pixels_beyond_6se']:.3%} (limit {MAX_Z_OUTLIERS:.1%}), "
+            f"mean z^2 {k['mean_z2']:.2f}, |z| > 3 {k['share_z_over_3']:.2%}: {'passed' if k['passed'] else 'FAILED'}; "
+            f"negative controls failed: {[n for n, v in c['negative_controls'].items() if not v['passed']]}")
     if "speed" in report:
         s = report["speed"]
         n = len(s["dormant"])
