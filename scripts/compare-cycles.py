@@ -674,7 +674,11 @@ def main():
     ap.add_argument("--reuse-dormant", action="store_true", help="correctness: keep dormant's EXRs of an earlier run")
     ap.add_argument("--reuse-trajectory", action="store_true", help="keep trajectories simulated by an earlier run")
     ap.add_argument("--only", choices=["correctness", "speed"])
+    ap.add_argument("--quick", action="store_true",
+                    help="the image checks alone on a small frame: --only correctness --spp 256 --correct-size 160x90")
     args = ap.parse_args()
+    if args.quick:
+        args.only, args.spp, args.correct_size = "correctness", 256, "160x90"
     if not args.dormant.exists():
         sys.exit(f"compare-cycles: {args.dormant} not found (cargo build --release)")
     args.out.mkdir(parents=True, exist_ok=True)
