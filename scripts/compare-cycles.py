@@ -408,6 +408,59 @@ class CyclesScene:
         return t1 - t0, sync, (t1 - first_sample) if first_sample else float("nan")
 
 
+class CyclesAnimation:
+    """Cycles as a user renders a simulation: dormant's animated glTF (`dormant export --gltf`:
+    one keyframed object per body, shared meshes) imported by Blender's importer, the
+    comparison's own camera, lights and sky, and frames rendered as animation jobs with
+    persistent data. The import is timed apart (`import_s`)."""
+
+    def __init__(self, glb, export):
+        reset_blender()
+        scene = bpy.context.scene
+        # The importer turns key times into frames at the scene's rate; frame f is then
+        # dormant's frame f (scripts/blender-roundtrip.py checks the import).
+        scene.render.fps, scene.render.fps_base = round(1.0 / export["timestep"]), 1.0
+        t = time.perf_counter()
+        bpy.ops.import_scene.gltf(filepath=str(glb), import_shading="NORMALS")
+        self.import_s = time.perf_counter() - t
+        for o in [o for o in bpy.data.objects if o.type in ("LIGHT", "CAMERA")]:
+            bpy.data.objects.remove(o)
+        match_materials()
+        build_world(export["sky"])
+        build_lights(export)
+        cam = bpy.data.objects.new("camera", bpy.data.cameras.new("camera"))
+        scene.collection.objects.link(cam)
+        scene.camera = cam
+        set_camera(cam, export["frames"][0]["camera"])
+
+    def render(self, first, last, out):
+        """Frames first..last as one animation job into `out`; per frame (wall s from the
+        previous frame's end, sync s to its first sample)."""
+        scene = bpy.context.scene
+        scene.frame_start, scene.frame_end = first, last - 1
+        scene.render.filepath = str(out / "frame_####")
+        marks = {"post": [], "sample": []}
+
+        def on_post(*_):
+            marks["post"].append(time.perf_counter())
+
+        def on_stats(text):
+            if "Sample" in str(text) and len(marks["sample"]) == len(marks["post"]):
+                marks["sample"].append(time.perf_counter())
+
+        bpy.app.handlers.render_post.append(on_post)
+        bpy.app.handlers.render_stats.append(on_stats)
+        t0 = time.perf_counter()
+        bpy.ops.render.render(animation=True)
+        bpy.app.handlers.render_post.remove(on_post)
+        bpy.app.handlers.render_stats.remove(on_stats)
+        starts = [t0] + marks["post"][:-1]
+        samples = marks["sample"] + [float("nan")] * (len(starts) - len(marks["sample"]))
+        return [{"frame": first + k, "wall_s": end - start, "sync_s": sample - start, "update_s": 0.0,
+                 "trace_s": end - sample}
+                for k, (start, end, sample) in enumerate(zip(starts, marks["post"], samples))]
+
+
 # --- images -----------------------------------------------------------------------------------
 
 
@@ -597,8 +650,17 @@ def speed(args, out):
     res = {"frames": f"{a}..{b}", "spp": args.rain_spp, "size": args.rain_size, "dormant": [],
            "cycles": {m: [] for m in args.cycles_modes.split(",")}, "dormant_wall_s": 0.0,
            "cycles_setup_s": 0.0}
+    modes = set(res["cycles"])
+    if "animation" in modes and modes != {"animation"}:
+        sys.exit("compare-cycles: --cycles-modes animation runs alone (it is a different Blender scene)")
     t = time.perf_counter()
-    cs = CyclesScene(exp)  # glTF import and materials, once for every mode
+    if modes == {"animation"}:
+        glb = out / "rain.glb"
+        run_dormant(args, "export", "--trajectory", traj, "--gltf", glb)
+        cs = CyclesAnimation(glb, exp)
+        res["cycles_import_s"] = cs.import_s
+    else:
+        cs = CyclesScene(exp)  # glTF import and materials, once for every mode
     res["cycles_setup_s"] = time.perf_counter() - t
     frames = exp["frames"]
     for c0 in range(0, len(frames), args.chunk):
@@ -613,6 +675,14 @@ def speed(args, out):
         rows_log.flush()
         log(f"speed {first}..{last}: dormant {wall:.1f} s")
         for m, rows in res["cycles"].items():
+            if m == "animation":
+                configure_render(args, args.rain_spp, args.rain_size, seed=0, persistent=True)
+                rows += cs.render(first, last, out / "cycles-animation")
+                for r in rows[-len(chunk):]:
+                    rows_log.write(json.dumps({"cycles": m, **r}) + "\n")
+                rows_log.flush()
+                log(f"speed {first}..{last}: cycles (animation) {sum(r['wall_s'] for r in rows[-len(chunk):]):.1f} s")
+                continue
             todo = chunk if m == "persistent" else frames[len(res["cycles"][m]):args.default_frames]
             if not todo:
                 continue  # rebuilt every frame: too slow for every frame on a shared machine
@@ -667,8 +737,10 @@ def main():
     ap.add_argument("--rain-spp", type=int, default=16)
     ap.add_argument("--rain-size", default="320x180")
     ap.add_argument("--chunk", type=int, default=10, help="speed: frames per interleaved chunk")
-    ap.add_argument("--cycles-modes", default="persistent,default",
-                    help="speed: Cycles with persistent data (scene kept between frames) and/or Blender's default (rebuilt every frame)")
+    ap.add_argument("--cycles-modes", default="animation",
+                    help="speed: `animation` (alone: dormant's animated glTF imported, keyframed, rendered as "
+                         "animation jobs with persistent data, as a user would), or `persistent` (each body posed "
+                         "from Python every frame, scene kept) and/or `default` (rebuilt every frame)")
     ap.add_argument("--default-frames", type=int, default=10,
                     help="speed: the first N frames also in Cycles' default mode (persistent mode renders all)")
     ap.add_argument("--reuse-dormant", action="store_true", help="correctness: keep dormant's EXRs of an earlier run")
