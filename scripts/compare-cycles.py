@@ -79,13 +79,13 @@ def run_dormant(args, *cmd):
 MATCHING_FLAGS = ["--filter", "blackman-harris", "--filter-width", "1.5", "--clamp-indirect", "0"]
 
 
-def dormant_render(args, traj, frames, out, spp, size, seed="fixed", reuse="on"):
+def dormant_render(args, traj, frames, out, spp, size, seed="fixed", reuse="on", seed_offset=0):
     """Renders frames A..B of `traj` into `out` with EXRs; returns (wall s, the frames' records
     from out/stats.json: stage times in ms, `trace_ms` and `frame_ms` among them)."""
     wall = run_dormant(
         args, "render", "--trajectory", traj, "--frames", frames, "--spp", spp, "--size", size,
-        "--max-depth", args.max_depth, "--seed", seed, "--reuse", reuse, "--exr", "--out", out,
-        *MATCHING_FLAGS,
+        "--max-depth", args.max_depth, "--seed", seed, "--seed-offset", seed_offset, "--reuse", reuse, "--exr",
+        "--out", out, *MATCHING_FLAGS,
     )
     a, b = map(int, frames.split(".."))
     records = json.loads((out / "stats.json").read_text())["frames"]
@@ -595,39 +595,37 @@ def export(args, traj, frames, path):
 
 
 def correctness(args, out):
-    """One frame at 1,024 spp per renderer as two independent 512-spp halves."""
+    """One frame at `--spp` per renderer as two independent halves (seeds 1 and 2 of both)."""
     out.mkdir(parents=True, exist_ok=True)
     scene = variant_scene(args, out)
     traj = out / "correctness.traj"
     f = args.settle_frames
     if not (args.reuse_trajectory and traj.exists()):
         run_dormant(args, "simulate", scene, "--count", args.correct_count, "--frame-count", f, "--out", traj)
-    exp = export(args, traj, f"{f - 2}..{f}", out / "correctness.json")
-    p0, p1 = (np.array([p if p else [np.nan] * 7 for p in fr["poses"]], dtype=float) for fr in exp["frames"])
-    drift = float(np.nanmax(np.abs(p0[:, :3] - p1[:, :3]))) if len(p0) else 0.0
-    log(f"correctness: {len(p0)} bodies; largest move between the two frames {drift:.2e} units")
+    exp = export(args, traj, f"{f - 1}..{f}", out / "correctness.json")
+    frame = exp["frames"][0]
+    i = frame["index"]
     half = args.spp // 2
     cycles = CyclesScene(exp)
-    res = {"frames": [f - 2, f - 1], "bodies": len(p0), "pose_drift": drift, "spp": args.spp,
-           "size": args.correct_size, "dormant_s": [], "cycles_s": [], "cycles_sync_s": []}
-    for k, fr in enumerate(exp["frames"]):
-        i = fr["index"]
-        if not (args.reuse_dormant and (out / "dormant" / f"frame_{i:04}.exr").exists()):
-            wall, _ = dormant_render(args, traj, f"{i}..{i + 1}", out / "dormant", half, args.correct_size,
-                                     seed="per-frame", reuse="off")
+    cycles.pose(frame)
+    res = {"frame": i, "bodies": len(frame["poses"]), "spp": args.spp, "size": args.correct_size,
+           "dormant_s": [], "cycles_s": [], "cycles_sync_s": []}
+    for k in range(2):
+        if not (args.reuse_dormant and (out / f"dormant-{k}" / f"frame_{i:04}.exr").exists()):
+            wall, _ = dormant_render(args, traj, f"{i}..{i + 1}", out / f"dormant-{k}", half, args.correct_size,
+                                     reuse="off", seed_offset=k + 1)
             res["dormant_s"].append(wall)
-        cycles.pose(fr)
         configure_render(args, half, args.correct_size, seed=k + 1, persistent=False)
-        wall, sync, _ = cycles.render(out / "cycles" / f"frame_{i:04}.exr")
+        wall, sync, _ = cycles.render(out / "cycles" / f"half{k}.exr")
         res["cycles_s"].append(wall)
         res["cycles_sync_s"].append(sync)
         log(f"correctness half {k}: dormant {sum(res['dormant_s'][k:k + 1]):.1f} s, cycles {wall:.1f} s (sync {sync:.1f} s)")
-    d = [read_exr(out / "dormant" / f"frame_{i:04}.exr") for i in res["frames"]]
-    c = [read_exr(out / "cycles" / f"frame_{i:04}.exr") for i in res["frames"]]
+    d = [read_exr(out / f"dormant-{k}" / f"frame_{i:04}.exr") for k in range(2)]
+    c = [read_exr(out / "cycles" / f"half{k}.exr") for k in range(2)]
     metrics, z = compare_images(d[0], d[1], c[0], c[1])
     res.update(metrics)
     res["checks"] = image_checks(d[0], d[1], c[0], c[1])
-    res["negative_controls"] = negative_controls(args, out, exp, cycles, d)
+    res["negative_controls"] = negative_controls(args, out, cycles, d)
     res["passed"] = res["checks"]["passed"] and not any(n["passed"] for n in res["negative_controls"].values())
     write_png(out / "dormant.png", (d[0] + d[1]) / 2)
     write_png(out / "cycles.png", (c[0] + c[1]) / 2)
@@ -701,7 +699,7 @@ def speed(args, out):
     return res
 
 
-def negative_controls(args, out, exp, cycles, dormant_halves):
+def negative_controls(args, out, cycles, dormant_halves):
     """Cycles' halves again with the sun 5% dimmer, and with prototype 0's material wrong:
     the image checks must fail both, or they would not catch such a bug."""
     half = args.spp // 2
@@ -710,10 +708,9 @@ def negative_controls(args, out, exp, cycles, dormant_halves):
                           ("prototype_0_magenta", lambda: cycles.break_material(0))]:
         restore = breaker()
         broken = []
-        for k, fr in enumerate(exp["frames"]):
-            cycles.pose(fr)
+        for k in range(2):
             configure_render(args, half, args.correct_size, seed=k + 1, persistent=False)
-            path = out / f"cycles-{name}" / f"frame_{fr['index']:04}.exr"
+            path = out / f"cycles-{name}" / f"half{k}.exr"
             cycles.render(path)
             broken.append(read_exr(path))
         restore()

@@ -193,3 +193,30 @@ fn static_frames_reuse_the_previous_image_byte_for_byte() {
     assert_eq!(read_stats(&on)["summary"]["totals"]["reused_frames"], 19);
     assert_eq!(read_stats(&off)["summary"]["totals"]["reused_frames"], 0);
 }
+
+#[test]
+fn seed_offsets_give_independent_renders_of_one_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    let render = |name: &str, offset: &str| {
+        let out = dir.path().join(name);
+        succeeds(
+            dormant()
+                .args([
+                    "render",
+                    "--quiet",
+                    "--size",
+                    "32x18",
+                    "--spp",
+                    "8",
+                    "--seed-offset",
+                    offset,
+                    "--out",
+                ])
+                .arg(&out),
+        );
+        std::fs::read(out.join("frame_0000.png")).unwrap()
+    };
+    let (a, again, b) = (render("a", "0"), render("again", "0"), render("b", "7"));
+    assert_eq!(a, again, "one offset, one image");
+    assert_ne!(a, b, "another offset, the same noise");
+}

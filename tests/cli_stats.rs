@@ -62,6 +62,7 @@ const RUN: &[(&str, &str)] = &[
     ("filter", "string"),
     ("filter_width", "number"),
     ("seed", "string"),
+    ("seed_offset", "integer"),
     ("reuse", "boolean"),
     ("reuse_mode", "string"),
     ("exposure", "number"),

@@ -151,6 +151,10 @@ pub struct RenderArgs {
     /// (noise changes from frame to frame).
     #[arg(long, value_enum, default_value_t = SeedMode::Fixed)]
     pub seed: SeedMode,
+    /// Added to every frame's seed, like Cycles' Seed value: renders of the same frames with
+    /// different offsets have independent noise.
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    pub seed_offset: u32,
     /// With a fixed seed: how a frame reuses earlier frames' work. `exact`: trace only the
     /// samples that can see something that moved since they were traced (the simulation's
     /// future is known, so each sample's next change is), take the rest from earlier frames,
@@ -468,7 +472,7 @@ fn render_still(job: &RenderJob<'_>, output: &mut FrameOutput<'_>) -> Result<Str
         width: args.size.width,
         height: args.size.height,
         spp: args.spp,
-        seed: 0,
+        seed: args.seed_offset,
         adaptive: adaptive_sampling(args, None)?,
         filter: pixel_filter(args)?,
     };

@@ -472,6 +472,7 @@ fn renderer<'a>(integrator: &'a dyn Integrator, options: &IntegrationBenchOption
         filter: PixelFilter::default(),
         // Every frame traced, and noise decorrelated as in a per-frame-seeded render.
         seed: SeedMode::PerFrame,
+        seed_offset: 0,
         reuse: ReuseMode::Off,
         reuse_budget: DEFAULT_REUSE_BYTES,
         shutter: options.shutter,

@@ -51,6 +51,9 @@ pub struct FrameRenderer<'a> {
     /// Where each pixel's samples land around its centre.
     pub filter: PixelFilter,
     pub seed: SeedMode,
+    /// Added to every frame's seed (Cycles' Seed value): renders of one frame with different
+    /// offsets are independent.
+    pub seed_offset: u32,
     /// With a fixed seed, how frames reuse earlier frames' work (see [`ReuseMode`]).
     pub reuse: ReuseMode,
     /// Bytes exact reuse may keep ([`DEFAULT_REUSE_BYTES`] by default).
@@ -75,6 +78,7 @@ impl<'a> FrameRenderer<'a> {
             adaptive: AdaptiveSampling::OFF,
             filter: PixelFilter::default(),
             seed: SeedMode::Fixed,
+            seed_offset: 0,
             reuse: ReuseMode::Exact,
             reuse_budget: DEFAULT_REUSE_BYTES,
             shutter: 0.0,
@@ -85,7 +89,8 @@ impl<'a> FrameRenderer<'a> {
         let seed = match self.seed {
             SeedMode::Fixed => 0,
             SeedMode::PerFrame => frame,
-        };
+        }
+        .wrapping_add(self.seed_offset);
         RenderSettings {
             width: self.width,
             height: self.height,

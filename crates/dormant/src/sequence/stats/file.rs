@@ -180,6 +180,7 @@ mod tests {
             filter: "tent".into(),
             filter_width: 1.0,
             seed: "fixed".into(),
+            seed_offset: 0,
             reuse: true,
             reuse_mode: "exact".into(),
             exposure: 1.1,

@@ -229,6 +229,9 @@ pub struct RunInfo {
     pub filter_width: f32,
     /// `fixed` or `per-frame`.
     pub seed: String,
+    /// `--seed-offset`. Absent in runs from before it: 0.
+    #[serde(default)]
+    pub seed_offset: u32,
     /// Any reuse: `--reuse static` or `exact`.
     pub reuse: bool,
     /// `--reuse`: `off`, `static` or `exact`. Absent in runs from before exact reuse, which
@@ -549,6 +552,7 @@ mod tests {
             filter: "tent".into(),
             filter_width: 1.0,
             seed: "fixed".into(),
+            seed_offset: 0,
             reuse: true,
             reuse_mode: "exact".into(),
             exposure: 1.0,
