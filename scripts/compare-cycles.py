@@ -696,6 +696,40 @@ def speed(args, out):
                 rows_log.write(json.dumps({"cycles": m, **rows[-1]}) + "\n")
                 rows_log.flush()
             log(f"speed {first}..{last}: cycles ({m}) {sum(r['wall_s'] for r in rows[-len(todo):]):.1f} s")
+    mode = next(iter(res["cycles"]))
+    res["noise"] = noise_at_equal_spp(args, out, traj, cs, mode, frames[len(frames) // 2])
+    return res
+
+
+def relative_variance(images):
+    """The mean over pixels and channels of the variance across `images` (independent seeds)
+    over the squared mean (plus 0.01, as relative MSE): the noise of one such image."""
+    stack = np.stack(images)
+    mean = stack.mean(axis=0)
+    return float((stack.var(axis=0, ddof=1) / (mean ** 2 + 1e-2)).mean())
+
+
+def noise_at_equal_spp(args, out, traj, cs, mode, frame, seeds=4):
+    """Each renderer's noise on `frame` at the sequence's spp, from `seeds` independent seeds
+    (dormant --seed-offset, Cycles' seed), against its own mean, so that the other's bias
+    does not count. Time to equal noise scales as noise x time (variance falls as 1/spp)."""
+    i = frame["index"]
+    d, c = [], []
+    for k in range(seeds):
+        folder = out / "noise" / f"dormant-{k}"
+        dormant_render(args, traj, f"{i}..{i + 1}", folder, args.rain_spp, args.rain_size, reuse="off",
+                       seed_offset=k + 1)
+        d.append(read_exr(folder / f"frame_{i:04}.exr"))
+        configure_render(args, args.rain_spp, args.rain_size, seed=k + 1, persistent=(mode != "default"))
+        if mode == "animation":
+            cs.render(i, i + 1, out / "noise" / f"cycles-{k}")
+            c.append(read_exr(out / "noise" / f"cycles-{k}" / f"frame_{i:04}.exr"))
+        else:
+            cs.pose(frame)
+            cs.render(out / "noise" / f"cycles-{k}.exr")
+            c.append(read_exr(out / "noise" / f"cycles-{k}.exr"))
+    res = {"frame": i, "seeds": seeds, "dormant": relative_variance(d), "cycles": relative_variance(c)}
+    log(f"noise at {args.rain_spp} spp, frame {i}: dormant {res['dormant']:.3e}, cycles {res['cycles']:.3e}")
     return res
 
 
@@ -792,6 +826,11 @@ def summarize(report):
             log(f"  cycles {m}: {tot:.1f} s for {len(rows)} frames (setup {s['cycles_setup_s']:.1f} s; per frame: wall "
                 f"{(tot - s['cycles_setup_s']) / k:.2f} s, pose update {pose / k:.3f} s, sync {sync / k:.3f} s, "
                 f"trace {trace_c / k:.2f} s); dormant/cycles per frame {s['dormant_wall_s'] / n / ((tot - s['cycles_setup_s']) / k):.2f}")
+            if "noise" in s:
+                v = s["noise"]["dormant"] / s["noise"]["cycles"]
+                per = s["dormant_wall_s"] / n / ((tot - s["cycles_setup_s"]) / k)
+                log(f"  noise dormant/cycles at equal spp {v:.3f}: dormant's time to Cycles' noise over Cycles' time "
+                    f"{per * v:.2f} (per frame, setup apart)")
 
 
 if __name__ == "__main__":
