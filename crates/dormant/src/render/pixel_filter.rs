@@ -48,10 +48,6 @@ impl FilterKind {
         }
     }
 
-    pub fn from_name(name: &str) -> Option<Self> {
-        Self::ALL.into_iter().find(|k| k.name() == name)
-    }
-
     /// The width a filter of this kind has unless one is given: Cycles' defaults (box 1,
     /// Gaussian and Blackman-Harris 1.5) and the tent of radius 1.
     pub fn default_width(self) -> f32 {
@@ -123,8 +119,8 @@ impl PixelFilter {
         match *self {
             PixelFilter::Tent { radius } => tent_offset(u) * radius,
             PixelFilter::Box { width } => (u - Vec2::splat(0.5)) * width,
-            PixelFilter::Gaussian { width } => tabulated(gaussian_table(), u) * (1.5 * width),
-            PixelFilter::BlackmanHarris { width } => tabulated(blackman_harris_table(), u) * width,
+            PixelFilter::Gaussian { .. } => tabulated(gaussian_table(), u) * self.reach(),
+            PixelFilter::BlackmanHarris { .. } => tabulated(blackman_harris_table(), u) * self.reach(),
         }
     }
 }
@@ -305,7 +301,5 @@ mod tests {
         for w in [0.0, -1.0, f32::NAN, f32::INFINITY, MAX_FILTER_WIDTH * 2.0] {
             assert!(PixelFilter::new(FilterKind::Gaussian, Some(w)).is_err(), "{w}");
         }
-        assert_eq!(FilterKind::from_name("blackman-harris"), Some(FilterKind::BlackmanHarris));
-        assert_eq!(FilterKind::from_name("mitchell"), None);
     }
 }
