@@ -11,9 +11,15 @@ samples per pixel, bounces and threads. Two measurements:
   correctness  one frame at 1,024 spp as two independent 512-spp halves per renderer; the
                per-pixel difference between the renderers is compared with the noise both
                halves show (see `compare_images` for the metric);
-  speed        a 120-frame monastery-rain sequence at 16 spp, frames in interleaved chunks
-               (dormant, Cycles, dormant, ...) because the machine is shared; wall time per
-               frame including scene updates, Cycles' sync (BVH build) and path tracing apart.
+  speed        each shot (`--shots`: monastery-rain frames 0..120, the demolition 600..660) at
+               16 spp and 960x540, `--runs` times: dormant without reuse and Cycles with
+               persistent data in interleaved chunks (the machine is shared), then dormant with
+               exact reuse over the whole stretch in one run, Cycles' default mode on the first
+               frames, and each renderer's noise (4 seeds of the middle frame, against its own
+               mean), whence the time to equal noise; that frame also gets the image checks.
+               Cycles holds each shot as a Blender user would: the rain as dormant's animated
+               glTF imported and rendered as animation jobs; the demolition's 80,000 bodies as
+               geometry-nodes instances of one mesh per prototype (`CyclesInstances`).
 
 What the comparison fixes so that both renderers compute the same image (see
 docs/performance.md#against-blender-cycles for what still differs):
@@ -37,6 +43,7 @@ import json
 import math
 import os
 import shutil
+import struct
 import subprocess
 import sys
 import time
@@ -391,21 +398,26 @@ class CyclesScene:
         return restore
 
     def render(self, path):
-        """Renders to `path`; returns (wall s, sync s, path-tracing s) from Cycles' status."""
-        marks = []
+        return render_still(path)
 
-        def on_stats(text):
-            marks.append((time.perf_counter(), str(text)))
 
-        bpy.app.handlers.render_stats.append(on_stats)
-        bpy.context.scene.render.filepath = str(path)
-        t0 = time.perf_counter()
-        bpy.ops.render.render(write_still=True)
-        t1 = time.perf_counter()
-        bpy.app.handlers.render_stats.remove(on_stats)
-        first_sample = next((t for t, s in marks if "Sample" in s), None)
-        sync = (first_sample - t0) if first_sample else float("nan")
-        return t1 - t0, sync, (t1 - first_sample) if first_sample else float("nan")
+def render_still(path):
+    """Renders the scene to `path`; returns (wall s, sync s, path-tracing s) from Cycles'
+    status."""
+    marks = []
+
+    def on_stats(text):
+        marks.append((time.perf_counter(), str(text)))
+
+    bpy.app.handlers.render_stats.append(on_stats)
+    bpy.context.scene.render.filepath = str(path)
+    t0 = time.perf_counter()
+    bpy.ops.render.render(write_still=True)
+    t1 = time.perf_counter()
+    bpy.app.handlers.render_stats.remove(on_stats)
+    first_sample = next((t for t, s in marks if "Sample" in s), None)
+    sync = (first_sample - t0) if first_sample else float("nan")
+    return t1 - t0, sync, (t1 - first_sample) if first_sample else float("nan")
 
 
 class CyclesAnimation:
@@ -459,6 +471,113 @@ class CyclesAnimation:
         return [{"frame": first + k, "wall_s": end - start, "sync_s": sample - start, "update_s": 0.0,
                  "trace_s": end - sample}
                 for k, (start, end, sample) in enumerate(zip(starts, marks["post"], samples))]
+
+
+def meshes_only_glb(glb, path):
+    """Writes to `path` a copy of the glTF export `glb` without its animation and its body,
+    camera and light nodes: one node per mesh at the origin, so that Blender's importer reads
+    the prototype and environment meshes with their materials, fast. (Importing the
+    demolition's 80,456 keyframed nodes had not finished after 9 minutes, docs/lab/cycles.md.)"""
+    data = Path(glb).read_bytes()
+    magic, version, _ = struct.unpack_from("<III", data, 0)
+    json_len, json_type = struct.unpack_from("<II", data, 12)
+    doc = json.loads(data[20:20 + json_len])
+    binary = data[20 + json_len:]  # the BIN chunk, header included
+    doc["nodes"] = [{"name": m["name"], "mesh": i} for i, m in enumerate(doc["meshes"])]
+    doc["scenes"], doc["scene"] = [{"nodes": list(range(len(doc["nodes"])))}], 0
+    for key in ("animations", "cameras"):
+        doc.pop(key, None)
+    text = json.dumps(doc, separators=(",", ":")).encode()
+    text += b" " * (-len(text) % 4)
+    header = struct.pack("<III", magic, version, 20 + len(text) + len(binary))
+    Path(path).write_bytes(header + struct.pack("<II", len(text), json_type) + text + binary)
+
+
+def instancer_tree(source):
+    """Geometry nodes that put `source`'s mesh on every point of the modified mesh, rotated by
+    its `rotation` attribute (a quaternion), where its `present` attribute is true."""
+    tree = bpy.data.node_groups.new(f"bodies of {source.name}", "GeometryNodeTree")
+    tree.interface.new_socket("Geometry", in_out="INPUT", socket_type="NodeSocketGeometry")
+    tree.interface.new_socket("Geometry", in_out="OUTPUT", socket_type="NodeSocketGeometry")
+    nodes, links = tree.nodes, tree.links
+    points, out = nodes.new("NodeGroupInput"), nodes.new("NodeGroupOutput")
+    info = nodes.new("GeometryNodeObjectInfo")
+    info.transform_space = "ORIGINAL"
+    info.inputs["Object"].default_value = source
+    inst = nodes.new("GeometryNodeInstanceOnPoints")
+    for name, kind, socket in (("rotation", "QUATERNION", "Rotation"), ("present", "BOOLEAN", "Selection")):
+        attr = nodes.new("GeometryNodeInputNamedAttribute")
+        attr.data_type = kind
+        attr.inputs["Name"].default_value = name
+        links.new(attr.outputs["Attribute"], inst.inputs[socket])
+    links.new(points.outputs[0], inst.inputs["Points"])
+    links.new(info.outputs["Geometry"], inst.inputs["Instance"])
+    links.new(inst.outputs["Instances"], out.inputs[0])
+    return tree
+
+
+class CyclesInstances:
+    """Blender's fastest form for many rigid bodies: each prototype's mesh once, instanced by
+    geometry nodes on the points of one mesh per prototype (a point per body; its rotation and
+    presence as point attributes). Each frame the points are moved from the export's poses
+    with foreach_set (`pose_s`, the harness's work, timed apart), Blender evaluates the
+    modifiers (`update_s`, charged to Cycles) and Cycles renders (persistent data by default).
+    Meshes and materials come from `dormant export --gltf` (built-in shapes included)."""
+
+    def __init__(self, glb, export):
+        reset_blender()
+        scene = bpy.context.scene
+        meshes = glb.with_suffix(".meshes.glb")
+        meshes_only_glb(glb, meshes)
+        t = time.perf_counter()
+        bpy.ops.import_scene.gltf(filepath=str(meshes), import_shading="NORMALS")
+        self.import_s = time.perf_counter() - t
+        imported = {o.name: o for o in bpy.data.objects if o.type == "MESH"}
+        match_materials()
+        build_world(export["sky"])
+        build_lights(export)
+        self.camera = bpy.data.objects.new("camera", bpy.data.cameras.new("camera"))
+        scene.collection.objects.link(self.camera)
+        scene.camera = self.camera
+        protos = np.asarray(export["body_prototypes"])
+        self.members, self.points = [], []
+        for k, p in enumerate(export["prototypes"]):
+            source = imported[p["name"]]
+            source.hide_render = True  # rendered only through its instances
+            self.members.append(np.flatnonzero(protos == k))
+            mesh = bpy.data.meshes.new(f"{p['name']} points")
+            mesh.vertices.add(len(self.members[-1]))
+            mesh.attributes.new("rotation", "QUATERNION", "POINT")
+            mesh.attributes.new("present", "BOOLEAN", "POINT")
+            obj = bpy.data.objects.new(f"{p['name']} bodies", mesh)
+            obj.modifiers.new("bodies", "NODES").node_group = instancer_tree(source)
+            scene.collection.objects.link(obj)
+            self.points.append(mesh)
+
+    def pose(self, frame):
+        """Moves every body's point to its pose in `frame` (absent bodies: not instanced) and
+        sets the camera; returns the seconds it took."""
+        t = time.perf_counter()
+        nan = [math.nan] * 7
+        poses = np.array([p if p is not None else nan for p in frame["poses"]], dtype=np.float32)
+        for members, mesh in zip(self.members, self.points):
+            pose = poses[members]
+            present = ~np.isnan(pose[:, 0])
+            pose[~present] = 0.0
+            # Y up to Z up (C): a position (x, y, z) -> (x, -z, y); a rotation C R C^-1 is
+            # the quaternion with its axis mapped the same way.
+            co = np.stack([pose[:, 0], -pose[:, 2], pose[:, 1]], axis=1)
+            q = np.stack([pose[:, 6], pose[:, 3], -pose[:, 5], pose[:, 4]], axis=1)
+            q[~present] = (1.0, 0.0, 0.0, 0.0)
+            mesh.vertices.foreach_set("co", co.ravel())
+            mesh.attributes["rotation"].data.foreach_set("value", q.ravel())
+            mesh.attributes["present"].data.foreach_set("value", present)
+            mesh.update()
+        set_camera(self.camera, frame["camera"])
+        return time.perf_counter() - t
+
+    def render(self, path):
+        return render_still(path)
 
 
 # --- images -----------------------------------------------------------------------------------
@@ -565,6 +684,45 @@ def write_png(path, rgb):
     bpy.data.images.remove(img)
 
 
+def diverging(x):
+    """x in [-1, 1] as blue (negative), white (0), red (positive)."""
+    x = np.clip(x, -1, 1)
+    pos, neg = np.maximum(x, 0), np.maximum(-x, 0)
+    return np.stack([1 - neg, 1 - pos - neg, 1 - pos], axis=2)
+
+
+def write_figure(path, a, b, z, crop_share=4, gap=4):
+    """The figure of the comparison: top row dormant | Cycles | relative luminance difference
+    (dormant over Cycles, -10% blue .. +10% red); bottom row the same three for the crop a
+    `crop_share`-th of the frame wide around the 16x16 tile of largest mean |z| (the place a
+    reviewer should look), enlarged `crop_share` times, its difference shown as z (-6 .. 6
+    standard errors). Returns where the crop is."""
+    lum = np.array([0.2126, 0.7152, 0.0722])
+    la, lb = a @ lum, b @ lum
+    rel = diverging((la - lb) / np.maximum(lb, 1e-2) / 0.10)
+    h, w = la.shape
+    zt = np.abs(z)[:h // TILE * TILE, :w // TILE * TILE]
+    zt = zt.reshape(h // TILE, TILE, w // TILE, TILE).mean(axis=(1, 3))
+    ty, tx = np.unravel_index(int(np.argmax(zt)), zt.shape)
+    ch, cw = h // crop_share, w // crop_share
+    y0 = int(np.clip(ty * TILE + TILE // 2 - ch // 2, 0, h - ch))
+    x0 = int(np.clip(tx * TILE + TILE // 2 - cw // 2, 0, w - cw))
+
+    def crop(img):
+        c = img[y0:y0 + ch, x0:x0 + cw]
+        return np.repeat(np.repeat(c, crop_share, axis=0), crop_share, axis=1)[:h, :w]
+
+    def row(panels):
+        sep = np.ones((h, gap, 3))
+        return np.concatenate([panels[0], sep, panels[1], sep, panels[2]], axis=1)
+
+    top = row([a, b, rel])
+    bottom = row([crop(a), crop(b), crop(diverging(z / 6.0))])
+    fig = np.concatenate([top, np.ones((gap, top.shape[1], 3)), bottom], axis=0)
+    write_png(path, fig)
+    return {"path": str(path), "crop": [x0, y0, cw, ch], "crop_tile_mean_abs_z": float(zt[ty, tx])}
+
+
 # --- the two measurements ---------------------------------------------------------------------
 
 
@@ -624,80 +782,96 @@ def correctness(args, out):
     c = [read_exr(out / "cycles" / f"half{k}.exr") for k in range(2)]
     metrics, z = compare_images(d[0], d[1], c[0], c[1])
     res.update(metrics)
-    res["checks"] = image_checks(d[0], d[1], c[0], c[1])
+    # The stretch's own frame checked as the correctness frame is (two halves of two seeds each).
+    res["checks"] = image_checks((d[0] + d[1]) / 2, (d[2] + d[3]) / 2, (c[0] + c[1]) / 2, (c[2] + c[3]) / 2)
+    _, z = compare_images((d[0] + d[1]) / 2, (d[2] + d[3]) / 2, (c[0] + c[1]) / 2, (c[2] + c[3]) / 2)
+    res["figure"] = write_figure(out / "figure.png", sum(d) / seeds, sum(c) / seeds, z)
     res["negative_controls"] = negative_controls(args, out, cycles, d)
     res["passed"] = res["checks"]["passed"] and not any(n["passed"] for n in res["negative_controls"].values())
     write_png(out / "dormant.png", (d[0] + d[1]) / 2)
     write_png(out / "cycles.png", (c[0] + c[1]) / 2)
     zc = np.clip(z / 6 + 0.5, 0, 1)
     write_png(out / "z.png", np.stack([zc, np.full_like(zc, 0.5), 1 - zc], axis=2))
+    res["figure"] = write_figure(out / "figure.png", (d[0] + d[1]) / 2, (c[0] + c[1]) / 2, z)
     return res
 
 
-def speed(args, out):
-    """The rain sequence at 16 spp, interleaved in chunks: dormant, then Cycles in each mode."""
-    out.mkdir(parents=True, exist_ok=True)
-    traj = out / "rain.traj"
-    a, b = map(int, args.rain_frames.split(".."))
+# The speed shots: scene file and Cycles' form (the way a Blender user would hold it).
+SHOTS = {
+    "rain": ("scenes/monastery-rain.toml", "animation"),
+    "demolition": ("scenes/demolition.toml", "instances"),
+}
+
+
+def shot_sources(args, out, shot):
+    """The shot's trajectory (simulated up to the stretch's end) and its glTF export; returns
+    (trajectory, glb, first frame, end frame)."""
+    a, b = map(int, getattr(args, f"{shot}_frames").split(".."))
+    traj, glb = out / f"{shot}.traj", out / f"{shot}.glb"
     if not (args.reuse_trajectory and traj.exists()):
         t = time.perf_counter()
-        run_dormant(args, "simulate", ROOT / "scenes/monastery-rain.toml", "--frame-count", b, "--out", traj)
-        log(f"speed: simulated {b} frames in {time.perf_counter() - t:.0f} s")
-    rows_log = (out / "frames.jsonl").open("a")
-    exp = export(args, traj, f"{a}..{b}", out / "rain.json")
-    res = {"frames": f"{a}..{b}", "spp": args.rain_spp, "size": args.rain_size, "dormant": [],
-           "cycles": {m: [] for m in args.cycles_modes.split(",")}, "dormant_wall_s": 0.0,
-           "cycles_setup_s": 0.0}
-    modes = set(res["cycles"])
-    if "animation" in modes and modes != {"animation"}:
-        sys.exit("compare-cycles: --cycles-modes animation runs alone (it is a different Blender scene)")
-    t = time.perf_counter()
-    if modes == {"animation"}:
-        glb = out / "rain.glb"
+        run_dormant(args, "simulate", ROOT / SHOTS[shot][0], "--frame-count", b, "--out", traj)
+        log(f"{shot}: simulated {b} frames in {time.perf_counter() - t:.0f} s")
+    if not (args.reuse_trajectory and glb.exists()):
         run_dormant(args, "export", "--trajectory", traj, "--gltf", glb)
-        cs = CyclesAnimation(glb, exp)
-        res["cycles_import_s"] = cs.import_s
-    else:
-        cs = CyclesScene(exp)  # glTF import and materials, once for every mode
-    res["cycles_setup_s"] = time.perf_counter() - t
-    frames = exp["frames"]
-    for c0 in range(0, len(frames), args.chunk):
-        chunk = frames[c0:c0 + args.chunk]
-        first, last = chunk[0]["index"], chunk[-1]["index"] + 1
-        wall, records = dormant_render(args, traj, f"{first}..{last}", out / "dormant", args.rain_spp, args.rain_size)
+    return traj, glb, a, b
+
+
+def cycles_chunk(args, cs, form, traj, first, last, out):
+    """Cycles renders frames first..last in its form; one row per frame."""
+    if form == "animation":
+        return cs.render(first, last, out / "cycles")
+    rows = []
+    out.mkdir(parents=True, exist_ok=True)
+    frames = export(args, traj, f"{first}..{last}", out / "chunk.json")["frames"]
+    for fr in frames:
+        pose = cs.pose(fr)
+        t = time.perf_counter()
+        bpy.context.view_layer.update()
+        update = time.perf_counter() - t
+        wall, sync, trace = cs.render(out / "cycles" / f"frame_{fr['index']:04}.exr")
+        rows.append({"frame": fr["index"], "pose_s": pose, "update_s": update, "wall_s": wall + update,
+                     "sync_s": sync, "trace_s": trace})
+    return rows
+
+
+def speed(args, out, shot):
+    """One shot's stretch at --speed-spp: dormant without reuse and Cycles with persistent data
+    in interleaved chunks (the machine is shared), then dormant with exact reuse over the whole
+    stretch in one run, Cycles' default mode (no persistent data) on its first frames, and
+    each renderer's noise from seeds of the middle frame."""
+    out.mkdir(parents=True, exist_ok=True)
+    form = SHOTS[shot][1]
+    traj, glb, a, b = shot_sources(args, out, shot)
+    setup = export(args, traj, f"{a}..{a + 1}", out / "first.json")
+    t = time.perf_counter()
+    cs = CyclesAnimation(glb, setup) if form == "animation" else CyclesInstances(glb, setup)
+    res = {"shot": shot, "frames": f"{a}..{b}", "spp": args.speed_spp, "size": args.speed_size,
+           "cycles_form": form, "cycles_import_s": cs.import_s, "cycles_setup_s": time.perf_counter() - t,
+           "dormant": [], "dormant_wall_s": 0.0, "cycles": []}
+    rows_log = (out / "frames.jsonl").open("a")
+    for first in range(a, b, args.chunk):
+        last = min(first + args.chunk, b)
+        wall, records = dormant_render(args, traj, f"{first}..{last}", out / "dormant", args.speed_spp,
+                                       args.speed_size, reuse="off")
         res["dormant_wall_s"] += wall
         res["dormant"] += records
-        rows_log.write(json.dumps({"dormant_chunk": [first, last], "wall_s": wall,
-                                   "frame_ms": [r["frame_ms"] for r in records],
-                                   "trace_ms": [r["trace_ms"] for r in records]}) + "\n")
+        configure_render(args, args.speed_spp, args.speed_size, seed=0, persistent=True)
+        rows = cycles_chunk(args, cs, form, traj, first, last, out)
+        res["cycles"] += rows
+        for r in [{"dormant_chunk": [first, last], "wall_s": wall, "records": records}, *rows]:
+            rows_log.write(json.dumps(r) + "\n")
         rows_log.flush()
-        log(f"speed {first}..{last}: dormant {wall:.1f} s")
-        for m, rows in res["cycles"].items():
-            if m == "animation":
-                configure_render(args, args.rain_spp, args.rain_size, seed=0, persistent=True)
-                rows += cs.render(first, last, out / "cycles-animation")
-                for r in rows[-len(chunk):]:
-                    rows_log.write(json.dumps({"cycles": m, **r}) + "\n")
-                rows_log.flush()
-                log(f"speed {first}..{last}: cycles (animation) {sum(r['wall_s'] for r in rows[-len(chunk):]):.1f} s")
-                continue
-            todo = chunk if m == "persistent" else frames[len(res["cycles"][m]):args.default_frames]
-            if not todo:
-                continue  # rebuilt every frame: too slow for every frame on a shared machine
-            configure_render(args, args.rain_spp, args.rain_size, seed=0, persistent=(m == "persistent"))
-            for fr in todo:
-                t = time.perf_counter()
-                cs.pose(fr)
-                bpy.context.view_layer.update()
-                update = time.perf_counter() - t
-                wall, sync, trace = cs.render(out / f"cycles-{m}" / f"frame_{fr['index']:04}.exr")
-                rows.append({"frame": fr["index"], "update_s": update, "wall_s": wall + update,
-                             "sync_s": sync, "trace_s": trace})
-                rows_log.write(json.dumps({"cycles": m, **rows[-1]}) + "\n")
-                rows_log.flush()
-            log(f"speed {first}..{last}: cycles ({m}) {sum(r['wall_s'] for r in rows[-len(todo):]):.1f} s")
-    mode = next(iter(res["cycles"]))
-    res["noise"] = noise_at_equal_spp(args, out, traj, cs, mode, frames[len(frames) // 2])
+        log(f"{shot} {first}..{last}: dormant {wall:.1f} s, cycles {sum(r['wall_s'] for r in rows):.1f} s")
+    wall, records = dormant_render(args, traj, f"{a}..{b}", out / "dormant-exact", args.speed_spp,
+                                   args.speed_size, reuse="exact")
+    res["dormant_exact"] = {"wall_s": wall, "frames": records}
+    log(f"{shot} {a}..{b}: dormant with exact reuse {wall:.1f} s")
+    n = min(args.default_frames, b - a)
+    if n:
+        configure_render(args, args.speed_spp, args.speed_size, seed=0, persistent=False)
+        res["cycles_default"] = cycles_chunk(args, cs, form, traj, a, a + n, out / "default")
+    res["noise"] = noise_at_equal_spp(args, out, traj, cs, form, (a + b) // 2)
     return res
 
 
@@ -709,27 +883,27 @@ def relative_variance(images):
     return float((stack.var(axis=0, ddof=1) / (mean ** 2 + 1e-2)).mean())
 
 
-def noise_at_equal_spp(args, out, traj, cs, mode, frame, seeds=4):
-    """Each renderer's noise on `frame` at the sequence's spp, from `seeds` independent seeds
+def noise_at_equal_spp(args, out, traj, cs, form, i, seeds=4):
+    assert seeds % 2 == 0
+    """Each renderer's noise on frame `i` at the stretch's spp, from `seeds` independent seeds
     (dormant --seed-offset, Cycles' seed), against its own mean, so that the other's bias
     does not count. Time to equal noise scales as noise x time (variance falls as 1/spp)."""
-    i = frame["index"]
     d, c = [], []
     for k in range(seeds):
         folder = out / "noise" / f"dormant-{k}"
-        dormant_render(args, traj, f"{i}..{i + 1}", folder, args.rain_spp, args.rain_size, reuse="off",
+        dormant_render(args, traj, f"{i}..{i + 1}", folder, args.speed_spp, args.speed_size, reuse="off",
                        seed_offset=k + 1)
         d.append(read_exr(folder / f"frame_{i:04}.exr"))
-        configure_render(args, args.rain_spp, args.rain_size, seed=k + 1, persistent=(mode != "default"))
-        if mode == "animation":
-            cs.render(i, i + 1, out / "noise" / f"cycles-{k}")
-            c.append(read_exr(out / "noise" / f"cycles-{k}" / f"frame_{i:04}.exr"))
-        else:
-            cs.pose(frame)
-            cs.render(out / "noise" / f"cycles-{k}.exr")
-            c.append(read_exr(out / "noise" / f"cycles-{k}.exr"))
+        configure_render(args, args.speed_spp, args.speed_size, seed=k + 1, persistent=True)
+        cycles_chunk(args, cs, form, traj, i, i + 1, out / "noise" / f"cycles-{k}")
+        c.append(read_exr(out / "noise" / f"cycles-{k}" / "cycles" / f"frame_{i:04}.exr"))
     res = {"frame": i, "seeds": seeds, "dormant": relative_variance(d), "cycles": relative_variance(c)}
-    log(f"noise at {args.rain_spp} spp, frame {i}: dormant {res['dormant']:.3e}, cycles {res['cycles']:.3e}")
+    # The stretch's own frame checked as the correctness frame is (two halves of two seeds each).
+    res["checks"] = image_checks((d[0] + d[1]) / 2, (d[2] + d[3]) / 2, (c[0] + c[1]) / 2, (c[2] + c[3]) / 2)
+    _, z = compare_images((d[0] + d[1]) / 2, (d[2] + d[3]) / 2, (c[0] + c[1]) / 2, (c[2] + c[3]) / 2)
+    res["figure"] = write_figure(out / "figure.png", sum(d) / seeds, sum(c) / seeds, z)
+    log(f"noise at {args.speed_spp} spp, frame {i}: dormant {res['dormant']:.3e}, cycles {res['cycles']:.3e}; "
+        f"image checks of two seeds: {res['checks']}")
     return res
 
 
@@ -764,16 +938,15 @@ def main():
     ap.add_argument("--correct-size", default="320x180")
     ap.add_argument("--correct-count", type=int, default=300, help="correctness: bodies dropped")
     ap.add_argument("--settle-frames", type=int, default=720, help="correctness: frames simulated before the compared pair")
+    ap.add_argument("--shots", default="rain,demolition", help="speed: the shots, of " + ", ".join(SHOTS))
     ap.add_argument("--rain-frames", default="0..120", help="speed: frames A..B of monastery-rain")
-    ap.add_argument("--rain-spp", type=int, default=16)
-    ap.add_argument("--rain-size", default="320x180")
+    ap.add_argument("--demolition-frames", default="600..660", help="speed: frames A..B of the demolition")
+    ap.add_argument("--speed-spp", type=int, default=16)
+    ap.add_argument("--speed-size", default="960x540")
+    ap.add_argument("--runs", type=int, default=3, help="speed: runs of each shot (the spread is reported)")
     ap.add_argument("--chunk", type=int, default=10, help="speed: frames per interleaved chunk")
-    ap.add_argument("--cycles-modes", default="animation",
-                    help="speed: `animation` (alone: dormant's animated glTF imported, keyframed, rendered as "
-                         "animation jobs with persistent data, as a user would), or `persistent` (each body posed "
-                         "from Python every frame, scene kept) and/or `default` (rebuilt every frame)")
-    ap.add_argument("--default-frames", type=int, default=10,
-                    help="speed: the first N frames also in Cycles' default mode (persistent mode renders all)")
+    ap.add_argument("--default-frames", type=int, default=5,
+                    help="speed: the first N frames also in Cycles' default mode (no persistent data)")
     ap.add_argument("--reuse-dormant", action="store_true", help="correctness: keep dormant's EXRs of an earlier run")
     ap.add_argument("--reuse-trajectory", action="store_true", help="keep trajectories simulated by an earlier run")
     ap.add_argument("--only", choices=["correctness", "speed"])
@@ -790,10 +963,20 @@ def main():
         report["correctness"] = correctness(args, args.out / "correctness")
         (args.out / "report.json").write_text(json.dumps(report, indent=2, default=str))
     if args.only in (None, "speed"):
-        report["speed"] = speed(args, args.out / "speed")
+        report["speed"] = {}
+        for shot in args.shots.split(","):
+            if shot not in SHOTS:
+                sys.exit(f"compare-cycles: --shots: unknown shot `{shot}` (known: {', '.join(SHOTS)})")
+            runs = report["speed"][shot] = []
+            for k in range(args.runs):
+                runs.append(speed(args, args.out / f"speed-{shot}" / f"run{k}", shot))
+                (args.out / "report.json").write_text(json.dumps(report, indent=2, default=str))
+                args.reuse_trajectory = True  # the later runs render the same trajectory
     (args.out / "report.json").write_text(json.dumps(report, indent=2, default=str))
     summarize(report)
-    if not report.get("correctness", {}).get("passed", True):
+    checks = [report.get("correctness", {}).get("passed", True)]
+    checks += [r["noise"]["checks"]["passed"] for runs in report.get("speed", {}).values() for r in runs]
+    if not all(checks):
         sys.exit("compare-cycles: the image checks failed (or a negative control passed): see report.json")
 
 
@@ -810,28 +993,44 @@ def summarize(report):
             f"pixels beyond {Z_OUTLIER:.0f} s.e. {k['pixels_beyond_6se']:.3%} (limit {MAX_Z_OUTLIERS:.1%}), "
             f"mean z^2 {k['mean_z2']:.2f}, |z| > 3 {k['share_z_over_3']:.2%}: {'passed' if k['passed'] else 'FAILED'}; "
             f"negative controls failed: {[n for n, v in c['negative_controls'].items() if not v['passed']]}")
-    if "speed" in report:
-        s = report["speed"]
-        n = len(s["dormant"])
-        trace = sum(r["trace_ms"] for r in s["dormant"]) / 1e3
-        update = sum(r["frame_ms"] for r in s["dormant"]) / 1e3 - trace
-        log(f"speed ({s['frames']}, {s['size']}, {s['spp']} spp): dormant {s['dormant_wall_s']:.1f} s for {n} frames "
-            f"(per frame: wall {s['dormant_wall_s'] / n:.2f} s, scene update {update / n:.3f} s, trace {trace / n:.2f} s)")
-        for m, rows in s["cycles"].items():
-            tot = sum(r["wall_s"] for r in rows) + s["cycles_setup_s"]
-            sync = sum(r["sync_s"] for r in rows)
-            k = max(len(rows), 1)
-            pose = sum(r["update_s"] for r in rows)
-            trace_c = sum(r["trace_s"] for r in rows)
-            log(f"  cycles {m}: {tot:.1f} s for {len(rows)} frames (setup {s['cycles_setup_s']:.1f} s; per frame: wall "
-                f"{(tot - s['cycles_setup_s']) / k:.2f} s, pose update {pose / k:.3f} s, sync {sync / k:.3f} s, "
-                f"trace {trace_c / k:.2f} s); dormant/cycles per frame {s['dormant_wall_s'] / n / ((tot - s['cycles_setup_s']) / k):.2f}")
-            if "noise" in s:
-                v = s["noise"]["dormant"] / s["noise"]["cycles"]
-                per = s["dormant_wall_s"] / n / ((tot - s["cycles_setup_s"]) / k)
-                log(f"  noise dormant/cycles at equal spp {v:.3f}: dormant's time to Cycles' noise over Cycles' time "
-                    f"{per * v:.2f} (per frame, setup apart)")
+    for shot, runs in report.get("speed", {}).items():
+        for k, s in enumerate(runs):
+            summarize_speed(f"{shot} run {k}", s)
+        if len(runs) > 1:
+            for key in ("per_frame", "equal_noise", "equal_noise_exact"):
+                vals = sorted(speed_ratios(s)[key] for s in runs)
+                log(f"{shot}: {key} dormant/cycles over {len(runs)} runs: {', '.join(f'{v:.3f}' for v in vals)}")
 
+
+def speed_ratios(s):
+    """dormant over Cycles (persistent data) per frame, at equal spp and at equal noise, without
+    reuse and with exact reuse; each renderer's setup (Cycles' import) apart."""
+    dormant = s["dormant_wall_s"] / len(s["dormant"])
+    exact = s["dormant_exact"]["wall_s"] / len(s["dormant_exact"]["frames"])
+    cycles = sum(r["wall_s"] for r in s["cycles"]) / len(s["cycles"])
+    noise = s["noise"]["dormant"] / s["noise"]["cycles"]
+    return {"dormant_s": dormant, "dormant_exact_s": exact, "cycles_s": cycles, "noise": noise,
+            "per_frame": dormant / cycles, "equal_noise": dormant / cycles * noise,
+            "equal_noise_exact": exact / cycles * noise}
+
+
+def summarize_speed(name, s):
+    r = speed_ratios(s)
+    n = len(s["dormant"])
+    trace = sum(x["trace_ms"] for x in s["dormant"]) / 1e3 / n
+    frame = sum(x["frame_ms"] for x in s["dormant"]) / 1e3 / n
+    c = s["cycles"]
+    mean = lambda key, rows=c: sum(x[key] for x in rows) / len(rows)
+    log(f"{name} ({s['frames']}, {s['size']}, {s['spp']} spp): dormant per frame {r['dormant_s']:.2f} s wall "
+        f"(in the loop {frame:.2f} s, trace {trace:.2f} s), with exact reuse {r['dormant_exact_s']:.2f} s; "
+        f"cycles ({s['cycles_form']}, persistent data) {r['cycles_s']:.2f} s (update {mean('update_s'):.3f} s, "
+        f"sync {mean('sync_s'):.2f} s, trace {mean('trace_s'):.2f} s; import {s['cycles_import_s']:.1f} s apart)")
+    if s.get("cycles_default"):
+        log(f"  cycles' default mode (no persistent data): {mean('wall_s', s['cycles_default']):.2f} s per frame "
+            f"(sync {mean('sync_s', s['cycles_default']):.2f} s) over {len(s['cycles_default'])} frames")
+    log(f"  dormant/cycles: per frame {r['per_frame']:.3f} at equal spp; noise at equal spp {r['noise']:.3f}; "
+        f"at equal noise {r['equal_noise']:.3f}, with exact reuse {r['equal_noise_exact']:.3f}; "
+        f"image checks on frame {s['noise']['frame']}: {'passed' if s['noise']['checks']['passed'] else 'FAILED'}")
 
 if __name__ == "__main__":
     main()
