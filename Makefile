@@ -42,8 +42,9 @@ soak: build
 
 # dormant against Blender Cycles (not in CI: `pip install bpy` fetches Blender 5.0 as a Python
 # module, a wheel of some 400 MB, into the git-ignored venv .deps/bpy-venv; bpy 5.0 needs
-# Python 3.11). Correctness at 1,024 spp and the monastery-rain sequence's speed, both on
-# COMPARE_THREADS threads; results in out/compare-cycles/report.json. See
+# Python 3.11). Correctness at 1,024 spp and the speed of monastery-rain and the demolition at
+# 960x540 (three runs each, about two hours in all), on COMPARE_THREADS threads; results in
+# out/compare-cycles/report.json. See
 # scripts/compare-cycles.py and docs/performance.md#against-blender-cycles.
 BPY_VENV := .deps/bpy-venv
 BPY_VERSION ?= 5.0.1

@@ -42,7 +42,6 @@ import argparse
 import json
 import math
 import os
-import shutil
 import struct
 import subprocess
 import sys
@@ -327,18 +326,14 @@ class CyclesScene:
             if p["gltf"] is None:
                 sys.exit(f"compare-cycles: prototype {p['name']} is a built-in {p['builtin']}; only glTF is supported")
             self.collections.append(import_gltf(p["gltf"], p["name"]))
-        match_materials()
         if export["environment_material"]:
             give_material(env_coll, export["environment_material"], "environment-fallback")
         for coll, p in zip(self.collections, export["prototypes"]):
             if p["material"]:
                 give_material(coll, p["material"], f"{p['name']}-fallback")
-        build_world(export["sky"])
-        build_lights(export)
-        cam = bpy.data.objects.new("camera", bpy.data.cameras.new("camera"))
-        bpy.context.scene.collection.objects.link(cam)
-        bpy.context.scene.camera = cam
-        self.camera = cam
+        # After give_material, so that its materials get single-scattering GGX too (Blender's
+        # default is multiscatter).
+        self.camera = comparison_setup(export)
         self.bodies = {}
 
     def pose(self, frame):
@@ -420,6 +415,19 @@ def render_still(path):
     return t1 - t0, sync, (t1 - first_sample) if first_sample else float("nan")
 
 
+def comparison_setup(export):
+    """What every form of the scene shares once its meshes are in: the comparison's materials
+    (`match_materials`), sky, lights and a camera, which it returns."""
+    scene = bpy.context.scene
+    match_materials()
+    build_world(export["sky"])
+    build_lights(export)
+    camera = bpy.data.objects.new("camera", bpy.data.cameras.new("camera"))
+    scene.collection.objects.link(camera)
+    scene.camera = camera
+    return camera
+
+
 class CyclesAnimation:
     """Cycles as a user renders a simulation: dormant's animated glTF (`dormant export --gltf`:
     one keyframed object per body, shared meshes) imported by Blender's importer, the
@@ -437,13 +445,7 @@ class CyclesAnimation:
         self.import_s = time.perf_counter() - t
         for o in [o for o in bpy.data.objects if o.type in ("LIGHT", "CAMERA")]:
             bpy.data.objects.remove(o)
-        match_materials()
-        build_world(export["sky"])
-        build_lights(export)
-        cam = bpy.data.objects.new("camera", bpy.data.cameras.new("camera"))
-        scene.collection.objects.link(cam)
-        scene.camera = cam
-        set_camera(cam, export["frames"][0]["camera"])
+        set_camera(comparison_setup(export), export["frames"][0]["camera"])
 
     def render(self, first, last, out):
         """Frames first..last as one animation job into `out`; per frame (wall s from the
@@ -516,6 +518,20 @@ def instancer_tree(source):
     return tree
 
 
+def bodiless_scene(glb, export):
+    """Resets Blender to the shot without its bodies: the meshes of the glTF export `glb`
+    (prototypes hidden at the origin, the environment), the comparison's materials, sky,
+    lights and camera. Returns (imported mesh objects by name, camera, import seconds)."""
+    reset_blender()
+    meshes = glb.with_suffix(".meshes.glb")
+    meshes_only_glb(glb, meshes)
+    t = time.perf_counter()
+    bpy.ops.import_scene.gltf(filepath=str(meshes), import_shading="NORMALS")
+    import_s = time.perf_counter() - t
+    imported = {o.name: o for o in bpy.data.objects if o.type == "MESH"}
+    return imported, comparison_setup(export), import_s
+
+
 class CyclesInstances:
     """Blender's fastest form for many rigid bodies: each prototype's mesh once, instanced by
     geometry nodes on the points of one mesh per prototype (a point per body; its rotation and
@@ -525,20 +541,8 @@ class CyclesInstances:
     Meshes and materials come from `dormant export --gltf` (built-in shapes included)."""
 
     def __init__(self, glb, export):
-        reset_blender()
+        imported, self.camera, self.import_s = bodiless_scene(glb, export)
         scene = bpy.context.scene
-        meshes = glb.with_suffix(".meshes.glb")
-        meshes_only_glb(glb, meshes)
-        t = time.perf_counter()
-        bpy.ops.import_scene.gltf(filepath=str(meshes), import_shading="NORMALS")
-        self.import_s = time.perf_counter() - t
-        imported = {o.name: o for o in bpy.data.objects if o.type == "MESH"}
-        match_materials()
-        build_world(export["sky"])
-        build_lights(export)
-        self.camera = bpy.data.objects.new("camera", bpy.data.cameras.new("camera"))
-        scene.collection.objects.link(self.camera)
-        scene.camera = self.camera
         protos = np.asarray(export["body_prototypes"])
         self.members, self.points = [], []
         for k, p in enumerate(export["prototypes"]):
@@ -573,6 +577,51 @@ class CyclesInstances:
             mesh.attributes["rotation"].data.foreach_set("value", q.ravel())
             mesh.attributes["present"].data.foreach_set("value", present)
             mesh.update()
+        set_camera(self.camera, frame["camera"])
+        return time.perf_counter() - t
+
+    def render(self, path):
+        return render_still(path)
+
+
+class CyclesObjects:
+    """The form Cell Fracture and rigid-body users have: one object per body, all bodies of a
+    prototype sharing its mesh (linked duplicates). Each frame only the bodies whose pose
+    changed get a new matrix (`pose_s`, the harness's work, timed apart); Blender's update and
+    Cycles' sync are charged to Cycles."""
+
+    def __init__(self, glb, export):
+        imported, self.camera, self.import_s = bodiless_scene(glb, export)
+        scene = bpy.context.scene
+        t = time.perf_counter()
+        bodies = bpy.data.collections.new("bodies")
+        scene.collection.children.link(bodies)
+        self.objects = []
+        for b, k in enumerate(export["body_prototypes"]):
+            source = imported[export["prototypes"][k]["name"]]
+            obj = bpy.data.objects.new(f"body {b}", source.data)
+            obj.hide_render = True
+            bodies.objects.link(obj)
+            self.objects.append(obj)
+        for source in {imported[p["name"]] for p in export["prototypes"]}:
+            source.hide_render = True
+        self.last = [None] * len(self.objects)
+        self.import_s += time.perf_counter() - t
+
+    def pose(self, frame):
+        """Moves the bodies whose pose differs from the last frame's and sets the camera;
+        returns the seconds it took."""
+        t = time.perf_counter()
+        for b, pose in enumerate(frame["poses"]):
+            if pose == self.last[b]:
+                continue
+            obj = self.objects[b]
+            if pose is None:
+                obj.hide_render = True
+            else:
+                obj.matrix_world = placement(1.0, pose=pose)
+                obj.hide_render = False
+            self.last[b] = pose
         set_camera(self.camera, frame["camera"])
         return time.perf_counter() - t
 
@@ -709,8 +758,8 @@ def write_figure(path, a, b, z, crop_share=4, gap=4):
     x0 = int(np.clip(tx * TILE + TILE // 2 - cw // 2, 0, w - cw))
 
     def crop(img):
-        c = img[y0:y0 + ch, x0:x0 + cw]
-        return np.repeat(np.repeat(c, crop_share, axis=0), crop_share, axis=1)[:h, :w]
+        c = np.repeat(np.repeat(img[y0:y0 + ch, x0:x0 + cw], crop_share, axis=0), crop_share, axis=1)
+        return np.pad(c, ((0, h - c.shape[0]), (0, w - c.shape[1]), (0, 0)), constant_values=1.0)
 
     def row(panels):
         sep = np.ones((h, gap, 3))
@@ -782,10 +831,7 @@ def correctness(args, out):
     c = [read_exr(out / "cycles" / f"half{k}.exr") for k in range(2)]
     metrics, z = compare_images(d[0], d[1], c[0], c[1])
     res.update(metrics)
-    # The stretch's own frame checked as the correctness frame is (two halves of two seeds each).
-    res["checks"] = image_checks((d[0] + d[1]) / 2, (d[2] + d[3]) / 2, (c[0] + c[1]) / 2, (c[2] + c[3]) / 2)
-    _, z = compare_images((d[0] + d[1]) / 2, (d[2] + d[3]) / 2, (c[0] + c[1]) / 2, (c[2] + c[3]) / 2)
-    res["figure"] = write_figure(out / "figure.png", sum(d) / seeds, sum(c) / seeds, z)
+    res["checks"] = image_checks(d[0], d[1], c[0], c[1])
     res["negative_controls"] = negative_controls(args, out, cycles, d)
     res["passed"] = res["checks"]["passed"] and not any(n["passed"] for n in res["negative_controls"].values())
     write_png(out / "dormant.png", (d[0] + d[1]) / 2)
@@ -807,7 +853,7 @@ def shot_sources(args, out, shot):
     """The shot's trajectory (simulated up to the stretch's end) and its glTF export; returns
     (trajectory, glb, first frame, end frame)."""
     a, b = map(int, getattr(args, f"{shot}_frames").split(".."))
-    traj, glb = out / f"{shot}.traj", out / f"{shot}.glb"
+    traj, glb = out.parent / f"{shot}.traj", out.parent / f"{shot}.glb"  # shared by the runs
     if not (args.reuse_trajectory and traj.exists()):
         t = time.perf_counter()
         run_dormant(args, "simulate", ROOT / SHOTS[shot][0], "--frame-count", b, "--out", traj)
@@ -841,11 +887,11 @@ def speed(args, out, shot):
     stretch in one run, Cycles' default mode (no persistent data) on its first frames, and
     each renderer's noise from seeds of the middle frame."""
     out.mkdir(parents=True, exist_ok=True)
-    form = SHOTS[shot][1]
+    form = args.demolition_form if shot == "demolition" else SHOTS[shot][1]
     traj, glb, a, b = shot_sources(args, out, shot)
     setup = export(args, traj, f"{a}..{a + 1}", out / "first.json")
     t = time.perf_counter()
-    cs = CyclesAnimation(glb, setup) if form == "animation" else CyclesInstances(glb, setup)
+    cs = {"animation": CyclesAnimation, "instances": CyclesInstances, "objects": CyclesObjects}[form](glb, setup)
     res = {"shot": shot, "frames": f"{a}..{b}", "spp": args.speed_spp, "size": args.speed_size,
            "cycles_form": form, "cycles_import_s": cs.import_s, "cycles_setup_s": time.perf_counter() - t,
            "dormant": [], "dormant_wall_s": 0.0, "cycles": []}
@@ -883,11 +929,12 @@ def relative_variance(images):
     return float((stack.var(axis=0, ddof=1) / (mean ** 2 + 1e-2)).mean())
 
 
-def noise_at_equal_spp(args, out, traj, cs, form, i, seeds=4):
-    assert seeds % 2 == 0
-    """Each renderer's noise on frame `i` at the stretch's spp, from `seeds` independent seeds
-    (dormant --seed-offset, Cycles' seed), against its own mean, so that the other's bias
-    does not count. Time to equal noise scales as noise x time (variance falls as 1/spp)."""
+def noise_at_equal_spp(args, out, traj, cs, form, i):
+    """Each renderer's noise on frame `i` at the stretch's spp, from --check-seeds independent
+    seeds (dormant --seed-offset, Cycles' seed), against its own mean, so that the other's bias
+    does not count. Time to equal noise scales as noise x time (variance falls as 1/spp).
+    The same renders give the frame's image checks (the seeds' two halves as the halves)."""
+    seeds = args.check_seeds
     d, c = [], []
     for k in range(seeds):
         folder = out / "noise" / f"dormant-{k}"
@@ -898,12 +945,13 @@ def noise_at_equal_spp(args, out, traj, cs, form, i, seeds=4):
         cycles_chunk(args, cs, form, traj, i, i + 1, out / "noise" / f"cycles-{k}")
         c.append(read_exr(out / "noise" / f"cycles-{k}" / "cycles" / f"frame_{i:04}.exr"))
     res = {"frame": i, "seeds": seeds, "dormant": relative_variance(d), "cycles": relative_variance(c)}
-    # The stretch's own frame checked as the correctness frame is (two halves of two seeds each).
-    res["checks"] = image_checks((d[0] + d[1]) / 2, (d[2] + d[3]) / 2, (c[0] + c[1]) / 2, (c[2] + c[3]) / 2)
-    _, z = compare_images((d[0] + d[1]) / 2, (d[2] + d[3]) / 2, (c[0] + c[1]) / 2, (c[2] + c[3]) / 2)
+    h = seeds // 2
+    halves = [sum(d[:h]) / h, sum(d[h:]) / h, sum(c[:h]) / h, sum(c[h:]) / h]
+    res["checks"] = image_checks(*halves)
+    _, z = compare_images(*halves)
     res["figure"] = write_figure(out / "figure.png", sum(d) / seeds, sum(c) / seeds, z)
     log(f"noise at {args.speed_spp} spp, frame {i}: dormant {res['dormant']:.3e}, cycles {res['cycles']:.3e}; "
-        f"image checks of two seeds: {res['checks']}")
+        f"image checks at {seeds * args.speed_spp} spp: {res['checks']}")
     return res
 
 
@@ -941,8 +989,14 @@ def main():
     ap.add_argument("--shots", default="rain,demolition", help="speed: the shots, of " + ", ".join(SHOTS))
     ap.add_argument("--rain-frames", default="0..120", help="speed: frames A..B of monastery-rain")
     ap.add_argument("--demolition-frames", default="600..660", help="speed: frames A..B of the demolition")
+    ap.add_argument("--demolition-form", choices=["instances", "objects"], default="instances",
+                    help="speed: how Blender holds the demolition's bodies: geometry-nodes instances of one mesh "
+                         "per prototype (Blender's fastest), or one object per body (as Cell Fracture makes them)")
     ap.add_argument("--speed-spp", type=int, default=16)
     ap.add_argument("--speed-size", default="960x540")
+    ap.add_argument("--check-seeds", type=int, default=16,
+                    help="speed: seeds of the middle frame for the noise and the image checks (even, >= 4; "
+                         "at 16 spp, 4 seeds leave the tile check noise-limited on the rain)")
     ap.add_argument("--runs", type=int, default=3, help="speed: runs of each shot (the spread is reported)")
     ap.add_argument("--chunk", type=int, default=10, help="speed: frames per interleaved chunk")
     ap.add_argument("--default-frames", type=int, default=5,
@@ -953,6 +1007,8 @@ def main():
     ap.add_argument("--quick", action="store_true",
                     help="the image checks alone on a small frame: --only correctness --spp 256 --correct-size 160x90")
     args = ap.parse_args()
+    if args.check_seeds < 4 or args.check_seeds % 2:
+        sys.exit("compare-cycles: --check-seeds must be even and at least 4")
     if args.quick:
         args.only, args.spp, args.correct_size = "correctness", 256, "160x90"
     if not args.dormant.exists():
@@ -963,7 +1019,7 @@ def main():
         report["correctness"] = correctness(args, args.out / "correctness")
         (args.out / "report.json").write_text(json.dumps(report, indent=2, default=str))
     if args.only in (None, "speed"):
-        report["speed"] = {}
+        report["speed"], reuse_trajectory = {}, args.reuse_trajectory
         for shot in args.shots.split(","):
             if shot not in SHOTS:
                 sys.exit(f"compare-cycles: --shots: unknown shot `{shot}` (known: {', '.join(SHOTS)})")
@@ -972,6 +1028,7 @@ def main():
                 runs.append(speed(args, args.out / f"speed-{shot}" / f"run{k}", shot))
                 (args.out / "report.json").write_text(json.dumps(report, indent=2, default=str))
                 args.reuse_trajectory = True  # the later runs render the same trajectory
+            args.reuse_trajectory = reuse_trajectory
     (args.out / "report.json").write_text(json.dumps(report, indent=2, default=str))
     summarize(report)
     checks = [report.get("correctness", {}).get("passed", True)]
