@@ -136,9 +136,13 @@ fn start_until(args: &[OsString], ready: impl Fn() -> bool) -> Child {
     child
 }
 
-/// Starts `args` and kills it (SIGKILL) once its stats.json records `frames` frames.
+/// Starts `args` and kills it (SIGKILL) once its stats.json records `frames` frames, or
+/// once half of `tiny_run`'s 40 frames are written: stats.json is rewritten at intervals that
+/// grow with the cost of its last write, so after one slow write it may next be written only
+/// at the end (CI of c61b1be: killed with 40 of 40 frames written).
 fn kill_after(args: &[OsString], out: &Path, frames: usize) {
-    let mut child = start_until(args, || recorded_frames(out) >= frames);
+    let mut child =
+        start_until(args, || recorded_frames(out) >= frames || (out.is_dir() && frame_count(out) >= 20));
     child.kill().unwrap();
     child.wait().unwrap();
 }
@@ -155,7 +159,8 @@ fn killed_render_resumes_to_the_files_of_an_uninterrupted_run() {
     kill_after(&tiny_run(&killed), &killed, 4);
     let recorded = read_stats(&killed)["frames"].as_array().unwrap().len();
     let written = frame_count(&killed);
-    assert!(recorded >= 4 && written < total, "killed with {written} of {total} frames written");
+    // stats.json is always written after the first frame.
+    assert!(recorded >= 1 && written < total, "killed with {written} of {total} frames written");
 
     let report = dir.path().join("resume.json");
     let mut args = tiny_run(&killed);
