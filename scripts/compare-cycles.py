@@ -123,7 +123,7 @@ def import_gltf(path, name):
 
 
 def match_materials():
-    """Makes every Principled BSDF the model dormant evaluates (src/render/bsdf.rs)."""
+    """Makes every Principled BSDF the model dormant evaluates (crates/dormant/src/render/bsdf/)."""
     for mat in bpy.data.materials:
         if not mat.use_nodes:
             continue

@@ -1,6 +1,11 @@
-//! The metallic-roughness BSDF (glTF's model): a Lambertian diffuse lobe for the dielectric
-//! part and a GGX microfacet specular lobe with Schlick Fresnel and height-correlated Smith
-//! shadowing. Directions are in world space; both point away from the surface.
+//! The metallic-roughness BSDF (glTF's model, layered as Blender's Principled BSDF): a
+//! Lambertian diffuse base under a dielectric GGX specular layer (exact Fresnel at IOR 1.5,
+//! scaled by `specular`), and GGX with Schlick Fresnel for metals, with height-correlated Smith
+//! shadowing. The base is weighted by one minus the layer's lobe-averaged reflectance
+//! ([`fresnel`]). Directions are in world space; both point away from the surface.
+
+mod fresnel;
+mod lobe_table;
 
 use std::f32::consts::{FRAC_1_PI, FRAC_PI_2};
 
@@ -67,6 +72,13 @@ impl Frame {
         self.around(u.x.sqrt(), (1.0 - u.x).max(0.0).sqrt(), u.y)
     }
 
+    /// A GGX microfacet normal of `alpha^2 = a2` around the axis, distributed as `D(h) cos(h)`.
+    fn ggx_half_vector(&self, a2: f32, u: Vec2) -> Vec3 {
+        let cos_h = ((1.0 - u.x) / (1.0 + (a2 - 1.0) * u.x)).max(0.0).sqrt();
+        let sin_h = (1.0 - cos_h * cos_h).max(0.0).sqrt();
+        self.around(sin_h, cos_h, u.y)
+    }
+
     /// Uniform direction within the cone of half-angle `acos(cos_max)` around the axis; unit
     /// to within 1e-6, as [`Self::cosine`].
     pub(crate) fn cone(&self, cos_max: f32, u: Vec2) -> Vec3 {
@@ -107,9 +119,15 @@ pub(crate) struct Bsdf {
     /// `n . wo`, and Smith's `lambda` of it: the same for every incident direction.
     cos_o: f32,
     lambda_o: f32,
-    /// The diffuse lobe's albedo over `pi`: the Lambertian BRDF before the Fresnel layer.
+    /// The diffuse lobe's albedo over `pi`, weighted by what the specular layer leaves it.
     diffuse_over_pi: Vec3,
-    f0: Vec3,
+    /// The specular reflectance at `cos` to the microfacet normal is
+    /// `dielectric * fresnel::dielectric(cos) + metal_f0 + metal_rise * fresnel::schlick_rise(cos)`.
+    dielectric: f32,
+    fresnel: &'static fresnel::DielectricTables,
+    metallic: bool,
+    metal_f0: Vec3,
+    metal_rise: Vec3,
     /// GGX's `alpha^2` (`alpha` = roughness squared), and that over `pi`.
     a2: f32,
     a2_over_pi: f32,
@@ -130,18 +148,22 @@ fn lambda(a2: f32, cos: f32) -> f32 {
     0.5 * ((1.0 + a2 * (1.0 - c2) / c2).sqrt() - 1.0)
 }
 
-fn fresnel(f0: Vec3, cos: f32) -> Vec3 {
-    f0 + (Vec3::ONE - f0) * (1.0 - cos.clamp(0.0, 1.0)).powi(5)
-}
-
 impl Bsdf {
     /// `n` is the unit shading normal on the side the ray came from, `wo` the unit direction
     /// back along the ray.
     pub(crate) fn new(material: &Material, n: Vec3, wo: Vec3) -> Self {
         let metallic = material.metallic.clamp(0.0, 1.0);
         let roughness = material.roughness.clamp(0.03, 1.0);
-        let diffuse = material.base_color * (1.0 - metallic);
-        let f0 = Vec3::splat(0.04 * material.specular.clamp(0.0, 1.0)).lerp(material.base_color, metallic);
+        let cos_o = n.dot(wo);
+        // The dielectric layer: KHR_materials_specular's factor scales its whole reflectance.
+        let dielectric = (1.0 - metallic) * material.specular.clamp(0.0, 1.0);
+        let (metal_f0, metal_rise) =
+            (material.base_color * metallic, (Vec3::ONE - material.base_color) * metallic);
+        let tables = fresnel::tables();
+        let layer = dielectric * tables.lobe_average(cos_o.max(0.0), roughness);
+        let diffuse = material.base_color * ((1.0 - metallic) * (1.0 - layer));
+        // Reflectance at normal incidence: the dielectric's is 0.04.
+        let f0 = metal_f0 + Vec3::splat(0.04 * dielectric);
         let (ld, ls) = (luminance(diffuse), luminance(f0));
         // Sample the specular lobe in proportion to its share, but never starve either lobe
         // that exists.
@@ -154,14 +176,17 @@ impl Bsdf {
         };
         let alpha = roughness * roughness;
         let a2 = alpha * alpha;
-        let cos_o = n.dot(wo);
         Self {
             frame: Frame::new(n),
             wo,
             cos_o,
             lambda_o: lambda(a2, cos_o),
             diffuse_over_pi: diffuse * FRAC_1_PI,
-            f0,
+            dielectric,
+            fresnel: tables,
+            metallic: metallic > 0.0,
+            metal_f0,
+            metal_rise,
             a2,
             a2_over_pi: a2 * FRAC_1_PI,
             p_spec,
@@ -178,8 +203,7 @@ impl Bsdf {
     /// they share the half vector and the microfacet distribution, and every light sample
     /// needs both (the pdf for its MIS weight). Four divisions: GGX's `D` is
     /// `a2 / (pi t^2)`, its product with the Smith term over `4 (n.wo) (n.wi)` one quotient, the
-    /// specular pdf another, and Smith's `lambda` of `wi` the last (results differ from the
-    /// term-by-term quotients at the last bits).
+    /// specular pdf another, and Smith's `lambda` of `wi` the last (results differ from the term-by-term quotients at the last bits).
     pub(crate) fn eval_pdf(&self, wi: Vec3) -> (Vec3, f32) {
         let (wo, co, ci) = (self.wo, self.cos_o, self.frame.n.dot(wi));
         if co <= 0.0 || ci <= 0.0 {
@@ -189,13 +213,16 @@ impl Bsdf {
         let (cos_h, wo_h) = (self.frame.n.dot(h), wo.dot(h));
         let t = cos_h * cos_h * (self.a2 - 1.0) + 1.0;
         let d = self.a2_over_pi / (t * t);
-        let f = fresnel(self.f0, wo_h);
+        let mut f = Vec3::splat(self.dielectric * self.fresnel.fresnel(wo_h));
+        // Most materials are dielectrics: they skip the metal's term.
+        if self.metallic {
+            f += self.metal_f0 + self.metal_rise * fresnel::schlick_rise(wo_h);
+        }
         // D G / (4 co ci) with G = 1 / (1 + lambda_o + lambda_i).
         let g_denominator = 1.0 + self.lambda_o + lambda(self.a2, ci);
         let spec = f * (d / (g_denominator * (4.0 * co * ci)));
-        let diff = self.diffuse_over_pi * (Vec3::ONE - f);
         let pdf_spec = d * cos_h / (4.0 * wo_h.max(1e-8));
-        ((spec + diff) * ci, self.p_spec * pdf_spec + self.p_diffuse_over_pi * ci)
+        ((spec + self.diffuse_over_pi) * ci, self.p_spec * pdf_spec + self.p_diffuse_over_pi * ci)
     }
 
     /// Whether `wi` and `wo` are both above the shading surface: where [`Self::eval_pdf`] can
@@ -218,10 +245,7 @@ impl Bsdf {
         }
         let wi = if u_lobe < self.p_spec {
             // Sample D(h) cos(h), reflect wo about h.
-            let a2 = self.a2;
-            let cos_h = ((1.0 - u.x) / (1.0 + (a2 - 1.0) * u.x)).max(0.0).sqrt();
-            let sin_h = (1.0 - cos_h * cos_h).max(0.0).sqrt();
-            let h = self.frame.around(sin_h, cos_h, u.y);
+            let h = self.frame.ggx_half_vector(self.a2, u);
             2.0 * wo.dot(h) * h - wo
         } else {
             self.frame.cosine(u)
@@ -295,9 +319,38 @@ mod tests {
 
     #[test]
     fn white_dielectric_conserves_energy() {
-        let a = albedo(&Material::diffuse(Vec3::ONE), 0.7);
-        // Lambert under the dielectric Fresnel layer: a bit below 1, never above.
-        assert!(a.x > 0.85 && a.x <= 1.01, "{a}");
+        for cos in [0.1, 0.4, 0.7] {
+            let a = albedo(&Material::diffuse(Vec3::ONE), cos);
+            // Lambert under the dielectric Fresnel layer: a bit below 1, never above.
+            assert!(a.x > 0.85 && a.x <= 1.01, "cos {cos}: {a}");
+        }
+    }
+
+    #[test]
+    fn surface_without_specular_layer_is_exactly_lambertian() {
+        let m = Material::lambertian(Vec3::splat(0.5));
+        let wo = Vec3::new(0.98, 0.0, 0.2).normalize();
+        let b = Bsdf::new(&m, Vec3::Z, wo);
+        for wi in [Vec3::new(-0.9, 0.0, 0.3), Vec3::new(0.9, 0.1, 0.3), Vec3::new(0.1, 0.5, 0.8)] {
+            let wi = wi.normalize();
+            let expect = 0.5 * FRAC_1_PI * wi.z;
+            assert!((b.eval(wi) - Vec3::splat(expect)).abs().max_element() < 1e-7, "{wi}");
+        }
+    }
+
+    #[test]
+    fn diffuse_base_is_weighted_by_the_layers_lobe_average_for_every_incident_direction() {
+        // A black dielectric has only the specular term; the same with a white base adds the
+        // base's Lambertian term, the same share of it towards and away from the view.
+        let (white, black) = (Material::diffuse(Vec3::ONE), Material::diffuse(Vec3::ZERO));
+        let wo = Vec3::new(0.98, 0.0, 0.17).normalize();
+        let (w, k) = (Bsdf::new(&white, Vec3::Z, wo), Bsdf::new(&black, Vec3::Z, wo));
+        let base = |wi: Vec3| (w.eval(wi) - k.eval(wi)).x / (wi.z * FRAC_1_PI);
+        let (back, forward) =
+            (base(Vec3::new(0.7, 0.0, 0.7).normalize()), base(Vec3::new(-0.7, 0.0, 0.7).normalize()));
+        assert!((back - forward).abs() < 1e-6, "{back} against {forward}");
+        let expect = 1.0 - fresnel::tables().lobe_average(wo.z, 1.0);
+        assert!((back - expect).abs() < 1e-6 && expect < 0.95, "{back} against {expect}");
     }
 
     #[test]
