@@ -57,6 +57,8 @@ except ImportError:  # pragma: no cover - the Makefile runs this under the bpy v
     sys.exit("compare-cycles: needs the `bpy` module (make compare-cycles installs it into .deps/bpy-venv)")
 
 ROOT = Path(__file__).resolve().parent.parent
+# Rec. 709 luminance of linear RGB, as dormant's `render::bsdf::luminance`.
+LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
 # glTF / dormant (Y up) to Blender (Z up): (x, y, z) -> (x, -z, y).
 C = Matrix(((1, 0, 0, 0), (0, 0, -1, 0), (0, 1, 0, 0), (0, 0, 0, 1)))
 
@@ -653,7 +655,7 @@ def compare_images(a1, a2, b1, b2):
     - `mean_ratio`: mean luminance of A over B (light units, exposure).
     - `rel_mse`: mean of (A - B)^2 / (B^2 + 1e-2) against each renderer's own rel. MSE of
       half vs half (what the noise alone gives at half the samples, divided by 4 for the full)."""
-    lum = np.array([0.2126, 0.7152, 0.0722])
+    lum = LUMINANCE
     a, b = (a1 + a2) / 2, (b1 + b2) / 2
     va, vb = (a1 - a2) ** 2 / 4, (b1 - b2) ** 2 / 4
     chi2 = float(((a - b) ** 2).sum() / (va + vb).sum())
@@ -693,7 +695,7 @@ MAX_Z_OUTLIERS = 0.001
 def tile_check(a, b, tile=TILE):
     """Mean luminance ratio of `a` over `b`, and the share of `tile` x `tile` tiles whose mean
     luminances agree within MAX_TILE_ERROR (relative to `b`'s)."""
-    lum = np.array([0.2126, 0.7152, 0.0722])
+    lum = LUMINANCE
     la, lb = a @ lum, b @ lum
     h, w = (la.shape[0] // tile) * tile, (la.shape[1] // tile) * tile
     ta = la[:h, :w].reshape(h // tile, tile, w // tile, tile).mean(axis=(1, 3))
@@ -746,7 +748,7 @@ def write_figure(path, a, b, z, crop_share=4, gap=4):
     `crop_share`-th of the frame wide around the 16x16 tile of largest mean |z| (the place a
     reviewer should look), enlarged `crop_share` times, its difference shown as z (-6 .. 6
     standard errors). Returns where the crop is."""
-    lum = np.array([0.2126, 0.7152, 0.0722])
+    lum = LUMINANCE
     la, lb = a @ lum, b @ lum
     rel = diverging((la - lb) / np.maximum(lb, 1e-2) / 0.10)
     h, w = la.shape
@@ -881,11 +883,12 @@ def cycles_chunk(args, cs, form, traj, first, last, out):
     return rows
 
 
-def speed(args, out, shot):
+def speed(args, out, shot, noise=None):
     """One shot's stretch at --speed-spp: dormant without reuse and Cycles with persistent data
     in interleaved chunks (the machine is shared), then dormant with exact reuse over the whole
-    stretch in one run, Cycles' default mode (no persistent data) on its first frames, and
-    each renderer's noise from seeds of the middle frame."""
+    stretch in one run, Cycles' default mode (no persistent data) on its first frames in a
+    process of its own, and each renderer's noise from seeds of the middle frame (unless
+    `noise`, an earlier run's, is given)."""
     out.mkdir(parents=True, exist_ok=True)
     form = args.demolition_form if shot == "demolition" else SHOTS[shot][1]
     traj, glb, a, b = shot_sources(args, out, shot)
@@ -915,10 +918,48 @@ def speed(args, out, shot):
     log(f"{shot} {a}..{b}: dormant with exact reuse {wall:.1f} s")
     n = min(args.default_frames, b - a)
     if n:
-        configure_render(args, args.speed_spp, args.speed_size, seed=0, persistent=False)
-        res["cycles_default"] = cycles_chunk(args, cs, form, traj, a, a + n, out / "default")
-    res["noise"] = noise_at_equal_spp(args, out, traj, cs, form, (a + b) // 2)
+        res["cycles_default"], res["cycles_default_process"] = cycles_default_mode(args, out, shot, (traj, glb),
+                                                                                   a, a + n)
+    # Fixed seeds: the noise and the checks are the same in every run, so only the first
+    # renders them.
+    res["noise"] = noise or noise_at_equal_spp(args, out, traj, cs, form, (a + b) // 2)
     return res
+
+
+def cycles_default_mode(args, out, shot, sources, first, last):
+    """Cycles' default mode (no persistent data) on frames first..last in a Blender process of
+    its own, as a user's separate job would run them; returns its rows and the process's
+    times (start-up and import apart from the frames)."""
+    folder = out / "default"
+    cmd = [sys.executable, __file__, "--dormant", args.dormant, "--threads", args.threads,
+           "--max-depth", args.max_depth, "--speed-spp", args.speed_spp, "--speed-size", args.speed_size,
+           "--demolition-form", args.demolition_form, "--out", folder,
+           "--internal-default-mode", shot, f"{first}..{last}", *sources]
+    t = time.perf_counter()
+    subprocess.run([str(c) for c in cmd], check=True)
+    process_s = time.perf_counter() - t
+    done = json.loads((folder / "default-mode.json").read_text())
+    rows = done.pop("rows")
+    log(f"{shot} {first}..{last}: cycles' default mode in its own process {process_s:.1f} s "
+        f"(import {done['import_s']:.1f} s)")
+    return rows, {**done, "process_s": process_s}
+
+
+def run_default_mode(args):
+    """The child of `cycles_default_mode`: imports the shot and renders its frames without
+    persistent data, then writes the rows to default-mode.json in --out."""
+    shot, frames, traj, glb = args.internal_default_mode
+    first, last = map(int, frames.split(".."))
+    form = args.demolition_form if shot == "demolition" else SHOTS[shot][1]
+    args.out.mkdir(parents=True, exist_ok=True)
+    setup = export(args, Path(traj), f"{first}..{first + 1}", args.out / "first.json")
+    t = time.perf_counter()
+    cs = {"animation": CyclesAnimation, "instances": CyclesInstances, "objects": CyclesObjects}[form](Path(glb), setup)
+    setup_s = time.perf_counter() - t
+    configure_render(args, args.speed_spp, args.speed_size, seed=0, persistent=False)
+    rows = cycles_chunk(args, cs, form, Path(traj), first, last, args.out)
+    done = {"import_s": cs.import_s, "setup_s": setup_s, "rows": rows}
+    (args.out / "default-mode.json").write_text(json.dumps(done, indent=2, default=str))
 
 
 def relative_variance(images):
@@ -1006,7 +1047,11 @@ def main():
     ap.add_argument("--only", choices=["correctness", "speed"])
     ap.add_argument("--quick", action="store_true",
                     help="the image checks alone on a small frame: --only correctness --spp 256 --correct-size 160x90")
+    ap.add_argument("--internal-default-mode", nargs=4, metavar=("SHOT", "A..B", "TRAJ", "GLB"),
+                    help=argparse.SUPPRESS)
     args = ap.parse_args()
+    if args.internal_default_mode:
+        return run_default_mode(args)
     if args.check_seeds < 4 or args.check_seeds % 2:
         sys.exit("compare-cycles: --check-seeds must be even and at least 4")
     if args.quick:
@@ -1025,7 +1070,8 @@ def main():
                 sys.exit(f"compare-cycles: --shots: unknown shot `{shot}` (known: {', '.join(SHOTS)})")
             runs = report["speed"][shot] = []
             for k in range(args.runs):
-                runs.append(speed(args, args.out / f"speed-{shot}" / f"run{k}", shot))
+                runs.append(speed(args, args.out / f"speed-{shot}" / f"run{k}", shot,
+                                  noise=runs[0]["noise"] if runs else None))
                 (args.out / "report.json").write_text(json.dumps(report, indent=2, default=str))
                 args.reuse_trajectory = True  # the later runs render the same trajectory
             args.reuse_trajectory = reuse_trajectory
@@ -1083,8 +1129,9 @@ def summarize_speed(name, s):
         f"cycles ({s['cycles_form']}, persistent data) {r['cycles_s']:.2f} s (update {mean('update_s'):.3f} s, "
         f"sync {mean('sync_s'):.2f} s, trace {mean('trace_s'):.2f} s; import {s['cycles_import_s']:.1f} s apart)")
     if s.get("cycles_default"):
-        log(f"  cycles' default mode (no persistent data): {mean('wall_s', s['cycles_default']):.2f} s per frame "
-            f"(sync {mean('sync_s', s['cycles_default']):.2f} s) over {len(s['cycles_default'])} frames")
+        log(f"  cycles' default mode (no persistent data, its own process): "
+            f"{mean('wall_s', s['cycles_default']):.2f} s per frame (sync {mean('sync_s', s['cycles_default']):.2f} s) "
+            f"over {len(s['cycles_default'])} frames")
     log(f"  dormant/cycles: per frame {r['per_frame']:.3f} at equal spp; noise at equal spp {r['noise']:.3f}; "
         f"at equal noise {r['equal_noise']:.3f}, with exact reuse {r['equal_noise_exact']:.3f}; "
         f"image checks on frame {s['noise']['frame']}: {'passed' if s['noise']['checks']['passed'] else 'FAILED'}")
