@@ -12,10 +12,10 @@ installs, and a few minutes).
            images are compared as `make compare-cycles` does, with thresholds: mean
            luminance within 1%, the mean of each 16x16 tile within 3% in at least 99% of
            tiles. The materials are Lambertian by default (Specular IOR Level 0, which the
-           exporter writes as KHR_materials_specular): with glTF's specular layer
-           (`--specular 0.5`) the two renderers' layering models differ by about 2.5% in
-           mean luminance (docs/lab/animated-gltf.md), which is the Cycles comparison's
-           question, not the round trip's;
+           exporter writes as KHR_materials_specular); `--specular 0.5` gives them glTF's
+           specular layer (F0 0.04), which both renderers layer as Principled v2 does
+           (mean luminance 1.0021 on 2026-12-07; 2.5% apart before dormant's base took that
+           layering, docs/lab/cycles.md);
   import   `dormant export --gltf` of scenes/tiny.toml is imported by Blender's glTF
            importer (the scene's frame rate set to the file's) and every body's world
            transform at several frames is compared with dormant's own poses: within 1e-4 of
