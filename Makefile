@@ -40,26 +40,25 @@ slurm-check: build
 soak: build
 	bash scripts/soak.sh
 
-# dormant against Blender Cycles (not in CI: `pip install bpy` fetches Blender 5.0 as a Python
-# module, a wheel of some 400 MB, into the git-ignored venv .deps/bpy-venv; bpy 5.0 needs
-# Python 3.11). Correctness at 1,024 spp and the speed of monastery-rain and the demolition at
-# 960x540 (three runs each, about two hours in all), on COMPARE_THREADS threads; results in
-# out/compare-cycles/report.json. See
-# scripts/compare-cycles.py and docs/performance.md#against-blender-cycles.
+# dormant against Blender Cycles (`setup.sh --bpy` installs Blender 5.0 as a Python module,
+# PyPI's bpy, a wheel of some 400 MB, into the git-ignored venv .deps/bpy-venv). Correctness
+# at 1,024 spp and the speed of monastery-rain and the demolition at 960x540 (three runs each,
+# hours in all; not in CI), on COMPARE_THREADS threads; results in
+# out/compare-cycles/report.json. CI runs COMPARE_ARGS=--quick, the image checks on a small
+# frame (about a minute). See scripts/compare-cycles.py and
+# docs/performance.md#against-blender-cycles.
 BPY_VENV := .deps/bpy-venv
 BPY_VERSION ?= 5.0.1
 COMPARE_THREADS ?= 2
 COMPARE_ARGS ?=
 compare-cycles: build
-	test -x $(BPY_VENV)/bin/python || python3.11 -m venv $(BPY_VENV)
-	$(BPY_VENV)/bin/python -c "import bpy" 2>/dev/null || $(BPY_VENV)/bin/pip install -q bpy==$(BPY_VERSION)
+	BPY_VERSION=$(BPY_VERSION) bash scripts/setup.sh --bpy
 	$(BPY_VENV)/bin/python scripts/compare-cycles.py --threads $(COMPARE_THREADS) $(COMPARE_ARGS)
 
 # A Blender rigid-body bake rendered by dormant and Cycles, and dormant's glTF export imported
 # into Blender (scripts/blender-roundtrip.py; not in CI). Uses the bpy venv of compare-cycles.
 blender-roundtrip: build
-	test -x $(BPY_VENV)/bin/python || python3.11 -m venv $(BPY_VENV)
-	$(BPY_VENV)/bin/python -c "import bpy" 2>/dev/null || $(BPY_VENV)/bin/pip install -q bpy==$(BPY_VERSION)
+	BPY_VERSION=$(BPY_VERSION) bash scripts/setup.sh --bpy
 	$(BPY_VENV)/bin/python scripts/blender-roundtrip.py --threads $(COMPARE_THREADS)
 
 # The module arrows inside each crate: no import cycle, nothing imported against the layer order

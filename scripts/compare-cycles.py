@@ -12,11 +12,13 @@ samples per pixel, bounces and threads. Two measurements:
                per-pixel difference between the renderers is compared with the noise both
                halves show (see `compare_images` for the metric);
   speed        each shot (`--shots`: monastery-rain frames 0..120, the demolition 600..660) at
-               16 spp and 960x540, `--runs` times: dormant without reuse and Cycles with
-               persistent data in interleaved chunks (the machine is shared), then dormant with
-               exact reuse over the whole stretch in one run, Cycles' default mode on the first
-               frames, and each renderer's noise (4 seeds of the middle frame, against its own
-               mean), whence the time to equal noise; that frame also gets the image checks.
+               960x540, `--runs` times. First each renderer's noise on the middle frame at 16
+               spp (16 seeds, each against its own mean; that frame also gets the image
+               checks), and the spp at which dormant's noise equals Cycles' at 16, found by
+               measurement (`equal_noise_spp`). Then dormant without reuse at 16 spp and at that
+               spp, and Cycles with persistent data at 16 spp, in interleaved chunks (the
+               machine is shared); dormant with exact reuse at the equal-noise spp over the
+               whole stretch in one run; Cycles' default mode on the first frames.
                Cycles holds each shot as a Blender user would: the rain as dormant's animated
                glTF imported and rendered as animation jobs; the demolition's 80,000 bodies as
                geometry-nodes instances of one mesh per prototype (`CyclesInstances`).
@@ -883,21 +885,34 @@ def cycles_chunk(args, cs, form, traj, first, last, out):
     return rows
 
 
-def speed(args, out, shot, noise=None):
-    """One shot's stretch at --speed-spp: dormant without reuse and Cycles with persistent data
-    in interleaved chunks (the machine is shared), then dormant with exact reuse over the whole
-    stretch in one run, Cycles' default mode (no persistent data) on its first frames in a
-    process of its own, and each renderer's noise from seeds of the middle frame (unless
-    `noise`, an earlier run's, is given)."""
-    out.mkdir(parents=True, exist_ok=True)
+def cycles_scene(args, shot, traj, glb, first, out):
+    """The shot's scene in Cycles, held as its users hold it, posed for frame `first`; returns
+    (form, scene, seconds to build it with the import)."""
     form = args.demolition_form if shot == "demolition" else SHOTS[shot][1]
-    traj, glb, a, b = shot_sources(args, out, shot)
-    setup = export(args, traj, f"{a}..{a + 1}", out / "first.json")
+    setup = export(args, traj, f"{first}..{first + 1}", out / "first.json")
     t = time.perf_counter()
     cs = {"animation": CyclesAnimation, "instances": CyclesInstances, "objects": CyclesObjects}[form](glb, setup)
+    return form, cs, time.perf_counter() - t
+
+
+def speed(args, out, shot, noise=None):
+    """One shot's stretch: first each renderer's noise on the middle frame and the spp at which
+    dormant's equals Cycles' at --speed-spp (unless `noise`, an earlier run's, is given); then
+    dormant without reuse at --speed-spp and at that spp, and Cycles with persistent data at
+    --speed-spp, in interleaved chunks (the machine is shared); then dormant with exact reuse at
+    the equal-noise spp over the whole stretch in one run, and Cycles' default mode (no
+    persistent data) on the first frames in a process of its own."""
+    out.mkdir(parents=True, exist_ok=True)
+    traj, glb, a, b = shot_sources(args, out, shot)
+    form, cs, setup_s = cycles_scene(args, shot, traj, glb, a, out)
+    # Fixed seeds: the noise and the checks are the same in every run, so only the first
+    # renders them.
+    noise = noise or equal_noise(args, out, traj, cs, form, (a + b) // 2)
+    spp = noise["equal_noise_spp"]
     res = {"shot": shot, "frames": f"{a}..{b}", "spp": args.speed_spp, "size": args.speed_size,
-           "cycles_form": form, "cycles_import_s": cs.import_s, "cycles_setup_s": time.perf_counter() - t,
-           "dormant": [], "dormant_wall_s": 0.0, "cycles": []}
+           "cycles_form": form, "cycles_import_s": cs.import_s, "cycles_setup_s": setup_s, "noise": noise,
+           "dormant": [], "dormant_wall_s": 0.0, "dormant_equal_noise": {"spp": spp, "wall_s": 0.0, "frames": []},
+           "cycles": []}
     rows_log = (out / "frames.jsonl").open("a")
     for first in range(a, b, args.chunk):
         last = min(first + args.chunk, b)
@@ -905,24 +920,27 @@ def speed(args, out, shot, noise=None):
                                        args.speed_size, reuse="off")
         res["dormant_wall_s"] += wall
         res["dormant"] += records
+        eq_wall, eq_records = dormant_render(args, traj, f"{first}..{last}", out / "dormant-equal-noise", spp,
+                                             args.speed_size, reuse="off")
+        res["dormant_equal_noise"]["wall_s"] += eq_wall
+        res["dormant_equal_noise"]["frames"] += eq_records
         configure_render(args, args.speed_spp, args.speed_size, seed=0, persistent=True)
         rows = cycles_chunk(args, cs, form, traj, first, last, out)
         res["cycles"] += rows
-        for r in [{"dormant_chunk": [first, last], "wall_s": wall, "records": records}, *rows]:
+        for r in [{"dormant_chunk": [first, last], "wall_s": wall, "equal_noise_wall_s": eq_wall,
+                   "records": records}, *rows]:
             rows_log.write(json.dumps(r) + "\n")
         rows_log.flush()
-        log(f"{shot} {first}..{last}: dormant {wall:.1f} s, cycles {sum(r['wall_s'] for r in rows):.1f} s")
-    wall, records = dormant_render(args, traj, f"{a}..{b}", out / "dormant-exact", args.speed_spp,
-                                   args.speed_size, reuse="exact")
-    res["dormant_exact"] = {"wall_s": wall, "frames": records}
-    log(f"{shot} {a}..{b}: dormant with exact reuse {wall:.1f} s")
+        log(f"{shot} {first}..{last}: dormant {wall:.1f} s at {args.speed_spp} spp, {eq_wall:.1f} s at {spp} spp; "
+            f"cycles {sum(r['wall_s'] for r in rows):.1f} s")
+    wall, records = dormant_render(args, traj, f"{a}..{b}", out / "dormant-exact", spp, args.speed_size,
+                                   reuse="exact")
+    res["dormant_exact"] = {"spp": spp, "wall_s": wall, "frames": records}
+    log(f"{shot} {a}..{b}: dormant with exact reuse at {spp} spp {wall:.1f} s")
     n = min(args.default_frames, b - a)
     if n:
         res["cycles_default"], res["cycles_default_process"] = cycles_default_mode(args, out, shot, (traj, glb),
                                                                                    a, a + n)
-    # Fixed seeds: the noise and the checks are the same in every run, so only the first
-    # renders them.
-    res["noise"] = noise or noise_at_equal_spp(args, out, traj, cs, form, (a + b) // 2)
     return res
 
 
@@ -950,12 +968,8 @@ def run_default_mode(args):
     persistent data, then writes the rows to default-mode.json in --out."""
     shot, frames, traj, glb = args.internal_default_mode
     first, last = map(int, frames.split(".."))
-    form = args.demolition_form if shot == "demolition" else SHOTS[shot][1]
     args.out.mkdir(parents=True, exist_ok=True)
-    setup = export(args, Path(traj), f"{first}..{first + 1}", args.out / "first.json")
-    t = time.perf_counter()
-    cs = {"animation": CyclesAnimation, "instances": CyclesInstances, "objects": CyclesObjects}[form](Path(glb), setup)
-    setup_s = time.perf_counter() - t
+    form, cs, setup_s = cycles_scene(args, shot, Path(traj), Path(glb), first, args.out)
     configure_render(args, args.speed_spp, args.speed_size, seed=0, persistent=False)
     rows = cycles_chunk(args, cs, form, Path(traj), first, last, args.out)
     done = {"import_s": cs.import_s, "setup_s": setup_s, "rows": rows}
@@ -970,30 +984,63 @@ def relative_variance(images):
     return float((stack.var(axis=0, ddof=1) / (mean ** 2 + 1e-2)).mean())
 
 
-def noise_at_equal_spp(args, out, traj, cs, form, i):
-    """Each renderer's noise on frame `i` at the stretch's spp, from --check-seeds independent
-    seeds (dormant --seed-offset, Cycles' seed), against its own mean, so that the other's bias
-    does not count. Time to equal noise scales as noise x time (variance falls as 1/spp).
-    The same renders give the frame's image checks (the seeds' two halves as the halves)."""
-    seeds = args.check_seeds
-    d, c = [], []
-    for k in range(seeds):
-        folder = out / "noise" / f"dormant-{k}"
-        dormant_render(args, traj, f"{i}..{i + 1}", folder, args.speed_spp, args.speed_size, reuse="off",
-                       seed_offset=k + 1)
-        d.append(read_exr(folder / f"frame_{i:04}.exr"))
+def dormant_seeds(args, out, traj, i, spp):
+    """dormant's frame `i` at `spp` from --check-seeds seeds (--seed-offset 1, 2, ...)."""
+    images = []
+    for k in range(args.check_seeds):
+        folder = out / "noise" / f"dormant-{spp}spp-{k}"
+        dormant_render(args, traj, f"{i}..{i + 1}", folder, spp, args.speed_size, reuse="off", seed_offset=k + 1)
+        images.append(read_exr(folder / f"frame_{i:04}.exr"))
+    return images
+
+
+def equal_noise(args, out, traj, cs, form, i):
+    """Each renderer's noise on frame `i` at --speed-spp from --check-seeds independent seeds,
+    against its own mean so that the other's bias does not count, and the spp at which dormant's
+    noise reaches Cycles' (see `equal_noise_spp`). The same renders give the frame's image
+    checks (the seeds' two halves as the halves) and the figure."""
+    d = dormant_seeds(args, out, traj, i, args.speed_spp)
+    c = []
+    for k in range(args.check_seeds):
         configure_render(args, args.speed_spp, args.speed_size, seed=k + 1, persistent=True)
         cycles_chunk(args, cs, form, traj, i, i + 1, out / "noise" / f"cycles-{k}")
         c.append(read_exr(out / "noise" / f"cycles-{k}" / "cycles" / f"frame_{i:04}.exr"))
-    res = {"frame": i, "seeds": seeds, "dormant": relative_variance(d), "cycles": relative_variance(c)}
-    h = seeds // 2
+    res = {"frame": i, "seeds": args.check_seeds, "dormant": relative_variance(d), "cycles": relative_variance(c)}
+    h = args.check_seeds // 2
     halves = [sum(d[:h]) / h, sum(d[h:]) / h, sum(c[:h]) / h, sum(c[h:]) / h]
     res["checks"] = image_checks(*halves)
     _, z = compare_images(*halves)
-    res["figure"] = write_figure(out / "figure.png", sum(d) / seeds, sum(c) / seeds, z)
+    res["figure"] = write_figure(out / "figure.png", sum(d) / len(d), sum(c) / len(c), z)
     log(f"noise at {args.speed_spp} spp, frame {i}: dormant {res['dormant']:.3e}, cycles {res['cycles']:.3e}; "
-        f"image checks at {seeds * args.speed_spp} spp: {res['checks']}")
+        f"image checks at {args.check_seeds * args.speed_spp} spp: {res['checks']}")
+    res["equal_noise_spp"], res["dormant_by_spp"] = equal_noise_spp(args, out, traj, i, res["dormant"], res["cycles"])
     return res
+
+
+def equal_noise_spp(args, out, traj, i, noise, target):
+    """The spp at which dormant's noise on frame `i` reaches `target`, found by measurement:
+    variance x spp is not constant (both samplers are Sobol nets, best at powers of two), so a
+    power law, variance = A spp^-b, is fitted through the noise at --speed-spp and a second
+    point at the spp that 1/spp predicts, and dormant is measured again at the fitted spp to
+    verify it. Returns (that spp, {spp: dormant's noise measured there})."""
+    s0 = args.speed_spp
+    measured = {s0: noise}
+    s1 = max(1, round(s0 * noise / target))
+    s1 = s1 if s1 != s0 else s0 + (1 if noise > target else -1)
+    if s1 < 1:
+        return s0, measured  # 1 spp is already as noisy as Cycles at --speed-spp
+    measured[s1] = relative_variance(dormant_seeds(args, out, traj, i, s1))
+    slope = math.log(measured[s0] / measured[s1]) / math.log(s1 / s0)
+    if slope <= 0:
+        sys.exit(f"compare-cycles: dormant's noise on frame {i} does not fall with spp: {measured}")
+    fitted = max(1, round(s0 * (noise / target) ** (1 / slope)))
+    if fitted not in measured:
+        measured[fitted] = relative_variance(dormant_seeds(args, out, traj, i, fitted))
+    log(f"dormant's noise on frame {i} by spp: "
+        + ", ".join(f"{s}: {v:.3e}" for s, v in sorted(measured.items()))
+        + f"; variance ~ spp^-{slope:.2f}; equal to Cycles' at {s0} spp ({target:.3e}) at {fitted} spp, "
+        f"measured {measured[fitted] / target:.3f} of it")
+    return fitted, measured
 
 
 def negative_controls(args, out, cycles, dormant_halves):
@@ -1100,21 +1147,27 @@ def summarize(report):
         for k, s in enumerate(runs):
             summarize_speed(f"{shot} run {k}", s)
         if len(runs) > 1:
-            for key in ("per_frame", "equal_noise", "equal_noise_exact"):
+            for key in ("per_frame", "equal_noise", "variance_time", "equal_noise_exact"):
                 vals = sorted(speed_ratios(s)[key] for s in runs)
                 log(f"{shot}: {key} dormant/cycles over {len(runs)} runs: {', '.join(f'{v:.3f}' for v in vals)}")
 
 
 def speed_ratios(s):
-    """dormant over Cycles (persistent data) per frame, at equal spp and at equal noise, without
-    reuse and with exact reuse; each renderer's setup (Cycles' import) apart."""
+    """dormant over Cycles (persistent data, --speed-spp) per frame, each renderer's setup
+    (Cycles' import) apart: at equal spp; at equal noise (dormant at the spp where its noise was
+    measured equal to Cycles'), with exact reuse at that spp; and variance x time, the inverse
+    of the efficiency ratio, which corrects for what is left of the noise difference there."""
+    eq = s["dormant_equal_noise"]
     dormant = s["dormant_wall_s"] / len(s["dormant"])
+    equal = eq["wall_s"] / len(eq["frames"])
     exact = s["dormant_exact"]["wall_s"] / len(s["dormant_exact"]["frames"])
     cycles = sum(r["wall_s"] for r in s["cycles"]) / len(s["cycles"])
-    noise = s["noise"]["dormant"] / s["noise"]["cycles"]
-    return {"dormant_s": dormant, "dormant_exact_s": exact, "cycles_s": cycles, "noise": noise,
-            "per_frame": dormant / cycles, "equal_noise": dormant / cycles * noise,
-            "equal_noise_exact": exact / cycles * noise}
+    noise = s["noise"]
+    left = noise["dormant_by_spp"][eq["spp"]] / noise["cycles"]
+    return {"dormant_s": dormant, "dormant_equal_noise_s": equal, "dormant_exact_s": exact, "cycles_s": cycles,
+            "noise_at_equal_spp": noise["dormant"] / noise["cycles"], "noise_left": left,
+            "per_frame": dormant / cycles, "equal_noise": equal / cycles, "variance_time": equal / cycles * left,
+            "equal_noise_exact": exact / cycles}
 
 
 def summarize_speed(name, s):
@@ -1124,17 +1177,21 @@ def summarize_speed(name, s):
     frame = sum(x["frame_ms"] for x in s["dormant"]) / 1e3 / n
     c = s["cycles"]
     mean = lambda key, rows=c: sum(x[key] for x in rows) / len(rows)
+    eq_spp = s["dormant_equal_noise"]["spp"]
     log(f"{name} ({s['frames']}, {s['size']}, {s['spp']} spp): dormant per frame {r['dormant_s']:.2f} s wall "
-        f"(in the loop {frame:.2f} s, trace {trace:.2f} s), with exact reuse {r['dormant_exact_s']:.2f} s; "
+        f"(in the loop {frame:.2f} s, trace {trace:.2f} s), at {eq_spp} spp {r['dormant_equal_noise_s']:.2f} s, "
+        f"with exact reuse at {eq_spp} spp {r['dormant_exact_s']:.2f} s; "
         f"cycles ({s['cycles_form']}, persistent data) {r['cycles_s']:.2f} s (update {mean('update_s'):.3f} s, "
         f"sync {mean('sync_s'):.2f} s, trace {mean('trace_s'):.2f} s; import {s['cycles_import_s']:.1f} s apart)")
     if s.get("cycles_default"):
         log(f"  cycles' default mode (no persistent data, its own process): "
             f"{mean('wall_s', s['cycles_default']):.2f} s per frame (sync {mean('sync_s', s['cycles_default']):.2f} s) "
             f"over {len(s['cycles_default'])} frames")
-    log(f"  dormant/cycles: per frame {r['per_frame']:.3f} at equal spp; noise at equal spp {r['noise']:.3f}; "
-        f"at equal noise {r['equal_noise']:.3f}, with exact reuse {r['equal_noise_exact']:.3f}; "
+    log(f"  dormant/cycles: per frame at equal spp {r['per_frame']:.3f} (noise {r['noise_at_equal_spp']:.3f}); "
+        f"at equal noise ({eq_spp} spp, noise {r['noise_left']:.3f}) {r['equal_noise']:.3f}, variance x time "
+        f"{r['variance_time']:.3f}, with exact reuse {r['equal_noise_exact']:.3f}; "
         f"image checks on frame {s['noise']['frame']}: {'passed' if s['noise']['checks']['passed'] else 'FAILED'}")
+
 
 if __name__ == "__main__":
     main()

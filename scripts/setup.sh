@@ -64,6 +64,28 @@ command -v python3 >/dev/null 2>&1 && python3 -m pip --version >/dev/null 2>&1 \
     && apt_packages=(build-essential pkg-config libclang-dev ca-certificates)
 apt_install "${apt_packages[@]}"
 
+# --- Blender as a Python module (`--bpy` only: make compare-cycles, make blender-roundtrip) ---
+# PyPI's bpy (BPY_VERSION, a wheel of some 400 MB) in the git-ignored venv .deps/bpy-venv.
+# bpy 5.0 needs Python 3.11, Debian 12's; Debian ships venv's ensurepip apart (python3.11-venv).
+if [ "${1:-}" = --bpy ]; then
+    venv="$root/.deps/bpy-venv"
+    bpy_version="${BPY_VERSION:-5.0.1}"
+    has_bpy() {
+        "$venv/bin/python" -c 'import importlib.metadata as m, sys; sys.exit(m.version("bpy") != sys.argv[1])' \
+            "$bpy_version" 2>/dev/null
+    }
+    if ! has_bpy; then
+        if [ ! -x "$venv/bin/python" ]; then
+            python3.11 -c 'import ensurepip' 2>/dev/null || apt_install python3.11 python3.11-venv
+            python3.11 -m venv "$venv"
+        fi
+        say "installing bpy==$bpy_version into $venv"
+        "$venv/bin/pip" install -q "bpy==$bpy_version"
+    fi
+    say "bpy $bpy_version present: $venv"
+    exit 0
+fi
+
 # --- Open Image Denoise 2 (before Embree, whose section ends the script) -------------------
 # The wheel's libraries carry RPATH $ORIGIN/../lib, and the core loads its device modules
 # from its own directory by their versioned names, so they keep the wheel's names under lib/.
