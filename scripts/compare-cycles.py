@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""dormant against Blender Cycles, side by side (`make compare-cycles`; not in CI).
+"""dormant against Blender Cycles, side by side (`make compare-cycles`; CI runs `--quick`).
 
 Runs under the Python of a venv holding `bpy` (Blender 5.0 as a module; the Makefile target
 creates .deps/bpy-venv). From a trajectory exported by `dormant export` it builds the same

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs everything dormant needs to build and test, on Debian 12 or 13, as root.
 # Idempotent: a second run checks, prints what it found, and changes nothing.
+# `setup.sh --bpy` installs only Blender as a Python module, for make compare-cycles (below).
 #
 # Embree 4 (feature `embree`):
 #   Debian >= 13: apt's libembree-dev (Embree 4.3).
