@@ -52,13 +52,13 @@ BPY_VERSION ?= 5.0.1
 COMPARE_THREADS ?= 2
 COMPARE_ARGS ?=
 compare-cycles: build
-	BPY_VERSION=$(BPY_VERSION) bash scripts/setup.sh --bpy
+	BPY_VENV=$(BPY_VENV) BPY_VERSION=$(BPY_VERSION) bash scripts/setup.sh --bpy
 	$(BPY_VENV)/bin/python scripts/compare-cycles.py --threads $(COMPARE_THREADS) $(COMPARE_ARGS)
 
 # A Blender rigid-body bake rendered by dormant and Cycles, and dormant's glTF export imported
 # into Blender (scripts/blender-roundtrip.py; not in CI). Uses the bpy venv of compare-cycles.
 blender-roundtrip: build
-	BPY_VERSION=$(BPY_VERSION) bash scripts/setup.sh --bpy
+	BPY_VENV=$(BPY_VENV) BPY_VERSION=$(BPY_VERSION) bash scripts/setup.sh --bpy
 	$(BPY_VENV)/bin/python scripts/blender-roundtrip.py --threads $(COMPARE_THREADS)
 
 # The module arrows inside each crate: no import cycle, nothing imported against the layer order

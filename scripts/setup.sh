@@ -66,10 +66,12 @@ command -v python3 >/dev/null 2>&1 && python3 -m pip --version >/dev/null 2>&1 \
 apt_install "${apt_packages[@]}"
 
 # --- Blender as a Python module (`--bpy` only: make compare-cycles, make blender-roundtrip) ---
-# PyPI's bpy (BPY_VERSION, a wheel of some 400 MB) in the git-ignored venv .deps/bpy-venv.
-# bpy 5.0 needs Python 3.11, Debian 12's; Debian ships venv's ensurepip apart (python3.11-venv).
+# PyPI's bpy (BPY_VERSION, a wheel of some 400 MB) in the venv BPY_VENV (default the git-ignored
+# .deps/bpy-venv; relative to the checkout). bpy 5.0 needs Python 3.11, Debian 12's; Debian
+# ships venv's ensurepip apart (python3.11-venv).
 if [ "${1:-}" = --bpy ]; then
-    venv="$root/.deps/bpy-venv"
+    venv="${BPY_VENV:-.deps/bpy-venv}"
+    case "$venv" in /*) ;; *) venv="$root/$venv" ;; esac
     bpy_version="${BPY_VERSION:-5.0.1}"
     has_bpy() {
         "$venv/bin/python" -c 'import importlib.metadata as m, sys; sys.exit(m.version("bpy") != sys.argv[1])' \
