@@ -1,7 +1,7 @@
 //! Criterion benchmarks of the pure-Rust BVH backend on a synthetic scene: a 125k-triangle
 //! static environment (ground plus boxes and spheres) and 8,000 instances of a 4k-triangle
 //! sphere. Measures build, trace (closest and any hit) and insertion of a 1% island against a
-//! full static rebuild. Run with `cargo bench --no-default-features --bench bvh`.
+//! full static rebuild. Run with `cargo bench -p dormant-bench` (the BVH alone: the library without Embree).
 
 use std::hint::black_box;
 
