@@ -16,18 +16,28 @@ build: setup
 demo: build
 	$(RELEASE_BIN) render --out out/demo
 
-# The whole workspace's tests in release mode (the BVH on the fastest SIMD path this CPU
-# runs; the library's accel/tests/bvh_props.rs checks every path), the accelerator property
-# tests and `dormant verify` again on the portable path (DORMANT_SIMD,
-# docs/performance.md#simd-paths), then the pure-Rust build without Embree.
+# The whole workspace's tests in release mode: each crate's unit tests and the integration
+# suite (tests/main.rs, one binary), the BVH on the fastest SIMD path this CPU runs (the
+# library's accel/tests/bvh_props.rs checks every path); then the accelerator property tests
+# and `dormant verify` again on the portable path (DORMANT_SIMD,
+# docs/performance.md#simd-paths); then the tests that differ without Embree and OIDN; last,
+# that the release build reuses what the tests compiled (scripts/build-reuse-check.py).
 test: setup
 	$(CARGO) test --release --workspace
-	DORMANT_SIMD=portable $(CARGO) test --release -p dormant --lib accel::tests
-	DORMANT_SIMD=portable $(CARGO) test --release --test cli_verify_bench -- --skip bench_
+	DORMANT_SIMD=portable $(CARGO) test --release --workspace --lib -- accel::tests
+	DORMANT_SIMD=portable $(CARGO) test --release --workspace --test suite -- cli_verify_bench:: --skip bench_
 	$(MAKE) test-no-embree
+	python3 scripts/build-reuse-check.py
 
+# The pure-Rust build (no Embree, no OIDN): the tests whose code or outcome depends on those
+# features. Each of them picks its backend by what the build compiled (the default backend,
+# `info`, the paper's backends, the in-process renders of render_images and render_materials)
+# or exists only without a feature (render_denoise). Every other test runs the same code with
+# and without Embree, so it runs once, above (scripts/test-inventory.py lists both sets;
+# docs/testing.md says why each module is or is not here).
+NO_EMBREE_TESTS := cli_render:: render_denoise:: bench_paper:: render_images:: render_materials::
 test-no-embree:
-	$(CARGO) test --release -p dormant -p dormant-lab -p dormant-cli --no-default-features
+	$(CARGO) test --release -p dormant-cli --no-default-features --test suite -- $(NO_EMBREE_TESTS)
 
 # The README's job array on a real single-node Slurm started on this machine (root; installs
 # slurm-wlm and munge), checked against one uninterrupted run. See docs/slurm.md.

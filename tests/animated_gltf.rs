@@ -2,7 +2,7 @@
 //! its rests found from the motion, and renders; malformed animations are input errors that
 //! name the file, the animation and the channel.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 

@@ -3,7 +3,7 @@
 //! it builds: the compiled-in atrium and the asset rain over the shared assets (skipped when
 //! ../shared/assets is absent).
 
-mod common;
+use crate::common;
 
 use common::cli::{dormant, exits_with, read_json, succeeds};
 use common::scenes;

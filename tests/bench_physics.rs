@@ -1,6 +1,6 @@
 //! The physics benchmark's report on the tiny scene.
 
-mod common;
+use crate::common;
 
 use common::scenes;
 use dormant::physics::SimulateOptions;

@@ -1,7 +1,7 @@
 //! `dormant export`: a trajectory's frames as JSON for another renderer
 //! (scripts/compare-cycles.py): every selected frame, a pose per body id, the mesh sources.
 
-mod common;
+use crate::common;
 
 use common::cli::{dormant, read_json, succeeds};
 

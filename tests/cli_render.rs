@@ -1,6 +1,6 @@
 //! The `dormant` binary end to end: the default render, `info`, and bad output paths.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

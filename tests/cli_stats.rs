@@ -1,7 +1,7 @@
 //! `dormant render SCENE` writes stats.json (checked against docs/stats-format.md's schema),
 //! stats.csv (a header and one row per frame) and report.png.
 
-mod common;
+use crate::common;
 
 use common::cli::{dormant, read_stats, simulate_tiny, succeeds};
 use serde_json::Value;

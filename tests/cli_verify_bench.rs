@@ -2,7 +2,7 @@
 //! ../shared/assets exists) on the monastery with ducks.
 #![cfg(feature = "embree")]
 
-mod common;
+use crate::common;
 
 use common::cli::{dormant, exits_with, read_json, succeeds};
 use common::scenes;

@@ -1,7 +1,7 @@
 //! `dormant render SCENE --video`: a clear input error (exit 2) without ffmpeg, and an MP4
 //! next to the frames with it (that half skips when ffmpeg is not installed).
 
-mod common;
+use crate::common;
 
 use std::process::Command;
 

@@ -4,7 +4,7 @@
 //! stretch kept as two keys, absent bodies are scaled to 0, and a second export is the same
 //! file.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

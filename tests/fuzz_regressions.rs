@@ -5,7 +5,7 @@
 //! target without panicking, and the generated seeds are accepted (so they reach past the
 //! parsers' first checks).
 
-mod fuzz_harness;
+use crate::fuzz_harness;
 
 use std::path::{Path, PathBuf};
 

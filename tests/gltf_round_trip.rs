@@ -2,7 +2,7 @@
 //! scene (`render FILE.glb`) is the same sequence: every body present on the same frames at
 //! the same pose, bit for bit, and the same images (issue 40's round trip).
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

@@ -3,7 +3,7 @@
 //! output file. One test per row of the table; `the_error_table_names_every_test` keeps the
 //! table and this file in step.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 use std::process::Command;

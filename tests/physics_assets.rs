@@ -1,7 +1,7 @@
 //! Scenes on the shared real assets (../shared/assets). Users' checkouts do not have them:
 //! every test here skips cleanly when they are absent.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

@@ -1,6 +1,6 @@
 //! The atrium scene, scaled down with a count override so it runs in seconds.
 
-mod common;
+use crate::common;
 
 use common::scenes;
 use dormant::physics::{simulate, BodyKind, IslandEvent, SimulateOptions};

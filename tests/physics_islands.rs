@@ -1,6 +1,6 @@
 //! Island tracking against real Rapier simulations: stacks, piles, pokes and merges.
 
-mod common;
+use crate::common;
 
 use common::scenes;
 use dormant::physics::{BodyId, BodyKind, BodyState, IslandEvent, IslandId, SimulateOptions, Simulation};

@@ -2,7 +2,7 @@
 //! they stay asleep, and whatever hits one (a projectile, a kinematic body, a domino front)
 //! wakes the whole copy, whose debris then settles into new islands.
 
-mod common;
+use crate::common;
 
 use std::collections::BTreeSet;
 

@@ -3,8 +3,8 @@
 //! replaying to the same frames, and rejection of files from another scene, another format
 //! version, or damaged, with errors that name the offset.
 
-mod common;
-mod trajectory_v2;
+use crate::common;
+use crate::trajectory_v2;
 
 use std::path::Path;
 use std::sync::OnceLock;

@@ -4,7 +4,7 @@
 //! spending fewer samples, it is identical at one and two threads, the statistics report the
 //! effective spp, and a scene file's `[render] noise_threshold` turns it on.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 

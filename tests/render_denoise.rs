@@ -6,7 +6,7 @@
 //! Image Denoise (a build without the `oidn` feature, or a library without its CPU device)
 //! exits 2 with a message naming what is missing.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 use std::process::Command;

@@ -4,7 +4,7 @@
 //! later frames really trace only part of their samples. Decisions of `--integration auto`
 //! follow measured times, so the runs pin them with `never` or `always`.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 

@@ -3,7 +3,7 @@
 //! both are recorded in a sequence's statistics and `--resume` refuses a run of another
 //! filter (bad values: `tests/input_errors.rs`).
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 

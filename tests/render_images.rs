@@ -2,7 +2,7 @@
 //! across thread counts, equal images from both backends, and from camera-ray packets and
 //! single rays.
 
-mod common;
+use crate::common;
 
 use common::cli::{dormant, succeeds};
 use common::render::{backend, empty_scene, render, BLACK_SKY, NO_SUN, WHITE_SKY};

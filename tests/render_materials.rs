@@ -3,7 +3,7 @@
 //! data), the duck from ../shared/assets when present, and punctual lights against their
 //! closed forms.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 

@@ -6,7 +6,7 @@
 //! and a blue crate at rest (in other rows and columns of the image), under an overhead sun
 //! against a constant sky.
 
-mod common;
+use crate::common;
 
 use common::cli::dormant;
 use common::scenes;

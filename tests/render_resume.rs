@@ -5,7 +5,7 @@
 //! configuration, or records the replay does not reach, are refused. One render at a time
 //! writes into a folder; a killed one does not lock out the next.
 
-mod common;
+use crate::common;
 
 use std::ffi::OsString;
 use std::path::Path;

@@ -1,6 +1,6 @@
 //! Describing simulated frames for rendering.
 
-mod common;
+use crate::common;
 
 use common::scenes;
 use dormant::scene::file::SceneFile;

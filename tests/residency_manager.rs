@@ -6,7 +6,7 @@
 //!   restored from the geometry cache, gives the same hits as a from-scratch build of the same
 //!   island set.
 
-mod common;
+use crate::common;
 
 use common::scenes;
 use dormant::accel::{self, load_scene, Backend, LoadedObjectMap, ObjectMap, SceneQuery};

@@ -1,7 +1,7 @@
 //! Bad scene input: every error names the file and the field (and the line when the field
 //! is written), and none panics.
 
-mod common;
+use crate::common;
 
 use common::scene_errors::{expect_error, parse};
 use common::scenes::{self, BOXES};

@@ -2,7 +2,7 @@
 //! scene files: what they parse into, how `--count` scales them, and bad input, which is an
 //! error naming the file, the line and the field, never a panic.
 
-mod common;
+use crate::common;
 
 use common::scene_errors::{expect_error, parse};
 use common::scenes;

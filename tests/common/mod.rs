@@ -1,6 +1,6 @@
-//! Helpers and fixtures shared by the integration tests; a test file uses them with
-//! `mod common;`. Each test file is its own crate, so what one file does not use is dead code
-//! there (hence the `allow`).
+//! Helpers and fixtures shared by the integration tests; a test module uses them with
+//! `use crate::common;`. Some serve only tests compiled with a feature (Embree, OIDN), so a
+//! build without it leaves them unused (hence the `allow`).
 //!
 //! - [`animated`]: a small animated glTF (a rigid-body bake) built by hand;
 //! - [`cli`]: the `dormant` binary, running it, reading what it writes;
