@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Reruns the headline benchmarks of docs/performance.md and prints each figure beside the
-documented one (`make bench-check`; docs/performance.md#checking-the-headline-figures).
+documented one (`make bench-check`; docs/performance.md#how-to-measure).
 
 The figures, their commands and their documented spread are docs/performance.json. Each
 selected command runs --runs times (its `setup`, e.g. simulating the trajectory, once before);

@@ -46,6 +46,7 @@ mod cli_render;
 mod cli_stats;
 mod cli_verify_bench;
 mod cli_video;
+mod docs_links;
 mod export_gltf;
 mod fuzz_regressions;
 mod gltf_round_trip;

@@ -59,7 +59,7 @@ pub enum BenchCommand {
     /// when given), simulated once and rendered under never/always/auto with the cache on and
     /// off by every backend; writes paper.json, paper.md and figures into --out.
     #[command(
-        after_help = "Examples:\n  dormant bench paper --out out/paper                 the atrium, about 15 minutes\n  dormant bench paper --quick --out out/paper-quick   scaled down, about 2 minutes\n  dormant bench paper --env ../shared/assets/monastery.glb --object ../shared/assets/duck.glb \\\n      --object ../shared/assets/teddy.glb --object ../shared/assets/soccerball.glb --out docs/paper"
+        after_help = "Examples:\n  dormant bench paper --out out/paper                 the atrium, 8,000 objects\n  dormant bench paper --quick --out out/paper-quick   scaled down (1,000 objects): 15-25 s\n  dormant bench paper --env ../shared/assets/monastery.glb --object ../shared/assets/duck.glb \\\n      --object ../shared/assets/teddy.glb --object ../shared/assets/soccerball.glb --out docs/paper"
     )]
     Paper(PaperArgs),
     /// Where integration pays: a scene simulated at several body counts, rendered under never,
@@ -85,7 +85,7 @@ pub struct PaperArgs {
     /// Output directory for paper.json, paper.md and figures/.
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
-    /// Scaled-down workloads (about 2 minutes) instead of the paper's sizes.
+    /// Scaled-down workloads (the atrium with 1,000 objects: 15-25 s) instead of the paper's sizes.
     #[arg(long)]
     pub quick: bool,
     /// Environment glTF of the monastery variant: objects rain onto it (needs --object).
