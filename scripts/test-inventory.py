@@ -130,8 +130,8 @@ def normalise(line):
 
 
 def compare(before_path, after_path, dropped_path):
-    before = {normalise(l) for l in open(before_path) if l.strip()}
-    after = {normalise(l) for l in open(after_path) if l.strip()}
+    before = {normalise(l.rstrip("\n")) for l in open(before_path) if l.strip()}
+    after = {normalise(l.rstrip("\n")) for l in open(after_path) if l.strip()}
     dropped = []
     if dropped_path:
         for l in open(dropped_path):
