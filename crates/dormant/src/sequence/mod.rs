@@ -8,7 +8,9 @@
 //!   the scene managers and hands each selected frame to the caller;
 //! - [`Sequence::render_frame`] and [`Sequence::render`]: the per-frame call into the
 //!   renderer through a [`SceneManager`](crate::residency::SceneManager), whose trace time
-//!   goes back to its cost model;
+//!   goes back to its cost model; exact temporal reuse, which lives in `render/reuse/` and is
+//!   called from there once per frame ([`ReuseMode`], [`ReuseRequest`] and
+//!   [`DEFAULT_REUSE_BYTES`] are re-exported here from it);
 //! - [`KeptFrame`]: a frame an earlier run finished (`render --resume`), which the driver
 //!   brings the manager through as that run did instead of rendering it;
 //! - [`Sequence::describe_frame`]: a frame with every present body an instance, the
@@ -29,16 +31,16 @@ mod kept;
 pub mod output;
 mod render;
 mod replay_loop;
-mod reuse;
 mod selection;
 mod source;
 pub mod stats;
 
+pub use crate::render::reuse::decision::{ReuseMode, ReuseRequest, DEFAULT_REUSE_BYTES};
 pub use error::SequenceError;
-pub use frame_renderer::{FrameRenderer, ReuseMode, SeedMode, DEFAULT_REUSE_BYTES};
+pub use frame_renderer::{FrameRenderer, SeedMode};
 pub(crate) use kept::KeptFrame;
+pub(crate) use render::trace_kind;
 pub use render::RenderedFrame;
-pub(crate) use reuse::FullFrame;
 pub use selection::{FrameRange, FrameSelection};
 pub(crate) use source::PhysicsSource;
 pub use source::{Sequence, SequenceSource};
