@@ -12,7 +12,6 @@ use crate::render::{
     render_with_aovs, Aov, Emitters, Film, FrameTracer, PinholeCamera, RenderError, RenderScene, RenderStats,
 };
 use crate::residency::{FrameStats, IntegrationForm, SceneManager, TraceKind};
-use crate::scene::Camera;
 
 /// Camera rays (one per pixel of this image) of the manager's trace-penalty probes: enough
 /// rays for a stable time, few enough to cost a few ms.
@@ -121,17 +120,6 @@ impl Sequence {
         Ok(RenderedFrame { index: frame.index, film, render, aovs, reused_from: None, reuse: exact })
     }
 
-    /// The camera of frame `index`: without a shutter, at the frame's instant; with one, at
-    /// shutter open and close (`shutter / 2` frame intervals before and after it).
-    pub(super) fn shutter_cameras(&self, index: u32, shutter: f32) -> (Camera, Option<Camera>) {
-        let t = self.time_of(index);
-        if shutter <= 0.0 {
-            return (self.assets.camera_at(t), None);
-        }
-        let half = 0.5 * shutter * self.trajectory.timestep;
-        (self.assets.camera_at(t - half), Some(self.assets.camera_at(t + half)))
-    }
-
     /// Points the manager's trace-penalty probes along `frame`'s camera, with the samples of
     /// one of `renderer`'s frames.
     pub(super) fn aim_probes(
@@ -144,16 +132,6 @@ impl Sequence {
         let samples = u64::from(renderer.width) * u64::from(renderer.height) * u64::from(renderer.spp);
         manager
             .set_probe_rays(PinholeCamera::pixel_centre_rays(&camera, PROBE_SIZE.0, PROBE_SIZE.1), samples);
-    }
-
-    /// Whether frames `a` and `b > a` show the same scene: no body moved, appeared or left in
-    /// between (kinematic bodies included), and the camera is where it was. Lights, sky and
-    /// materials do not change over a sequence.
-    pub(crate) fn unchanged_between(&self, a: u32, b: u32) -> bool {
-        let frames = &self.trajectory.frames;
-        let still = (a as usize + 1..=b as usize)
-            .all(|f| frames.get(f).is_some_and(|f| f.pose_changes.is_empty() && f.state_changes.is_empty()));
-        still && self.assets.camera_at(self.time_of(a)) == self.assets.camera_at(self.time_of(b))
     }
 
     /// Renders the frames `selection` selects through `manager` and hands each to
