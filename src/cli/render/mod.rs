@@ -28,7 +28,7 @@ use dormant::scene::file::SceneFile;
 use dormant::scene::limits::{shutter_problem, MAX_SAMPLES_PER_PIXEL};
 use dormant::sequence::output::FrameWriter;
 use dormant::sequence::{
-    FrameRange, RenderedFrame, ReuseMode, ReuseRequest, SeedMode, Sequence, SequenceError, SequenceSource,
+    FrameRange, RenderedFrame, ReuseMode, SeedMode, Sequence, SequenceError, SequenceSource,
     DEFAULT_REUSE_BYTES,
 };
 
@@ -407,15 +407,9 @@ fn check_reuse(args: &RenderArgs) -> Result<(), CliError> {
     if args.scene_file.is_none() && args.trajectory.is_none() {
         return Ok(());
     }
-    let request = ReuseRequest {
-        mode: args.reuse,
-        fixed_seed: args.seed == SeedMode::Fixed,
-        width: args.size.width,
-        height: args.size.height,
-        aovs: &aov_passes(args),
-        budget: sequence::reuse_budget(args)?,
-    };
-    request.decide().map(|_| ()).map_err(|e| CliError::Input(format!("--reuse-mib {}: {e}", args.reuse_mib)))
+    let budget = sequence::reuse_budget(args)?;
+    let decided = args.reuse.decide(args.seed == SeedMode::Fixed, args.size, &aov_passes(args), budget);
+    decided.map(|_| ()).map_err(|e| CliError::Input(format!("--reuse-mib {}: {e}", args.reuse_mib)))
 }
 
 /// `--shutter S` (render, verify, bench integration): from 0 to 1.

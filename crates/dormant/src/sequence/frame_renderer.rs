@@ -1,9 +1,9 @@
 //! [`FrameRenderer`]: how every frame of a run is rendered (integrator, passes, size and
 //! samples, sampling, pixel filter, seed, reuse, shutter). Its reuse mode and budget are
-//! `crate::render::reuse`'s ([`ReuseMode`], decided by [`ReuseRequest::decide`]).
+//! `render/reuse/`'s ([`ReuseMode`], decided by [`ReuseMode::decide`]).
 
-use super::{ReuseMode, ReuseRequest, DEFAULT_REUSE_BYTES};
-use crate::render::{AdaptiveSampling, Aov, Integrator, PixelFilter, RenderSettings};
+use super::{ReuseMode, DEFAULT_REUSE_BYTES};
+use crate::render::{AdaptiveSampling, Aov, ImageSize, Integrator, PixelFilter, RenderError, RenderSettings};
 
 /// How the pixel sampler is seeded across a sequence (`--seed`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
@@ -82,15 +82,9 @@ impl<'a> FrameRenderer<'a> {
         }
     }
 
-    /// What this renderer asks of reuse, for [`ReuseRequest::decide`].
-    pub(super) fn reuse_request(&self) -> ReuseRequest<'a> {
-        ReuseRequest {
-            mode: self.reuse,
-            fixed_seed: self.seed == SeedMode::Fixed,
-            width: self.width,
-            height: self.height,
-            aovs: self.aovs,
-            budget: self.reuse_budget,
-        }
+    /// How this renderer's frames reuse ([`ReuseMode::decide`]).
+    pub(super) fn decide_reuse(&self) -> Result<ReuseMode, RenderError> {
+        let size = ImageSize { width: self.width, height: self.height };
+        self.reuse.decide(self.seed == SeedMode::Fixed, size, self.aovs, self.reuse_budget)
     }
 }

@@ -13,8 +13,8 @@
 //!   [`Sequence::render`], the per-frame call into the renderer through a
 //!   [`SceneManager`](crate::residency::SceneManager), whose trace time goes back to its cost
 //!   model; static-frame reuse; exact temporal reuse, which lives in `render/reuse/` and is
-//!   called from there once per frame ([`ReuseMode`], [`ReuseRequest`] and
-//!   [`DEFAULT_REUSE_BYTES`] are re-exported here from it);
+//!   called from there once per frame ([`ReuseMode`], whose [`ReuseMode::decide`] says
+//!   whether a run reuses, and [`DEFAULT_REUSE_BYTES`] are re-exported here from it);
 //! - [`KeptFrame`]: a frame an earlier run finished (`render --resume`), which the driver
 //!   brings the manager through as that run did instead of rendering it;
 //! - the sequence's export methods, each beside its format: [`Sequence::export`]
@@ -38,7 +38,7 @@ pub mod stats;
 
 use std::sync::Arc;
 
-pub use crate::render::reuse::decision::{ReuseMode, ReuseRequest, DEFAULT_REUSE_BYTES};
+pub use crate::render::reuse::decision::{ReuseMode, DEFAULT_REUSE_BYTES};
 pub use error::SequenceError;
 pub use frame_renderer::{FrameRenderer, SeedMode};
 pub(crate) use kept::KeptFrame;

@@ -157,7 +157,7 @@ impl Sequence {
     ) -> Result<(), E> {
         let mut last: Option<RenderedFrame> = None;
         let mut kept = kept.iter().peekable();
-        let reuse = renderer.reuse_request().decide().map_err(SequenceError::from)?;
+        let reuse = renderer.decide_reuse().map_err(SequenceError::from)?;
         let reusable = reuse != ReuseMode::Off;
         let mut exact = (reuse == ReuseMode::Exact)
             .then(|| ExactReuse::new(self.run_motion(selection, renderer.shutter), renderer.reuse_budget));

@@ -13,7 +13,8 @@
 //! Where each part lives, in the order a run meets them:
 //!
 //! - `decision.rs`: whether a run reuses at all and whether exact reuse fits its memory
-//!   budget ([`ReuseRequest::decide`]), for the command line and `Sequence::render` alike.
+//!   budget ([`ReuseMode::decide`](decision::ReuseMode::decide)), for the command line and
+//!   `Sequence::render` alike.
 //! - `changes.rs`: what changes between consecutive rendered frames, found from the
 //!   trajectory before they are rendered: [`RunMotion`], the facts the sequence hands over,
 //!   and the change stream that turns them, a window of frames at a time, into the boxes of a

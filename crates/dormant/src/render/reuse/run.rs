@@ -39,10 +39,10 @@ pub(crate) struct ExactReuse<'s> {
 }
 
 impl<'s> ExactReuse<'s> {
-    /// Exact reuse over `run` within `budget` bytes (which [`ReuseRequest::decide`] found
+    /// Exact reuse over `run` within `budget` bytes (which [`ReuseMode::decide`] found
     /// enough), with the change index of its first window built.
     ///
-    /// [`ReuseRequest::decide`]: super::ReuseRequest::decide
+    /// [`ReuseMode::decide`]: super::decision::ReuseMode::decide
     pub(crate) fn new(run: RunMotion<'s>, budget: usize) -> Self {
         let window_bytes = (budget / 8).min(CHANGE_WINDOW_BYTES);
         let mut reuse = Self {
