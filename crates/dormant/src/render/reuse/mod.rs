@@ -22,9 +22,9 @@
 //!   `accel/bvh/change_index/`).
 //! - `run.rs`: exact reuse over one run ([`ExactReuse`]): the change index's window, which
 //!   frames must be traced in full and why, the store, and each frame rendered through them.
-//! - `store.rs`: the [`ReuseStore`] of every sample's (or pixel's) last traced value and
-//!   horizon, and the AOV passes; one frame rendered through it, which merges what was traced
-//!   back in.
+//! - `store.rs`: the [`ReuseStore`](store::ReuseStore) of every sample's (or pixel's) last
+//!   traced value and horizon, and the AOV passes; one frame rendered through it, which merges
+//!   what was traced back in.
 //! - `plan.rs`: what the tile loop is asked to trace ([`FramePlan`], [`Due`]) and gives back
 //!   ([`PlannedFrame`]), and the tile loop bound to a frame as reuse sees it ([`PlanTracer`]).
 //!   The tile loop (`render/tiles/tile_loop.rs`) carries the plans out: a due sample is traced
