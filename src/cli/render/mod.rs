@@ -28,7 +28,7 @@ use dormant::scene::file::SceneFile;
 use dormant::scene::limits::{shutter_problem, MAX_SAMPLES_PER_PIXEL};
 use dormant::sequence::output::FrameWriter;
 use dormant::sequence::{
-    FrameRange, FrameRenderer, RenderedFrame, ReuseMode, SeedMode, Sequence, SequenceError, SequenceSource,
+    FrameRange, RenderedFrame, ReuseMode, SeedMode, Sequence, SequenceError, SequenceSource,
     DEFAULT_REUSE_BYTES,
 };
 
@@ -403,19 +403,13 @@ fn check_reuse(args: &RenderArgs) -> Result<(), CliError> {
     if args.reuse_mib == 0 {
         return Err(CliError::Input("--reuse-mib 0: must be at least 1".into()));
     }
-    let sequence = args.scene_file.is_some() || args.trajectory.is_some();
-    if !sequence || args.reuse != ReuseMode::Exact || args.seed != SeedMode::Fixed {
+    // Only a sequence reuses; whether this one does is the reuse decision's.
+    if args.scene_file.is_none() && args.trajectory.is_none() {
         return Ok(());
     }
-    let passes = aov_passes(args);
     let budget = sequence::reuse_budget(args)?;
-    let integrator = PathTracer::default();
-    let renderer = FrameRenderer {
-        aovs: &passes,
-        reuse_budget: budget,
-        ..FrameRenderer::new(&integrator, args.size.width, args.size.height, args.spp)
-    };
-    renderer.check_reuse_budget().map_err(|e| CliError::Input(format!("--reuse-mib {}: {e}", args.reuse_mib)))
+    let decided = args.reuse.decide(args.seed == SeedMode::Fixed, args.size, &aov_passes(args), budget);
+    decided.map(|_| ()).map_err(|e| CliError::Input(format!("--reuse-mib {}: {e}", args.reuse_mib)))
 }
 
 /// `--shutter S` (render, verify, bench integration): from 0 to 1.

@@ -2,14 +2,13 @@
 //! and depth at the first hit, and the samples each pixel got. A frame's passes are shaded at
 //! the beauty pass's camera hits as it traces them (no second trace of the camera rays); a
 //! pass alone, as exact reuse retraces where only the passes changed, is an integrator
-//! ([`AovIntegrator`]) over the same tiles, sampling and film, so both give the same bits
-//! ([`render_with_aovs`](super::render_with_aovs) renders a frame's image with its passes).
+//! ([`AovIntegrator`](super::AovIntegrator), `integrator/aov_pass.rs`) over the same tiles,
+//! sampling and film, so both give the same bits ([`render_with_aovs`](super::render_with_aovs)
+//! renders a frame's image with its passes).
 
 use glam::Vec3;
 
-use super::{
-    Film, FrameContext, FrameIntegrator, Integrator, PixelSampler, RayLog, RenderScene, SurfaceKind,
-};
+use super::{Film, RenderScene, SurfaceKind};
 use crate::accel::Hit;
 use crate::geometry::Ray;
 
@@ -28,7 +27,7 @@ pub enum Aov {
     Baked,
     /// Camera samples the pixel got (the effective spp of adaptive sampling, `--spp`
     /// everywhere without it), in all three channels. Not an integrator's pass: it is the
-    /// beauty pass's sample counts ([`render_with_aovs`]).
+    /// beauty pass's sample counts ([`render_with_aovs`](super::render_with_aovs)).
     Spp,
     /// Camera samples traced this frame: the pixel's samples where its block was traced, 0
     /// where exact temporal reuse took it from an earlier frame (every pixel's samples
@@ -77,34 +76,5 @@ pub(crate) fn aov_at_hit(aov: Aov, scene: &RenderScene, ray: &Ray, first: Option
         }
         // Filled from the sample counts, never traced.
         Aov::Spp | Aov::Traced => Vec3::ZERO,
-    }
-}
-
-/// An [`Integrator`] that returns one AOV at the camera ray's first hit.
-#[derive(Clone, Copy, Debug)]
-pub struct AovIntegrator(pub Aov);
-
-impl Integrator for AovIntegrator {
-    fn bind<'a>(&'a self, frame: FrameContext<'a>) -> Box<dyn FrameIntegrator + 'a> {
-        Box::new(AovFrame { aov: self.0, scene: frame.scene })
-    }
-}
-
-/// [`AovIntegrator`] bound to a frame: it only shades camera-ray hits, so it needs no query.
-struct AovFrame<'a> {
-    aov: Aov,
-    scene: &'a RenderScene<'a>,
-}
-
-impl FrameIntegrator for AovFrame<'_> {
-    fn li_from_hit(
-        &self,
-        ray: &Ray,
-        first: Option<Hit>,
-        _sampler: &PixelSampler,
-        _index: u32,
-        _log: &mut RayLog,
-    ) -> Vec3 {
-        aov_at_hit(self.aov, self.scene, ray, first.as_ref())
     }
 }

@@ -1,6 +1,10 @@
 //! Turning a committed scene into pixels: camera rays, shading, tiles over rayon, the film and
 //! image output. Talks to geometry only through [`crate::accel::SceneQuery`] and the scene
 //! manager's hit mapping; image sequences of simulations are `crate::sequence`'s.
+//!
+//! A frame is rendered by `tiles/` (the entry points and the tile loop) with the settings of
+//! `settings.rs` and an integrator of `integrator/`; exact temporal reuse, which traces only
+//! the samples that can see a change, is `reuse/`.
 
 mod adaptive;
 mod aov;
@@ -13,17 +17,17 @@ mod image_file;
 mod image_size;
 mod integrator;
 mod pixel_filter;
-mod ray_log;
 mod render_scene;
-mod reuse;
+pub(crate) mod reuse;
 mod sampler;
+mod settings;
 mod texture_sampling;
 mod tiles;
 
 pub use adaptive::AdaptiveSampling;
 pub(crate) use adaptive::SppStats;
+pub use aov::Aov;
 pub(crate) use aov::AovPasses;
-pub use aov::{Aov, AovIntegrator};
 pub use bsdf::{sample_cone, sample_cosine};
 pub use camera::PinholeCamera;
 pub(crate) use emitters::Emitters;
@@ -31,17 +35,18 @@ pub use film::Film;
 pub use image_file::write_exr_atomic;
 pub(crate) use image_file::{write_aov_png_atomic, write_png_atomic};
 pub use image_size::ImageSize;
+pub use integrator::aov_pass::AovIntegrator;
 pub use integrator::path::PathTracer;
 pub use integrator::preview::{AmbientOcclusion, DirectLighting};
+pub use integrator::ray_log::RayLog;
 pub use integrator::{FrameContext, FrameIntegrator, Integrator};
 pub use pixel_filter::{FilterKind, PixelFilter, MAX_FILTER_WIDTH};
-pub use ray_log::RayLog;
 pub use render_scene::RenderScene;
 pub(crate) use render_scene::{SurfaceHit, SurfaceKind};
-pub(crate) use reuse::{render_reusing, FrameReuse, ReuseStore};
-pub(crate) use reuse::{ReuseGranularity, ReuseStats};
 pub(crate) use sampler::PixelSampler;
-pub use tiles::{render_frame, render_with_aovs, RenderSettings, RenderStats};
+pub use settings::{RenderSettings, RenderStats};
+pub(crate) use tiles::FrameTracer;
+pub use tiles::{render_frame, render_with_aovs};
 
 use std::path::PathBuf;
 
@@ -71,6 +76,12 @@ pub enum RenderError {
         #[source]
         source: image::ImageError,
     },
+    /// Exact temporal reuse needs more memory than its budget allows (callers name the flag).
+    #[error(
+        "{budget_mib} MiB is too small for exact reuse of {width}x{height} frames with these passes: \
+         it needs {needed_mib} MiB (one value per pixel and pass); raise the budget or turn reuse off"
+    )]
+    ReuseBudget { budget_mib: usize, needed_mib: usize, width: u32, height: u32 },
     #[error("scene '{scene}': {what}")]
     Scene { scene: String, what: String },
     #[error(transparent)]

@@ -51,12 +51,6 @@ pub enum SequenceError {
         "frame {frame}: the kept statistics record {what} = {recorded}, replaying them gives {replayed}"
     )]
     KeptMismatch { frame: u32, what: &'static str, recorded: String, replayed: String },
-    /// Exact temporal reuse needs more memory than its budget allows (callers name the flag).
-    #[error(
-        "{budget_mib} MiB is too small for exact reuse of {width}x{height} frames with these passes: \
-         it needs {needed_mib} MiB (one value per pixel and pass); raise the budget or turn reuse off"
-    )]
-    ReuseBudget { budget_mib: usize, needed_mib: usize, width: u32, height: u32 },
     #[error(transparent)]
     Render(#[from] RenderError),
     #[error(transparent)]
@@ -68,7 +62,12 @@ pub enum SequenceError {
 impl SequenceError {
     /// Whether the input (scene, trajectory, options) was at fault rather than the run.
     pub fn is_input(&self) -> bool {
-        // A trajectory that cannot be read is input too, like a missing scene file.
-        !matches!(self, SequenceError::Render(_) | SequenceError::Accel(_) | SequenceError::Denoise(_))
+        // A trajectory that cannot be read is input too, like a missing scene file, and so is
+        // a reuse budget too small for the frames asked for.
+        match self {
+            SequenceError::Render(e) => matches!(e, RenderError::ReuseBudget { .. }),
+            SequenceError::Accel(_) | SequenceError::Denoise(_) => false,
+            _ => true,
+        }
     }
 }

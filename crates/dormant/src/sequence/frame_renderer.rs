@@ -1,28 +1,9 @@
 //! [`FrameRenderer`]: how every frame of a run is rendered (integrator, passes, size and
-//! samples, sampling, pixel filter, seed, reuse, shutter).
+//! samples, sampling, pixel filter, seed, reuse, shutter). Its reuse mode and budget are
+//! `render/reuse/`'s ([`ReuseMode`], decided by [`ReuseMode::decide`]).
 
-use crate::render::{AdaptiveSampling, Aov, Integrator, PixelFilter, RenderSettings};
-
-/// How frames reuse earlier frames' work (`--reuse`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum ReuseMode {
-    /// Trace every frame in full.
-    Off,
-    /// A frame where nothing moved and the camera stayed is the previous frame's image,
-    /// copied instead of traced.
-    #[value(alias = "on")]
-    Static,
-    /// Also within frames: trace only the samples that can see something that changed since
-    /// they were traced; take the rest from the previous frames, bit for bit.
-    #[default]
-    Exact,
-}
-
-/// Memory exact reuse may keep by default: room for a per-pixel store of a 3840x2160 frame
-/// with every AOV (538 MiB, `ReuseStore::bytes_for`), and for a per-sample
-/// store of 1920x1080 at 16 spp or 960x540 at 64 spp.
-pub const DEFAULT_REUSE_BYTES: usize = 576 << 20;
+use super::{ReuseMode, DEFAULT_REUSE_BYTES};
+use crate::render::{AdaptiveSampling, Aov, ImageSize, Integrator, PixelFilter, RenderError, RenderSettings};
 
 /// How the pixel sampler is seeded across a sequence (`--seed`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
@@ -99,5 +80,11 @@ impl<'a> FrameRenderer<'a> {
             adaptive: self.adaptive,
             filter: self.filter,
         }
+    }
+
+    /// How this renderer's frames reuse ([`ReuseMode::decide`]).
+    pub(super) fn decide_reuse(&self) -> Result<ReuseMode, RenderError> {
+        let size = ImageSize { width: self.width, height: self.height };
+        self.reuse.decide(self.seed == SeedMode::Fixed, size, self.aovs, self.reuse_budget)
     }
 }

@@ -1,16 +1,17 @@
-//! The per-frame call into the renderer: a scene manager brought to a frame, its committed
-//! scene rendered with the run's integrator and AOVs, and the trace time reported back to the
-//! manager's cost model.
+//! The sequence's rendering methods: the per-frame call into the renderer (a scene manager
+//! brought to a frame, its committed scene rendered with the run's integrator and AOVs, the
+//! trace time reported back to the manager's cost model), the render loop over a run's frames
+//! with static-frame reuse, and frames kept from an earlier run brought through the manager.
+//! Exact temporal reuse is `crate::render::reuse`'s; this file asks it whether it applies,
+//! hands it the run's facts ([`RunMotion`]) and calls it once per frame.
 
-use super::frame_renderer::{FrameRenderer, ReuseMode, SeedMode};
-use super::reuse::{ExactFrame, ExactReuse, FullFrame};
-use super::{FrameSelection, KeptFrame, Sequence, SequenceError};
+use super::{FrameRenderer, FrameSelection, KeptFrame, ReuseMode, Sequence, SequenceError};
 use crate::physics::trajectory::ReplayFrame;
+use crate::render::reuse::{ExactFrame, ExactReuse, FullFrame, RunMotion};
 use crate::render::{
-    render_with_aovs, Aov, Emitters, Film, PinholeCamera, RenderError, RenderScene, RenderStats,
+    render_with_aovs, Aov, Emitters, Film, FrameTracer, PinholeCamera, RenderError, RenderScene, RenderStats,
 };
-use crate::residency::{FrameStats, SceneManager};
-use crate::scene::Camera;
+use crate::residency::{FrameStats, IntegrationForm, SceneManager, TraceKind};
 
 /// Camera rays (one per pixel of this image) of the manager's trace-penalty probes: enough
 /// rays for a stable time, few enough to cost a few ms.
@@ -102,26 +103,21 @@ impl Sequence {
                     (film, render, aovs, None)
                 }
                 Some(reuse) => {
+                    let tracer = FrameTracer {
+                        scene: &scene,
+                        query,
+                        integrator: renderer.integrator,
+                        settings: &settings,
+                    };
                     let (film, render, aovs, exact) =
-                        reuse.render(&scene, query, renderer, frame.index, manager.last_frame())?;
+                        reuse.render(&tracer, renderer.aovs, frame.index, islands_baked(manager))?;
                     (film, render, aovs, Some(exact))
                 }
             }
         };
         let full = exact.as_ref().and_then(|e| e.full);
-        manager.record_trace(render.seconds * 1e3, render.rays, FullFrame::trace_kind(full));
+        manager.record_trace(render.seconds * 1e3, render.rays, trace_kind(full));
         Ok(RenderedFrame { index: frame.index, film, render, aovs, reused_from: None, reuse: exact })
-    }
-
-    /// The camera of frame `index`: without a shutter, at the frame's instant; with one, at
-    /// shutter open and close (`shutter / 2` frame intervals before and after it).
-    pub(super) fn shutter_cameras(&self, index: u32, shutter: f32) -> (Camera, Option<Camera>) {
-        let t = self.time_of(index);
-        if shutter <= 0.0 {
-            return (self.assets.camera_at(t), None);
-        }
-        let half = 0.5 * shutter * self.trajectory.timestep;
-        (self.assets.camera_at(t - half), Some(self.assets.camera_at(t + half)))
     }
 
     /// Points the manager's trace-penalty probes along `frame`'s camera, with the samples of
@@ -136,16 +132,6 @@ impl Sequence {
         let samples = u64::from(renderer.width) * u64::from(renderer.height) * u64::from(renderer.spp);
         manager
             .set_probe_rays(PinholeCamera::pixel_centre_rays(&camera, PROBE_SIZE.0, PROBE_SIZE.1), samples);
-    }
-
-    /// Whether frames `a` and `b > a` show the same scene: no body moved, appeared or left in
-    /// between (kinematic bodies included), and the camera is where it was. Lights, sky and
-    /// materials do not change over a sequence.
-    pub(crate) fn unchanged_between(&self, a: u32, b: u32) -> bool {
-        let frames = &self.trajectory.frames;
-        let still = (a as usize + 1..=b as usize)
-            .all(|f| frames.get(f).is_some_and(|f| f.pose_changes.is_empty() && f.state_changes.is_empty()));
-        still && self.assets.camera_at(self.time_of(a)) == self.assets.camera_at(self.time_of(b))
     }
 
     /// Renders the frames `selection` selects through `manager` and hands each to
@@ -171,8 +157,10 @@ impl Sequence {
     ) -> Result<(), E> {
         let mut last: Option<RenderedFrame> = None;
         let mut kept = kept.iter().peekable();
-        let reusable = renderer.reuse != ReuseMode::Off && renderer.seed == SeedMode::Fixed;
-        let mut exact = ExactReuse::plan(self, selection, renderer, manager.options().form)?;
+        let reuse = renderer.decide_reuse().map_err(SequenceError::from)?;
+        let reusable = reuse != ReuseMode::Off;
+        let mut exact = (reuse == ReuseMode::Exact)
+            .then(|| ExactReuse::new(self.run_motion(selection, renderer.shutter), renderer.reuse_budget));
         // With motion blur a frame's image also shows the motion from the frame before it to
         // the frame after it.
         let last_frame = self.frame_count().saturating_sub(1);
@@ -206,9 +194,7 @@ impl Sequence {
         debug_assert!(kept.next().is_none(), "kept frames are the first selected ones");
         Ok(())
     }
-}
 
-impl Sequence {
     /// Brings `manager` through `kept` (the frame `frame`) as the earlier run did, without
     /// tracing; `reused`: whether this run reuses the previous image here. Fails when the
     /// replay does not reach the state that run recorded.
@@ -245,5 +231,31 @@ impl Sequence {
             }
         }
         Ok(())
+    }
+
+    /// What exact reuse needs to know of rendering `selection` with shutter `shutter`: the
+    /// trajectory, the template, the frames and the camera at each.
+    fn run_motion(&self, selection: &FrameSelection, shutter: f32) -> RunMotion<'_> {
+        let frames = selection.frames();
+        let cameras = frames.iter().map(|&f| self.shutter_cameras(f, shutter)).collect();
+        RunMotion::new(&self.trajectory, &self.template, frames, cameras, shutter)
+    }
+}
+
+/// Whether the frame `manager` just prepared baked islands into its static scene or took
+/// them out (the baked form): their triangles are then hit through another structure, and
+/// exact reuse traces the frame in full.
+fn islands_baked(manager: &SceneManager) -> bool {
+    let stats = manager.last_frame();
+    manager.options().form == IntegrationForm::Baked
+        && stats.islands_integrated + stats.islands_reactivated > 0
+}
+
+/// What the trace of a frame traced in full for `full` under exact reuse (`None`: it reused
+/// samples, or reuse was off) says of the frames after it.
+pub(crate) fn trace_kind(full: Option<FullFrame>) -> TraceKind {
+    match full {
+        Some(_) => TraceKind::FullBeforeReuse,
+        None => TraceKind::Typical,
     }
 }

@@ -1,17 +1,22 @@
 //! Integrators: the interface ([`Integrator`] bound to one frame's [`FrameContext`] as a
-//! [`FrameIntegrator`]), the sampler dimensions they draw from, and what they share about
-//! punctual lights and shadow rays. The integrators themselves: path tracing in `path.rs`,
-//! the direct-light preview and ambient occlusion in `preview.rs` (AOVs are in `render/aov.rs`).
+//! [`FrameIntegrator`]), the sampler dimensions they draw from, what they share about
+//! punctual lights and shadow rays, and the [`RayLog`] every ray they trace is recorded in
+//! (`ray_log.rs`). The integrators themselves: path tracing in `path.rs`, the direct-light
+//! preview and ambient occlusion in `preview.rs`, one AOV pass in `aov_pass.rs` (what the
+//! passes record is `render/aov.rs`).
 
+pub(super) mod aov_pass;
 pub(super) mod path;
 pub(super) mod preview;
+pub(super) mod ray_log;
 
 use glam::Vec3;
 
-use super::{PixelSampler, RayLog, RenderScene};
+use super::{PixelSampler, RenderScene};
 use crate::accel::{Hit, Occluder, SceneQuery};
 use crate::geometry::Ray;
 use crate::scene::Light;
+use ray_log::RayLog;
 
 /// What an integrator sees of one frame: the shading data, camera and lights
 /// ([`RenderScene`]) and the committed geometry to trace rays against.

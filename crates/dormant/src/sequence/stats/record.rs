@@ -7,9 +7,10 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use super::StatsError;
-use crate::render::{RenderStats, ReuseGranularity, SppStats};
+use crate::render::reuse::{FullFrame, ReuseGranularity};
+use crate::render::{RenderStats, SppStats};
 use crate::residency::{CacheStats, CostModelState, Decision, FrameStats, StageTimes};
-use crate::sequence::{FullFrame, KeptFrame, PhysicsSource, RenderedFrame};
+use crate::sequence::{trace_kind, KeptFrame, PhysicsSource, RenderedFrame};
 
 /// `format` field of stats.json.
 pub(crate) const STATS_FORMAT: &str = "dormant-stats";
@@ -163,7 +164,7 @@ impl FrameRecord {
             decisions: self.decisions.iter().map(|d| (d.island, d.integrate)).collect(),
             trace_ms: self.stages.trace_ms,
             rays: self.rays,
-            trace_kind: FullFrame::trace_kind(self.reuse.full_frame),
+            trace_kind: trace_kind(self.reuse.full_frame),
             instances: self.instances,
             integrated_islands: self.integrated_islands,
             sleeping_islands: self.sleeping_islands,

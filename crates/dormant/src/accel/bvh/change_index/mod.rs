@@ -13,6 +13,9 @@
 //! if it comes near that geometry at either pose: a ray passing a moved body without touching
 //! it sees nothing change. The test is conservative (f64, with a margin), so it never misses a
 //! hit either tracer could find.
+//!
+//! Exact reuse (`render/reuse/`) is its one user: `changes.rs` there makes the boxes from the
+//! trajectory and builds the index window by window, `horizon.rs` queries it ray by ray.
 
 mod shape;
 

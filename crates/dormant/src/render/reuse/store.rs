@@ -1,14 +1,7 @@
-//! Exact temporal reuse: a frame traces only the samples (or pixels) whose horizon has come,
-//! and takes everything else from the [`ReuseStore`], which holds the last traced value of
-//! every sample (or pixel), the AOV passes, and each one's horizon.
-//!
-//! Why it is exact: a sample is traced as a full frame traces it (its camera ray in the same
-//! packet with the same neighbours, the same sampler dimensions), and its horizon is the
-//! earliest later frame whose changes ([`ChangeIndex`]) any of its rays' segments meets. Until
-//! then every segment sees the same geometry, so with the camera, lights and seed unchanged the
-//! sample computes the same bits; a pixel is the sum of its samples in index order, so it is
-//! the pixel a full render computes. Whether a frame may reuse at all (camera, lights, seed,
-//! the scene's representation) is its caller's to decide ([`FrameReuse::full`]).
+//! The [`ReuseStore`]: the last traced value of every sample (or pixel) of a run's frames, the
+//! AOV passes, and each one's horizon; and one frame rendered through it
+//! ([`ReuseStore::render_frame`]), which traces only what is due and takes the rest from the
+//! store.
 //!
 //! The store keeps every sample when the budget allows (a pixel whose path changed in one
 //! sample of sixteen retraces one; with adaptive sampling, `spp` slots per pixel, of which a
@@ -19,11 +12,9 @@
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
-use super::aov::{AovIntegrator, AovPasses};
-use super::tiles::{render_planned, Due, FramePlan, PlannedFrame, StoredSamples};
-use super::{Aov, Film, Integrator, RenderError, RenderScene, RenderSettings, RenderStats, SppStats};
+use super::plan::{Due, FramePlan, PlanTracer, PlannedFrame, StoredSamples};
 use crate::accel::bvh::ChangeIndex;
-use crate::accel::SceneQuery;
+use crate::render::{Aov, AovPasses, Film, RenderError, RenderSettings, RenderStats, SppStats};
 
 /// What the store keeps of every pixel: a sample count and a horizon (4 bytes each) and one RGB
 /// value (12 bytes) for the image and for each AOV pass that is traced.
@@ -43,7 +34,7 @@ pub enum ReuseGranularity {
 }
 
 impl ReuseGranularity {
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             ReuseGranularity::Sample => "sample",
             ReuseGranularity::Pixel => "pixel",
@@ -196,55 +187,60 @@ impl ReuseStore {
     }
 }
 
-/// A frame's image with `integrator` and its `aovs` passes, tracing only what `reuse` and the
-/// store say must be traced and taking the rest from `store`, which is brought up to date.
-/// The same bits as [`super::render_with_aovs`] (see the module docs); the statistics count
-/// only what was traced, but for the samples per pixel, which are the whole frame's.
-pub fn render_reusing(
-    scene: &RenderScene,
-    query: &dyn SceneQuery,
-    integrator: &dyn Integrator,
-    settings: &RenderSettings,
-    aovs: &[Aov],
-    reuse: FrameReuse,
-    store: &mut ReuseStore,
-) -> Result<(Film, RenderStats, AovPasses, ReuseStats), RenderError> {
-    if reuse.full || !store.fits(settings, aovs) {
-        *store = ReuseStore::fresh(settings, aovs, reuse.budget, reuse.ordinal);
+impl ReuseStore {
+    /// A frame's image and its `aovs` passes through `tracer`, tracing only what `reuse` and
+    /// the store say must be traced and taking the rest from the store, which is brought up to
+    /// date. The same bits as a full render of the frame (see `render/reuse/mod.rs`); the
+    /// statistics count only what was traced, but for the samples per pixel, which are the
+    /// whole frame's.
+    pub(crate) fn render_frame(
+        &mut self,
+        tracer: &dyn PlanTracer,
+        aovs: &[Aov],
+        reuse: FrameReuse,
+    ) -> Result<(Film, RenderStats, AovPasses, ReuseStats), RenderError> {
+        let settings = tracer.settings();
+        if reuse.full || !self.fits(settings, aovs) {
+            *self = ReuseStore::fresh(settings, aovs, reuse.budget, reuse.ordinal);
+        }
+        let due = self.due(reuse.ordinal);
+        let plan = FramePlan {
+            samples: None,
+            due: self.beauty_due(&due, reuse.ordinal),
+            horizons: Some((reuse.index, reuse.ordinal, reuse.until)),
+            aovs: &self.first_hit_passes(),
+        };
+        let beauty = tracer.trace(&plan)?;
+        let counts_before = (!self.passes.is_empty()).then(|| self.counts.clone());
+        let traced = match self.granularity {
+            ReuseGranularity::Sample => self.merge_samples(&beauty, &due, settings.spp),
+            ReuseGranularity::Pixel => self.merge_pixels(&beauty, &due),
+        };
+        let mut seconds = beauty.seconds;
+        if let Some(before) = counts_before {
+            let shaded = self.merge_first_hit_passes(&beauty, &traced);
+            seconds += self.render_passes(tracer, reuse, &before, &shaded)?;
+        }
+        let (film, passes) = self.frame(aovs, &traced, settings);
+        let stats = RenderStats { rays: beauty.rays, seconds, spp: SppStats::of(&self.counts) };
+        Ok((film, stats, passes, self.stats(&beauty, &traced)))
     }
-    let due = store.due(reuse.ordinal);
-    let plan = FramePlan {
-        samples: None,
-        due: store.beauty_due(&due, reuse.ordinal),
-        horizons: Some((reuse.index, reuse.ordinal, reuse.until)),
-        aovs: &store.first_hit_passes(),
-    };
-    let beauty = render_planned(scene, query, integrator, settings, &plan)?;
-    let counts_before = (!store.passes.is_empty()).then(|| store.counts.clone());
-    let traced = match store.granularity {
-        ReuseGranularity::Sample => store.merge_samples(&beauty, &due, settings.spp),
-        ReuseGranularity::Pixel => store.merge_pixels(&beauty, &due),
-    };
-    let mut seconds = beauty.seconds;
-    if let Some(before) = counts_before {
-        let shaded = store.merge_first_hit_passes(&beauty, &traced);
-        seconds += store.render_passes(scene, query, settings, reuse, &before, &shaded)?;
+
+    /// What reuse did in a frame that traced `beauty`, `traced` samples per pixel.
+    fn stats(&self, beauty: &PlannedFrame, traced: &[u32]) -> ReuseStats {
+        let total: u64 = self.counts.iter().map(|&n| u64::from(n)).sum();
+        let samples_traced: u64 = traced.iter().map(|&n| u64::from(n)).sum();
+        ReuseStats {
+            granularity: self.granularity,
+            samples_traced,
+            samples_reused: total - samples_traced,
+            pixels_traced: traced.iter().filter(|&&n| n > 0).count() as u64,
+            pixels: traced.len() as u64,
+            horizon_queries: beauty.horizon_queries,
+            horizon_ms: beauty.horizon_seconds * 1e3,
+            store_bytes: self.memory_bytes() as u64,
+        }
     }
-    let total: u64 = store.counts.iter().map(|&n| u64::from(n)).sum();
-    let samples_traced: u64 = traced.iter().map(|&n| u64::from(n)).sum();
-    let (film, passes) = store.frame(aovs, &traced, settings);
-    let stats = RenderStats { rays: beauty.rays, seconds, spp: SppStats::of(&store.counts) };
-    let reuse_stats = ReuseStats {
-        granularity: store.granularity,
-        samples_traced,
-        samples_reused: total - samples_traced,
-        pixels_traced: traced.iter().filter(|&&n| n > 0).count() as u64,
-        pixels: due.len() as u64,
-        horizon_queries: beauty.horizon_queries,
-        horizon_ms: beauty.horizon_seconds * 1e3,
-        store_bytes: store.memory_bytes() as u64,
-    };
-    Ok((film, stats, passes, reuse_stats))
 }
 
 /// Copies the values of the pixels `due` from `from` into `to`.
@@ -287,9 +283,7 @@ impl ReuseStore {
     /// pass's, before this frame); returns the seconds taken.
     fn render_passes(
         &mut self,
-        scene: &RenderScene,
-        query: &dyn SceneQuery,
-        settings: &RenderSettings,
+        tracer: &dyn PlanTracer,
         reuse: FrameReuse,
         counts_before: &[u32],
         shaded: &[bool],
@@ -309,7 +303,7 @@ impl ReuseStore {
             horizons: Some((reuse.index, reuse.ordinal, reuse.until)),
             aovs: &rest,
         };
-        let traced = render_planned(scene, query, &AovIntegrator(self.passes[0].0), settings, &plan)?;
+        let traced = tracer.trace_pass(self.passes[0].0, &plan)?;
         copy_due(&mut self.passes[0].1, &traced.film.pixels, &due);
         for ((_, stored), film) in self.passes[1..].iter_mut().zip(&traced.aovs) {
             copy_due(stored, &film.pixels, &due);
@@ -383,7 +377,7 @@ impl ReuseStore {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sequence::DEFAULT_REUSE_BYTES;
+    use crate::render::reuse::decision::DEFAULT_REUSE_BYTES;
 
     #[test]
     fn the_default_budget_holds_a_4k_frame_per_pixel_and_hd_per_sample() {
