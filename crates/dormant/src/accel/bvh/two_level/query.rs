@@ -18,8 +18,8 @@ use glam::{Affine3A, Mat3, Vec3};
 use rayon::prelude::*;
 
 use crate::accel::bvh::flat::{
-    build, each_bit, interval_is_valid, BoxRay, FlatBvh, Lanes, MeshBvh, PrimHit, RayPacket, Start, Wide,
-    ANY_HIT, CLOSEST_HIT, PACKET,
+    build, each_bit, interval_is_valid, BoxRay, FlatBvh, Lanes, MeshBvh, PacketLanes, PrimHit, RayPacket,
+    Start, Wide, ANY_HIT, CLOSEST_HIT, PACKET,
 };
 use crate::accel::bvh::persistent::StaticSnapshot;
 use crate::accel::bvh::simd::{dispatch, Kernel};
@@ -228,8 +228,7 @@ impl Top {
             k,
             &self.bvh,
             Start::Test(0),
-            packet,
-            lanes,
+            PacketLanes { packet, lanes },
             t_max,
             &mut |first, count, lanes, t_max| {
                 for (item, motion) in self.live(first, count) {
@@ -272,8 +271,7 @@ impl Top {
             k,
             &self.bvh,
             Start::Test(0),
-            packet,
-            lanes,
+            PacketLanes { packet, lanes },
             &mut t_max,
             &mut |first, count, lanes, t_max| {
                 let mut left = lanes;
