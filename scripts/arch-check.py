@@ -388,8 +388,11 @@ def api_problems(crate):
                 if path[-1] == "*":
                     problems.append(f"{crate.name}: {where}: glob re-export `pub use {'::'.join(path)}` "
                                     f"(name each item: the API count and the reader see only named ones)")
-        for m in re.finditer(r"#!?\[[^\]]*\bdoc\s*\(\s*hidden\b", text):
-            line = text.count("\n", 0, m.start()) + 1
+        if not re.search(r"\bdoc\s*\(\s*hidden\b", text):
+            continue
+        raw = open(crate.files[module], encoding="utf-8").read().split("\n")
+        for line in (i for i, l in enumerate(raw, 1)
+                     if re.search(r"\bdoc\s*\(\s*hidden\b", l) and not l.lstrip().startswith("//")):
             problems.append(f"{crate.name}: {where}:{line}: `#[doc(hidden)]` hides an item from the API "
                             f"count and the documentation (make it `pub(crate)` or document it)")
     return problems, names, items
