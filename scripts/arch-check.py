@@ -35,7 +35,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 # first). A top-level module missing here is an error, so a new domain gets a place on purpose.
 CRATES = {
     "dormant": ("crates/dormant/src", "lib.rs", {
-        "atomic_file": 0, "rng": 0, "geometry": 0,
+        "atomic_file": 0, "rng": 0, "geometry": 0, "names": 0,
         "scene": 1,
         "physics": 2,
         "accel": 3,

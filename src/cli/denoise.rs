@@ -4,6 +4,7 @@
 use clap::Args;
 use dormant::render::denoise::{DenoiseError, DenoiseQuality, Denoiser};
 
+use super::named::named;
 use super::CliError;
 
 /// `--denoise` and how it filters.
@@ -20,7 +21,7 @@ pub(crate) struct DenoiseArgs {
     pub denoise_prefilter: bool,
     /// With --denoise: OIDN's filter quality, like Cycles' "Denoising Quality": `fast` filters
     /// with a smaller network, in about half the time and with more error.
-    #[arg(long, value_enum, default_value_t, requires = "denoise")]
+    #[arg(long, value_parser = named::<DenoiseQuality>(), default_value_t, requires = "denoise")]
     pub denoise_quality: DenoiseQuality,
 }
 

@@ -32,6 +32,8 @@
 
 use std::collections::VecDeque;
 
+use crate::names::named_enum;
+
 /// Samples kept per fit.
 const WINDOW: usize = 64;
 /// Prior build throughput before two builds were measured: 4 M triangles/s plus 0.5 ms.
@@ -123,19 +125,21 @@ pub enum TraceKind {
     FullBeforeReuse,
 }
 
-/// How integrated islands are held (`--integrate-as`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum IntegrationForm {
-    /// The island's triangles in world space, in the static scene (one incremental insert).
-    Baked,
-    /// The island's bodies stay instances, in a resting scene beside the per-frame top level:
-    /// rebuilt on a schedule, traced as a second scene per ray. The default: on the monastery
-    /// with 8,000 ducks it traces 0.98x (Embree) and 0.87-1.0x (BVH) as fast as every body
-    /// instanced in one top level, where baking every body traces 1.7-1.8x slower (`dormant
-    /// bench accel`): docs/lab/accelerators.md#2026-12-01-integration-forms-on-the-same-scene-and-the-ratios-table
-    #[default]
-    Resting,
+named_enum! {
+    /// How integrated islands are held (`--integrate-as`).
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize)]
+    #[serde(rename_all = "lowercase")]
+    pub enum IntegrationForm {
+        /// The island's triangles in world space, in the static scene (one incremental insert).
+        Baked = "baked",
+        /// The island's bodies stay instances, in a resting scene beside the per-frame top level:
+        /// rebuilt on a schedule, traced as a second scene per ray. The default: on the monastery
+        /// with 8,000 ducks it traces 0.98x (Embree) and 0.87-1.0x (BVH) as fast as every body
+        /// instanced in one top level, where baking every body traces 1.7-1.8x slower (`dormant
+        /// bench accel`): docs/lab/accelerators.md#2026-12-01-integration-forms-on-the-same-scene-and-the-ratios-table
+        #[default]
+        Resting = "resting",
+    }
 }
 
 impl IntegrationForm {
@@ -147,15 +151,6 @@ impl IntegrationForm {
         let mut forms = vec![first];
         forms.extend(Self::ALL.into_iter().filter(|f| *f != first));
         forms
-    }
-}
-
-impl std::fmt::Display for IntegrationForm {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            IntegrationForm::Baked => "baked",
-            IntegrationForm::Resting => "resting",
-        })
     }
 }
 

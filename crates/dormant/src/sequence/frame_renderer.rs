@@ -1,22 +1,24 @@
 //! [`FrameRenderer`]: how every frame of a run is rendered (integrator, passes, size and
 //! samples, sampling, pixel filter, seed, reuse, shutter).
 
+use crate::names::named_enum;
 use crate::render::{AdaptiveSampling, Aov, Integrator, PixelFilter, RenderSettings};
 
-/// How frames reuse earlier frames' work (`--reuse`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum ReuseMode {
-    /// Trace every frame in full.
-    Off,
-    /// A frame where nothing moved and the camera stayed is the previous frame's image,
-    /// copied instead of traced.
-    #[value(alias = "on")]
-    Static,
-    /// Also within frames: trace only the samples that can see something that changed since
-    /// they were traced; take the rest from the previous frames, bit for bit.
-    #[default]
-    Exact,
+named_enum! {
+    /// How frames reuse earlier frames' work (`--reuse`).
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+    #[serde(rename_all = "lowercase")]
+    pub enum ReuseMode {
+        /// Trace every frame in full.
+        Off = "off",
+        /// A frame where nothing moved and the camera stayed is the previous frame's image,
+        /// copied instead of traced.
+        Static = "static" | "on",
+        /// Also within frames: trace only the samples that can see something that changed since
+        /// they were traced; take the rest from the previous frames, bit for bit.
+        #[default]
+        Exact = "exact",
+    }
 }
 
 /// Memory exact reuse may keep by default: room for a per-pixel store of a 3840x2160 frame
@@ -24,17 +26,19 @@ pub enum ReuseMode {
 /// store of 1920x1080 at 16 spp or 960x540 at 64 spp.
 pub const DEFAULT_REUSE_BYTES: usize = 576 << 20;
 
-/// How the pixel sampler is seeded across a sequence (`--seed`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum SeedMode {
-    /// One seed for every frame, as Cycles does by default: a frame that shows the same scene
-    /// as the one before is the same image, so it is not traced again but copied.
-    #[default]
-    Fixed,
-    /// The frame number seeds each frame: noise decorrelates from frame to frame (like
-    /// Cycles' animated seed), and every frame is traced.
-    PerFrame,
+named_enum! {
+    /// How the pixel sampler is seeded across a sequence (`--seed`).
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+    #[serde(rename_all = "kebab-case")]
+    pub enum SeedMode {
+        /// One seed for every frame, as Cycles does by default: a frame that shows the same scene
+        /// as the one before is the same image, so it is not traced again but copied.
+        #[default]
+        Fixed = "fixed",
+        /// The frame number seeds each frame: noise decorrelates from frame to frame (like
+        /// Cycles' animated seed), and every frame is traced.
+        PerFrame = "per-frame",
+    }
 }
 
 /// How every frame of a run is rendered.
