@@ -12,10 +12,9 @@ use crate::accel::AccelError;
 use crate::physics::trajectory::ReplayFrame;
 use crate::physics::IslandId;
 use crate::residency::baked::BakedIsland;
-use crate::residency::cost_model::{
-    choose_batch, Candidate, CostEstimate, IntegrationForm, Outlook, Situation,
-};
+use crate::residency::cost_model::{choose_batch, Candidate, CostEstimate, Outlook, Situation};
 use crate::residency::policy::IntegrationPolicy;
+use crate::residency::IntegrationForm;
 
 /// A candidate island and what was decided about it.
 struct Considered {

@@ -10,7 +10,8 @@ use rayon::prelude::*;
 
 use crate::accel::SceneQuery;
 use crate::geometry::{offset_origin, Ray};
-use crate::residency::cost_model::{CostModel, IntegrationForm};
+use crate::residency::cost_model::CostModel;
+use crate::residency::IntegrationForm;
 
 /// Smallest share of the present bodies a baked batch must move for its probe to measure
 /// more than timing noise.
