@@ -39,23 +39,22 @@ const WINDOW: usize = 64;
 /// Prior build throughput before two builds were measured: 4 M triangles/s plus 0.5 ms.
 const PRIOR_BUILD_MS: (f64, f64) = (0.5, 2.5e-4);
 /// Prior commit ms per top-level instance before a commit of at least
-/// [`MIN_COMMIT_INSTANCES`] was measured: Embree 4.4's HIGH top level measured 0.35 us per
-/// instance on the demolition's 80,000 and 0.45 us on 8,000 ducks, the BVH 0.5 us.
+/// [`MIN_COMMIT_INSTANCES`] was measured: about what both backends measured on large scenes
+/// (docs/lab/integration.md#2026-12-01-the-cost-models-priors-and-its-first-frame).
 const PRIOR_GAIN_MS_PER_INSTANCE: f64 = 5e-4;
 /// Commits of fewer top-level instances do not measure the per-instance cost: a commit's
-/// fixed part (about 0.1 ms) dominates them. Counted in, the few awake bodies left once
-/// everything else rests made the ratio 200 times too large (70 us per instance on the
-/// demolition at 2,000 bodies), and `auto` integrated islands worth nothing.
+/// fixed part dominates them. Counted in, the few awake bodies left once everything else
+/// rests made the ratio far too large, and `auto` integrated islands worth nothing (the same
+/// entry).
 const MIN_COMMIT_INSTANCES: usize = 1000;
 /// Prior expected sleep, in frames, before any island has slept.
 const PRIOR_SLEEP_FRAMES: f64 = 30.0;
-/// Prior rebuild of the resting scene: 0.2 ms plus 0.5 us per instance (Embree 4.4, HIGH:
-/// 0.41-0.43 us per instance on 7,920 instances; the BVH 0.44-0.59 us; `dormant bench accel`).
+/// Prior rebuild of the resting scene, ms: fixed, and per instance about what both backends
+/// measured (docs/lab/integration.md#2026-12-01-the-cost-models-priors-and-its-first-frame).
 const PRIOR_REST_MS: (f64, f64) = (0.2, 5e-4);
-/// Prior trace penalties until a probe measured them: a second scene per ray cost 0.98x on
-/// the monastery with 8,000 ducks and on the atrium but 1.1-1.3x on the demolition, so 10%;
-/// baking every body about 15%:
-/// docs/lab/integration.md#2026-12-01-the-resting-form-with-a-scheduled-resting-level
+/// Prior trace penalties until a probe measured them: a second scene per ray costs little on
+/// most scenes and more on the demolition; baking every body costs more:
+/// docs/lab/integration.md#2026-12-01-the-cost-models-priors-and-its-first-frame
 const PRIOR_RESTING_PENALTY: f64 = 0.10;
 const PRIOR_BAKED_PENALTY: f64 = 0.15;
 

@@ -185,7 +185,7 @@ impl Wide {
     ///
     /// Pushing here, not in the caller, and each lane's kernel ray prepared here per node
     /// (broadcasts from the packet) rather than once per traversal into an array: returning
-    /// the sorted children to the caller cost 3-5% of the packets' gain, and that array was
+    /// the sorted children to the caller cost part of the packets' gain, and that array was
     /// copied with `memcpy` at every traversal, instance entries included. A loop over each
     /// lane's hit children instead of the transpose made packets slower than single rays:
     /// docs/lab/rendering.md#2026-12-02-bvh-packets

@@ -9,8 +9,8 @@
 //! Why: a ray walks each block subtree it enters to the end before the next, so a subtree of
 //! the environment that encloses an island (the floor and walls around a pile) is walked
 //! behind the island by rays aimed at it. Overlays made by inserting blocks one at a time
-//! (`insert.rs`, still what [`super::StaticBvh::insert`] does) kept such subtrees whole: at
-//! its most fragmented, such a tree traced up to 1.5x a fresh build of its triangles.
+//! (`insert.rs`, still what [`super::StaticBvh::insert`] does) kept such subtrees whole, and
+//! at its most fragmented such a tree traced well behind a fresh build of its triangles.
 //!
 //! Which pieces: the largest first, while a piece is larger than a quarter of the
 //! second-largest block (the largest island, where the largest block is the environment),
