@@ -18,6 +18,9 @@ between the workspace's crates; this checks the arrows inside each crate.
   method on the value the arguments describe instead), nor its threshold raised.
 - No function over LONG_FUNCTION_LINES lines in any crate's src/ (test modules aside),
   counted as ../shared/tools/long-functions counts.
+- Every docs/ link in the Rust sources names a file and heading that exist.
+- A comment in a crate's src/ that quotes a measured ratio (`1.3x`) links the docs/lab entry
+  holding the measurement, and at most MAX_RATIO_COMMENTS do (ratios only: see there).
 
 Imports are read from the source text: `use` trees and `crate::`/`super::`/`self::` paths in
 code (comments and string literals stripped), and paths through child modules a file declares.
@@ -460,6 +463,61 @@ def doc_link_problems():
     return problems
 
 
+# A comment that quotes a measured speed ratio (`1.3x`, `0.72-0.78x`) must link the docs/lab
+# entry that holds the measurement, and few may quote one at all: the history lives in the lab
+# notebook, a comment says why in a line. Only ratios are checked: percentages and times also
+# state thresholds, definitions and sizes, which a pattern cannot tell from measurements.
+MAX_RATIO_COMMENTS = 10
+RATIO = re.compile(r"(?<![\w.])\d+(?:\.\d+)?(?:-\d+(?:\.\d+)?)?x\b")
+
+
+def comment_blocks(path):
+    """(first line, text) of each run of comment lines of one kind (`//!`, `///`, `//`) in a Rust
+    file, outside test modules (`#[cfg(test)]` then `mod NAME {`)."""
+    lines = open(path, encoding="utf-8", errors="replace").read().split("\n")
+    blocks, i = [], 0
+    while i < len(lines):
+        m = re.match(r"^(\s*)#\[cfg\(test\)\]\s*$", lines[i])
+        if m and i + 1 < len(lines) and re.match(r"^\s*(pub(\([^)]*\))?\s+)?mod\s+\w+\s*\{", lines[i + 1]):
+            i += 2
+            while i < len(lines) and not lines[i].startswith(m.group(1) + "}"):
+                i += 1
+            i += 1
+            continue
+        kind = re.match(r"^\s*(//[/!]?)", lines[i])
+        if not kind:
+            i += 1
+            continue
+        j = i
+        while j < len(lines) and re.match(r"^\s*(//[/!]?)", lines[j]) and \
+                re.match(r"^\s*(//[/!]?)", lines[j]).group(1) == kind.group(1):
+            j += 1
+        blocks.append((i + 1, "\n".join(lines[i:j])))
+        i = j
+    return blocks
+
+
+def ratio_comment_problems():
+    """Comment blocks in the crates' src/ that quote a ratio without a docs/lab link, and more
+    than MAX_RATIO_COMMENTS of them."""
+    problems, quoting = [], []
+    for path in workspace_files((".rs",)):
+        rel = os.path.relpath(path, ROOT)
+        if "/src/" not in "/" + rel:
+            continue
+        for line, text in comment_blocks(path):
+            if RATIO.search(text):
+                quoting.append(f"{rel}:{line}")
+                if "docs/lab/" not in text:
+                    problems.append(f"{rel}:{line}: a comment quotes a measured ratio "
+                                    f"({RATIO.search(text).group(0)}) without the docs/lab entry that holds "
+                                    f"the measurement: link it, or say why in a line and move the figures there")
+    if len(quoting) > MAX_RATIO_COMMENTS:
+        problems.append(f"{len(quoting)} comments quote measured ratios, more than {MAX_RATIO_COMMENTS}: "
+                        f"leave the figures to docs/lab ({', '.join(quoting)})")
+    return problems, len(quoting)
+
+
 def long_functions(limit=LONG_FUNCTION_LINES):
     """(lines, path, line, name) of each function longer than `limit` lines in any src/ folder
     of the workspace, counted as ../shared/tools/long-functions counts: a function runs from its
@@ -525,12 +583,15 @@ def main():
                    f"{items}/{MAX_PUBLIC_ITEMS} public items")
     problems.extend(too_many_arguments_problems())
     problems.extend(doc_link_problems())
+    found, ratio_comments = ratio_comment_problems()
+    problems.extend(found)
     for lines, path, line, fn in long_functions():
         problems.append(f"{path}:{line}: `fn {fn}` is {lines} lines, over {LONG_FUNCTION_LINES}: split it "
                         f"into steps with names")
     for p in problems:
         print("arch-check:", p)
-    print("arch-check:", "; ".join(summary + [api]), f"; {len(problems)} problem(s)")
+    ratios = f"{ratio_comments}/{MAX_RATIO_COMMENTS} comments quoting a ratio"
+    print("arch-check:", "; ".join(summary + [api, ratios]), f"; {len(problems)} problem(s)")
     sys.exit(1 if problems else 0)
 
 
