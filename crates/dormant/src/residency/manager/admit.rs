@@ -94,7 +94,8 @@ impl SceneManager {
     fn policy_verdicts(&mut self, frame: &ReplayFrame<'_>) -> Option<Vec<Verdict>> {
         // `auto` prices the trace penalty in trace time, unknown before a frame was traced: the
         // probe's rays, scaled to the frame's samples, stand in until then (priced at 0 or
-        // waited for, the first frames lost: docs/lab/integration.md#2026-12-01-the-cost-models-priors-and-its-first-frame).
+        // waited for, the first frames lost):
+        // docs/lab/integration.md#2026-12-01-the-cost-models-priors-and-its-first-frame
         if self.options.policy == IntegrationPolicy::Auto && !self.cost.knows_trace() {
             match self.accel.query().ok().and_then(|q| self.probe.frame_trace_estimate(q)) {
                 Some(ms) => self.cost.assume_trace(ms),

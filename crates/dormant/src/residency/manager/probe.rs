@@ -25,8 +25,8 @@ const REPEATS: usize = 3;
 /// Rays a camera sample traces, for the trace estimate made before any frame was traced: the
 /// shaded preview traces about 3 (the camera ray and two shadow rays), a path-traced sample
 /// 5-10 (bounces and their shadow rays). 8 errs towards declining (camera rays alone made
-/// path-traced frames look cheap: docs/lab/integration.md#2026-12-01-the-cost-models-priors-and-its-first-frame),
-/// and the first measured frame corrects the estimate.
+/// path-traced frames look cheap), and the first measured frame corrects the estimate:
+/// docs/lab/integration.md#2026-12-01-the-cost-models-priors-and-its-first-frame
 const RAYS_PER_SAMPLE: f64 = 8.0;
 
 /// A measurement started before an integration.

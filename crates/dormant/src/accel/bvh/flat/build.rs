@@ -346,9 +346,8 @@ fn best_split(ctx: &Ctx, prims: &[PrimRef], b: &Box3, cb: &Box3) -> Option<(f32,
     }
 }
 
-/// [`best_split`] of two primitives (a good share of all calls:
-/// docs/lab/bvh-build.md#2026-12-02-the-binned-sah-builder-reworked-first-pass), without the bins and sweeps it
-/// would cost: the same answer. However many bins, the two centroids fall in the first and
+/// [`best_split`] of two primitives (a good share of all calls), without the bins and sweeps it
+/// would cost: the same answer (docs/lab/bvh-build.md#2026-12-02-the-binned-sah-builder-reworked-first-pass). However many bins, the two centroids fall in the first and
 /// last bin of every axis where they differ, every plane costs the same, and the first axis
 /// and plane win.
 fn best_split_pair(

@@ -458,8 +458,8 @@ impl Node8 {
     #[inline(always)]
     pub(super) fn code(&self, at: u32, slot: usize) -> u32 {
         // A select, not a branch: whether a child is a leaf follows no pattern a predictor
-        // learns (a branch here was a good share of a render's mispredictions:
-        // docs/lab/accelerators.md#2026-12-02-counted-instead-of-timed-cachegrind-instance-records-child-codes).
+        // learns (a branch here was a good share of a render's mispredictions):
+        // docs/lab/accelerators.md#2026-12-02-counted-instead-of-timed-cachegrind-instance-records-child-codes
         std::hint::select_unpredictable(
             self.count[slot] > 0,
             LEAF | (at << 3) | slot as u32,

@@ -315,8 +315,8 @@ pub(crate) use dispatch;
 /// The integer parts of `x`'s lanes, each in `0..2^31`: the BVH builder's bin of a primitive on
 /// each axis. On x86-64 one SSE2 conversion for the three lanes ([`x86::truncate3`]); Rust's
 /// `as` casts saturate, which costs about a dozen instructions per lane and made the
-/// monastery's tree slower to build (docs/lab/bvh-build.md#2026-12-02-embrees-bin-count-one-sse2-conversion-triangles-stored-once).
-/// Elsewhere the casts.
+/// monastery's tree slower to build. Elsewhere the casts.
+/// docs/lab/bvh-build.md#2026-12-02-embrees-bin-count-one-sse2-conversion-triangles-stored-once
 #[inline(always)]
 pub(crate) fn truncate3(x: Vec3A) -> [usize; 3] {
     debug_assert!(x.cmpge(Vec3A::ZERO).all() && x.cmplt(Vec3A::splat(2_147_483_648.0)).all());
