@@ -73,7 +73,11 @@ blender-roundtrip: build
 
 # The module arrows inside each crate: no import cycle, nothing imported against the layer order
 # (geometry < scene < physics < accel < {render, residency} < sequence; Cargo enforces the crates'
-# own arrows: dormant < dormant-lab < dormant-cli). See scripts/arch-check.py.
+# own arrows: dormant < dormant-lab < dormant-cli); and the house rules: the core crate's public
+# API within its caps (`pub use` names, public items; no glob re-exports or #[doc(hidden)]), no
+# clippy::too_many_arguments allowed, no function over 80 lines in a crate's src/, every docs/
+# link in the sources resolving, and few comments quoting a measured ratio, each linking its
+# docs/lab entry. Pure Python, no build. See scripts/arch-check.py.
 arch-check:
 	python3 scripts/arch-check.py
 

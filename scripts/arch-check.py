@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
-"""The architecture check (`make arch-check`): fails on an import cycle between modules or an
-import against the layer order. Cargo enforces the arrows between the workspace's crates; this
-checks the arrows inside each crate.
+"""The architecture check (`make arch-check`): fails on an import cycle between modules, an
+import against the layer order, or a breach of the house rules below. Cargo enforces the arrows
+between the workspace's crates; this checks the arrows inside each crate.
 
 - Layers: each crate's top-level modules have a layer (LAYERS below). A module may import
   modules of lower layers only; two modules of one layer may not import each other (render and
@@ -10,9 +10,21 @@ checks the arrows inside each crate.
   a folder taken as a whole) must not import each other in a circle. A module may use what its
   parent declares; a name its parent re-exports counts as an import of the module that
   defines it.
+- The core crate's API (crates/dormant/src), counted from the source: at most
+  MAX_PUB_USE_NAMES `pub use` names and MAX_PUBLIC_ITEMS public items (see their comment);
+  no glob re-export (`pub use a::*`) and no `#[doc(hidden)]`, which would hide names from
+  the count and from the documentation.
+- No `clippy::too_many_arguments` allowed anywhere in the workspace (a parameter struct or a
+  method on the value the arguments describe instead), nor its threshold raised.
+- No function over LONG_FUNCTION_LINES lines in any crate's src/ (test modules aside),
+  counted as ../shared/tools/long-functions counts.
+- Every docs/ link in the Rust sources names a file and heading that exist.
+- A comment in a crate's src/ that quotes a measured ratio (`1.3x`) links the docs/lab entry
+  holding the measurement, and at most MAX_RATIO_COMMENTS do (ratios only: see there).
 
 Imports are read from the source text: `use` trees and `crate::`/`super::`/`self::` paths in
 code (comments and string literals stripped), and paths through child modules a file declares.
+No build and no nightly toolchain: pure Python over the source, in well under a second.
 Usage: scripts/arch-check.py [--graph]  (--graph prints every module edge found)."""
 
 import os
@@ -26,7 +38,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 # first). A top-level module missing here is an error, so a new domain gets a place on purpose.
 CRATES = {
     "dormant": ("crates/dormant/src", "lib.rs", {
-        "atomic_file": 0, "rng": 0, "geometry": 0,
+        "atomic_file": 0, "rng": 0, "geometry": 0, "names": 0,
         "scene": 1,
         "physics": 2,
         "accel": 3,
@@ -54,6 +66,27 @@ CRATES = {
     }),
 }
 
+
+# The core crate's API caps, counted from the source (scripts/api-size.py counts the same API
+# with rustdoc JSON, which needs a nightly toolchain and a build). Re-baselined at commit
+# 25660ea ("A curated API within the house's limits"), where api-size.py counted 120 `pub use`
+# names and 439 public items by rustdoc; this script's counts of that commit's source are the
+# caps: 120 names (api-size.py's own `pub_use_names`, the same count) and 459 items (the source
+# count also takes public items in private modules and of private types, which rustdoc does not
+# reach, so it is higher than rustdoc's). Raise a cap only on purpose, with its new provenance.
+API_CRATE = "dormant"
+MAX_PUB_USE_NAMES = 120
+MAX_PUBLIC_ITEMS = 459
+# Declarations with plain `pub` (not `pub(crate)`, `pub(super)`, ...): functions (inherent
+# methods included; trait methods have no `pub`), types, traits, constants (associated ones
+# included), statics, type aliases and modules. Fields and enum variants are parts of their type.
+PUBLIC_ITEM = re.compile(
+    r"(?<![\w:])pub\s+(?:(?:const|async|unsafe|extern)\s+)*(fn|struct|enum|union|trait|const|static|type|mod)\b")
+
+# The longest function allowed in any crate's src/, in lines (../shared/tools/long-functions).
+LONG_FUNCTION_LINES = 80
+# Folders the workspace-wide rules do not look into (build outputs, dependencies, VCS).
+NOT_SOURCES = {"target", ".git", ".deps", "out", "node_modules"}
 
 def strip_comments_and_strings(text):
     """Source without comments, string and char literals (replaced by spaces)."""
@@ -315,6 +348,230 @@ def check(crate, show_graph):
     return problems, len(edges), len(crate.files)
 
 
+def load_api_size():
+    """scripts/api-size.py as a module: the owner of the `pub use` name count."""
+    import importlib.util
+    spec = importlib.util.spec_from_file_location("api_size", os.path.join(ROOT, "scripts", "api-size.py"))
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def api_counts(crate):
+    """(`pub use` names, public items by kind) of `crate`, from its source."""
+    import pathlib
+    names = load_api_size().pub_use_names(pathlib.Path(crate.src))
+    kinds = defaultdict(int)
+    for text in crate.text.values():
+        for m in PUBLIC_ITEM.finditer(text):
+            kinds[m.group(1)] += 1
+    return names, kinds
+
+
+def api_problems(crate):
+    """The core crate's API against its caps, glob re-exports and `#[doc(hidden)]`."""
+    problems = []
+    names, kinds = api_counts(crate)
+    items = sum(kinds.values())
+    detail = ", ".join(f"{k} {n}" for k, n in sorted(kinds.items()))
+    over = []
+    if names > MAX_PUB_USE_NAMES:
+        over.append(f"{names} `pub use` names, cap {MAX_PUB_USE_NAMES} (+{names - MAX_PUB_USE_NAMES})")
+    if items > MAX_PUBLIC_ITEMS:
+        over.append(f"{items} public items, cap {MAX_PUBLIC_ITEMS} (+{items - MAX_PUBLIC_ITEMS}; {detail})")
+    if over:
+        problems.append(f"{crate.name}: the public API is over its cap: {'; '.join(over)}. Give the new "
+                        f"names a home that does not widen the API (a method of the type they serve, "
+                        f"`pub(crate)`, one re-export fewer) rather than raising the caps "
+                        f"(MAX_PUB_USE_NAMES, MAX_PUBLIC_ITEMS in scripts/arch-check.py)")
+    for module, text in sorted(crate.text.items()):
+        where = os.path.relpath(crate.files[module], ROOT)
+        for m in re.finditer(r"\bpub\s+use\s+([^;]+);", text):
+            for path in expand_use_tree(m.group(1).strip()):
+                if path[-1] == "*":
+                    problems.append(f"{crate.name}: {where}: glob re-export `pub use {'::'.join(path)}` "
+                                    f"(name each item: the API count and the reader see only named ones)")
+        if not re.search(r"\bdoc\s*\(\s*hidden\b", text):
+            continue
+        raw = open(crate.files[module], encoding="utf-8").read().split("\n")
+        for line in (i for i, l in enumerate(raw, 1)
+                     if re.search(r"\bdoc\s*\(\s*hidden\b", l) and not l.lstrip().startswith("//")):
+            problems.append(f"{crate.name}: {where}:{line}: `#[doc(hidden)]` hides an item from the API "
+                            f"count and the documentation (make it `pub(crate)` or document it)")
+    return problems, names, items
+
+
+def workspace_files(suffixes):
+    """Every file of the checkout ending in one of `suffixes`, outside NOT_SOURCES, sorted."""
+    found = []
+    for root, dirs, files in os.walk(ROOT):
+        dirs[:] = sorted(d for d in dirs if d not in NOT_SOURCES)
+        found.extend(os.path.join(root, f) for f in files if f.endswith(suffixes))
+    return sorted(found)
+
+
+def too_many_arguments_problems():
+    """`clippy::too_many_arguments` allowed (or expected) in any Rust source of the workspace,
+    or its threshold raised in a clippy.toml or a Cargo.toml `[lints]` table."""
+    problems = []
+    for path in workspace_files((".rs",)):
+        code = strip_comments_and_strings(open(path, encoding="utf-8", errors="replace").read())
+        for m in re.finditer(r"\btoo_many_arguments\b", code):
+            line = code.count("\n", 0, m.start()) + 1
+            problems.append(f"{os.path.relpath(path, ROOT)}:{line}: `clippy::too_many_arguments` allowed: "
+                            f"pass a parameter struct, or make the function a method of what its "
+                            f"arguments describe")
+    for path in workspace_files(("clippy.toml", "Cargo.toml")):
+        for i, line in enumerate(open(path, encoding="utf-8", errors="replace"), 1):
+            if re.search(r"too[-_]many[-_]arguments", line.split("#")[0]):
+                problems.append(f"{os.path.relpath(path, ROOT)}:{i}: clippy's too_many_arguments "
+                                f"configured (the default threshold holds everywhere)")
+    return problems
+
+
+def markdown_anchors(path):
+    """The anchors of a Markdown file's headings, as GitHub makes them."""
+    anchors, seen = set(), defaultdict(int)
+    in_code = False
+    for line in open(path, encoding="utf-8"):
+        if line.startswith("```"):
+            in_code = not in_code
+        m = None if in_code else re.match(r"#{1,6}\s+(.*?)\s*#*\s*$", line)
+        if m:
+            slug = re.sub(r"[^\w\- ]", "", m.group(1).lower()).replace(" ", "-")
+            anchors.add(slug if not seen[slug] else f"{slug}-{seen[slug]}")
+            seen[slug] += 1
+    return anchors
+
+
+def doc_link_problems():
+    """Links from the Rust sources' comments into docs/ (`docs/lab/<file>.md#<anchor>`: where a
+    comment's measurement lives) whose file or heading does not exist. String literals are
+    left alone (a test may build links that point nowhere on purpose)."""
+    problems, anchors = [], {}
+    for path in workspace_files((".rs",)):
+        text = open(path, encoding="utf-8", errors="replace").read()
+        for m in re.finditer(r"\bdocs/([\w./-]+?\.md)(?:#([\w-]+))?", text):
+            line_start = text.rfind("\n", 0, m.start()) + 1
+            if "//" not in text[line_start:m.start()]:
+                continue
+            doc = os.path.join(ROOT, "docs", m.group(1))
+            where = f"{os.path.relpath(path, ROOT)}:{text.count(chr(10), 0, m.start()) + 1}"
+            if not os.path.isfile(doc):
+                problems.append(f"{where}: links docs/{m.group(1)}, which does not exist")
+            elif m.group(2):
+                if doc not in anchors:
+                    anchors[doc] = markdown_anchors(doc)
+                if m.group(2) not in anchors[doc]:
+                    problems.append(f"{where}: links docs/{m.group(1)}#{m.group(2)}, a heading that does not exist")
+    return problems
+
+
+# A comment that quotes a measured speed ratio (`1.3x`, `0.72-0.78x`) must link the docs/lab
+# entry that holds the measurement, and few may quote one at all: the history lives in the lab
+# notebook, a comment says why in a line. Only ratios are checked: percentages and times also
+# state thresholds, definitions and sizes, which a pattern cannot tell from measurements.
+MAX_RATIO_COMMENTS = 10
+RATIO = re.compile(r"(?<![\w.])\d+(?:\.\d+)?(?:-\d+(?:\.\d+)?)?x\b")
+
+
+def comment_blocks(path):
+    """(first line, text) of each run of comment lines of one kind (`//!`, `///`, `//`) in a Rust
+    file, outside test modules (`#[cfg(test)]` then `mod NAME {`)."""
+    lines = open(path, encoding="utf-8", errors="replace").read().split("\n")
+    blocks, i = [], 0
+    while i < len(lines):
+        m = re.match(r"^(\s*)#\[cfg\(test\)\]\s*$", lines[i])
+        if m and i + 1 < len(lines) and re.match(r"^\s*(pub(\([^)]*\))?\s+)?mod\s+\w+\s*\{", lines[i + 1]):
+            i += 2
+            while i < len(lines) and not lines[i].startswith(m.group(1) + "}"):
+                i += 1
+            i += 1
+            continue
+        kind = re.match(r"^\s*(//[/!]?)", lines[i])
+        if not kind:
+            i += 1
+            continue
+        j = i
+        while j < len(lines) and re.match(r"^\s*(//[/!]?)", lines[j]) and \
+                re.match(r"^\s*(//[/!]?)", lines[j]).group(1) == kind.group(1):
+            j += 1
+        blocks.append((i + 1, "\n".join(lines[i:j])))
+        i = j
+    return blocks
+
+
+def ratio_comment_problems():
+    """Comment blocks in the crates' src/ that quote a ratio without a docs/lab link, and more
+    than MAX_RATIO_COMMENTS of them."""
+    problems, quoting = [], []
+    for path in workspace_files((".rs",)):
+        rel = os.path.relpath(path, ROOT)
+        if "/src/" not in "/" + rel:
+            continue
+        for line, text in comment_blocks(path):
+            if RATIO.search(text):
+                quoting.append(f"{rel}:{line}")
+                if "docs/lab/" not in text:
+                    problems.append(f"{rel}:{line}: a comment quotes a measured ratio "
+                                    f"({RATIO.search(text).group(0)}) without the docs/lab entry that holds "
+                                    f"the measurement: link it, or say why in a line and move the figures there")
+    if len(quoting) > MAX_RATIO_COMMENTS:
+        problems.append(f"{len(quoting)} comments quote measured ratios, more than {MAX_RATIO_COMMENTS}: "
+                        f"leave the figures to docs/lab ({', '.join(quoting)})")
+    return problems, len(quoting)
+
+
+def long_functions(limit=LONG_FUNCTION_LINES):
+    """(lines, path, line, name) of each function longer than `limit` lines in any src/ folder
+    of the workspace, counted as ../shared/tools/long-functions counts: a function runs from its
+    `fn` line to the first later line at its own indentation that starts with `}`; test modules
+    (`#[cfg(test)]` then `mod NAME {`) are skipped, and a `#[cfg(test)]` on another item skips
+    only that item's function."""
+    fn_re = re.compile(r'^(\s*)(pub(\([^)]*\))?\s+)?(const\s+)?(async\s+)?(unsafe\s+)?(extern\s+"C"\s+)?fn\s+(\w+)')
+    mod_re = re.compile(r'^(\s*)(pub(\([^)]*\))?\s+)?mod\s+\w+\s*\{')
+    skip = {"target", ".git", ".deps", "fuzz", "tests", "benches", "out", "node_modules"}
+
+    def block_end(lines, i, indent):
+        for j in range(i + 1, len(lines)):
+            if lines[j].startswith(indent + "}"):
+                return j
+        return len(lines) - 1
+
+    found = []
+    for root, dirs, files in os.walk(ROOT):
+        dirs[:] = sorted(d for d in dirs if d not in skip)
+        rel = "./" + os.path.relpath(root, ROOT)
+        if "/src" not in rel + "/" and not rel.endswith("/src"):
+            continue
+        for f in sorted(files):
+            if not f.endswith(".rs"):
+                continue
+            path = os.path.join(root, f)
+            lines = open(path, encoding="utf-8", errors="replace").read().split("\n")
+            i, test_attr = 0, False
+            while i < len(lines):
+                line = lines[i]
+                if re.match(r"^\s*#\[cfg\(test\)\]", line):
+                    test_attr = True
+                    i += 1
+                    continue
+                m = mod_re.match(line)
+                if m and test_attr:
+                    i = block_end(lines, i, m.group(1)) + 1
+                    test_attr = False
+                    continue
+                m = fn_re.match(line)
+                if m and not line.rstrip().endswith(";"):
+                    n = block_end(lines, i, m.group(1)) - i + 1
+                    if n > limit and not test_attr:
+                        found.append((n, os.path.relpath(path, ROOT), i + 1, m.group(8)))
+                if line.strip() and not line.strip().startswith("#["):
+                    test_attr = False
+                i += 1
+    return found
+
+
 def main():
     show_graph = "--graph" in sys.argv[1:]
     problems, summary = [], []
@@ -323,9 +580,22 @@ def main():
         found, edge_count, modules = check(crate, show_graph)
         problems.extend(found)
         summary.append(f"{crate_name}: {modules} modules, {edge_count} arrows")
+        if crate_name == API_CRATE:
+            found, names, items = api_problems(crate)
+            problems.extend(found)
+            api = (f"{crate_name} API: {names}/{MAX_PUB_USE_NAMES} `pub use` names, "
+                   f"{items}/{MAX_PUBLIC_ITEMS} public items")
+    problems.extend(too_many_arguments_problems())
+    problems.extend(doc_link_problems())
+    found, ratio_comments = ratio_comment_problems()
+    problems.extend(found)
+    for lines, path, line, fn in long_functions():
+        problems.append(f"{path}:{line}: `fn {fn}` is {lines} lines, over {LONG_FUNCTION_LINES}: split it "
+                        f"into steps with names")
     for p in problems:
         print("arch-check:", p)
-    print("arch-check:", "; ".join(summary), f"; {len(problems)} problem(s)")
+    ratios = f"{ratio_comments}/{MAX_RATIO_COMMENTS} comments quoting a ratio"
+    print("arch-check:", "; ".join(summary + [api, ratios]), f"; {len(problems)} problem(s)")
     sys.exit(1 if problems else 0)
 
 

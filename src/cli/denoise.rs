@@ -4,6 +4,7 @@
 use clap::Args;
 use dormant::render::denoise::{DenoiseError, DenoiseQuality, Denoiser};
 
+use super::named::named;
 use super::CliError;
 
 /// `--denoise` and how it filters.
@@ -14,13 +15,15 @@ pub(crate) struct DenoiseArgs {
     /// `oidn` feature, which `scripts/setup.sh` makes available.
     #[arg(long)]
     pub denoise: bool,
+    // Its cost: docs/lab/sampling.md#2026-12-02-prefiltered-guides---denoise-prefilter
     /// With --denoise: denoise the albedo and normal guides first (like Cycles' "Accurate"
     /// prefilter): less error on fine texture edges, about six times the denoising time.
     #[arg(long, requires = "denoise")]
     pub denoise_prefilter: bool,
+    // Its cost: docs/lab/reuse.md#2026-12-06-the-stores-passes-in-one-trace-the-denoisers-filter-kept---denoise-quality
     /// With --denoise: OIDN's filter quality, like Cycles' "Denoising Quality": `fast` filters
     /// with a smaller network, in about half the time and with more error.
-    #[arg(long, value_enum, default_value_t, requires = "denoise")]
+    #[arg(long, value_parser = named::<DenoiseQuality>(), default_value_t, requires = "denoise")]
     pub denoise_quality: DenoiseQuality,
 }
 

@@ -5,6 +5,7 @@ mod bench;
 mod denoise;
 mod export;
 mod info;
+mod named;
 mod progress;
 mod render;
 mod simulate;

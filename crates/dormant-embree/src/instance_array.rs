@@ -2,8 +2,8 @@
 //! (RTC_GEOMETRY_TYPE_INSTANCE_ARRAY), still (one time step) or moving over the shutter (two).
 //!
 //! `dormant bench instances` measures it against one instance geometry per instance, which is
-//! what `EmbreeAccel` keeps: the array's blurred commit costs the same, and it saves only a
-//! few ms of a still commit at 8,000 instances:
+//! what `EmbreeAccel` keeps: the array's blurred commit costs the same, and it saves little
+//! of a still commit:
 //! docs/lab/motion-blur.md#2026-12-02-where-the-blurred-commit-goes-barely-turning-instances-as-matrices
 
 use std::sync::Arc;

@@ -15,7 +15,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> io::Result<()> {
 
 /// Writes what `contents` writes to `path` atomically, through a buffer: for large files
 /// written again and again (a long run's statistics), building them in memory first grows
-/// the heap with every write (the soak measured +1.4 MB per 1,000 frames).
+/// the heap with every write (docs/lab/soak-and-build.md#2026-12-01-the-10000-frame-soak).
 pub(crate) fn write_atomic_with(
     path: &Path,
     contents: impl FnOnce(&mut dyn Write) -> io::Result<()>,

@@ -12,6 +12,7 @@
 pub mod accel;
 pub mod atomic_file;
 pub mod geometry;
+pub mod names;
 pub mod physics;
 pub mod prelude;
 pub mod render;

@@ -8,7 +8,9 @@ use clap::{Args, Subcommand};
 mod reuse;
 
 use super::denoise::DenoiseArgs;
+use super::named::named;
 use super::{CliError, JsonOutput, SceneSource};
+use dormant::residency::IntegrationForm;
 use dormant::scene::limits::MAX_SAMPLES_PER_PIXEL;
 use dormant::sequence::{FrameRange, SequenceSource};
 use dormant_lab::bench::{
@@ -120,8 +122,8 @@ pub struct RegimesArgs {
     #[arg(long)]
     pub backend: Vec<dormant::accel::Backend>,
     /// The integration form measured.
-    #[arg(long, value_enum, default_value_t = dormant::residency::IntegrationForm::default())]
-    pub integrate_as: dormant::residency::IntegrationForm,
+    #[arg(long, value_parser = named::<IntegrationForm>(), default_value_t = IntegrationForm::default())]
+    pub integrate_as: IntegrationForm,
     /// Frames rendered per preview cell.
     #[arg(long, value_name = "N", default_value_t = 150)]
     pub preview_frames: u32,
@@ -189,8 +191,8 @@ pub struct IntegrationArgs {
     #[arg(long, value_enum, default_value_t = super::render::RenderMode::Shaded)]
     pub mode: super::render::RenderMode,
     /// The integration form the ratios describe; the other form runs too (`always`, `auto`).
-    #[arg(long, value_enum, default_value_t = dormant::residency::IntegrationForm::default())]
-    pub integrate_as: dormant::residency::IntegrationForm,
+    #[arg(long, value_parser = named::<IntegrationForm>(), default_value_t = IntegrationForm::default())]
+    pub integrate_as: IntegrationForm,
     /// Compare this form only.
     #[arg(long)]
     pub one_form: bool,
@@ -335,7 +337,7 @@ fn integration(
         forms: if args.one_form {
             vec![args.integrate_as]
         } else {
-            dormant::residency::IntegrationForm::starting_with(args.integrate_as)
+            IntegrationForm::starting_with(args.integrate_as)
         },
         cache_variants: args.cache_variants,
         shutter: args.shutter,

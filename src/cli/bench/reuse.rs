@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use clap::Args;
 
 use super::super::denoise::DenoiseArgs;
+use super::super::named::named;
 use super::super::render::{
     check_shutter, choose_backend, integrator, load_sequence, sequence_error, RenderMode,
 };
@@ -53,17 +54,17 @@ pub struct ReuseArgs {
     #[arg(long, value_enum, default_value_t = RenderMode::Path)]
     pub mode: RenderMode,
     /// AOV passes rendered with each frame (compared too).
-    #[arg(long, value_enum, value_delimiter = ',', value_name = "KIND")]
+    #[arg(long, value_parser = named::<Aov>(), value_delimiter = ',', value_name = "KIND")]
     pub aov: Vec<Aov>,
     /// When sleeping islands are integrated (both modes alike).
-    #[arg(long, value_enum, default_value_t = IntegrationPolicy::Auto)]
+    #[arg(long, value_parser = named::<IntegrationPolicy>(), default_value_t = IntegrationPolicy::Auto)]
     pub integration: IntegrationPolicy,
     /// The run without reuse integrates under this policy instead (e.g. `never`: reuse and
     /// integration together against neither).
-    #[arg(long, value_enum, value_name = "POLICY")]
+    #[arg(long, value_parser = named::<IntegrationPolicy>(), value_name = "POLICY")]
     pub off_integration: Option<IntegrationPolicy>,
     /// How integrated islands are held.
-    #[arg(long, value_enum, default_value_t = IntegrationForm::default())]
+    #[arg(long, value_parser = named::<IntegrationForm>(), default_value_t = IntegrationForm::default())]
     pub integrate_as: IntegrationForm,
     /// Motion blur's shutter, as `render --shutter`.
     #[arg(long, value_name = "S", default_value_t = 0.0)]

@@ -19,9 +19,8 @@ pub(super) struct FrameOutput<'a> {
     pub backend: Backend,
     /// No per-frame line on stdout (`--quiet`, or the JSON report goes there).
     pub quiet: bool,
-    /// Keep each frame's record for the `--json` report. Only then: a record is about 5.5 kB,
-    /// which a long sequence would otherwise accumulate for nothing (some 55 MB over the
-    /// soak's 10,000 frames).
+    /// Keep each frame's record for the `--json` report. Only then: a long sequence would
+    /// otherwise accumulate them for nothing (docs/lab/soak-and-build.md#2026-12-01-the-10000-frame-soak).
     pub keep_records: bool,
     pub records: Vec<serde_json::Value>,
     /// Frames kept from an earlier run (`--resume`), not written again.

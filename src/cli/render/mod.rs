@@ -15,6 +15,7 @@ use clap::Args;
 use indicatif::ProgressBar;
 
 use super::denoise::DenoiseArgs;
+use super::named::named;
 use super::CliError;
 use dormant::accel::{self, Backend};
 use dormant::physics::SimulateOptions;
@@ -107,7 +108,7 @@ pub struct RenderArgs {
     pub clamp_indirect: f32,
     /// Pixel filter: where each pixel's samples land around its centre (docs/design.md,
     /// "Renderer"). Cycles' default is blackman-harris of width 1.5.
-    #[arg(long, value_enum, default_value_t = FilterKind::Tent)]
+    #[arg(long, value_parser = named::<FilterKind>(), default_value_t = FilterKind::Tent)]
     pub filter: FilterKind,
     /// The pixel filter's width in pixels (default: tent 1, box 1, gaussian 1.5,
     /// blackman-harris 1.5; Cycles' Pixel Filter Width).
@@ -123,14 +124,14 @@ pub struct RenderArgs {
     /// --exr: albedo (textured base colour), normal (shading normal), depth (distance),
     /// baked (debug: instanced bodies blue, integrated ones orange, environment grey), spp
     /// (camera samples per pixel, grey up to the frame's most; the counts in the EXR).
-    #[arg(long, value_enum, value_delimiter = ',', value_name = "KIND")]
+    #[arg(long, value_parser = named::<Aov>(), value_delimiter = ',', value_name = "KIND")]
     pub aov: Vec<Aov>,
     /// With SCENE or --trajectory: when sleeping islands are baked into the static scene.
-    #[arg(long, value_enum, default_value_t = IntegrationPolicy::Auto)]
+    #[arg(long, value_parser = named::<IntegrationPolicy>(), default_value_t = IntegrationPolicy::Auto)]
     pub integration: IntegrationPolicy,
     /// With SCENE or --trajectory: how integrated islands are held: baked into the static
     /// scene, or as instances in a resting scene rebuilt on a schedule.
-    #[arg(long, value_enum, default_value_t = IntegrationForm::default())]
+    #[arg(long, value_parser = named::<IntegrationForm>(), default_value_t = IntegrationForm::default())]
     pub integrate_as: IntegrationForm,
     /// With SCENE or --trajectory: serve reactivations of baked islands from the geometry cache.
     #[arg(long, value_enum, default_value_t = Switch::On)]
@@ -149,7 +150,7 @@ pub struct RenderArgs {
     /// How frames seed the sampler: one seed for all (like Cycles' default; a frame where
     /// nothing moved is then the previous image, copied instead of traced) or the frame number
     /// (noise changes from frame to frame).
-    #[arg(long, value_enum, default_value_t = SeedMode::Fixed)]
+    #[arg(long, value_parser = named::<SeedMode>(), default_value_t = SeedMode::Fixed)]
     pub seed: SeedMode,
     /// Added to every frame's seed, like Cycles' Seed value: renders of the same frames with
     /// different offsets have independent noise.
@@ -160,7 +161,7 @@ pub struct RenderArgs {
     /// future is known, so each sample's next change is), take the rest from earlier frames,
     /// bit for bit; `static`: only copy the previous frame's files where
     /// nothing moved and the camera stayed (`on` is an alias); `off`: trace every frame.
-    #[arg(long, value_enum, default_value_t = ReuseMode::Exact)]
+    #[arg(long, value_parser = named::<ReuseMode>(), default_value_t = ReuseMode::Exact)]
     pub reuse: ReuseMode,
     /// With --reuse exact: memory its store may keep, in MiB. With room for every sample (16
     /// bytes each, plus the pixels) it keeps samples and retraces only those due; else one
@@ -294,7 +295,7 @@ pub(super) fn run(
         "noise_threshold": args.noise_threshold,
         "min_spp": args.min_spp,
         "mode": args.mode,
-        "filter": args.filter.name(),
+        "filter": args.filter.to_string(),
         "filter_width": pixel_filter(args)?.width(),
         "clamp_indirect": args.clamp_indirect,
         "denoise": args.denoising.denoise,

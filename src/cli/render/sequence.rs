@@ -287,7 +287,7 @@ fn run_info(
         frame_step: frames.step(),
         max_depth: (args.mode == RenderMode::Path).then_some(args.max_depth),
         clamp_indirect: args.clamp_indirect,
-        filter: renderer.filter.kind().name().to_string(),
+        filter: renderer.filter.kind().to_string(),
         filter_width: renderer.filter.width(),
         seed: json_name(&args.seed),
         seed_offset: args.seed_offset,

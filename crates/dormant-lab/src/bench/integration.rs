@@ -41,8 +41,9 @@ pub struct IntegrationBenchOptions {
     pub spp: u32,
     pub threads: Option<usize>,
     /// Also build and trace the backend's alternative static structures (Embree's flat
-    /// MEDIUM and HIGH rebuilds, 10-20 s each on large scenes); the rebuild of
-    /// `rebuild_over_insert` is always measured.
+    /// MEDIUM and HIGH rebuilds, seconds each on large scenes:
+    /// docs/lab/integration.md#2026-11-22-the-baked-form-only-atrium-and-monastery-variant); the
+    /// rebuild of `rebuild_over_insert` is always measured.
     pub static_variants: bool,
     /// Integration forms compared; the first is the one `ratios` describes.
     pub forms: Vec<IntegrationForm>,

@@ -68,7 +68,8 @@ impl PaperPreset {
                 accel_width: 640,
                 accel_height: 360,
             },
-            // 1,000 objects are 93% asleep after 1,200 frames, though in small islands.
+            // Long enough for 1,000 objects to settle, though in small islands:
+            // docs/lab/paper.md#2026-11-22-the-first-committed-bench-paper-run
             PaperPreset::Quick => WorkloadSize {
                 count: 1000,
                 frames: 1200,
@@ -81,8 +82,8 @@ impl PaperPreset {
         }
     }
 
-    /// The asset rain. 2,000 objects, not the monastery scene's 8,000: at 8,000 only 19% are
-    /// asleep after 900 frames, so the run would measure the fall, not the settling:
+    /// The asset rain. 2,000 objects, not the monastery scene's 8,000, which are still falling
+    /// when the run ends (it would measure the fall, not the settling):
     /// docs/lab/integration.md#2026-11-22-the-baked-form-only-atrium-and-monastery-variant
     pub fn rain(self) -> WorkloadSize {
         match self {

@@ -21,9 +21,8 @@
 //! level replaces, on scenes where a few islands fall asleep and wake in every frame:
 //! docs/lab/integration.md#2026-12-01-the-resting-form-with-a-scheduled-resting-level
 
-/// Prior cost of a resting-level rebuild per instance, ms: Embree 4.4's HIGH instance build
-/// measured 0.4-0.6 us per instance on the monastery with 8,000 ducks (`bench accel`), 0.25 us
-/// on the demolition's 78,000.
+/// Prior cost of a resting-level rebuild per instance, ms: about what Embree's HIGH instance
+/// build measured (docs/lab/integration.md#2026-12-01-the-cost-models-priors-and-its-first-frame).
 const PRIOR_REBUILD_MS_PER_INSTANCE: f64 = 0.4e-3;
 
 /// Weight of a new measurement in the running mean of the rebuild cost.

@@ -12,7 +12,7 @@
 //! relative standard deviation of one sample), not when every pixel reaches the same error
 //! (n ∝ σ², which puts the samples into the noisiest pixels up to the cap). Stopping once
 //! σ²/n ≤ t²·σ gives n ∝ σ: on the default scene it reaches uniform sampling's error with
-//! about 1.7x fewer samples, where the equal-error rule needed 1.3x fewer. Pooling σ over
+//! fewer samples than the equal-error rule. Pooling σ over
 //! neighbours, other exponents, one threshold for the frame, and other check intervals and
 //! minimums measured no better: docs/lab/sampling.md#2026-12-02-adaptive-samplings-stopping-rule-n--σ
 

@@ -11,40 +11,37 @@ use glam::Vec3;
 use super::{Film, RenderScene, SurfaceKind};
 use crate::accel::Hit;
 use crate::geometry::Ray;
+use crate::names::{named_enum, Named};
 
-/// What an AOV pass records. Pixels whose camera ray escapes are 0.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Aov {
-    /// Base colour with textures applied (linear RGB).
-    Albedo,
-    /// World-space shading normal facing the camera, components in [-1, 1].
-    Normal,
-    /// Distance from the camera to the first hit, in scene units (in all three channels).
-    Depth,
-    /// Debug view of integration: instanced bodies blue, baked (integrated) bodies orange, the
-    /// environment grey, each shaded by the facing ratio so shapes stay readable.
-    Baked,
-    /// Camera samples the pixel got (the effective spp of adaptive sampling, `--spp`
-    /// everywhere without it), in all three channels. Not an integrator's pass: it is the
-    /// beauty pass's sample counts ([`render_with_aovs`](super::render_with_aovs)).
-    Spp,
-    /// Camera samples traced this frame: the pixel's samples where its block was traced, 0
-    /// where exact temporal reuse took it from an earlier frame (every pixel's samples
-    /// without reuse). Shows where the motion is.
-    Traced,
+named_enum! {
+    /// What an AOV pass records. Pixels whose camera ray escapes are 0.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+    #[serde(rename_all = "lowercase")]
+    pub enum Aov {
+        /// Base colour with textures applied (linear RGB).
+        Albedo = "albedo",
+        /// World-space shading normal facing the camera, components in [-1, 1].
+        Normal = "normal",
+        /// Distance from the camera to the first hit, in scene units (in all three channels).
+        Depth = "depth",
+        /// Debug view of integration: instanced bodies blue, baked (integrated) bodies orange, the
+        /// environment grey, each shaded by the facing ratio so shapes stay readable.
+        Baked = "baked",
+        /// Camera samples the pixel got (the effective spp of adaptive sampling, `--spp`
+        /// everywhere without it), in all three channels. Not an integrator's pass: it is the
+        /// beauty pass's sample counts ([`render_with_aovs`](super::render_with_aovs)).
+        Spp = "spp",
+        /// Camera samples traced this frame: the pixel's samples where its block was traced, 0
+        /// where exact temporal reuse took it from an earlier frame (every pixel's samples
+        /// without reuse). Shows where the motion is.
+        Traced = "traced",
+    }
 }
 
 impl Aov {
+    /// The pass's name ([`Named::name`], callable without the trait): `frame_NNNN.<name>.png`.
     pub fn name(self) -> &'static str {
-        match self {
-            Aov::Albedo => "albedo",
-            Aov::Normal => "normal",
-            Aov::Depth => "depth",
-            Aov::Baked => "baked",
-            Aov::Spp => "spp",
-            Aov::Traced => "traced",
-        }
+        Named::name(self)
     }
 
     /// Whether the pass is traced by its own integrator (not derived from sample counts).

@@ -16,6 +16,7 @@ use std::sync::OnceLock;
 use glam::Vec2;
 
 use super::RenderError;
+use crate::names::named_enum;
 
 /// The reconstruction filter's shape and width, in pixels (see the module documentation).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -26,28 +27,18 @@ pub enum PixelFilter {
     BlackmanHarris { width: f32 },
 }
 
-/// The filter kinds, as the command line names them.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum FilterKind {
-    Tent,
-    Box,
-    Gaussian,
-    BlackmanHarris,
+named_enum! {
+    /// The filter kinds, as the command line names them.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+    pub enum FilterKind {
+        Tent = "tent",
+        Box = "box",
+        Gaussian = "gaussian",
+        BlackmanHarris = "blackman-harris",
+    }
 }
 
 impl FilterKind {
-    pub const ALL: [FilterKind; 4] =
-        [FilterKind::Tent, FilterKind::Box, FilterKind::Gaussian, FilterKind::BlackmanHarris];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            FilterKind::Tent => "tent",
-            FilterKind::Box => "box",
-            FilterKind::Gaussian => "gaussian",
-            FilterKind::BlackmanHarris => "blackman-harris",
-        }
-    }
-
     /// The width a filter of this kind has unless one is given: Cycles' defaults (box 1,
     /// Gaussian and Blackman-Harris 1.5) and the tent of radius 1.
     pub fn default_width(self) -> f32 {
@@ -237,7 +228,7 @@ mod tests {
 
     #[test]
     fn offsets_grow_with_u_and_stay_within_the_reach() {
-        for kind in FilterKind::ALL {
+        for &kind in <FilterKind as crate::names::Named>::VALUES {
             let f = PixelFilter::new(kind, None).unwrap();
             let o = offsets(f, 4096);
             assert!(o.windows(2).all(|w| w[0] <= w[1]), "{kind:?} not monotone");

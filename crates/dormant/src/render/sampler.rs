@@ -23,8 +23,9 @@
 //! which needs the pixel's budget and leaves an early-stopped prefix unstratified.
 //!
 //! Cost: the dimension-hash table, the pre-reversed Sobol tables and the per-pixel seeds of the
-//! first pairs keep the sampler at about 6% of a path-traced frame. Cheaper hash-combined
-//! seeds for the three scrambles would change every image for at most about 2% of a frame.
+//! first pairs keep the sampler a small share of a path-traced frame; cheaper hash-combined
+//! seeds for the three scrambles would change every image for little:
+//! docs/lab/rendering.md#2026-12-02-shading-cut-last-bit-changes-allowed
 
 use glam::Vec2;
 

@@ -32,28 +32,29 @@
 
 use std::collections::VecDeque;
 
+use super::{IntegrationForm, TraceKind};
+
 /// Samples kept per fit.
 const WINDOW: usize = 64;
 /// Prior build throughput before two builds were measured: 4 M triangles/s plus 0.5 ms.
 const PRIOR_BUILD_MS: (f64, f64) = (0.5, 2.5e-4);
 /// Prior commit ms per top-level instance before a commit of at least
-/// [`MIN_COMMIT_INSTANCES`] was measured: Embree 4.4's HIGH top level measured 0.35 us per
-/// instance on the demolition's 80,000 and 0.45 us on 8,000 ducks, the BVH 0.5 us.
+/// [`MIN_COMMIT_INSTANCES`] was measured: about what both backends measured on large scenes
+/// (docs/lab/integration.md#2026-12-01-the-cost-models-priors-and-its-first-frame).
 const PRIOR_GAIN_MS_PER_INSTANCE: f64 = 5e-4;
 /// Commits of fewer top-level instances do not measure the per-instance cost: a commit's
-/// fixed part (about 0.1 ms) dominates them. Counted in, the few awake bodies left once
-/// everything else rests made the ratio 200 times too large (70 us per instance on the
-/// demolition at 2,000 bodies), and `auto` integrated islands worth nothing.
+/// fixed part dominates them. Counted in, the few awake bodies left once everything else
+/// rests made the ratio far too large, and `auto` integrated islands worth nothing (the same
+/// entry).
 const MIN_COMMIT_INSTANCES: usize = 1000;
 /// Prior expected sleep, in frames, before any island has slept.
 const PRIOR_SLEEP_FRAMES: f64 = 30.0;
-/// Prior rebuild of the resting scene: 0.2 ms plus 0.5 us per instance (Embree 4.4, HIGH:
-/// 0.41-0.43 us per instance on 7,920 instances; the BVH 0.44-0.59 us; `dormant bench accel`).
+/// Prior rebuild of the resting scene, ms: fixed, and per instance about what both backends
+/// measured (docs/lab/integration.md#2026-12-01-the-cost-models-priors-and-its-first-frame).
 const PRIOR_REST_MS: (f64, f64) = (0.2, 5e-4);
-/// Prior trace penalties until a probe measured them: a second scene per ray cost 0.98x on
-/// the monastery with 8,000 ducks and on the atrium but 1.1-1.3x on the demolition, so 10%;
-/// baking every body about 15%:
-/// docs/lab/integration.md#2026-12-01-the-resting-form-with-a-scheduled-resting-level
+/// Prior trace penalties until a probe measured them: a second scene per ray costs little on
+/// most scenes and more on the demolition; baking every body costs more:
+/// docs/lab/integration.md#2026-12-01-the-cost-models-priors-and-its-first-frame
 const PRIOR_RESTING_PENALTY: f64 = 0.10;
 const PRIOR_BAKED_PENALTY: f64 = 0.15;
 
@@ -111,53 +112,6 @@ impl LineFit {
 const MIN_BUILD_SAMPLES: usize = 6;
 /// Weight of the newest trace time in the running mean of a frame's trace.
 const TRACE_EMA: f64 = 0.2;
-
-/// What a frame's trace time says of the frames after it, whose trace the model prices.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum TraceKind {
-    /// They trace about as much: it joins the running mean.
-    Typical,
-    /// Traced in full in a run that reuses samples (`--reuse exact`), where the frames after
-    /// it trace only what changed: it stands for them only until one is measured (averaged
-    /// in, its seconds kept `auto` from integrating for many frames: docs/lab/reuse.md).
-    FullBeforeReuse,
-}
-
-/// How integrated islands are held (`--integrate-as`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum IntegrationForm {
-    /// The island's triangles in world space, in the static scene (one incremental insert).
-    Baked,
-    /// The island's bodies stay instances, in a resting scene beside the per-frame top level:
-    /// rebuilt on a schedule, traced as a second scene per ray. The default: on the monastery
-    /// with 8,000 ducks it traces 0.98x (Embree) and 0.87-1.0x (BVH) as fast as every body
-    /// instanced in one top level, where baking every body traces 1.7-1.8x slower (`dormant
-    /// bench accel`): docs/lab/accelerators.md#2026-12-01-integration-forms-on-the-same-scene-and-the-ratios-table
-    #[default]
-    Resting,
-}
-
-impl IntegrationForm {
-    /// Every form, the default first.
-    pub const ALL: [IntegrationForm; 2] = [IntegrationForm::Resting, IntegrationForm::Baked];
-
-    /// Every form with `first` first.
-    pub fn starting_with(first: IntegrationForm) -> Vec<IntegrationForm> {
-        let mut forms = vec![first];
-        forms.extend(Self::ALL.into_iter().filter(|f| *f != first));
-        forms
-    }
-}
-
-impl std::fmt::Display for IntegrationForm {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            IntegrationForm::Baked => "baked",
-            IntegrationForm::Resting => "resting",
-        })
-    }
-}
 
 /// The numbers behind one decision.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]

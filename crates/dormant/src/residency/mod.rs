@@ -14,15 +14,19 @@
 mod baked;
 mod cache;
 mod cost_model;
+mod form;
 mod lookahead;
 mod manager;
 mod policy;
 mod stage_times;
+mod trace_kind;
 
 pub use cache::{CacheBudget, CacheStats};
-pub use cost_model::{CostModelState, IntegrationForm, TraceKind};
+pub use cost_model::CostModelState;
+pub use form::IntegrationForm;
 pub(crate) use lookahead::Lookahead;
 pub(crate) use manager::Decision;
 pub use manager::{FrameStats, ManagerOptions, ReactivationPath, ReactivationStrategy, SceneManager};
 pub use policy::{IntegrationPolicy, IntegrationSettings};
 pub use stage_times::StageTimes;
+pub use trace_kind::TraceKind;

@@ -1,24 +1,18 @@
 //! When and how to integrate sleeping islands: the policy and the settings a run chooses.
 
-/// The integration policy (`--integration`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, clap::ValueEnum, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum IntegrationPolicy {
-    /// Never integrate: every body stays an instance (the instanced baseline).
-    Never,
-    /// Integrate every island as soon as it sleeps.
-    Always,
-    /// Integrate when the cost model expects the build to pay off before the island wakes.
-    Auto,
-}
+use crate::names::named_enum;
 
-impl std::fmt::Display for IntegrationPolicy {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            IntegrationPolicy::Never => "never",
-            IntegrationPolicy::Always => "always",
-            IntegrationPolicy::Auto => "auto",
-        })
+named_enum! {
+    /// The integration policy (`--integration`).
+    #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
+    #[serde(rename_all = "lowercase")]
+    pub enum IntegrationPolicy {
+        /// Never integrate: every body stays an instance (the instanced baseline).
+        Never = "never",
+        /// Integrate every island as soon as it sleeps.
+        Always = "always",
+        /// Integrate when the cost model expects the build to pay off before the island wakes.
+        Auto = "auto",
     }
 }
 

@@ -3,10 +3,8 @@
 //! error naming the field instead of an allocation that grows until the machine gives up.
 //! Scene-file validation and the CLI's parsers both check against these constants.
 //!
-//! The budgets come from measurement (docs/errors.md): simulating the demolition's 80,456
-//! bodies peaks at 505 MB resident (about 6.3 KB a body with Rapier's broad phase, islands and
-//! the trajectory), so [`MAX_BODIES`] bodies need about 13 GB; a frame holds about 100 bytes a
-//! pixel over its film, AOVs and output buffers, so [`MAX_PIXELS`] need about 7 GB.
+//! The budgets come from the memory a simulated body and a rendered pixel were measured to
+//! take: docs/errors.md#the-bounds-and-why.
 
 /// Dynamic bodies in one scene: spawned objects, structure blocks, projectiles and
 /// key-framed bodies together.

@@ -3,19 +3,22 @@
 //! `render/reuse/`'s ([`ReuseMode`], decided by [`ReuseMode::decide`]).
 
 use super::{ReuseMode, DEFAULT_REUSE_BYTES};
+use crate::names::named_enum;
 use crate::render::{AdaptiveSampling, Aov, ImageSize, Integrator, PixelFilter, RenderError, RenderSettings};
 
-/// How the pixel sampler is seeded across a sequence (`--seed`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum SeedMode {
-    /// One seed for every frame, as Cycles does by default: a frame that shows the same scene
-    /// as the one before is the same image, so it is not traced again but copied.
-    #[default]
-    Fixed,
-    /// The frame number seeds each frame: noise decorrelates from frame to frame (like
-    /// Cycles' animated seed), and every frame is traced.
-    PerFrame,
+named_enum! {
+    /// How the pixel sampler is seeded across a sequence (`--seed`).
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+    #[serde(rename_all = "kebab-case")]
+    pub enum SeedMode {
+        /// One seed for every frame, as Cycles does by default: a frame that shows the same scene
+        /// as the one before is the same image, so it is not traced again but copied.
+        #[default]
+        Fixed = "fixed",
+        /// The frame number seeds each frame: noise decorrelates from frame to frame (like
+        /// Cycles' animated seed), and every frame is traced.
+        PerFrame = "per-frame",
+    }
 }
 
 /// How every frame of a run is rendered.

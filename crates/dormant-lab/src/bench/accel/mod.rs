@@ -4,8 +4,9 @@
 //! - **build**: the instanced scene (static environment, one prototype, N instances), Embree
 //!   at LOW/MEDIUM/HIGH (all its scenes at that quality), at MEDIUM with Embree's robust mode
 //!   (`medium-robust`: the watertight guarantees the BVH always gives) and the BVH; best of
-//!   three builds (the first in a fresh process, the others reusing its freed memory: Embree's
-//!   single builds here moved between about 22 and 42 ms from one run to the next);
+//!   three builds (the first in a fresh process, the others reusing its freed memory), since
+//!   Embree's single builds vary widely from one run to the next:
+//!   docs/lab/accelerators.md#2026-11-22-bench-accel-on-the-monastery-with-8000-ducks-builds-traces-insertion;
 //! - **trace**: primary rays (one per pixel) and diffuse-bounce rays (cosine-distributed from
 //!   the primary hits, generated once through Embree), closest hit, rayon over all cores; best
 //!   of three runs;

@@ -54,7 +54,7 @@ impl BuildParams {
 
     /// More bins: for structures built once and traced a lot. Leaves of up to 8 triangles (two
     /// packets; the SAH counts blocks of four, so a leaf grows past one packet only where that
-    /// pays): builds 8-13% faster than leaves of 4, traces about the same:
+    /// pays): builds faster than leaves of 4, traces about the same:
     /// docs/lab/bvh-build.md#2026-12-02-where-the-builds-time-goes-in-a-fresh-process-node-slots-leaves-of-8
     /// Blocks of eight (`leaf_block: 8`, so that a leaf of up to eight costs one AVX2 test)
     /// made fewer, fuller leaves that traced slower:

@@ -413,8 +413,9 @@ impl RayTri {
     ///
     /// The vertices are read by the ray's axes straight from the packet (one load each, the
     /// axis offsets fixed per ray), not shifted on all three axes first and then picked: that
-    /// form stored the nine shifted rows to the stack and read them back by index, about a
-    /// tenth more instructions per leaf test.
+    /// form stored the nine shifted rows to the stack and read them back by index, more
+    /// instructions per leaf test:
+    /// docs/lab/accelerators.md#2026-12-03-embree-counted-too-half-its-instructions-cachegrind
     #[inline(always)]
     fn closest_lane<L: TriLanes>(&self, q: &[Tri4], t_max: f32) -> Option<(usize, TriHit)> {
         let (mut mask, t, v, w, det) = match self.test_lanes::<L>(q, t_max) {
@@ -456,8 +457,8 @@ impl RayTri {
         // Outside when one edge function is negative and another positive: the smallest below
         // zero and the largest above. A lane with a NaN edge function may come out either way
         // here (min and max pass NaN on from one operand only), but its `det` is NaN and the
-        // lane is never hit, on this path or the one-triangle test's. Four instructions fewer
-        // than three compares per side.
+        // lane is never hit, on this path or the one-triangle test's. Fewer instructions than
+        // three compares per side.
         let neg = u.min(v).min(w).lt(zero);
         let pos = u.max(v).max(w).gt(zero);
         let maybe_inside = !(neg & pos);

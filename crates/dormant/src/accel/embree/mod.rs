@@ -217,7 +217,8 @@ impl EmbreeAccel {
         quality: BuildQuality,
     ) -> Result<(TriangleGeometry, usize), AccelError> {
         mesh.validate()?;
-        // In parallel: on a 337k-triangle island this count took 2-3 ms of a 100 ms insert.
+        // In parallel: on one thread this count was a share of a large island's insert:
+        // docs/lab/accelerators.md#2026-12-01-embrees-static-insert-counts-skipped-triangles-in-parallel
         let skipped = (0..mesh.triangle_count())
             .into_par_iter()
             .with_min_len(1 << 14)

@@ -5,8 +5,8 @@
 //! lane, and the top level's packet is skipped when no lane needs it.
 //!
 //! Skipping the top level by its bounds ([`AwakeBounds`]) brought the resting form's camera
-//! packets from about 1.15x to 1.05x the all-instanced scene's trace. The other orders, the
-//! resting scene at other qualities and a box test of whole packets did not pay:
+//! packets close to the all-instanced scene's trace. The other orders, the resting scene at
+//! other qualities and a box test of whole packets did not pay:
 //! docs/lab/accelerators.md#2026-12-01-how-rays-meet-the-resting-level-the-bvhs-order-embrees-skipped-top-level
 //! One scene per ray (Embree's two-level builder over arrays of bodies) traced no faster:
 //! docs/lab/accelerators.md#2026-12-07-one-scene-for-the-resting-form-embrees-two-level-builder-over-arrays-of-bodies-not-kept
@@ -214,12 +214,11 @@ impl EmbreeAccel {
     }
 }
 
-/// Closest-hit packets are camera rays of neighbouring pixels: the COHERENT hint measured equal
-/// or faster than INCOHERENT (monastery, 4x2 tiles: 1.3-1.4x over single rays either way;
-/// default scene: 2.4-3.4x against 1.6x).
+/// Closest-hit packets are camera rays of neighbouring pixels, which the COHERENT hint traces as
+/// fast or faster: docs/lab/rendering.md#2026-11-22-ray-packets-on-embree-rtcintersect4816-rtcoccluded4816
 const CLOSEST: Coherence = Coherence::Coherent;
-/// Shadow rays towards the sun: COHERENT measured slower than INCOHERENT on the monastery (0.83x
-/// against 1.1x of single rays, 4x2 tiles), so Embree's default.
+/// Shadow rays towards the sun: COHERENT traced them slower (the same entry), so Embree's
+/// default.
 const OCCLUSION: Coherence = Coherence::Incoherent;
 
 /// Occlusion of `rays` in `view`, in packets of up to 16 (the top level alone).

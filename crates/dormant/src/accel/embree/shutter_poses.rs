@@ -19,14 +19,13 @@ use crate::geometry::InstanceMotion;
 /// An instance farther out may turn further ([`lerps_as_matrices`]): its points may then move
 /// by 5e-7 of its translation's magnitude instead, still eight unit roundoffs of it, half of
 /// what the crosscheck allows Embree's own f32 transform (16 roundoffs of the ray origin's and
-/// the translation's magnitude; docs/crosscheck.md). On the atrium about three quarters of the
-/// moving instances' motions over the shutter turn by less than 2e-3 rad.
+/// the translation's magnitude; docs/crosscheck.md). On the atrium most of the moving
+/// instances' motions over the shutter turn by less than 2e-3 rad.
 ///
 /// Beyond the angle, quaternions at two time steps: the instances that turn further as
 /// matrices at more time steps (up to 16, no segment turning by more than this) made Embree's
-/// blurred commit 3x slower:
+/// blurred commit slower for the same trace:
 /// docs/lab/motion-blur.md#2026-12-02-the-angle-scaled-by-the-instances-distance-from-the-origin
-/// tracing unchanged. Two time steps, quaternions beyond the angle, stay.
 const LERP_MAX_ANGLE: f32 = 2e-3;
 
 /// Whether `motion` of an instance whose points lie within `radius` of its origin goes to

@@ -5,8 +5,8 @@
 //! it: the diffuse lobe is weighted by one minus the specular layer's reflectance averaged
 //! over that layer's lobe for the outgoing direction, a constant per shading point. glTF's
 //! reference `fresnel_mix` weights it by `1 - F(wo.h)` per incident direction instead, which
-//! at grazing views makes a sunlit diffuse ground up to 3% brighter than Principled (measured
-//! against Cycles: docs/lab/cycles.md#2026-12-07-layering-the-demolitions-bias-was-the-diffuse-bases-layering).
+//! at grazing views makes a sunlit diffuse ground brighter than Principled (measured against
+//! Cycles: docs/lab/cycles.md#2026-12-07-layering-the-demolitions-bias-was-the-diffuse-bases-layering).
 
 use std::sync::OnceLock;
 
@@ -39,7 +39,7 @@ const LOBE_NODES: usize = 32;
 
 /// [`dielectric`] and its lobe average as tables: a lookup costs less on the BSDF's hot path
 /// than the exact formula's square root and division. The lobe averages are committed
-/// (`lobe_table.rs`, 2 million lobe samples: 0.1 s at start-up otherwise), the Fresnel table
+/// (`lobe_table.rs`, 2 million lobe samples, which every start-up would compute otherwise), the Fresnel table
 /// is computed on first use (the variants measured: the lab entry linked above).
 #[derive(Debug)]
 pub(super) struct DielectricTables {

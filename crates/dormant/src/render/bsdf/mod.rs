@@ -16,8 +16,9 @@ use crate::scene::Material;
 /// `(sin, cos)` of the angle `2 pi turn`, for `turn` in `[0, 1]` (sample points): the nearest
 /// quarter turn exactly, then Cephes' `sinf`/`cosf` minimax polynomials on the rest, at most
 /// `pi / 4`, with no branch. Within 2e-7 of the exact values (the unit test
-/// `sincos_turn_is_within_its_bound` checks a dense grid); it replaced libm's `sincosf`
-/// (3-5% of a path-traced frame's CPU time), whose range reduction handles any angle.
+/// `sincos_turn_is_within_its_bound` checks a dense grid); it replaced libm's `sincosf`,
+/// whose range reduction handles any angle and showed in a path-traced frame's profile:
+/// docs/lab/rendering.md#2026-12-02-shading-cut-last-bit-changes-allowed
 pub(crate) fn sincos_turn(turn: f32) -> (f32, f32) {
     debug_assert!((0.0..=1.0).contains(&turn), "turn {turn}");
     let quarters = 4.0 * turn;

@@ -23,6 +23,7 @@ use std::time::Instant;
 use glam::Vec3;
 
 use super::{Aov, Film};
+use crate::names::named_enum;
 
 /// What can go wrong when denoising.
 #[derive(Debug, thiserror::Error)]
@@ -67,20 +68,22 @@ pub(crate) const OIDN_VERSION: &str = "2.5.1";
 /// The AOVs the denoiser takes as guides, rendered whenever a frame is denoised.
 pub const GUIDE_AOVS: [Aov; 2] = [Aov::Albedo, Aov::Normal];
 
-/// OIDN's filter quality (`--denoise-quality`, Cycles' "Denoising Quality"): which of its
-/// networks filters the image. Prefiltered guides are filtered at `balanced` when `fast` is
-/// asked for (OIDN has no fast guide filter).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum DenoiseQuality {
-    /// The largest network: for final frames.
-    #[default]
-    High,
-    /// OIDN's middle setting (for interactive rendering). On the CPU device it gives `high`'s
-    /// result unless the guides are prefiltered, where `high` takes a larger network.
-    Balanced,
-    /// The smallest: fastest, for previews.
-    Fast,
+named_enum! {
+    /// OIDN's filter quality (`--denoise-quality`, Cycles' "Denoising Quality"): which of its
+    /// networks filters the image. Prefiltered guides are filtered at `balanced` when `fast` is
+    /// asked for (OIDN has no fast guide filter).
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+    #[serde(rename_all = "lowercase")]
+    pub enum DenoiseQuality {
+        /// The largest network: for final frames.
+        #[default]
+        High = "high",
+        /// OIDN's middle setting (for interactive rendering). On the CPU device it gives `high`'s
+        /// result unless the guides are prefiltered, where `high` takes a larger network.
+        Balanced = "balanced",
+        /// The smallest: fastest, for previews.
+        Fast = "fast",
+    }
 }
 
 /// An OIDN CPU device, made once and used for every frame of a run. Not `Sync`: OIDN reports

@@ -3,22 +3,24 @@
 //! simulates anything) and for `Sequence::render` (before its first frame).
 
 use super::store::ReuseStore;
+use crate::names::named_enum;
 use crate::render::{Aov, ImageSize, RenderError};
 
-/// How frames reuse earlier frames' work (`--reuse`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum ReuseMode {
-    /// Trace every frame in full.
-    Off,
-    /// A frame where nothing moved and the camera stayed is the previous frame's image,
-    /// copied instead of traced.
-    #[value(alias = "on")]
-    Static,
-    /// Also within frames: trace only the samples that can see something that changed since
-    /// they were traced; take the rest from the previous frames, bit for bit.
-    #[default]
-    Exact,
+named_enum! {
+    /// How frames reuse earlier frames' work (`--reuse`).
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+    #[serde(rename_all = "lowercase")]
+    pub enum ReuseMode {
+        /// Trace every frame in full.
+        Off = "off",
+        /// A frame where nothing moved and the camera stayed is the previous frame's image,
+        /// copied instead of traced.
+        Static = "static" | "on",
+        /// Also within frames: trace only the samples that can see something that changed since
+        /// they were traced; take the rest from the previous frames, bit for bit.
+        #[default]
+        Exact = "exact",
+    }
 }
 
 /// Memory exact reuse may keep by default: room for a per-pixel store of a 3840x2160 frame

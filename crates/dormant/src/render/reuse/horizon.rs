@@ -146,7 +146,8 @@ impl<'a> HorizonProbe<'a> {
 }
 
 /// What reading the clock twice costs, which a timed query's time includes: the least of a
-/// few tries, measured once per process (about 40 ns, as much as a short query).
+/// few tries, measured once per process (as much as a short query:
+/// docs/lab/reuse.md#2026-12-06-blocked-shadow-rays-and-what-the-horizon-timings-counted).
 fn clock_seconds() -> f64 {
     static CLOCK: OnceLock<f64> = OnceLock::new();
     *CLOCK.get_or_init(|| {

@@ -59,7 +59,8 @@ pub(super) fn camera_ray(
 }
 
 /// Sample `i`'s ray from `camera` through film point `(px, py)`. Kept inline: as a closure the
-/// compiler at times called it out of line, a percent of a preview frame's instructions.
+/// compiler at times called it out of line
+/// (docs/lab/reuse.md#2026-12-06-evening-the-previews-update-visits-only-the-bodies-that-changed).
 #[inline(always)]
 fn through_lens(camera: &PinholeCamera, px: f32, py: f32, sampler: &PixelSampler, i: u32) -> Ray {
     if camera.has_aperture() {

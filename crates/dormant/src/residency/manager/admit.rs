@@ -12,10 +12,9 @@ use crate::accel::AccelError;
 use crate::physics::trajectory::ReplayFrame;
 use crate::physics::IslandId;
 use crate::residency::baked::BakedIsland;
-use crate::residency::cost_model::{
-    choose_batch, Candidate, CostEstimate, IntegrationForm, Outlook, Situation,
-};
+use crate::residency::cost_model::{choose_batch, Candidate, CostEstimate, Outlook, Situation};
 use crate::residency::policy::IntegrationPolicy;
+use crate::residency::IntegrationForm;
 
 /// A candidate island and what was decided about it.
 struct Considered {
@@ -93,11 +92,10 @@ impl SceneManager {
     /// What the policy decides about each candidate this frame; `None` when `auto` cannot
     /// price a decision yet.
     fn policy_verdicts(&mut self, frame: &ReplayFrame<'_>) -> Option<Vec<Verdict>> {
-        // `auto` prices the trace penalty in trace time, unknown before a frame was traced
-        // (milliseconds in a preview, seconds in a production frame). Priced at 0, everything
-        // was integrated at the first of four production frames, 3-8% slower; waiting for a
-        // traced frame cost the preview of 150,000 bodies a whole `never` frame (4% of the
-        // run). So the probe's rays, scaled to the frame's samples, stand in until then.
+        // `auto` prices the trace penalty in trace time, unknown before a frame was traced: the
+        // probe's rays, scaled to the frame's samples, stand in until then (priced at 0 or
+        // waited for, the first frames lost):
+        // docs/lab/integration.md#2026-12-01-the-cost-models-priors-and-its-first-frame
         if self.options.policy == IntegrationPolicy::Auto && !self.cost.knows_trace() {
             match self.accel.query().ok().and_then(|q| self.probe.frame_trace_estimate(q)) {
                 Some(ms) => self.cost.assume_trace(ms),

@@ -35,10 +35,11 @@ use bit_set::BitSet;
 use glam::Mat3;
 
 use super::cache::{CacheBudget, CacheOutcome, CacheStats, GeometryCache};
-use super::cost_model::{CostEstimate, CostModel, CostModelState, IntegrationForm, TraceKind};
+use super::cost_model::{CostEstimate, CostModel, CostModelState};
 use super::lookahead::Lookahead;
 use super::policy::IntegrationPolicy;
 use super::stage_times::StageTimes;
+use super::{IntegrationForm, TraceKind};
 use crate::accel::{mesh_triangle, HitTriangle, MeshRef, ObjectMap, ResolvedHit};
 use crate::accel::{AccelError, Accelerator, HitObject, PrototypeId, SceneQuery, StaticSceneSnapshot};
 use crate::geometry::{Ray, TriangleMesh};

@@ -10,7 +10,8 @@ use rayon::prelude::*;
 
 use crate::accel::SceneQuery;
 use crate::geometry::{offset_origin, Ray};
-use crate::residency::cost_model::{CostModel, IntegrationForm};
+use crate::residency::cost_model::CostModel;
+use crate::residency::IntegrationForm;
 
 /// Smallest share of the present bodies a baked batch must move for its probe to measure
 /// more than timing noise.
@@ -23,9 +24,9 @@ const REPEATS: usize = 3;
 
 /// Rays a camera sample traces, for the trace estimate made before any frame was traced: the
 /// shaded preview traces about 3 (the camera ray and two shadow rays), a path-traced sample
-/// 5-10 (bounces and their shadow rays). Taking camera rays alone, `auto` integrated every
-/// body at the first of four path-traced frames of 150,000 bodies and lost 15%; 8 errs
-/// towards declining, and the first measured frame corrects the estimate.
+/// 5-10 (bounces and their shadow rays). 8 errs towards declining (camera rays alone made
+/// path-traced frames look cheap), and the first measured frame corrects the estimate:
+/// docs/lab/integration.md#2026-12-01-the-cost-models-priors-and-its-first-frame
 const RAYS_PER_SAMPLE: f64 = 8.0;
 
 /// A measurement started before an integration.

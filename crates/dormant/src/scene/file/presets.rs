@@ -104,7 +104,8 @@ impl SceneFile {
 
 /// Two `[[spawners]]` over opposite quadrants of the central area of `env`, half the `count`
 /// objects each, the second a little later, as scenes/monastery-rain.toml does: one region
-/// over the centre left 13% of the objects awake (on roofs) after 1,800 frames, against 3%.
+/// over the centre left many of them awake on roofs
+/// (docs/lab/paper.md#2026-11-22-the-first-committed-bench-paper-run).
 /// `names` are the prototypes' quoted names.
 fn rain_spawners(env: &Aabb, object_size: f32, names: &[String], count: u32) -> String {
     let centre = env.center();

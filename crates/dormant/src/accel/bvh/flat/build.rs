@@ -149,8 +149,8 @@ pub(crate) fn build_with(
 ///
 /// Subtrees build into arrays of their own, placed once at the end, not into one array of
 /// `2n - 1` slots sized for the worst case: that array was mostly unused, yet spread so that
-/// every page of it was touched (8 MB for the monastery, a good share of a scene load's page
-/// faults): docs/lab/bvh-build.md#2026-12-02-where-the-builds-time-goes-in-a-fresh-process-node-slots-leaves-of-8
+/// every page of it was touched (a good share of a scene load's page faults):
+/// docs/lab/bvh-build.md#2026-12-02-where-the-builds-time-goes-in-a-fresh-process-node-slots-leaves-of-8
 enum Subtree {
     Nodes(Vec<Node>),
     Split(Aabb, Box<(Subtree, Subtree)>),
@@ -330,12 +330,10 @@ fn split_at(prims: &[PrimRef], mid: usize) -> (usize, RangeBounds, RangeBounds) 
 /// every centroid coincides. All three axes are binned in one pass over the range.
 fn best_split(ctx: &Ctx, prims: &[PrimRef], b: &Box3, cb: &Box3) -> Option<(f32, usize, usize, Binning)> {
     // Small ranges need few bins: clearing and sweeping them would cost more than binning.
-    // Embree's rule, 4 + n / 20 (up to `bins`), builds the monastery's tree in 0.72-0.78x the
-    // time of 4 + n / 2 for 0.3% more SAH cost and the same trace. Other divisors and 4 bins
-    // everywhere measured slower or worse:
+    // Embree's rule, 4 + n / 20 (up to `bins`), built fastest for the same trace; other
+    // divisors and 4 bins everywhere did not pay:
     // docs/lab/bvh-build.md#2026-12-02-embrees-bin-count-one-sse2-conversion-triangles-stored-once
-    // An exact sweep over the sorted centroids of small ranges found lower SAH costs but built
-    // slower than binning them: docs/lab/bvh-build.md#2026-12-02-second-pass-branch-build2
+    // nor an exact sweep of small ranges: docs/lab/bvh-build.md#2026-12-02-second-pass-branch-build2
     let nb = ctx.p.bins.min(4 + prims.len() / 20);
     if prims.len() == 2 {
         return best_split_pair(ctx, prims, b, cb);
@@ -348,8 +346,8 @@ fn best_split(ctx: &Ctx, prims: &[PrimRef], b: &Box3, cb: &Box3) -> Option<(f32,
     }
 }
 
-/// [`best_split`] of two primitives (a third of all calls), without the bins and sweeps it
-/// would cost: the same answer. However many bins, the two centroids fall in the first and
+/// [`best_split`] of two primitives (a good share of all calls), without the bins and sweeps it
+/// would cost: the same answer (docs/lab/bvh-build.md#2026-12-02-the-binned-sah-builder-reworked-first-pass). However many bins, the two centroids fall in the first and
 /// last bin of every axis where they differ, every plane costs the same, and the first axis
 /// and plane win.
 fn best_split_pair(
@@ -436,8 +434,8 @@ struct Bins<const N: usize> {
 impl<const N: usize> Bins<N> {
     const EMPTY: Self = Bins { boxes: [[Box3::EMPTY; N]; 3], counts: [[0u32; N]; 3] };
 
-    /// Adds `prims` to the bins. In place: returning the bins by value copied them (a
-    /// `memcpy` of up to 7 KiB per node, 5% of a build).
+    /// Adds `prims` to the bins. In place: returning the bins by value copied them, a `memcpy`
+    /// per node: docs/lab/bvh-build.md#2026-12-02-the-binned-sah-builder-reworked-first-pass
     fn add(&mut self, prims: &[PrimRef], binning: &Binning) {
         if prims.len() >= 2 * PAR_BIN_CHUNK {
             let (l, r) = prims.split_at(prims.len() / 2);
@@ -487,7 +485,7 @@ fn median_split(prims: &mut [PrimRef], cb: &Box3) -> usize {
 /// In-place partition; returns how many elements satisfy `left` and the bounds of both sides
 /// (every element is tested once, and counted on its side then). Branch-free (Lomuto: each
 /// element swaps with the first right one, which moves on when it went left): which side an
-/// element goes is close to random, and a branch on it mispredicted about half the time.
+/// element goes is close to random, so a branch on it could not be predicted.
 /// Both sides' bounds are indexed by the side: kept in registers and updated through selects
 /// instead, they doubled the min/max work and built slower:
 /// docs/lab/bvh-build.md#2026-12-02-embrees-bin-count-one-sse2-conversion-triangles-stored-once

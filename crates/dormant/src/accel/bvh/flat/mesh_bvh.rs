@@ -5,7 +5,7 @@
 
 use rayon::prelude::*;
 
-use super::packet::{each_bit, Lanes, RayPacket, PACKET};
+use super::packet::{each_bit, Lanes, PacketLanes, RayPacket, PACKET};
 use super::{build_with, BoxRay, FlatBvh, Node, Start, Wide, ANY_HIT, CLOSEST_HIT, PAR_CHUNK};
 use crate::accel::bvh::simd::Kernel;
 use crate::accel::bvh::triangle::{RayTri, Tri, Tri4, TriHit};
@@ -196,8 +196,7 @@ impl MeshBvh {
             k,
             &self.bvh,
             root,
-            packet,
-            lanes,
+            PacketLanes { packet, lanes },
             t_max,
             &mut |first, count, lanes, t_max| {
                 found |= self.intersect_packet_leaf(k, (first, count), packet, lanes, t_max, best);
@@ -249,8 +248,7 @@ impl MeshBvh {
             k,
             &self.bvh,
             root,
-            packet,
-            lanes,
+            PacketLanes { packet, lanes },
             &mut t_max,
             &mut |first, count, lanes, t_max| {
                 self.occluded_packet_leaf(k, (first, count), packet, lanes, t_max)

@@ -18,7 +18,7 @@ mod wide;
 
 pub(crate) use build::{build, build_with};
 pub(crate) use mesh_bvh::{MeshBvh, PrimHit};
-pub(crate) use packet::{each_bit, Lanes, RayPacket, PACKET};
+pub(crate) use packet::{each_bit, Lanes, PacketLanes, RayPacket, PACKET};
 pub(crate) use sah::subtree_cost;
 #[cfg(test)]
 pub(crate) use traverse::traverse;

@@ -55,6 +55,13 @@ impl RayPacket {
     }
 }
 
+/// The lanes of a packet a traversal serves: the packet's rays and which of them walk.
+#[derive(Clone, Copy)]
+pub(crate) struct PacketLanes<'a> {
+    pub(crate) packet: &'a RayPacket,
+    pub(crate) lanes: Lanes,
+}
+
 /// The lanes whose `t_max` is at least `t` (those a subtree entered at `t` may still serve).
 #[inline(always)]
 fn lanes_within(t_max: &[f32; PACKET], t: f32) -> Lanes {
@@ -100,14 +107,12 @@ impl Wide {
     ///
     /// `leaf` is called from one place only, for the reason [`Wide::traverse`] gives.
     #[inline(always)]
-    #[allow(clippy::too_many_arguments)] // `traverse`'s seven and the lanes.
     pub(crate) fn traverse_packet<K: Kernel, F>(
         &self,
         k: K,
         bvh: &FlatBvh,
         root: Start,
-        packet: &RayPacket,
-        lanes: Lanes,
+        PacketLanes { packet, lanes }: PacketLanes<'_>,
         t_max: &mut [f32; PACKET],
         leaf: &mut F,
     ) -> Lanes
@@ -180,7 +185,7 @@ impl Wide {
     ///
     /// Pushing here, not in the caller, and each lane's kernel ray prepared here per node
     /// (broadcasts from the packet) rather than once per traversal into an array: returning
-    /// the sorted children to the caller cost 3-5% of the packets' gain, and that array was
+    /// the sorted children to the caller cost part of the packets' gain, and that array was
     /// copied with `memcpy` at every traversal, instance entries included. A loop over each
     /// lane's hit children instead of the transpose made packets slower than single rays:
     /// docs/lab/rendering.md#2026-12-02-bvh-packets

@@ -4,8 +4,8 @@
 //! `unsafe`.
 //!
 //! The storage is left uninitialised: a ray runs one traversal per block subtree and per
-//! instance it enters, most of them short, and zeroing 1-3 KiB for each cost 1.21x the CPU
-//! time of an AO render. The length lives in the stack object, so the compiler reloads it
+//! instance it enters, most of them short, and zeroing 1-3 KiB for each slowed a whole AO
+//! render. The length lives in the stack object, so the compiler reloads it
 //! around pushes; keeping it in a register (the entries in a separate local) and dropping the
 //! pop's bounds check were tried and did not pay:
 //! docs/lab/accelerators.md#2026-12-01-one-traversal-stack-type-its-storage-left-uninitialised

@@ -352,7 +352,8 @@ impl Wide {
         let kr = k.prepare(&BoxRay8 { org: ray.org.into(), inv: ray.inv.into(), t_min: ray.t_min });
         let mut cur = first;
         // The hit children of the current node, sorted; only `hits[..m]` of this node is read.
-        // Made once per traversal: zeroed per node, it cost three instructions a node.
+        // Made once per traversal: zeroing it per node cost instructions at every node:
+        // docs/lab/accelerators.md#2026-12-03-redundant-box-tests-and-stack-round-trips-removed-cachegrind
         let mut hits = [(0u32, 0f32); WIDTH];
         loop {
             if cur & LEAF == 0 {
@@ -457,8 +458,8 @@ impl Node8 {
     #[inline(always)]
     pub(super) fn code(&self, at: u32, slot: usize) -> u32 {
         // A select, not a branch: whether a child is a leaf follows no pattern a predictor
-        // learns (cachegrind's branch simulation: 11% of a render's mispredictions were this
-        // branch).
+        // learns (a branch here was a good share of a render's mispredictions):
+        // docs/lab/accelerators.md#2026-12-02-counted-instead-of-timed-cachegrind-instance-records-child-codes
         std::hint::select_unpredictable(
             self.count[slot] > 0,
             LEAF | (at << 3) | slot as u32,

@@ -1,4 +1,5 @@
-//! Insertion of a new block into the persistent tree (the O(k log(n + k)) update).
+//! Insertion of one mesh into the persistent tree by path copying ([`StaticBvh::insert`]): its new
+//! block placed into the existing overlay (the O(k log(n + k)) update).
 //!
 //! For a subtree N of the new block, a branch-and-bound search (Bittner et al. 2013, the same
 //! bound as Box2D's dynamic tree) finds the sibling S minimising the SAH increase
@@ -12,8 +13,40 @@ use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 use std::sync::Arc;
 
-use super::{Block, Link, ONode};
-use crate::geometry::Aabb;
+use super::{Block, Link, ONode, StaticBvh, MAX_OVERLAY_HEIGHT};
+use crate::accel::bvh::triangle::{extract, Tri};
+use crate::accel::{AccelError, StaticId};
+use crate::geometry::{Aabb, TriangleMesh};
+
+impl StaticBvh {
+    /// Inserts a world-space mesh without rebuilding: builds a block for it and inserts the
+    /// block's subtrees where they add the least SAH cost. Replaces a mesh with the same id.
+    /// Returns the number of skipped (degenerate or non-finite) triangles.
+    pub fn insert(&mut self, id: StaticId, mesh: &TriangleMesh) -> Result<usize, AccelError> {
+        mesh.validate()?;
+        let (tris, skipped) = extract(mesh, id.0);
+        self.remove(id);
+        self.insert_tris(id, tris);
+        Ok(skipped)
+    }
+
+    /// Inserts already extracted triangles as mesh `id` (which must not be present). Returns
+    /// whether the overlay got deeper than [`MAX_OVERLAY_HEIGHT`] so the tree was rebuilt.
+    fn insert_tris(&mut self, id: StaticId, tris: Vec<Tri>) -> bool {
+        if let Some(block) = self.add_mesh(id, tris) {
+            let root = match self.state.root.take() {
+                None => Link::Ref(block, 0),
+                Some(root) => insert_block(root, &block),
+            };
+            self.state.set_root(Some(root));
+        }
+        if self.state.root.as_ref().is_some_and(|r| r.height() > MAX_OVERLAY_HEIGHT) {
+            self.rebuild();
+            return true;
+        }
+        false
+    }
+}
 
 /// Inserts the whole of `block` into the tree at `root` and returns the new root. `root` is not
 /// modified: everything off the copied paths stays shared with it.

@@ -39,11 +39,19 @@
 //!
 //! Mesh bookkeeping (id -> block) is an `Arc<HashMap>` cloned on first write after a snapshot,
 //! so that part of a change is O(number of static meshes), once per commit.
+//!
+//! This file holds the types and the mesh bookkeeping; each operation on the tree has a file of
+//! its own: `apply.rs` (a commit), `insert.rs`, `remove.rs`, `rebraid.rs` (the overlay over
+//! every live block), `relink.rs` (merging what never wakes), `rebuild.rs` (one block), and
+//! `traverse.rs` (ray queries), `stats.rs` (counts and walks).
 
+mod apply;
 #[cfg(test)]
 mod check;
 mod insert;
 mod rebraid;
+mod rebuild;
+mod relink;
 mod remove;
 mod stats;
 mod traverse;
@@ -52,10 +60,10 @@ use std::collections::{HashMap, HashSet};
 use std::sync::Arc;
 
 use super::flat::MeshBvh;
-use super::triangle::{extract, Tri};
+use super::triangle::Tri;
 use super::BuildParams;
-use crate::accel::{AccelError, StaticId};
-use crate::geometry::{Aabb, TriangleMesh};
+use crate::accel::StaticId;
+use crate::geometry::Aabb;
 
 /// Deepest overlay allowed before a rebuild; also bounds the overlay traversal stack.
 pub(crate) const MAX_OVERLAY_HEIGHT: u32 = 64;
@@ -300,34 +308,6 @@ impl StaticBvh {
         Arc::new(Block { id, mesh: MeshBvh::build(tris, self.params) })
     }
 
-    /// Inserts a world-space mesh without rebuilding: builds a block for it and inserts the
-    /// block's subtrees where they add the least SAH cost. Replaces a mesh with the same id.
-    /// Returns the number of skipped (degenerate or non-finite) triangles.
-    pub fn insert(&mut self, id: StaticId, mesh: &TriangleMesh) -> Result<usize, AccelError> {
-        mesh.validate()?;
-        let (tris, skipped) = extract(mesh, id.0);
-        self.remove(id);
-        self.insert_tris(id, tris);
-        Ok(skipped)
-    }
-
-    /// Inserts already extracted triangles as mesh `id` (which must not be present). Returns
-    /// whether the overlay got deeper than [`MAX_OVERLAY_HEIGHT`] so the tree was rebuilt.
-    fn insert_tris(&mut self, id: StaticId, tris: Vec<Tri>) -> bool {
-        if let Some(block) = self.add_mesh(id, tris) {
-            let root = match self.state.root.take() {
-                None => Link::Ref(block, 0),
-                Some(root) => insert::insert_block(root, &block),
-            };
-            self.state.set_root(Some(root));
-        }
-        if self.state.root.as_ref().is_some_and(|r| r.height() > MAX_OVERLAY_HEIGHT) {
-            self.rebuild();
-            return true;
-        }
-        false
-    }
-
     /// Records mesh `id` (which must not be present) with its own block of `tris`, not linked
     /// into the tree yet; returns the block (`None` for a mesh without usable triangles).
     fn add_mesh(&mut self, id: StaticId, tris: Vec<Tri>) -> Option<Arc<Block>> {
@@ -367,241 +347,5 @@ impl StaticBvh {
             });
         }
         blocks
-    }
-
-    /// Removes a mesh; returns whether it was present. A mesh with its own block is unlinked
-    /// and the path refitted; one sharing a rebuilt block triggers a rebuild.
-    pub fn remove(&mut self, id: StaticId) -> bool {
-        let Some(entry) = self.forget(id) else {
-            return false;
-        };
-        if entry.triangles == 0 {
-            return true;
-        }
-        if entry.shared {
-            self.rebuild();
-        } else if let Some(root) = self.state.root.take() {
-            self.state.set_root(remove::remove_block(&root, entry.block).resolve(root));
-        }
-        true
-    }
-
-    /// Rebuilds the whole tree into one block from the live meshes' triangles.
-    pub(crate) fn rebuild(&mut self) {
-        let tris = self.live_tris();
-        self.rebuild_from(tris);
-    }
-
-    /// The triangles of every live mesh, gathered from the blocks.
-    fn live_tris(&self) -> Vec<Tri> {
-        let mut tris = Vec::with_capacity(self.state.triangles);
-        if let Some(root) = &self.state.root {
-            stats::for_each_block(root, &mut |b| tris.extend(self.live_tris_of(b)));
-        }
-        tris
-    }
-
-    /// The triangles of `block` whose mesh is live and still kept in that block.
-    fn live_tris_of<'a>(&'a self, block: &'a Block) -> impl Iterator<Item = Tri> + 'a {
-        let meshes = &self.state.meshes;
-        block
-            .mesh
-            .tris_in_leaf_order()
-            .filter(move |t| meshes.get(&StaticId(t.geom)).is_some_and(|e| e.block == block.id))
-            .copied()
-    }
-
-    /// Rebuilds the overlay over the existing blocks ([`rebraid`]) after merging the blocks
-    /// that will never be removed (the rebuilt base and the blocks of meshes declared with
-    /// [`Self::set_permanent`]) into one rebuilt block. Every other mesh keeps its own block
-    /// and stays removable without a rebuild. What growth past [`Self::rebuild_fraction`]
-    /// triggers: the environment and the islands that stay are then one tree again, whose
-    /// order is the SAH's and not the overlay's. Returns the triangles built into the merged
-    /// block (0 when there was nothing to merge), or `None` when it fell back to a full rebuild
-    /// (the overlay came out deeper than [`MAX_OVERLAY_HEIGHT`]).
-    ///
-    /// Merging only what never wakes keeps the best of both: merging everything, as a full
-    /// rebuild does, makes every later removal a full rebuild, and keeping every island's
-    /// block leaves hundreds of small, overlapping blocks that rays enter one at a time.
-    /// Merging only when a cost estimate said it pays left a tree slower than either:
-    /// docs/lab/persistent-tree.md#2026-12-02-the-persistent-static-tree-after-the-atriums-run
-    ///
-    /// `blocks`: every live block, each whole (none of them may hold a removed mesh's
-    /// triangles).
-    fn relink(&mut self, blocks: Vec<Arc<Block>>) -> Option<usize> {
-        let (merge, keep) = self.mergeable(&blocks);
-        let (order, built) = match (merge.len() > 1).then(|| self.merge_blocks(&merge)).flatten() {
-            Some(merged) => {
-                let built = merged.mesh.tris.len();
-                (std::iter::once(merged).chain(keep).collect(), built)
-            }
-            None => (blocks, 0),
-        };
-        self.state.rebuilt_triangles = self.state.triangles;
-        self.state.inserted_since_rebuild = 0;
-        (!self.braid_or_rebuild(&order)).then_some(built)
-    }
-
-    /// [`Self::braid`], or a rebuild from the triangles of `blocks` where that fails; returns
-    /// whether it rebuilt.
-    fn braid_or_rebuild(&mut self, blocks: &[Arc<Block>]) -> bool {
-        if self.braid(blocks) {
-            return false;
-        }
-        // From `blocks`, not the current tree: after a merge, only `blocks` holds the block
-        // the mesh entries name.
-        let tris = blocks.iter().flat_map(|b| self.live_tris_of(b)).collect();
-        self.rebuild_from(tris);
-        true
-    }
-
-    /// Makes the overlay a re-braided one ([`rebraid`]) over the whole of `blocks`; returns
-    /// false, leaving the tree as it was, if that came out deeper than
-    /// [`MAX_OVERLAY_HEIGHT`].
-    fn braid(&mut self, blocks: &[Arc<Block>]) -> bool {
-        let root = match blocks {
-            [] => None,
-            [one] => Some(Link::Ref(one.clone(), 0)),
-            _ => Some(rebraid::rebraid(blocks)),
-        };
-        if root.as_ref().is_some_and(|r| r.height() > MAX_OVERLAY_HEIGHT) {
-            return false;
-        }
-        self.state.set_root(root);
-        true
-    }
-
-    /// Splits `blocks` into those that will never be removed on their own (every live mesh in
-    /// them is shared or permanent) and the rest.
-    fn mergeable(&self, blocks: &[Arc<Block>]) -> (Vec<Arc<Block>>, Vec<Arc<Block>>) {
-        let mut removable = HashSet::new();
-        for (id, e) in self.state.meshes.iter() {
-            if e.triangles > 0 && !e.shared && !self.permanent.contains(id) {
-                removable.insert(e.block);
-            }
-        }
-        blocks.iter().cloned().partition(|b| !removable.contains(&b.id))
-    }
-
-    /// Builds one block from the live triangles of `blocks` and marks their meshes as sharing it.
-    fn merge_blocks(&mut self, blocks: &[Arc<Block>]) -> Option<Arc<Block>> {
-        let ids: HashSet<u32> = blocks.iter().map(|b| b.id).collect();
-        let tris: Vec<Tri> = blocks.iter().flat_map(|b| self.live_tris_of(b)).collect();
-        if tris.is_empty() {
-            return None;
-        }
-        let block = self.new_block(tris);
-        for e in Arc::make_mut(&mut self.state.meshes).values_mut() {
-            if e.triangles > 0 && ids.contains(&e.block) {
-                e.block = block.id;
-                e.shared = true;
-            }
-        }
-        Some(block)
-    }
-
-    fn rebuild_from(&mut self, tris: Vec<Tri>) {
-        debug_assert!(tris.iter().all(|t| self.state.meshes.contains_key(&StaticId(t.geom))));
-        let n = tris.len();
-        let block = self.new_block(tris);
-        let meshes = Arc::make_mut(&mut self.state.meshes);
-        for e in meshes.values_mut() {
-            if e.triangles > 0 {
-                e.block = block.id;
-                e.shared = true;
-            }
-        }
-        self.state.set_root((n > 0).then_some(Link::Ref(block, 0)));
-        self.state.triangles = n;
-        self.state.rebuilt_triangles = n;
-        self.state.inserted_since_rebuild = 0;
-    }
-
-    /// Applies a batch of changes the way a commit should: removals first, then either one
-    /// rebuild (an empty tree, or a removal from a shared block), or a block per added mesh and
-    /// one new overlay over every live block: re-braided ([`rebraid`]), or relinked
-    /// ([`Self::relink`]) once the new triangles pass [`Self::rebuild_fraction`]. Unknown ids
-    /// in `removes` are ignored; an added id that is present replaces that mesh.
-    pub fn apply(
-        &mut self,
-        removes: &[StaticId],
-        adds: &[(StaticId, &TriangleMesh)],
-    ) -> Result<StaticUpdate, AccelError> {
-        for (_, m) in adds {
-            m.validate()?;
-        }
-        let mut skipped = 0;
-        let extracted = adds
-            .iter()
-            .map(|(id, m)| {
-                let (tris, s) = extract(m, id.0);
-                skipped += s;
-                (*id, tris)
-            })
-            .collect();
-        let mut update = self.apply_extracted(removes, extracted);
-        update.skipped_triangles += skipped;
-        Ok(update)
-    }
-
-    /// [`Self::apply`] with triangles already extracted (skipped ones are not counted here).
-    pub(crate) fn apply_extracted(
-        &mut self,
-        removes: &[StaticId],
-        adds: Vec<(StaticId, Vec<Tri>)>,
-    ) -> StaticUpdate {
-        let mut update = StaticUpdate::default();
-        let mut need_rebuild = false;
-        let mut changed = !adds.is_empty();
-        let replaced = adds.iter().map(|(id, _)| id);
-        for id in removes.iter().chain(replaced) {
-            // The entry goes now; the tree is rebuilt or re-braided without it below.
-            if let Some(e) = self.forget(*id) {
-                changed = true;
-                need_rebuild |= e.shared && e.triangles > 0;
-            }
-        }
-        if !changed {
-            return update;
-        }
-        let added: usize = adds.iter().map(|(_, t)| t.len()).sum();
-        let budget = self.rebuild_fraction * self.state.rebuilt_triangles as f32;
-        if need_rebuild || self.state.triangles == 0 {
-            let mut tris = self.live_tris();
-            let meshes = Arc::make_mut(&mut self.state.meshes);
-            for (id, t) in adds {
-                meshes.insert(id, MeshEntry { block: u32::MAX, shared: true, triangles: t.len() });
-                if tris.is_empty() {
-                    // The first mesh of an empty tree is moved, not copied.
-                    tris = t;
-                } else {
-                    tris.extend(t);
-                }
-            }
-            self.rebuild_from(tris);
-            update.rebuilt = true;
-            update.built_triangles = self.state.triangles;
-            return update;
-        }
-        let over_budget = (self.state.inserted_since_rebuild + added) as f32 > budget;
-        let mut blocks = self.live_blocks();
-        for (id, t) in adds {
-            update.built_triangles += t.len();
-            blocks.extend(self.add_mesh(id, t));
-        }
-        let merged = if over_budget {
-            update.relinked = true;
-            self.relink(blocks)
-        } else {
-            (!self.braid_or_rebuild(&blocks)).then_some(0)
-        };
-        match merged {
-            Some(merged) => update.built_triangles += merged,
-            None => {
-                update.rebuilt = true;
-                update.built_triangles = self.state.triangles;
-            }
-        }
-        update
     }
 }

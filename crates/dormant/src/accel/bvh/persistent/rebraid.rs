@@ -3,13 +3,14 @@
 //! blocks, the blocks larger than every other opened into subtrees, so that the overlay can
 //! put an island's block between the parts of the environment around it instead of beside the
 //! whole. Every commit of the persistent tree makes its overlay this way
-//! ([`super::StaticBvh::apply`]).
+//! ([`super::StaticBvh::apply`], through `StaticBvh::braid`, which falls back to a rebuild when
+//! the overlay comes out too deep).
 //!
 //! Why: a ray walks each block subtree it enters to the end before the next, so a subtree of
 //! the environment that encloses an island (the floor and walls around a pile) is walked
 //! behind the island by rays aimed at it. Overlays made by inserting blocks one at a time
-//! (`insert.rs`, still what [`super::StaticBvh::insert`] does) kept such subtrees whole: at
-//! its most fragmented, such a tree traced up to 1.5x a fresh build of its triangles.
+//! (`insert.rs`, still what [`super::StaticBvh::insert`] does) kept such subtrees whole, and
+//! at its most fragmented such a tree traced well behind a fresh build of its triangles.
 //!
 //! Which pieces: the largest first, while a piece is larger than a quarter of the
 //! second-largest block (the largest island, where the largest block is the environment),
@@ -22,10 +23,41 @@ use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 use std::sync::Arc;
 
-use super::{Block, Link, ONode};
+use super::{Block, Link, ONode, StaticBvh, MAX_OVERLAY_HEIGHT};
 use crate::accel::bvh::flat::{build, FlatBvh};
 use crate::accel::bvh::BuildParams;
 use crate::geometry::Aabb;
+
+impl StaticBvh {
+    /// [`Self::braid`], or a rebuild from the triangles of `blocks` where that fails; returns
+    /// whether it rebuilt.
+    pub(super) fn braid_or_rebuild(&mut self, blocks: &[Arc<Block>]) -> bool {
+        if self.braid(blocks) {
+            return false;
+        }
+        // From `blocks`, not the current tree: after a merge, only `blocks` holds the block
+        // the mesh entries name.
+        let tris = blocks.iter().flat_map(|b| self.live_tris_of(b)).collect();
+        self.rebuild_from(tris);
+        true
+    }
+
+    /// Makes the overlay a re-braided one ([`super::rebraid`]) over the whole of `blocks`; returns
+    /// false, leaving the tree as it was, if that came out deeper than
+    /// [`MAX_OVERLAY_HEIGHT`].
+    fn braid(&mut self, blocks: &[Arc<Block>]) -> bool {
+        let root = match blocks {
+            [] => None,
+            [one] => Some(Link::Ref(one.clone(), 0)),
+            _ => Some(rebraid(blocks)),
+        };
+        if root.as_ref().is_some_and(|r| r.height() > MAX_OVERLAY_HEIGHT) {
+            return false;
+        }
+        self.state.set_root(root);
+        true
+    }
+}
 
 /// At most this many pieces per block.
 const PIECES_PER_BLOCK: usize = 4;

@@ -1,9 +1,30 @@
-//! Removal of a block's references from the persistent tree, refitting the copied path and
-//! collapsing path copies that became identical to their block node again.
+//! Removal of one mesh from the persistent tree ([`StaticBvh::remove`]): its block's references
+//! unlinked, the copied path refitted and path copies that became identical to their block node
+//! collapsed again; a mesh sharing a rebuilt block costs a rebuild instead.
 
 use std::sync::Arc;
 
-use super::{Link, ONode};
+use super::{Link, ONode, StaticBvh};
+use crate::accel::StaticId;
+
+impl StaticBvh {
+    /// Removes a mesh; returns whether it was present. A mesh with its own block is unlinked
+    /// and the path refitted; one sharing a rebuilt block triggers a rebuild.
+    pub fn remove(&mut self, id: StaticId) -> bool {
+        let Some(entry) = self.forget(id) else {
+            return false;
+        };
+        if entry.triangles == 0 {
+            return true;
+        }
+        if entry.shared {
+            self.rebuild();
+        } else if let Some(root) = self.state.root.take() {
+            self.state.set_root(remove_block(&root, entry.block).resolve(root));
+        }
+        true
+    }
+}
 
 pub(crate) enum Removed {
     /// Nothing below referenced the block.

@@ -5,8 +5,8 @@ use std::sync::Arc;
 
 use super::{Block, Link, StaticSnapshot};
 use crate::accel::bvh::flat::{
-    interval_is_valid, BoxRay, FlatBvh, Lanes, Node, PrimHit, RayPacket, Start, Wide, ANY_HIT, CLOSEST_HIT,
-    PACKET,
+    interval_is_valid, BoxRay, FlatBvh, Lanes, Node, PacketLanes, PrimHit, RayPacket, Start, Wide, ANY_HIT,
+    CLOSEST_HIT, PACKET,
 };
 use crate::accel::bvh::simd::{dispatch, Kernel};
 use crate::accel::bvh::triangle::RayTri;
@@ -131,8 +131,7 @@ impl StaticSnapshot {
             k,
             &v.bvh,
             Start::Test(0),
-            packet,
-            lanes,
+            PacketLanes { packet, lanes },
             t_max,
             &mut |first, count, lanes, t_max| {
                 let mut left = lanes;

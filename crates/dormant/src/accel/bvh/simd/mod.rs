@@ -199,8 +199,8 @@ pub(crate) trait Kernel: Copy {
     /// Runs `f` compiled for this path: a leaf's triangle tests. The leaf closures stay out of
     /// line (a mesh is traversed from two places in one query), so without this they are
     /// compiled for the x86-64 baseline: legacy SSE, where every operation that keeps its
-    /// input costs a register copy (compiled for AVX2 the leaf tests run about 12% fewer
-    /// instructions).
+    /// input costs a register copy (compiled for AVX2 they run fewer instructions:
+    /// docs/lab/accelerators.md#2026-12-03-embree-counted-too-half-its-instructions-cachegrind).
     fn leaf<R>(self, f: impl FnOnce() -> R) -> R;
     /// [`RayTri::closest_in`] on a leaf's `packets`, as many at once as this path's registers
     /// hold: one on the portable path, two on AVX2 and AVX-512.
@@ -315,7 +315,8 @@ pub(crate) use dispatch;
 /// The integer parts of `x`'s lanes, each in `0..2^31`: the BVH builder's bin of a primitive on
 /// each axis. On x86-64 one SSE2 conversion for the three lanes ([`x86::truncate3`]); Rust's
 /// `as` casts saturate, which costs about a dozen instructions per lane and made the
-/// monastery's tree about 5% slower to build. Elsewhere the casts.
+/// monastery's tree slower to build. Elsewhere the casts.
+/// docs/lab/bvh-build.md#2026-12-02-embrees-bin-count-one-sse2-conversion-triangles-stored-once
 #[inline(always)]
 pub(crate) fn truncate3(x: Vec3A) -> [usize; 3] {
     debug_assert!(x.cmpge(Vec3A::ZERO).all() && x.cmplt(Vec3A::splat(2_147_483_648.0)).all());

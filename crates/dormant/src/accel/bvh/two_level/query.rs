@@ -6,7 +6,7 @@
 //! Closest hits trace the three structures one after the other, each up to the nearest hit so
 //! far: the static tree, the resting level, then the top level. Static first, because in
 //! scenes of piles inside a large environment most rays end on the environment; resting first
-//! gains a few percent where bodies stand in front of the floor but cost piles up to 1.5x.
+//! gains a little where bodies stand in front of the floor but costs piles much more.
 //! Without resting instances the resting level is empty. Any-hit queries trace the static tree
 //! first too. The other orders measured, a root over the three, and the instance levels first
 //! for rays that start among the bodies:
@@ -18,8 +18,8 @@ use glam::{Affine3A, Mat3, Vec3};
 use rayon::prelude::*;
 
 use crate::accel::bvh::flat::{
-    build, each_bit, interval_is_valid, BoxRay, FlatBvh, Lanes, MeshBvh, PrimHit, RayPacket, Start, Wide,
-    ANY_HIT, CLOSEST_HIT, PACKET,
+    build, each_bit, interval_is_valid, BoxRay, FlatBvh, Lanes, MeshBvh, PacketLanes, PrimHit, RayPacket,
+    Start, Wide, ANY_HIT, CLOSEST_HIT, PACKET,
 };
 use crate::accel::bvh::persistent::StaticSnapshot;
 use crate::accel::bvh::simd::{dispatch, Kernel};
@@ -228,8 +228,7 @@ impl Top {
             k,
             &self.bvh,
             Start::Test(0),
-            packet,
-            lanes,
+            PacketLanes { packet, lanes },
             t_max,
             &mut |first, count, lanes, t_max| {
                 for (item, motion) in self.live(first, count) {
@@ -272,8 +271,7 @@ impl Top {
             k,
             &self.bvh,
             Start::Test(0),
-            packet,
-            lanes,
+            PacketLanes { packet, lanes },
             &mut t_max,
             &mut |first, count, lanes, t_max| {
                 let mut left = lanes;
@@ -294,8 +292,9 @@ impl Top {
 
 /// The ray in the instance's object space. The origin is moved by the forward translation
 /// before the inverse linear part is applied: `inv * o` would add two large, nearly
-/// cancelling terms for instances far from the world origin (seen: t errors of 7e-5 at
-/// t = 0.2 on ducks 40 units out, twice Embree's), while `o - translation` is nearly exact.
+/// cancelling terms for instances far from the world origin (errors beyond Embree's on ducks
+/// 40 units out: docs/lab/crosscheck.md#2026-11-22-the-bvhs-object-rays-translation-first), while
+/// `o - translation` is nearly exact.
 ///
 /// A moving instance is placed at the ray's time first (its rotation is inverted by the
 /// conjugate), as Embree interpolates a motion instance per ray.
@@ -303,7 +302,8 @@ impl Top {
 fn object_ray(ray: &Ray, item: &TopItem, motion: Option<&InstanceMotion>) -> Ray {
     // Origin and direction as values, one `Ray` built from them: with a `Ray` returned from
     // each branch the two were merged in memory, stored in 8- and 4-byte pieces and read back
-    // in 16 (a failed store forward on every instance entered, 2% of a render's samples).
+    // in 16, a failed store forward on every instance entered:
+    // docs/lab/accelerators.md#2026-12-02-the-node-step-and-leaves-one-idea-at-a-time-second-pass
     let (origin, dir) = match motion {
         Some(motion) => moving_object_frame(ray, motion),
         None => (item.linear * (ray.origin - item.translation), item.linear * ray.dir),
