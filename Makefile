@@ -77,9 +77,12 @@ blender-roundtrip: build
 # API within its caps (`pub use` names, public items; no glob re-exports or #[doc(hidden)]), no
 # clippy::too_many_arguments allowed, no function over 80 lines in a crate's src/, every docs/
 # link in the sources resolving, and few comments quoting a measured ratio, each linking its
-# docs/lab entry. Pure Python, no build. See scripts/arch-check.py.
+# docs/lab entry; no clap in the core's dependencies. Pure Python, no build. See
+# scripts/arch-check.py. Then scripts/arch-check-selftest.sh breaks each rule once in a scratch
+# copy and requires arch-check to catch it (about 15 s).
 arch-check:
 	python3 scripts/arch-check.py
+	bash scripts/arch-check-selftest.sh
 
 lint: arch-check
 	$(CARGO) fmt --all --check

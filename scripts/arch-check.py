@@ -13,7 +13,7 @@ between the workspace's crates; this checks the arrows inside each crate.
 - The core crate's API (crates/dormant/src), counted from the source: at most
   MAX_PUB_USE_NAMES `pub use` names and MAX_PUBLIC_ITEMS public items (see their comment);
   no glob re-export (`pub use a::*`) and no `#[doc(hidden)]`, which would hide names from
-  the count and from the documentation.
+  the count and from the documentation. No dependency CORE_FORBIDDEN_DEPENDENCIES names (clap).
 - No `clippy::too_many_arguments` allowed anywhere in the workspace (a parameter struct or a
   method on the value the arguments describe instead), nor its threshold raised.
 - No function over LONG_FUNCTION_LINES lines in any crate's src/ (test modules aside),
@@ -82,6 +82,10 @@ MAX_PUBLIC_ITEMS = 459
 # included), statics, type aliases and modules. Fields and enum variants are parts of their type.
 PUBLIC_ITEM = re.compile(
     r"(?<![\w:])pub\s+(?:(?:const|async|unsafe|extern)\s+)*(fn|struct|enum|union|trait|const|static|type|mod)\b")
+
+# Dependencies the core crate must not take: what the CLI owns stays in the CLI (the core's
+# enums get their names through names.rs's `named_enum!`; the CLI parses them).
+CORE_FORBIDDEN_DEPENDENCIES = {"clap": "argument parsing belongs to dormant-cli"}
 
 # The longest function allowed in any crate's src/, in lines (../shared/tools/long-functions).
 LONG_FUNCTION_LINES = 80
@@ -572,6 +576,16 @@ def long_functions(limit=LONG_FUNCTION_LINES):
     return found
 
 
+def core_dependency_problems():
+    """Dependencies of the core crate's [dependencies] table that CORE_FORBIDDEN_DEPENDENCIES names."""
+    import tomllib
+    with open(os.path.join(ROOT, "crates", API_CRATE, "Cargo.toml"), "rb") as f:
+        manifest = tomllib.load(f)
+    deps = manifest.get("dependencies", {})
+    return [f"crates/{API_CRATE}/Cargo.toml: [dependencies] has `{name}`: {why}"
+            for name, why in sorted(CORE_FORBIDDEN_DEPENDENCIES.items()) if name in deps]
+
+
 def main():
     show_graph = "--graph" in sys.argv[1:]
     problems, summary = [], []
@@ -585,6 +599,7 @@ def main():
             problems.extend(found)
             api = (f"{crate_name} API: {names}/{MAX_PUB_USE_NAMES} `pub use` names, "
                    f"{items}/{MAX_PUBLIC_ITEMS} public items")
+    problems.extend(core_dependency_problems())
     problems.extend(too_many_arguments_problems())
     problems.extend(doc_link_problems())
     found, ratio_comments = ratio_comment_problems()
