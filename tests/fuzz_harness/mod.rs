@@ -20,7 +20,9 @@ use dormant::sequence::stats::{RunInfo, StatsFile};
 use dormant::sequence::FrameRange;
 
 // Base64 and the trajectory checksum, shared with the tests' helpers; by path, so that the
-// fuzz targets, which include this file by path, find it too.
+// fuzz targets, which include this file by path, find it too (in the test suite the file is
+// thus loaded twice, here and as `common::encoding`).
+#[allow(clippy::duplicate_mod)]
 #[path = "../common/encoding.rs"]
 mod encoding;
 

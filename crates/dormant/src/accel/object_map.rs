@@ -19,7 +19,7 @@ pub enum MeshRef {
 
 impl MeshRef {
     /// The mesh in `desc`, if `desc` has it.
-    pub fn mesh(self, desc: &SceneDescription) -> Option<&TriangleMesh> {
+    pub(crate) fn mesh(self, desc: &SceneDescription) -> Option<&TriangleMesh> {
         match self {
             MeshRef::Static(i) => desc.statics.get(i as usize).map(|s| &s.mesh),
             MeshRef::Prototype(i) => desc.prototypes.get(i as usize).map(|p| &p.mesh),

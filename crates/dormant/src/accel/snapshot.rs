@@ -24,7 +24,7 @@ impl StaticSceneSnapshot {
         Self { backend, payload: Arc::new(payload) }
     }
 
-    pub fn backend(&self) -> Backend {
+    pub(crate) fn backend(&self) -> Backend {
         self.backend
     }
 

@@ -32,7 +32,7 @@ impl Aabb {
         Self { min: self.min.min(o.min), max: self.max.max(o.max) }
     }
 
-    pub fn is_empty(&self) -> bool {
+    pub(crate) fn is_empty(&self) -> bool {
         self.min.x > self.max.x || self.min.y > self.max.y || self.min.z > self.max.z
     }
 
@@ -55,7 +55,7 @@ impl Aabb {
     }
 
     /// Bounds of this box's eight corners after an affine transform.
-    pub fn transformed(&self, m: &glam::Affine3A) -> Self {
+    pub(crate) fn transformed(&self, m: &glam::Affine3A) -> Self {
         if self.is_empty() {
             return *self;
         }

@@ -46,7 +46,7 @@ impl TriangleMesh {
 
     /// Checks that indices and attributes are consistent. Does not reject degenerate or
     /// non-finite triangles: accelerators skip those and count them.
-    pub fn validate(&self) -> Result<(), MeshError> {
+    pub(crate) fn validate(&self) -> Result<(), MeshError> {
         let n = self.positions.len();
         for (t, tri) in self.indices.iter().enumerate() {
             if let Some(&index) = tri.iter().find(|&&i| i as usize >= n) {

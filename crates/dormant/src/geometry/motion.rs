@@ -28,7 +28,7 @@ impl RigidTransform {
         }
     }
 
-    pub fn is_finite(&self) -> bool {
+    pub(crate) fn is_finite(&self) -> bool {
         self.rotation.is_finite() && self.translation.is_finite()
     }
 }
@@ -58,7 +58,7 @@ impl InstanceMotion {
         glam::Mat3::from_quat(self.at(time).rotation)
     }
 
-    pub fn is_finite(&self) -> bool {
+    pub(crate) fn is_finite(&self) -> bool {
         self.open.is_finite() && self.close.is_finite()
     }
 
@@ -78,7 +78,7 @@ impl InstanceMotion {
     /// the union of the boxes at `BOUND_STEPS + 1` evenly spaced times, grown by the farthest
     /// any point of the object can travel between two of them: at most a step's share of the
     /// translation plus the arc (angle times radius) the farthest corner sweeps.
-    pub fn bounds(&self, local: &Aabb) -> Aabb {
+    pub(crate) fn bounds(&self, local: &Aabb) -> Aabb {
         if local.is_empty() {
             return *local;
         }

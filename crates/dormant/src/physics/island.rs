@@ -118,14 +118,14 @@ pub(crate) struct IslandTracker {
 }
 
 impl IslandTracker {
-    pub fn new() -> Self {
+    pub(crate) fn new() -> Self {
         Self::default()
     }
 
     /// Feeds the observations of one step (every body in the world, any order; a body not
     /// listed counts as awake or gone) and returns that step's events: all `Woke` events
     /// first, then all `Slept` events, each in ascending id order.
-    pub fn update(&mut self, observations: &[SleepObservation]) -> Vec<IslandEvent> {
+    pub(crate) fn update(&mut self, observations: &[SleepObservation]) -> Vec<IslandEvent> {
         self.counters.updates += 1;
         let Sleepers { group_of, observation_of, groups } = Sleepers::of(observations);
         let max_body = group_of.len();
@@ -182,16 +182,16 @@ impl IslandTracker {
     }
 
     /// The sleeping island `body` belongs to.
-    pub fn island_of(&self, body: BodyId) -> Option<IslandId> {
+    pub(crate) fn island_of(&self, body: BodyId) -> Option<IslandId> {
         self.island_of.get(body.0 as usize).copied().flatten()
     }
 
     /// Live sleeping islands, ascending by id, with their bodies (ascending).
-    pub fn islands(&self) -> impl Iterator<Item = (IslandId, &[BodyId])> {
+    pub(crate) fn islands(&self) -> impl Iterator<Item = (IslandId, &[BodyId])> {
         self.islands.iter().map(|(&id, b)| (id, b.as_slice()))
     }
 
-    pub fn counters(&self) -> &IslandCounters {
+    pub(crate) fn counters(&self) -> &IslandCounters {
         &self.counters
     }
 

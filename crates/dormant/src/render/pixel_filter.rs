@@ -41,7 +41,7 @@ named_enum! {
 impl FilterKind {
     /// The width a filter of this kind has unless one is given: Cycles' defaults (box 1,
     /// Gaussian and Blackman-Harris 1.5) and the tent of radius 1.
-    pub fn default_width(self) -> f32 {
+    pub(crate) fn default_width(self) -> f32 {
         match self {
             FilterKind::Tent | FilterKind::Box => 1.0,
             FilterKind::Gaussian | FilterKind::BlackmanHarris => 1.5,
@@ -50,7 +50,7 @@ impl FilterKind {
 }
 
 /// Widest filter accepted, pixels: far beyond any reconstruction filter in use.
-pub const MAX_FILTER_WIDTH: f32 = 16.0;
+pub(crate) const MAX_FILTER_WIDTH: f32 = 16.0;
 
 impl Default for PixelFilter {
     fn default() -> Self {
@@ -94,7 +94,7 @@ impl PixelFilter {
     }
 
     /// Farthest a sample lands from the pixel's centre along an axis, pixels.
-    pub fn reach(&self) -> f32 {
+    pub(crate) fn reach(&self) -> f32 {
         match *self {
             PixelFilter::Tent { radius } => radius,
             PixelFilter::Box { width } => 0.5 * width,
@@ -106,7 +106,7 @@ impl PixelFilter {
     /// A sample's offset from the pixel's centre for the uniform pair `u`, distributed as the
     /// filter.
     #[inline]
-    pub fn sample_offset(&self, u: Vec2) -> Vec2 {
+    pub(crate) fn sample_offset(&self, u: Vec2) -> Vec2 {
         match *self {
             PixelFilter::Tent { radius } => tent_offset(u) * radius,
             PixelFilter::Box { width } => (u - Vec2::splat(0.5)) * width,

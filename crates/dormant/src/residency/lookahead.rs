@@ -18,7 +18,10 @@ pub struct Lookahead {
 impl Lookahead {
     /// From every frame's island events (`(frame index, event)` in order) and the frames
     /// the run renders.
-    pub fn new<'a>(events: impl IntoIterator<Item = (u32, &'a IslandEvent)>, mut rendered: Vec<u32>) -> Self {
+    pub(crate) fn new<'a>(
+        events: impl IntoIterator<Item = (u32, &'a IslandEvent)>,
+        mut rendered: Vec<u32>,
+    ) -> Self {
         rendered.sort_unstable();
         rendered.dedup();
         let wakes = events

@@ -58,7 +58,7 @@ impl StageTimes {
     }
 
     /// Each stage's value through `f` (e.g. a median over frames).
-    pub fn from_fn(mut f: impl FnMut(fn(&StageTimes) -> f64) -> f64) -> StageTimes {
+    pub(crate) fn from_fn(mut f: impl FnMut(fn(&StageTimes) -> f64) -> f64) -> StageTimes {
         StageTimes {
             update_ms: f(|s| s.update_ms),
             integrate_ms: f(|s| s.integrate_ms),

@@ -63,7 +63,7 @@ impl Material {
     }
 
     /// The texture indices this material uses.
-    pub fn textures(&self) -> impl Iterator<Item = u32> {
+    pub(crate) fn textures(&self) -> impl Iterator<Item = u32> {
         [self.base_color_texture, self.metallic_roughness_texture, self.emissive_texture]
             .into_iter()
             .flatten()

@@ -185,7 +185,7 @@ impl Sequence {
 
     /// What the run knows of its future: the frames `selection` renders and when each island
     /// wakes.
-    pub fn lookahead(&self, selection: &FrameSelection) -> Lookahead {
+    pub(crate) fn lookahead(&self, selection: &FrameSelection) -> Lookahead {
         let events = self
             .trajectory
             .frames

@@ -29,7 +29,7 @@ mod change_index;
 mod flat;
 mod params;
 mod persistent;
-pub mod simd;
+pub(crate) mod simd;
 #[cfg(test)]
 pub(crate) mod testing;
 mod triangle;

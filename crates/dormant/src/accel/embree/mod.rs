@@ -150,7 +150,7 @@ pub struct EmbreeAccel {
 }
 
 impl EmbreeAccel {
-    pub fn new(threads: Option<usize>) -> Result<Self, AccelError> {
+    pub(crate) fn new(threads: Option<usize>) -> Result<Self, AccelError> {
         Self::with_device(Device::new(threads)?, EmbreeBuildParams::DEFAULT)
     }
 

@@ -81,7 +81,7 @@ pub struct RecordedScene {
 
 impl RecordedScene {
     /// Records `file` (as read, before `options` apply).
-    pub fn new(file: &SceneFile, options: &SimulateOptions) -> Self {
+    pub(crate) fn new(file: &SceneFile, options: &SimulateOptions) -> Self {
         let absolute = |p: PathBuf| std::path::absolute(&p).unwrap_or(p);
         Self {
             path: file.path().to_path_buf(),

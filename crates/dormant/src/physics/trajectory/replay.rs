@@ -205,7 +205,7 @@ impl ReplayFrame<'_> {
 
     /// How many bodies are present this frame (`present_bodies().count()`, without reading
     /// every body when the replay keeps the count).
-    pub fn present_count(&self) -> usize {
+    pub(crate) fn present_count(&self) -> usize {
         debug_assert!(self.present.is_none_or(|n| n == self.present_bodies().count()));
         self.present.unwrap_or_else(|| self.present_bodies().count())
     }
@@ -251,7 +251,7 @@ impl<'a> Replay<'a> {
     }
 
     /// Forgets which bodies changed: the frames from the next one on start a new run of them.
-    pub fn restart_changes(&mut self) {
+    pub(crate) fn restart_changes(&mut self) {
         let since = self.next as u32;
         match &mut self.tracked {
             Some(t) => {

@@ -44,7 +44,7 @@ impl ReuseGranularity {
 
 /// The last traced values of a sequence's frames and their horizons.
 #[derive(Clone, Debug, Default)]
-pub struct ReuseStore {
+pub(crate) struct ReuseStore {
     /// What the stored values were rendered with; a frame of other settings starts afresh.
     settings: Option<(RenderSettings, Vec<Aov>)>,
     granularity: ReuseGranularity,
@@ -68,7 +68,7 @@ pub struct ReuseStore {
 /// One frame's use of the store: the change index, this frame's ordinal, the latest horizon
 /// worth finding, whether the frame must be traced in full, and the memory the store may use.
 #[derive(Clone, Copy)]
-pub struct FrameReuse<'a> {
+pub(crate) struct FrameReuse<'a> {
     pub index: &'a ChangeIndex,
     pub ordinal: u32,
     /// Horizons end here at the latest: the next frame traced in full, or the run's end.
@@ -114,7 +114,7 @@ impl ReuseStats {
 impl ReuseStore {
     /// The bytes a store of `width` x `height` pixels with `aovs` needs: one value per pixel
     /// and pass (the least the store works with).
-    pub fn bytes_for(width: u32, height: u32, aovs: &[Aov]) -> usize {
+    pub(crate) fn bytes_for(width: u32, height: u32, aovs: &[Aov]) -> usize {
         let traced_passes = aovs.iter().filter(|a| a.is_traced()).count();
         // The passes' values, and their horizon when there are any.
         let passes = 12 * traced_passes + if traced_passes > 0 { 4 } else { 0 };
@@ -122,12 +122,12 @@ impl ReuseStore {
     }
 
     /// The bytes a store that keeps every one of `spp` samples per pixel needs.
-    pub fn sample_bytes_for(width: u32, height: u32, spp: u32, aovs: &[Aov]) -> usize {
+    pub(crate) fn sample_bytes_for(width: u32, height: u32, spp: u32, aovs: &[Aov]) -> usize {
         Self::bytes_for(width, height, aovs) + width as usize * height as usize * spp as usize * SAMPLE_BYTES
     }
 
     /// Bytes the store holds now.
-    pub fn memory_bytes(&self) -> usize {
+    pub(crate) fn memory_bytes(&self) -> usize {
         let pixels = self.image.len() * (12 + 4 + 4);
         let passes: usize = self.passes.iter().map(|(_, p)| p.len() * 12).sum();
         pixels + passes + self.pass_horizons.len() * 4 + self.samples.len() * SAMPLE_BYTES
@@ -193,7 +193,7 @@ impl ReuseStore {
     /// date. The same bits as a full render of the frame (see `render/reuse/mod.rs`); the
     /// statistics count only what was traced, but for the samples per pixel, which are the
     /// whole frame's.
-    pub(crate) fn render_frame(
+    pub fn render_frame(
         &mut self,
         tracer: &dyn PlanTracer,
         aovs: &[Aov],

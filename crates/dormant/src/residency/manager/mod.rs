@@ -311,7 +311,7 @@ impl SceneManager {
     }
 
     /// The islands integrated now (either form).
-    pub fn integrated_islands(&self) -> impl Iterator<Item = IslandId> + '_ {
+    pub(crate) fn integrated_islands(&self) -> impl Iterator<Item = IslandId> + '_ {
         self.integrated.keys().chain(self.resting.keys()).copied()
     }
 

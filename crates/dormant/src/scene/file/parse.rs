@@ -97,7 +97,7 @@ impl SceneFile {
     }
 
     /// The file the scene was read from (used in messages and to resolve asset paths).
-    pub fn path(&self) -> &Path {
+    pub(crate) fn path(&self) -> &Path {
         &self.path
     }
 
@@ -136,7 +136,7 @@ impl SceneFile {
 
     /// The directory relative asset paths resolve against: the override given when loading,
     /// else `scene.assets` (relative to the scene file), else the scene file's directory.
-    pub fn asset_dir(&self) -> &Path {
+    pub(crate) fn asset_dir(&self) -> &Path {
         self.assets.path()
     }
 

@@ -143,10 +143,10 @@ impl AnimationDef {
     /// 1 mm for a scene in metres: settled bodies in Blender's rigid-body bakes still drift
     /// by 1e-6 to 1e-5 a frame, which adds up over a rest of a hundred frames; a resting body
     /// is shown at most this far from where it is.
-    pub const DEFAULT_REST_TOLERANCE: f32 = 1e-3;
+    pub(crate) const DEFAULT_REST_TOLERANCE: f32 = 1e-3;
     /// A third of a second at 24 frames per second: shorter pauses (a body at the top of a
     /// bounce, a pile still shifting) are not worth taking out of the per-frame build.
-    pub const DEFAULT_MIN_REST_FRAMES: u32 = 8;
+    pub(crate) const DEFAULT_MIN_REST_FRAMES: u32 = 8;
 }
 
 /// Where the environment's triangles come from.

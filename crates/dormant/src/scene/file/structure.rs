@@ -12,7 +12,7 @@ use crate::geometry::Aabb;
 
 /// One body of a structure in world space.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct StructureBlock {
+pub(crate) struct StructureBlock {
     /// Which copy of the structure it belongs to (array order: X fastest, then Z).
     pub copy: u32,
     pub translation: Vec3,
@@ -146,7 +146,7 @@ impl StructureDef {
     }
 
     /// Every block of every copy in world space, copy by copy.
-    pub fn blocks(&self) -> Vec<StructureBlock> {
+    pub(crate) fn blocks(&self) -> Vec<StructureBlock> {
         let local = self.local_blocks();
         let mut blocks = Vec::with_capacity(local.len() * self.copies() as usize);
         for copy in 0..self.copies() {

@@ -111,7 +111,7 @@ impl GltfAsset {
     }
 
     /// The asset moved by `xf` (mesh and lights).
-    pub fn transformed(mut self, xf: &Affine3A) -> Self {
+    pub(crate) fn transformed(mut self, xf: &Affine3A) -> Self {
         self.mesh = self.mesh.transformed(xf);
         for camera in &mut self.cameras {
             camera.position = xf.transform_point3(camera.position);

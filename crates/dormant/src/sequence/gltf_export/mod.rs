@@ -32,7 +32,7 @@ use crate::geometry::MeshError;
 
 /// Version of the glTF export's layout (in `asset.extras.dormant.format`); bump it when the
 /// contract in docs/design.md changes.
-pub const GLTF_FORMAT: &str = "dormant-gltf-1";
+pub(crate) const GLTF_FORMAT: &str = "dormant-gltf-1";
 
 /// What stops a glTF export.
 #[derive(Debug, thiserror::Error)]
@@ -92,7 +92,7 @@ impl Sequence {
     }
 
     /// The GLB file's JSON chunk (checked: it is valid glTF), binary chunk and node count.
-    pub fn gltf_parts(&self) -> Result<(Vec<u8>, Vec<u8>, usize), GltfExportError> {
+    pub(crate) fn gltf_parts(&self) -> Result<(Vec<u8>, Vec<u8>, usize), GltfExportError> {
         let mut buffer = BufferBuilder::default();
         let mut rest = Map::new();
         rest.insert(

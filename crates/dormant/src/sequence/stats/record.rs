@@ -425,7 +425,7 @@ fn csv_columns() -> Vec<(&'static str, Cell)> {
 impl RunStats {
     /// The statistics of a run: its frames, the cache and cost model at the end, and the
     /// physics time of the whole simulation when it ran in this process.
-    pub fn new(
+    pub(crate) fn new(
         run: RunInfo,
         frames: Vec<FrameRecord>,
         cache: CacheStats,
@@ -492,7 +492,7 @@ impl RunStats {
 
     /// Writes `stats.json` and `stats.csv` into `dir`, each atomically and streamed to the
     /// file rather than built in memory: they are rewritten as a run's frames finish.
-    pub fn write(&self, dir: &Path) -> Result<(), StatsError> {
+    pub(crate) fn write(&self, dir: &Path) -> Result<(), StatsError> {
         let write = |name: &str, contents: &dyn Fn(&mut dyn Write) -> std::io::Result<()>| {
             let path = dir.join(name);
             crate::atomic_file::write_atomic_with(&path, |w| contents(w))

@@ -34,7 +34,7 @@ use crate::geometry::{Aabb, Ray};
 /// A world box whose content looks different from rendered frame `visible_at` on (an
 /// ordinal: 0 for the first rendered frame) than at the frame before it.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ChangeBox {
+pub(crate) struct ChangeBox {
     pub bounds: Aabb,
     pub visible_at: u32,
     /// The body that changed, when a body did.
@@ -72,7 +72,7 @@ struct LeafBox {
 /// The change boxes of a sequence in a BVH (see the module docs). Immutable once built; queries
 /// run from many threads at once.
 #[derive(Clone, Debug, Default)]
-pub struct ChangeIndex {
+pub(crate) struct ChangeIndex {
     bvh: FlatBvh,
     wide: Wide,
     /// Per wide node, its children's frame ranges.
@@ -101,7 +101,7 @@ impl ChangeIndex {
     /// size plus 1e-5 of its distance from the origin) so that rounding in the tracers' hit
     /// points and instance transforms never puts a change outside its box. Empty and
     /// non-finite boxes are dropped.
-    pub fn build(mut boxes: Vec<ChangeBox>, meshes: Vec<Vec<[Vec3; 3]>>) -> Self {
+    pub(crate) fn build(mut boxes: Vec<ChangeBox>, meshes: Vec<Vec<[Vec3; 3]>>) -> Self {
         // Built before a window's first frame, which waits for it: its passes go over rayon
         // (what each costs: docs/lab/reuse.md, 2026-12-06).
         boxes.retain(|b| !b.bounds.is_empty() && b.bounds.min.is_finite() && b.bounds.max.is_finite());
@@ -127,7 +127,7 @@ impl ChangeIndex {
     /// The earliest `visible_at` greater than `after` of body `body`'s changes, if it has one.
     /// A segment that ends on the body at ordinal `after` changes there at the latest, so its
     /// horizon is no later: a query for it needs to look only before that.
-    pub fn next_change_of(&self, body: u32, after: u32) -> Option<u32> {
+    pub(crate) fn next_change_of(&self, body: u32, after: u32) -> Option<u32> {
         self.changes_after(body, after)?.next().map(|i| self.changes[i])
     }
 
@@ -136,7 +136,7 @@ impl ChangeIndex {
     /// which it may no longer block the ray (its shape is not surely crossed at both poses, or
     /// is not known), or `before`. While the body blocks the ray nothing else along it
     /// matters, so no other change is looked at.
-    pub fn blocked_until(&self, body: u32, ray: &Ray, after: u32, before: u32) -> u32 {
+    pub(crate) fn blocked_until(&self, body: u32, ray: &Ray, after: u32, before: u32) -> u32 {
         let Some(range) = self.changes_after(body, after) else { return before };
         for i in range {
             let visible_at = self.changes[i];
@@ -167,7 +167,7 @@ impl ChangeIndex {
     /// With `occlusion` the segment is an occlusion ray's, whose result is only whether
     /// anything blocks it: a shape it meets at both poses blocks it before and after the
     /// change, so only a shape met at one pose counts.
-    pub fn first_change(&self, ray: &Ray, after: u32, before: u32, occlusion: bool) -> u32 {
+    pub(crate) fn first_change(&self, ray: &Ray, after: u32, before: u32, occlusion: bool) -> u32 {
         let (earliest, latest) = self.span;
         if self.bvh.is_empty()
             || after.saturating_add(1) >= before

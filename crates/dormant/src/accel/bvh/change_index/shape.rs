@@ -20,14 +20,14 @@ use crate::geometry::{Aabb, Ray};
 /// The geometry a change box bounds: mesh `mesh` of the index's meshes placed by each pose
 /// there is (a body before and after the change; one for a body that appeared or left).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ChangeShape {
+pub(crate) struct ChangeShape {
     pub mesh: u32,
     pub poses: [Option<Affine3A>; 2],
 }
 
 /// Meshes with at most this many triangles are tested exactly; larger ones by their box, so
 /// that a query never walks thousands of triangles.
-pub const EXACT_MESH_TRIANGLES: usize = 256;
+pub(crate) const EXACT_MESH_TRIANGLES: usize = 256;
 
 /// The tolerance relative to the magnitudes a ray's computation involves (its origin, the
 /// body's position and size): about 80 times f32's epsilon.

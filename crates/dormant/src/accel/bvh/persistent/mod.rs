@@ -183,7 +183,7 @@ impl StaticSnapshot {
     }
 
     /// Whether `id` is part of this version.
-    pub fn contains(&self, id: StaticId) -> bool {
+    pub(crate) fn contains(&self, id: StaticId) -> bool {
         self.meshes.contains_key(&id)
     }
 
@@ -206,7 +206,7 @@ impl StaticSnapshot {
 
     /// This version's live triangles rebuilt into one block with `params`: the tree a fresh
     /// build of the same scene makes. `self` is unchanged.
-    pub fn rebuilt(&self, params: BuildParams) -> StaticSnapshot {
+    pub(crate) fn rebuilt(&self, params: BuildParams) -> StaticSnapshot {
         let mut tree = StaticBvh::new(params);
         tree.restore(self.clone());
         tree.rebuild();
@@ -275,7 +275,7 @@ impl StaticBvh {
         self.state.triangles
     }
 
-    pub fn contains(&self, id: StaticId) -> bool {
+    pub(crate) fn contains(&self, id: StaticId) -> bool {
         self.state.contains(id)
     }
 

@@ -10,7 +10,7 @@ use crate::accel::StaticId;
 impl StaticBvh {
     /// Removes a mesh; returns whether it was present. A mesh with its own block is unlinked
     /// and the path refitted; one sharing a rebuilt block triggers a rebuild.
-    pub fn remove(&mut self, id: StaticId) -> bool {
+    pub(crate) fn remove(&mut self, id: StaticId) -> bool {
         let Some(entry) = self.forget(id) else {
             return false;
         };

@@ -108,7 +108,7 @@ impl StaticSnapshot {
 
 impl StaticBvh {
     /// SAH cost of the current tree with this tree's build parameters.
-    pub fn sah_cost(&self) -> f32 {
+    pub(crate) fn sah_cost(&self) -> f32 {
         self.state.sah_cost(&self.params)
     }
 }

@@ -56,7 +56,7 @@ pub enum SimdError {
 impl SimdPath {
     pub const ALL: [SimdPath; 3] = [SimdPath::Portable, SimdPath::Avx2, SimdPath::Avx512];
 
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             SimdPath::Portable => "portable",
             SimdPath::Avx2 => "avx2",
@@ -90,7 +90,7 @@ impl SimdPath {
     /// its 8-wide kernel differs only in the compare going to a mask register, and it measured
     /// slower than AVX2 on the project's AVX-512 machine:
     /// docs/lab/accelerators.md#2026-12-02-simd-paths-8-wide-nodes-four-triangle-leaves-avx2-avx-512-portable
-    pub fn best() -> SimdPath {
+    pub(crate) fn best() -> SimdPath {
         if SimdPath::Avx2.is_supported() {
             SimdPath::Avx2
         } else {
@@ -107,7 +107,7 @@ impl SimdPath {
     }
 
     /// A path by name, if this CPU supports it.
-    pub fn parse(value: &str) -> Result<SimdPath, SimdError> {
+    pub(crate) fn parse(value: &str) -> Result<SimdPath, SimdError> {
         let path = Self::ALL
             .into_iter()
             .find(|p| p.name().eq_ignore_ascii_case(value.trim()))
