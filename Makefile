@@ -1,6 +1,8 @@
 # dormant: build, demo and test entry points. Every target installs what it needs through
 # scripts/setup.sh first (idempotent; needs root on a fresh Debian 12/13 machine).
 
+# Where scripts/setup.sh installs Rust with rustup when the machine has no new enough one.
+export PATH := $(HOME)/.cargo/bin:$(PATH)
 CARGO ?= cargo
 RELEASE_BIN := target/release/dormant
 

@@ -2,6 +2,12 @@
 # Installs everything dormant needs to build and test, on Debian 12 or 13, as root.
 # Idempotent: a second run checks, prints what it found, and changes nothing.
 # `setup.sh --bpy` installs only Blender as a Python module, for make compare-cycles (below).
+# `setup.sh --rust` installs only Rust (below).
+#
+# Rust: the workspace's `rust-version` (Cargo.toml) or newer. Debian's packaged rustc is older,
+#   so where no such Rust is found (on PATH or in ~/.cargo/bin), rustup installs that version
+#   into ~/.cargo (minimal profile with clippy and rustfmt; the Makefile puts ~/.cargo/bin on
+#   PATH); where that fails, the script stops with one line naming what to install.
 #
 # Embree 4 (feature `embree`):
 #   Debian >= 13: apt's libembree-dev (Embree 4.3).
@@ -65,6 +71,44 @@ command -v python3 >/dev/null 2>&1 && python3 -m pip --version >/dev/null 2>&1 \
     && apt_packages=(build-essential pkg-config libclang-dev ca-certificates)
 apt_install "${apt_packages[@]}"
 
+# --- Rust ----------------------------------------------------------------------------------
+# RUSTUP_INIT_URL overrides where rustup's installer (the rustup-init binary) comes from; the
+# tests point it nowhere.
+install_rust() {
+    local want have
+    want=$(sed -n 's/^rust-version *= *"\([0-9.]*\)".*/\1/p' "$root/Cargo.toml" | head -1)
+    [ -n "$want" ] || die "no rust-version in $root/Cargo.toml"
+    export PATH="${CARGO_HOME:-$HOME/.cargo}/bin:$PATH"
+    have=$(rustc --version 2>/dev/null | awk '{print $2}' || true)
+    if [ -n "$have" ] && command -v cargo >/dev/null 2>&1 \
+        && [ "$(printf '%s\n%s\n' "$want" "$have" | sort -V | head -1)" = "$want" ]; then
+        say "Rust $have present (the workspace needs $want or newer)"
+        return
+    fi
+    local why="install Rust $want or newer (https://rustup.rs: rustup toolchain install $want) and run this again"
+    if command -v rustup >/dev/null 2>&1; then
+        say "installing Rust $want with rustup (found ${have:-no rustc})"
+        rustup toolchain install "$want" --profile minimal -c clippy -c rustfmt >/dev/null \
+            && rustup default "$want" >/dev/null || die "rustup could not install Rust $want: $why"
+    else
+        command -v curl >/dev/null 2>&1 || apt_install curl
+        say "installing rustup and Rust $want into ${CARGO_HOME:-$HOME/.cargo} (found ${have:-no rustc})"
+        local init url
+        init="$(mktemp -d)/rustup-init"  # rustup-init takes its role from its file name
+        url="${RUSTUP_INIT_URL:-https://static.rust-lang.org/rustup/dist/$(uname -m)-unknown-linux-gnu/rustup-init}"
+        curl --proto '=https,file' -sSfL -o "$init" "$url" 2>/dev/null && chmod +x "$init" \
+            && "$init" -y -q --no-modify-path --profile minimal --default-toolchain "$want" \
+                -c clippy -c rustfmt >/dev/null 2>&1 \
+            && command -v cargo >/dev/null 2>&1 || { rm -rf "${init%/*}"; die "could not install Rust $want: $why"; }
+        rm -rf "${init%/*}"
+    fi
+    say "Rust $(rustc --version | awk '{print $2}') installed"
+}
+if [ "${1:-}" = --rust ]; then
+    install_rust
+    exit 0
+fi
+
 # --- Blender as a Python module (`--bpy` only: make compare-cycles, make blender-roundtrip) ---
 # PyPI's bpy (BPY_VERSION, a wheel of some 400 MB) in the venv BPY_VENV (default the git-ignored
 # .deps/bpy-venv; relative to the checkout). bpy 5.0 needs Python 3.11, Debian 12's; Debian
@@ -88,6 +132,8 @@ if [ "${1:-}" = --bpy ]; then
     say "bpy $bpy_version present: $venv"
     exit 0
 fi
+
+install_rust
 
 # --- Open Image Denoise 2 (before Embree, whose section ends the script) -------------------
 # The wheel's libraries carry RPATH $ORIGIN/../lib, and the core loads its device modules

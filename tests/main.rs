@@ -51,3 +51,4 @@ mod export_gltf;
 mod fuzz_regressions;
 mod gltf_round_trip;
 mod input_errors;
+mod setup_rust;
