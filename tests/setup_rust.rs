@@ -32,7 +32,8 @@ fn setup_rust(home: &Path, path_dirs: &[&Path]) -> Output {
 fn fake_rust(dir: &Path, version: &str) {
     use std::os::unix::fs::PermissionsExt;
     std::fs::create_dir_all(dir).unwrap();
-    for (name, body) in [("rustc", format!("echo 'rustc {version} (fake)'")), ("cargo", "exit 0".to_string())] {
+    let scripts = [("rustc", format!("echo 'rustc {version} (fake)'")), ("cargo", "exit 0".to_string())];
+    for (name, body) in scripts {
         let file = dir.join(name);
         std::fs::write(&file, format!("#!/bin/sh\n{body}\n")).unwrap();
         std::fs::set_permissions(&file, std::fs::Permissions::from_mode(0o755)).unwrap();
@@ -54,7 +55,10 @@ fn no_cargo_on_path_stops_with_one_line_naming_the_rust_to_install() {
     assert!(stdout.contains("found no rustc"), "{stdout}");
     let lines = stderr_lines(&out);
     assert_eq!(lines.len(), 1, "one line: {lines:?}");
-    assert!(lines[0].starts_with("setup: error:") && lines[0].contains(&format!("install Rust {want} or newer")), "{lines:?}");
+    assert!(
+        lines[0].starts_with("setup: error:") && lines[0].contains(&format!("install Rust {want} or newer")),
+        "{lines:?}"
+    );
     assert!(lines[0].contains("https://rustup.rs"), "{lines:?}");
 }
 
@@ -78,5 +82,8 @@ fn a_new_enough_rust_is_kept() {
     let out = setup_rust(home.path(), &[&new]);
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{stdout}{}", String::from_utf8_lossy(&out.stderr));
-    assert!(stdout.contains(&format!("Rust 9.99.0 present (the workspace needs {} or newer)", required_rust())), "{stdout}");
+    assert!(
+        stdout.contains(&format!("Rust 9.99.0 present (the workspace needs {} or newer)", required_rust())),
+        "{stdout}"
+    );
 }
