@@ -202,3 +202,73 @@ fn the_specular_layer_reads_from_khr_materials_specular_and_from_dormants_own_ex
     let specular: Vec<f32> = asset.materials.iter().map(|m| m.specular).collect();
     assert_eq!(specular, [0.25, 0.0]);
 }
+
+/// The sun and lights a render of `file` (with no scene file lights) is lit by.
+fn lit_by(file: &AnimatedFile) -> dormant::scene::SceneDescription {
+    let dir = tempfile::TempDir::new().unwrap();
+    let scene = SceneFile::load(write_scene(dir.path(), file, "")).unwrap();
+    dormant::scene::SceneAssets::load(&scene).unwrap().describe(0.0)
+}
+
+/// Adds KHR_lights_punctual `lights` to `file`, each on a node of its own at the root.
+fn with_lights(file: &mut AnimatedFile, lights: serde_json::Value) {
+    let count = lights.as_array().unwrap().len();
+    file.json["extensionsUsed"] = serde_json::json!(["KHR_lights_punctual"]);
+    file.json["extensions"] = serde_json::json!({ "KHR_lights_punctual": { "lights": lights } });
+    for i in 0..count {
+        let nodes = file.json["nodes"].as_array_mut().unwrap();
+        nodes.push(serde_json::json!({ "extensions": { "KHR_lights_punctual": { "light": i } } }));
+        let node = nodes.len() - 1;
+        file.json["scenes"][0]["nodes"].as_array_mut().unwrap().push(serde_json::json!(node));
+    }
+}
+
+#[test]
+fn a_blender_bakes_sun_in_lux_is_the_sun_at_its_strength_in_blender() {
+    // Blender's exporter writes a sun of strength 3 W/m² as 3 * 683 = 2049 lux, and a point
+    // light of 1000 W as 1000 / (4 pi) * 683 candela.
+    let mut file = falling_cubes();
+    let candela = 1000.0 / (4.0 * std::f32::consts::PI) * 683.0;
+    with_lights(
+        &mut file,
+        serde_json::json!([
+            { "type": "directional", "intensity": 2049.0 },
+            { "type": "point", "intensity": candela }
+        ]),
+    );
+    let desc = lit_by(&file);
+    assert!((desc.sun.irradiance - glam::Vec3::splat(3.0)).abs().max_element() < 1e-5, "{:?}", desc.sun);
+    // The node's -Z is where its light travels: the sun is up the node's +Z.
+    assert!((desc.sun.direction - glam::Vec3::Z).length() < 1e-5, "{:?}", desc.sun);
+    assert_eq!(desc.lights.len(), 1, "the sun is not a second directional light: {:?}", desc.lights);
+    match desc.lights[0] {
+        dormant::scene::Light::Point { intensity, .. } => {
+            // Cycles' point light of P watts has a radiant intensity of P / (4 pi) W/sr.
+            let expected = 1000.0 / (4.0 * std::f32::consts::PI);
+            assert!((intensity - glam::Vec3::splat(expected)).abs().max_element() < 1e-3, "{intensity}");
+        }
+        ref other => panic!("expected the point light, got {other:?}"),
+    }
+}
+
+#[test]
+fn a_bake_without_lights_is_lit_by_the_default_sky_and_sun_and_says_so() {
+    let desc = lit_by(&falling_cubes());
+    assert!(desc.lights.is_empty());
+    let default = dormant::scene::default_scene();
+    assert_eq!(desc.sun.irradiance, default.sun.irradiance);
+    // The one line, from the binary.
+    let dir = tempfile::TempDir::new().unwrap();
+    let scene = write_scene(dir.path(), &falling_cubes(), "");
+    let out = dormant()
+        .arg("render")
+        .arg(&scene)
+        .args(["--frames", "0..1", "--size", "32x18", "--spp", "1", "--mode", "shaded", "--out"])
+        .arg(dir.path().join("out"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    let said: Vec<&str> = stderr.lines().filter(|l| l.contains("no lights in the file")).collect();
+    assert_eq!(said.len(), 1, "{stderr}");
+}

@@ -278,3 +278,26 @@ fn export_gltf_materials_and_textures_import_back_identical() {
         }
     }
 }
+
+#[test]
+fn exported_lights_are_photometric_for_other_tools_and_exact_for_dormant() {
+    let dir = tempfile::TempDir::new().unwrap();
+    let file = common::scenes::load("tiny");
+    let source = SequenceSource::scene(file, dormant::physics::SimulateOptions::default(), None);
+    let sequence = Sequence::load(source, &mut |_| {}).unwrap();
+    let glb = dir.path().join("tiny.glb");
+    sequence.write_gltf(&glb).unwrap();
+    let sun = sequence.template.sun.irradiance;
+    // Other tools read lux: the sun's peak times 683 lm/W.
+    let (doc, _, _) = gltf::import(&glb).unwrap();
+    let light = doc.lights().unwrap().next().expect("the sun is the first light");
+    assert_eq!(light.intensity(), sun.max_element() * 683.0);
+    // dormant reads its own value back bit for bit, not lux / 683.
+    let back = dormant::scene::gltf::load_gltf(&glb).unwrap();
+    match back.lights[0] {
+        dormant::scene::Light::Directional { irradiance, .. } => {
+            assert_eq!(irradiance.to_array().map(f32::to_bits), sun.to_array().map(f32::to_bits))
+        }
+        ref other => panic!("the sun came back as {other:?}"),
+    }
+}

@@ -554,6 +554,7 @@ fn aov_passes_shaded_beside_the_image_equal_passes_traced_on_their_own() {
     assert!(passes[1].1.pixels.iter().all(|&p| p == Vec3::splat(5.0)));
 }
 
+/// Photometric intensities (candela, lux) become radiometric ones over 683 lm/W.
 #[test]
 fn gltf_punctual_lights_and_sampler_wrap_modes_are_imported() {
     use dormant::scene::texture::Wrap;
@@ -592,7 +593,7 @@ fn gltf_punctual_lights_and_sampler_wrap_modes_are_imported() {
         match *light {
             Light::Point { position, intensity } => {
                 assert!(close(position, Vec3::new(1.0, 2.0, 0.0)), "{position}");
-                assert!(close(intensity, Vec3::new(8.0, 4.0, 2.0)), "{intensity}");
+                assert!(close(intensity, Vec3::new(8.0, 4.0, 2.0) / 683.0), "{intensity}");
                 kinds |= 1;
             }
             Light::Spot { position, direction, intensity, cos_inner, cos_outer } => {
@@ -600,12 +601,15 @@ fn gltf_punctual_lights_and_sampler_wrap_modes_are_imported() {
                     close(position, Vec3::new(0.0, 2.0, 0.0)) && close(direction, Vec3::NEG_Y),
                     "{light:?}"
                 );
-                assert!(close(intensity, Vec3::splat(2.0)));
+                assert!(close(intensity, Vec3::splat(2.0 / 683.0)));
                 assert!((cos_inner - 0.2f32.cos()).abs() < 1e-6 && (cos_outer - 0.5f32.cos()).abs() < 1e-6);
                 kinds |= 2;
             }
             Light::Directional { direction, irradiance } => {
-                assert!(close(direction, Vec3::NEG_Z) && close(irradiance, Vec3::splat(3.0)), "{light:?}");
+                assert!(
+                    close(direction, Vec3::NEG_Z) && close(irradiance, Vec3::splat(3.0 / 683.0)),
+                    "{light:?}"
+                );
                 kinds |= 4;
             }
         }

@@ -193,6 +193,9 @@ pub(super) fn sky(file: &SceneFile) -> Sky {
     }
 }
 
+/// The angular radius of a sun that gives none, in degrees.
+pub(super) const DEFAULT_SUN_RADIUS_DEG: f32 = 1.0;
+
 /// The first directional light as the sun (its `direction` is where light travels).
 pub(super) fn sun(file: &SceneFile) -> Sun {
     let sun = file.spec().lights.iter().find_map(|l| match l.kind {
@@ -203,12 +206,12 @@ pub(super) fn sun(file: &SceneFile) -> Sun {
         Some((l, d)) => Sun {
             direction: (-Vec3::from(d)).normalize_or(Vec3::Y),
             irradiance: Vec3::from(l.color) * l.intensity,
-            angular_radius_deg: 1.0,
+            angular_radius_deg: DEFAULT_SUN_RADIUS_DEG,
         },
         None => Sun {
             direction: Vec3::new(-0.4, 0.85, 0.3).normalize(),
             irradiance: Vec3::splat(2.4),
-            angular_radius_deg: 1.0,
+            angular_radius_deg: DEFAULT_SUN_RADIUS_DEG,
         },
     }
 }

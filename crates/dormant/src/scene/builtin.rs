@@ -105,13 +105,18 @@ pub fn default_scene() -> SceneDescription {
         prototypes,
         bodies: default_bodies(),
         camera: Camera::pinhole(Vec3::new(-1.5, 3.2, 8.5), Vec3::new(0.0, 0.6, 0.0), Vec3::Y, 40.0),
-        sun: Sun {
-            direction: Vec3::new(-0.5, 0.8, 0.35).normalize(),
-            irradiance: Vec3::new(2.4, 2.25, 2.0),
-            angular_radius_deg: 2.0,
-        },
+        sun: builtin_sun(),
         sky: Sky::DAYLIGHT,
         lights: Vec::new(),
+    }
+}
+
+/// The default scene's sun, which also lights a glTF file that brings no light of its own.
+pub(crate) fn builtin_sun() -> Sun {
+    Sun {
+        direction: Vec3::new(-0.5, 0.8, 0.35).normalize(),
+        irradiance: Vec3::new(2.4, 2.25, 2.0),
+        angular_radius_deg: 2.0,
     }
 }
 

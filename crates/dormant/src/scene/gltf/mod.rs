@@ -29,6 +29,7 @@ use glam::{Affine3A, Vec3};
 
 use checks::{check_animation_indices, check_extensions, check_glb_length, check_position_accessors};
 use materials::material;
+pub(crate) use nodes::LUMENS_PER_WATT;
 use nodes::{perspective_camera, punctual_light, walk_nodes};
 use textures::TextureLoader;
 use triangles::Triangles;

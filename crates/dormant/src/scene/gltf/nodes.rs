@@ -88,9 +88,41 @@ pub(super) fn perspective_camera(path: &Path, camera: &gltf::Camera, world: &Mat
     }
 }
 
+/// Lumens per watt by which KHR_lights_punctual's photometric intensities (lux for
+/// directional lights, candela for point and spot lights) become dormant's radiometric ones
+/// (irradiance in W/m², radiant intensity in W/sr): the constant Blender's glTF importer and
+/// exporter use by default (their "Standard" lighting mode), so that a Blender scene's lights
+/// come back at the strength they had in Cycles (a sun of strength 3 is written as 2049 lux).
+pub(crate) const LUMENS_PER_WATT: f32 = 683.0;
+
+/// A light's own extras, written by dormant's glTF export: its radiometric RGB exactly
+/// (`{"dormant": {"radiometric": [r, g, b]}}`), which dividing the photometric value by
+/// [`LUMENS_PER_WATT`] would only approximate.
+#[derive(serde::Deserialize)]
+struct LightExtras {
+    dormant: OwnLight,
+}
+
+#[derive(serde::Deserialize)]
+struct OwnLight {
+    radiometric: [f32; 3],
+}
+
+/// A light's radiometric RGB: its extras' exact value where dormant wrote one, else its
+/// colour times its photometric intensity over [`LUMENS_PER_WATT`].
+fn radiometric(light: &gltf::khr_lights_punctual::Light) -> Vec3 {
+    let own = light.extras().as_ref().and_then(|raw| serde_json::from_str::<LightExtras>(raw.get()).ok());
+    match own {
+        Some(e) if e.dormant.radiometric.iter().all(|c| c.is_finite() && *c >= 0.0) => {
+            Vec3::from_array(e.dormant.radiometric)
+        }
+        _ => Vec3::from_array(light.color()) * (light.intensity().max(0.0) / LUMENS_PER_WATT),
+    }
+}
+
 pub(super) fn punctual_light(light: &gltf::khr_lights_punctual::Light, world: &Mat4) -> Light {
     use gltf::khr_lights_punctual::Kind;
-    let intensity = Vec3::from_array(light.color()) * light.intensity().max(0.0);
+    let intensity = radiometric(light);
     let position = world.transform_point3(Vec3::ZERO);
     // Lights shine along their node's -Z.
     let direction = world.transform_vector3(Vec3::NEG_Z).normalize_or(Vec3::NEG_Y);

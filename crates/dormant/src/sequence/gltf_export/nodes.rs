@@ -8,6 +8,7 @@ use serde::Serialize;
 use serde_json::{json, Value};
 
 use super::animation::Pose;
+use crate::scene::gltf::LUMENS_PER_WATT;
 use crate::scene::{Camera, Light, Sun};
 
 /// A node of the document: a body's (typed: a large export has tens of thousands) or
@@ -97,9 +98,15 @@ pub(super) fn lights(sun: &Sun, lights: &[Light]) -> (Vec<Value>, Vec<Value>) {
     let (mut defs, mut nodes) = (Vec::new(), Vec::new());
     for (i, light) in std::iter::once(&sun_light).chain(lights).enumerate() {
         let name = if i == 0 { "sun".to_string() } else { format!("light {}", i - 1) };
-        let (def, position, direction) = light_json(light);
-        let (color, intensity) = def;
-        let mut light_def = json!({ "name": name, "color": color.to_array(), "intensity": intensity });
+        let (rgb, position, direction) = light_json(light);
+        let (color, intensity) = color_intensity(rgb);
+        // Photometric, as KHR_lights_punctual and Blender read it; the exact value in extras.
+        let mut light_def = json!({
+            "name": name,
+            "color": color.to_array(),
+            "intensity": intensity * LUMENS_PER_WATT,
+            "extras": { "dormant": { "radiometric": rgb.to_array() } },
+        });
         let mut node = json!({
             "name": name,
             "rotation": towards(direction).to_array(),
@@ -124,14 +131,12 @@ pub(super) fn lights(sun: &Sun, lights: &[Light]) -> (Vec<Value>, Vec<Value>) {
     (defs, nodes)
 }
 
-/// A light's colour and intensity, position (none for directional) and direction.
-fn light_json(light: &Light) -> ((Vec3, f32), Option<Vec3>, Vec3) {
+/// A light's radiometric RGB, position (none for directional) and direction.
+fn light_json(light: &Light) -> (Vec3, Option<Vec3>, Vec3) {
     match *light {
-        Light::Point { position, intensity } => (color_intensity(intensity), Some(position), Vec3::NEG_Z),
-        Light::Spot { position, direction, intensity, .. } => {
-            (color_intensity(intensity), Some(position), direction)
-        }
-        Light::Directional { direction, irradiance } => (color_intensity(irradiance), None, direction),
+        Light::Point { position, intensity } => (intensity, Some(position), Vec3::NEG_Z),
+        Light::Spot { position, direction, intensity, .. } => (intensity, Some(position), direction),
+        Light::Directional { direction, irradiance } => (irradiance, None, direction),
     }
 }
 
