@@ -153,7 +153,8 @@ pub struct RenderArgs {
     /// (camera samples per pixel, grey up to the frame's most; the counts in the EXR).
     #[arg(long, value_parser = named::<Aov>(), value_delimiter = ',', value_name = "KIND")]
     pub aov: Vec<Aov>,
-    /// With SCENE or --trajectory: when sleeping islands are baked into the static scene.
+    /// With SCENE or --trajectory: when sleeping islands leave the per-frame build (how they
+    /// are held: --integrate-as).
     #[arg(long, value_parser = named::<IntegrationPolicy>(), default_value_t = IntegrationPolicy::Auto)]
     pub integration: IntegrationPolicy,
     /// With SCENE or --trajectory: how integrated islands are held: baked into the static
