@@ -76,6 +76,10 @@ pub(super) fn render_sequence(
         return Err(stopped);
     }
     crate::report::write_report_png(&run_stats, &args.out.join("report.png")).map_err(|e| runtime(&e))?;
+    if !output.quiet {
+        let dir = args.out.display();
+        println!("wrote {dir}/stats.json, {dir}/stats.csv and {dir}/report.png");
+    }
     if args.video {
         let fps = 1.0 / (f64::from(sequence.trajectory.timestep) * f64::from(frames.step()));
         let frame_paths = output.video_frames.take().unwrap_or_default();
