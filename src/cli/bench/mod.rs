@@ -106,6 +106,9 @@ pub struct RegimesArgs {
     /// Scene file to simulate at each count.
     #[arg(value_name = "SCENE")]
     pub scene: PathBuf,
+    /// Directory that relative asset paths in the scene resolve against.
+    #[arg(long, value_name = "DIR")]
+    pub assets: Option<PathBuf>,
     /// Output directory for regimes.json, regimes.md and regimes.png.
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
@@ -359,8 +362,8 @@ fn regimes(
     quiet: bool,
     json: &JsonOutput,
 ) -> Result<(), CliError> {
-    let scene =
-        dormant::scene::file::SceneFile::load(&args.scene).map_err(|e| CliError::Input(e.to_string()))?;
+    let scene = dormant::scene::file::SceneFile::load_with_assets(&args.scene, args.assets.as_deref())
+        .map_err(|e| CliError::Input(e.to_string()))?;
     let backends = chosen_backends(&args.backend)?;
     let budgets = if args.budgets.is_empty() { regimes::Budget::ALL.to_vec() } else { args.budgets.clone() };
     let (counts, frame_count, sizes) = match args.quick {
