@@ -6,7 +6,7 @@ export PATH := $(HOME)/.cargo/bin:$(PATH)
 CARGO ?= cargo
 RELEASE_BIN := target/release/dormant
 
-.PHONY: setup build demo test test-no-embree lint arch-check fmt bench bench-check instruction-check soak slurm-check fuzz fuzz-check compare-cycles blender-roundtrip clean
+.PHONY: setup build demo test test-no-embree lint arch-check fmt bench-check instruction-check soak slurm-check fuzz fuzz-check compare-cycles blender-roundtrip clean
 
 setup:
 	bash scripts/setup.sh

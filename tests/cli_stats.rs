@@ -71,6 +71,7 @@ const RUN: &[(&str, &str)] = &[
     ("denoise", "string|null"),
     ("keep_noisy", "boolean"),
     ("shutter", "number"),
+    ("settings_from", "object"),
 ];
 
 const FRAME: &[(&str, &str)] = &[

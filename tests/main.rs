@@ -43,6 +43,7 @@ mod bench_paper;
 mod bench_physics;
 mod cli_export;
 mod cli_render;
+mod cli_settings;
 mod cli_stats;
 mod cli_verify_bench;
 mod cli_video;

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use clap::Args;
 
-use super::render::{load_sequence, sequence_error, sequence_source_of};
+use super::render::{load_sequence, sequence_error, sequence_source_of, SceneArgs};
 use super::{write_json_atomic, CliError, JsonOutput};
 use dormant::sequence::FrameRange;
 
@@ -31,6 +31,10 @@ pub struct ExportArgs {
     /// With a glTF file as SCENE: frames per second to sample its animation at.
     #[arg(long, value_name = "FPS", requires = "scene_file")]
     pub fps: Option<f64>,
+    /// With SCENE: directory that relative asset paths in the scene file resolve against
+    /// (default: the scene file's own directory).
+    #[arg(long, value_name = "DIR", requires = "scene_file")]
+    pub assets: Option<PathBuf>,
     /// JSON file to write (format `dormant-export-1`, see docs/design.md).
     #[arg(long, value_name = "FILE", required_unless_present = "gltf")]
     pub out: Option<PathBuf>,
@@ -47,9 +51,9 @@ pub(super) fn run(args: &ExportArgs, quiet: bool, json_out: &JsonOutput) -> Resu
                 .into(),
         ));
     }
-    let source =
-        sequence_source_of(args.scene_file.as_deref(), args.trajectory.as_ref(), args.count, args.fps)?
-            .ok_or_else(|| CliError::Input("export needs a SCENE file or --trajectory".into()))?;
+    let scene = SceneArgs { file: args.scene_file.as_deref(), assets: args.assets.as_deref(), fps: args.fps };
+    let source = sequence_source_of(scene, args.trajectory.as_ref(), args.count)?
+        .ok_or_else(|| CliError::Input("export needs a SCENE file or --trajectory".into()))?;
     let sequence = load_sequence(source, quiet)?;
     let mut summary = serde_json::Map::new();
     if let Some(out) = &args.out {

@@ -73,7 +73,7 @@ impl CliError {
 #[command(
     name = "dormant",
     version,
-    about = "Offline renderer for physics-simulated scenes that bakes sleeping islands into the static scene",
+    about = "Offline renderer for physics-simulated scenes that takes sleeping islands out of the per-frame ray tracing structure",
     after_help = "Examples:\n  dormant render --out out/demo          render the built-in default scene\n  dormant render --size 1280x720 --spp 64 --out out/hq\n  dormant info                           versions and compiled backends as JSON"
 )]
 pub(crate) struct Cli {
@@ -91,9 +91,11 @@ pub(crate) struct Cli {
 
 #[derive(Debug, Subcommand)]
 pub(crate) enum Command {
-    /// Render the built-in default scene to a PNG.
+    /// Render a scene file, a glTF file or a trajectory to PNG frames (or, without one, a
+    /// still of the built-in scene).
     #[command(
-        after_help = "Examples:\n  dormant render --out out/demo\n  dormant render --size 640x360 --spp 4 --backend embree --out /tmp/preview"
+        after_help = "Settings: a flag given on the command line, else --preset's value, else the scene file's [render], else the built-in default (960x540, 16 spp, path).\n\nExamples:\n  dormant render --out out/demo\n  dormant render scenes/tiny.toml --out out/tiny               the scene's size and samples\n  dormant render scenes/tiny.toml --preset preview --out out/p  shaded, 320x180, 1 spp\n  dormant render --size 640x360 --spp 4 --backend embree --out /tmp/preview",
+        mut_arg("count", |a| a.help("Objects: the heap's size with --env/--object (default 8000), or with a SCENE file the total dynamic objects, spread over its spawners and structures (whole copies) in proportion"))
     )]
     Render(render::RenderArgs),
     /// Simulate a scene file with Rapier and record its trajectory and island events.
@@ -103,6 +105,7 @@ pub(crate) enum Command {
     Simulate(simulate::SimulateArgs),
     /// Trace the same rays through Embree and the BVH and compare the hits.
     #[command(
+        mut_arg("count", |a| a.help("Objects: the heap's size with --env/--object (default 8000), or with a SCENE file the total dynamic objects, spread over its spawners and structures (whole copies) in proportion")),
         after_help = "Examples:\n  dormant verify --json out/verify.json\n  dormant verify --env ../shared/assets/monastery.glb --object ../shared/assets/duck.glb --count 8000"
     )]
     Verify(verify::VerifyArgs),
@@ -185,9 +188,7 @@ pub(crate) struct SceneSource {
     /// Object glTF, instanced --count times.
     #[arg(long, value_name = "GLB", requires = "env")]
     pub object: Option<PathBuf>,
-    /// Objects: the heap's size with --env/--object (default 8000), or with a SCENE file the
-    /// total dynamic objects, spread over its spawners and structures (whole copies) in
-    /// proportion.
+    /// Objects in the heap of --env/--object (default 8000).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
     pub count: Option<u32>,
 }

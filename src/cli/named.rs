@@ -37,12 +37,19 @@ impl<T: Named + Send + Sync> TypedValueParser for NamedParser<T> {
     }
 }
 
+/// Each value with its aliases, which its help names (clap lists no aliases).
 fn possible_values<T: Named>() -> impl Iterator<Item = PossibleValue> {
     T::VALUES.iter().map(|&v| {
         let value = PossibleValue::new(v.name()).aliases(v.aliases().iter().copied());
-        match help(v.doc()) {
-            Some(help) => value.help(help),
-            None => value,
+        let aliases = match v.aliases() {
+            [] => None,
+            names => Some(format!("also `{}`", names.join("`, `"))),
+        };
+        match (help(v.doc()), aliases) {
+            (Some(help), Some(aliases)) => value.help(format!("{help} ({aliases})")),
+            (Some(help), None) => value.help(help),
+            (None, Some(aliases)) => value.help(aliases),
+            (None, None) => value,
         }
     })
 }

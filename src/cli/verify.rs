@@ -28,6 +28,10 @@ pub struct VerifyArgs {
     /// dormant's export record it; Blender's do not).
     #[arg(long, value_name = "FPS", requires = "scene_file")]
     pub fps: Option<f64>,
+    /// With SCENE: directory that relative asset paths in the scene file resolve against
+    /// (default: the scene file's own directory).
+    #[arg(long, value_name = "DIR", requires = "scene_file")]
+    pub assets: Option<PathBuf>,
     #[command(flatten)]
     pub scene: SceneSource,
     /// Camera rays: one per pixel of an image of this size.
@@ -43,12 +47,13 @@ pub struct VerifyArgs {
     /// With SCENE: motion blur. Bodies moving within a shutter of this fraction of the frame
     /// interval (0 to 1, centred on each checked frame) become motion instances on both
     /// backends, and every ray gets a random time in the shutter (default: the scene's
-    /// render.shutter).
+    /// render.shutter, else 0).
     #[arg(long, value_name = "S", allow_negative_numbers = true)]
     pub shutter: Option<f32>,
-    /// Seed for the surface and shadow rays.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
+    /// Seeds the random surface and shadow rays (and their times): checks with different
+    /// offsets trace different rays.
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    pub seed_offset: u64,
 }
 
 pub(super) fn run(
@@ -65,7 +70,7 @@ pub(super) fn run(
     let mut report = VerifyReport::default();
     let mut counts = [0; 3];
     for (i, frame) in descs.iter().enumerate() {
-        let (r, n) = check_frame(frame, args, shutter, args.seed.wrapping_add(i as u64), threads)?;
+        let (r, n) = check_frame(frame, args, shutter, args.seed_offset.wrapping_add(i as u64), threads)?;
         report.merge(r);
         counts = [counts[0] + n[0], counts[1] + n[1], counts[2] + n[2]];
     }
@@ -211,10 +216,11 @@ fn simulated_frames(
     args: &VerifyArgs,
     quiet: bool,
 ) -> Result<(Vec<CheckedFrame>, Vec<u32>, f32), CliError> {
-    let file = SceneFile::load_with_fps(path, None, args.fps).map_err(|e| CliError::Input(e.to_string()))?;
+    let file = SceneFile::load_with_fps(path, args.assets.as_deref(), args.fps)
+        .map_err(|e| CliError::Input(e.to_string()))?;
     let options = SimulateOptions { count: args.scene.count, frames: args.frame_count };
     let sequence = super::render::load_sequence(SequenceSource::scene(file, options, None), quiet)?;
-    let shutter = args.shutter.unwrap_or(sequence.shutter);
+    let shutter = args.shutter.or(sequence.render.shutter).unwrap_or(0.0);
     let whole = FrameRange { start: 0, end: sequence.frame_count() };
     let selection = sequence.evenly_spaced_in(whole, args.check_frames);
     let mut descs = Vec::new();

@@ -61,7 +61,7 @@ pub enum BenchCommand {
     /// when given), simulated once and rendered under never/always/auto with the cache on and
     /// off by every backend; writes paper.json, paper.md and figures into --out.
     #[command(
-        after_help = "Examples:\n  dormant bench paper --out out/paper                 the atrium, 8,000 objects\n  dormant bench paper --quick --out out/paper-quick   scaled down (1,000 objects): 15-25 s\n  dormant bench paper --env ../shared/assets/monastery.glb --object ../shared/assets/duck.glb \\\n      --object ../shared/assets/teddy.glb --object ../shared/assets/soccerball.glb --out docs/paper"
+        after_help = "Examples:\n  dormant bench paper --out out/paper                 the atrium, 8,000 objects\n  dormant bench paper --quick --out out/paper-quick   scaled down (1,000 objects)\n  dormant bench paper --env ../shared/assets/monastery.glb --object ../shared/assets/duck.glb \\\n      --object ../shared/assets/teddy.glb --object ../shared/assets/soccerball.glb --out docs/paper"
     )]
     Paper(PaperArgs),
     /// Where integration pays: a scene simulated at several body counts, rendered under never,
@@ -87,7 +87,7 @@ pub struct PaperArgs {
     /// Output directory for paper.json, paper.md and figures/.
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
-    /// Scaled-down workloads (the atrium with 1,000 objects: 15-25 s) instead of the paper's sizes.
+    /// Scaled-down workloads (the atrium with 1,000 objects) instead of the paper's sizes.
     #[arg(long)]
     pub quick: bool,
     /// Environment glTF of the monastery variant: objects rain onto it (needs --object).
@@ -106,11 +106,14 @@ pub struct RegimesArgs {
     /// Scene file to simulate at each count.
     #[arg(value_name = "SCENE")]
     pub scene: PathBuf,
+    /// Directory that relative asset paths in the scene resolve against.
+    #[arg(long, value_name = "DIR")]
+    pub assets: Option<PathBuf>,
     /// Output directory for regimes.json, regimes.md and regimes.png.
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
     /// Dynamic bodies of each simulation (comma-separated).
-    #[arg(long, value_name = "N,...", value_delimiter = ',', default_values_t = [2000u32, 8000, 50000, 150000])]
+    #[arg(long, value_name = "N,...", value_delimiter = ',', default_value = "2000,8000,50000,150000")]
     pub counts: Vec<u32>,
     /// Frames to simulate (default: the scene's).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
@@ -174,7 +177,7 @@ pub struct IntegrationArgs {
     /// Ray tracing backend (default: the first compiled in, Embree preferred).
     #[arg(long)]
     pub backend: Option<dormant::accel::Backend>,
-    /// Render frames A..B (half-open) of the simulation (`--range` is the old spelling).
+    /// Render frames A..B (half-open) of the simulation.
     #[arg(long, value_name = "A..B", alias = "range")]
     pub frames: Option<FrameRange>,
     /// Render every N-th frame (default: the scene's render.frame_step).
@@ -243,6 +246,7 @@ pub struct AdaptiveBenchArgs {
     /// Ray tracing backend (default: the first compiled in).
     #[arg(long)]
     pub backend: Option<dormant::accel::Backend>,
+    /// Image size of the frames and the reference.
     #[arg(long, value_name = "WxH", default_value = "480x270")]
     pub size: dormant::render::ImageSize,
     /// Longest path (bounces).
@@ -358,8 +362,8 @@ fn regimes(
     quiet: bool,
     json: &JsonOutput,
 ) -> Result<(), CliError> {
-    let scene =
-        dormant::scene::file::SceneFile::load(&args.scene).map_err(|e| CliError::Input(e.to_string()))?;
+    let scene = dormant::scene::file::SceneFile::load_with_assets(&args.scene, args.assets.as_deref())
+        .map_err(|e| CliError::Input(e.to_string()))?;
     let backends = chosen_backends(&args.backend)?;
     let budgets = if args.budgets.is_empty() { regimes::Budget::ALL.to_vec() } else { args.budgets.clone() };
     let (counts, frame_count, sizes) = match args.quick {

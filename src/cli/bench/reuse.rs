@@ -44,7 +44,8 @@ pub struct ReuseArgs {
     /// Samples per pixel; with --noise-threshold, the most a pixel gets.
     #[arg(long, value_name = "N", default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=MAX_SAMPLES_PER_PIXEL as i64))]
     pub spp: u32,
-    /// Adaptive sampling's noise level, as `render --noise-threshold` (0: off).
+    /// Adaptive sampling's noise level, as `render --noise-threshold`; 0 (off) unless given,
+    /// whatever the scene's render.noise_threshold (a benchmark keeps its own defaults).
     #[arg(long, value_name = "T", default_value_t = 0.0)]
     pub noise_threshold: f32,
     /// With --noise-threshold: as `render --min-spp`.
@@ -66,7 +67,8 @@ pub struct ReuseArgs {
     /// How integrated islands are held.
     #[arg(long, value_parser = named::<IntegrationForm>(), default_value_t = IntegrationForm::default())]
     pub integrate_as: IntegrationForm,
-    /// Motion blur's shutter, as `render --shutter`.
+    /// Motion blur's shutter, as `render --shutter`; 0 (off) unless given, whatever the
+    /// scene's render.shutter (a benchmark keeps its own defaults).
     #[arg(long, value_name = "S", default_value_t = 0.0)]
     pub shutter: f32,
     /// Exact reuse's memory, in MiB, as `render --reuse-mib`.

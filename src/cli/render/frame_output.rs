@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 
 use indicatif::ProgressBar;
 
+use super::settings::Settings;
 use super::RenderArgs;
 use crate::cli::CliError;
 use dormant::accel::Backend;
@@ -15,7 +16,7 @@ use dormant::sequence::RenderedFrame;
 /// Writes each rendered frame's files and reports it.
 pub(super) struct FrameOutput<'a> {
     pub writer: FrameWriter<'a>,
-    pub args: &'a RenderArgs,
+    pub settings: Settings,
     pub backend: Backend,
     /// No per-frame line on stdout (`--quiet`, or the JSON report goes there).
     pub quiet: bool,
@@ -113,7 +114,6 @@ impl FrameOutput<'_> {
 
     /// The line printed for a written frame.
     fn summary(&self, path: &Path, frame: &RenderedFrame, denoise_seconds: Option<f64>) -> String {
-        let args = self.args;
         if let Some(source) = frame.reused_from {
             return format!(
                 "wrote {} (nothing moved since frame {source}: its image, not traced)",
@@ -135,12 +135,12 @@ impl FrameOutput<'_> {
             _ => String::new(),
         };
         format!(
-            "rendered {} ({}x{}, {}, {:?} mode, {}): {:.2} s, {} rays, {:.1} Mrays/s{reuse}",
+            "rendered {} ({}x{}, {}, {} mode, {}): {:.2} s, {} rays, {:.1} Mrays/s{reuse}",
             path.display(),
-            args.size.width,
-            args.size.height,
+            self.settings.size.value.width,
+            self.settings.size.value.height,
             spp,
-            args.mode,
+            self.settings.mode.value.name(),
             self.backend,
             stats.seconds,
             stats.rays,

@@ -6,6 +6,7 @@
 mod frame_output;
 mod output_lock;
 mod sequence;
+mod settings;
 mod stop;
 mod video;
 
@@ -21,10 +22,11 @@ use dormant::accel::{self, Backend};
 use dormant::physics::SimulateOptions;
 use dormant::render;
 use dormant::render::{
-    AdaptiveSampling, AmbientOcclusion, Aov, DirectLighting, FilterKind, ImageSize, Integrator, PathTracer,
-    PixelFilter, RenderScene, RenderSettings,
+    AmbientOcclusion, Aov, DirectLighting, FilterKind, ImageSize, Integrator, PathTracer, PixelFilter,
+    RenderScene, RenderSettings,
 };
 use dormant::residency::{CacheBudget, IntegrationForm, IntegrationPolicy};
+use dormant::scene::file::spec::RenderDef;
 use dormant::scene::file::SceneFile;
 use dormant::scene::limits::{shutter_problem, MAX_SAMPLES_PER_PIXEL};
 use dormant::sequence::output::FrameWriter;
@@ -35,6 +37,8 @@ use dormant::sequence::{
 
 use frame_output::FrameOutput;
 pub(crate) use output_lock::BUSY_EXIT_CODE;
+pub(crate) use settings::Preset;
+use settings::Settings;
 pub(crate) use stop::{exit_code as stop_exit_code, signal_name};
 
 /// What a render computes per pixel.
@@ -47,6 +51,17 @@ pub enum RenderMode {
     Shaded,
     /// Ambient occlusion within one scene unit.
     Ao,
+}
+
+impl RenderMode {
+    /// The mode's name on the command line (`--mode path`).
+    pub fn name(self) -> &'static str {
+        match self {
+            RenderMode::Path => "path",
+            RenderMode::Shaded => "shaded",
+            RenderMode::Ao => "ao",
+        }
+    }
 }
 
 #[derive(Debug, Args)]
@@ -66,7 +81,7 @@ pub struct RenderArgs {
     #[arg(long, value_name = "A..B")]
     pub frames: Option<FrameRange>,
     /// With SCENE or --trajectory: render every N-th frame, counted from frame 0 (default:
-    /// the scene's render.frame_step).
+    /// the preset's, else the scene's render.frame_step, else 1).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     pub frame_step: Option<u32>,
     /// With a glTF file as SCENE: frames per second to sample its animation at (files from
@@ -75,15 +90,26 @@ pub struct RenderArgs {
     pub fps: Option<f64>,
     #[command(flatten)]
     pub scene: super::SceneSource,
+    /// With SCENE: directory that relative asset paths in the scene file resolve against
+    /// (default: the scene file's own directory).
+    #[arg(long, value_name = "DIR", requires = "scene_file")]
+    pub assets: Option<PathBuf>,
     /// Output directory; frames are written as frame_NNNN.png.
     #[arg(long, value_name = "DIR", default_value = "out/render")]
     pub out: PathBuf,
-    /// Image size.
-    #[arg(long, value_name = "WxH", default_value = "960x540")]
-    pub size: ImageSize,
-    /// Samples per pixel; with --noise-threshold, the most a pixel gets.
-    #[arg(long, value_name = "N", default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=MAX_SAMPLES_PER_PIXEL as i64))]
-    pub spp: u32,
+    /// Named settings between the flags and the scene file: `preview` is --mode shaded,
+    /// --size 320x180, --spp 1, --frame-step 1 and no adaptive sampling; `final` the scene
+    /// file's settings. A flag given still wins.
+    #[arg(long, value_enum)]
+    pub preset: Option<Preset>,
+    /// Image size (default: the preset's, else the scene's render.width x render.height,
+    /// else 960x540).
+    #[arg(long, value_name = "WxH")]
+    pub size: Option<ImageSize>,
+    /// Samples per pixel; with --noise-threshold, the most a pixel gets (default: the
+    /// preset's, else the scene's render.samples_per_pixel, else 16).
+    #[arg(long, value_name = "N", allow_negative_numbers = true, value_parser = clap::value_parser!(u32).range(1..=MAX_SAMPLES_PER_PIXEL as i64))]
+    pub spp: Option<u32>,
     /// Adaptive sampling: the noise level left in the image. A pixel stops once its estimated
     /// relative error (the standard error of its mean over its value, the value at least 0.1)
     /// is at most T x sqrt(σ), σ the relative spread of its samples: T is the noise left in a
@@ -95,9 +121,10 @@ pub struct RenderArgs {
     /// (then every 4); default: the scene's render.min_spp, else max(8, √spp), at most spp.
     #[arg(long, value_name = "N")]
     pub min_spp: Option<u32>,
-    /// Rendering mode: path tracing, direct light only, or ambient occlusion.
-    #[arg(long, value_enum, default_value_t = RenderMode::Path)]
-    pub mode: RenderMode,
+    /// Rendering mode: path tracing, direct light only, or ambient occlusion (default: the
+    /// preset's, else path).
+    #[arg(long, value_enum)]
+    pub mode: Option<RenderMode>,
     /// Longest path (bounces) in `path` mode.
     #[arg(long, value_name = "N", default_value_t = 6, value_parser = clap::value_parser!(u32).range(1..=64))]
     pub max_depth: u32,
@@ -126,7 +153,8 @@ pub struct RenderArgs {
     /// (camera samples per pixel, grey up to the frame's most; the counts in the EXR).
     #[arg(long, value_parser = named::<Aov>(), value_delimiter = ',', value_name = "KIND")]
     pub aov: Vec<Aov>,
-    /// With SCENE or --trajectory: when sleeping islands are baked into the static scene.
+    /// With SCENE or --trajectory: when sleeping islands leave the per-frame build (how they
+    /// are held: --integrate-as).
     #[arg(long, value_parser = named::<IntegrationPolicy>(), default_value_t = IntegrationPolicy::Auto)]
     pub integration: IntegrationPolicy,
     /// With SCENE or --trajectory: how integrated islands are held: baked into the static
@@ -244,8 +272,9 @@ pub(super) fn load_sequence(source: SequenceSource, quiet: bool) -> Result<Seque
 }
 
 /// What every frame of a `render` run is made with.
-pub(super) struct RenderJob<'a> {
+struct RenderJob<'a> {
     pub args: &'a RenderArgs,
+    pub settings: Settings,
     pub backend: Backend,
     pub threads: Option<usize>,
     pub integrator: &'a dyn Integrator,
@@ -260,18 +289,22 @@ pub(super) fn run(
     let backend = choose_backend(args.backend)?;
     check_flags(args)?;
     let denoiser = args.denoising.denoiser(threads)?;
-    // The scene file is read (and a bad one refused) before anything is written.
+    // The scene file is read, and a bad one or bad settings refused, before anything is
+    // written (a trajectory alone names its scene's settings once it is read, below).
     let source = sequence_source(args)?;
-    std::fs::create_dir_all(&args.out).map_err(|e| {
-        CliError::Runtime(format!("cannot create output directory {}: {e}", args.out.display()))
-    })?;
-    let _lock = output_lock::OutputLock::acquire(&args.out)?;
-    let integrator = integrator(args.mode, path_tracer(args));
-    let job = RenderJob { args, backend, threads, integrator: integrator.as_ref() };
+    if let Some(scene) = known_scene_settings(source.as_ref()) {
+        checked_settings(args, scene)?;
+    }
+    let out = output_dir(&args.out)?;
+    let _lock = output_lock::OutputLock::acquire(out)?;
+    let sequence = source.map(|source| load_sequence(source, quiet)).transpose()?;
+    let settings = checked_settings(args, sequence.as_ref().map(|s| &s.render))?;
+    let integrator = integrator(settings.mode.value, path_tracer(args));
+    let job = RenderJob { args, settings, backend, threads, integrator: integrator.as_ref() };
     let layout = frame_output::layout(args);
     let mut output = FrameOutput {
         writer: FrameWriter { layout: &layout, exposure: args.exposure, denoiser: denoiser.as_ref() },
-        args,
+        settings,
         backend,
         quiet: quiet || json.is_requested(),
         keep_records: json.is_requested(),
@@ -279,30 +312,61 @@ pub(super) fn run(
         kept: 0,
         video_frames: None,
     };
-    let (scene_name, is_sequence) = match source {
-        None => (render_still(&job, &mut output)?, false),
-        Some(source) => {
-            let sequence = load_sequence(source, quiet)?;
-            (sequence::render_sequence(&job, &sequence, &mut output, quiet)?, true)
-        }
+    let scene_name = match &sequence {
+        None => render_still(&job, &mut output)?,
+        Some(sequence) => sequence::render_sequence(&job, sequence, &mut output, quiet)?,
     };
     json.emit(&serde_json::json!({
         "scene": scene_name,
         "backend": backend,
-        "width": args.size.width,
-        "height": args.size.height,
-        "spp": args.spp,
-        "noise_threshold": args.noise_threshold,
-        "min_spp": args.min_spp,
-        "mode": args.mode,
+        "width": settings.size.value.width,
+        "height": settings.size.value.height,
+        "spp": settings.spp.value,
+        "noise_threshold": settings.noise_threshold.value,
+        "min_spp": settings.min_spp.value,
+        "mode": settings.mode.value,
         "filter": args.filter.to_string(),
         "filter_width": pixel_filter(args)?.width(),
         "clamp_indirect": args.clamp_indirect,
         "denoise": args.denoising.denoise,
-        "integration": is_sequence.then_some(args.integration),
+        "integration": sequence.is_some().then_some(args.integration),
+        "settings_from": settings.sources(),
         "frames": output.records,
         "kept_frames": output.kept,
     }))
+}
+
+/// The output directory, created; a path that names a file is an input error.
+fn output_dir(out: &Path) -> Result<&Path, CliError> {
+    if out.exists() && !out.is_dir() {
+        return Err(CliError::Input(format!(
+            "--out {}: is a file, not a directory (frames, stats.json and report.png go into a directory)",
+            out.display()
+        )));
+    }
+    std::fs::create_dir_all(out)
+        .map_err(|e| CliError::Runtime(format!("cannot create output directory {}: {e}", out.display())))?;
+    Ok(out)
+}
+
+/// The scene file's `[render]` settings as far as they are known before the sequence loads:
+/// `Some(None)` for a still (no scene file), the file's for a scene file, `None` for a
+/// trajectory alone (its scene is read with it).
+fn known_scene_settings(source: Option<&SequenceSource>) -> Option<Option<&RenderDef>> {
+    match source {
+        None => Some(None),
+        Some(SequenceSource::Scene { file, .. }) => Some(Some(&file.spec().render)),
+        Some(_) => None,
+    }
+}
+
+/// The run's settings from its flags, preset and the scene's `[render]` (`scene`), checked:
+/// adaptive sampling against the samples per pixel, and exact reuse's budget against the size.
+fn checked_settings(args: &RenderArgs, scene: Option<&RenderDef>) -> Result<Settings, CliError> {
+    let settings = Settings::resolve(args, scene);
+    settings.adaptive()?;
+    check_reuse(args, &settings)?;
+    Ok(settings)
 }
 
 /// The AOV passes a frame renders: the requested ones in order, then the denoiser's guides
@@ -340,7 +404,9 @@ fn check_flags(args: &RenderArgs) -> Result<(), CliError> {
     }
     pixel_filter(args)?;
     check_shutter(args.shutter)?;
-    check_reuse(args)?;
+    if args.reuse_mib == 0 {
+        return Err(CliError::Input("--reuse-mib 0: must be at least 1".into()));
+    }
     let sequence = args.scene_file.is_some() || args.trajectory.is_some();
     if !sequence {
         for (flag, given) in [
@@ -367,49 +433,16 @@ fn check_flags(args: &RenderArgs) -> Result<(), CliError> {
     Ok(())
 }
 
-/// Adaptive sampling from `--noise-threshold` and `--min-spp`, else from the scene file of
-/// `sequence` (`render.noise_threshold`, `render.min_spp`), else off; each checked naming the
-/// flag or field it came from.
-fn adaptive_sampling(args: &RenderArgs, sequence: Option<&Sequence>) -> Result<AdaptiveSampling, CliError> {
-    let file = sequence.map(|s| s.adaptive).unwrap_or_default();
-    let noise_threshold = args.noise_threshold.unwrap_or(file.noise_threshold);
-    if !(noise_threshold.is_finite() && noise_threshold >= 0.0) {
-        return Err(CliError::Input(format!(
-            "--noise-threshold {noise_threshold}: must be a number, 0 (off) or more"
-        )));
-    }
-    let adaptive = AdaptiveSampling { noise_threshold, min_spp: args.min_spp.or(file.min_spp) };
-    if !adaptive.is_on() {
-        return match args.min_spp {
-            Some(_) => Err(CliError::Input(
-                "--min-spp needs adaptive sampling: --noise-threshold (or the scene's render.noise_threshold) \
-                 above 0"
-                    .into(),
-            )),
-            None => Ok(AdaptiveSampling::OFF),
-        };
-    }
-    match adaptive.min_spp {
-        Some(min) if min == 0 || min > args.spp => {
-            let from = if args.min_spp.is_some() { "--min-spp" } else { "the scene's render.min_spp" };
-            Err(CliError::Input(format!("{from} {min}: must be from 1 to --spp ({})", args.spp)))
-        }
-        _ => Ok(adaptive),
-    }
-}
-
-/// `--reuse-mib`: positive, and with exact reuse of a sequence large enough for a store of one
-/// value per pixel and pass at `--size` with the passes rendered.
-fn check_reuse(args: &RenderArgs) -> Result<(), CliError> {
-    if args.reuse_mib == 0 {
-        return Err(CliError::Input("--reuse-mib 0: must be at least 1".into()));
-    }
+/// With exact reuse of a sequence, `--reuse-mib` large enough for a store of one value per
+/// pixel and pass at the run's size with the passes rendered.
+fn check_reuse(args: &RenderArgs, settings: &Settings) -> Result<(), CliError> {
     // Only a sequence reuses; whether this one does is the reuse decision's.
     if args.scene_file.is_none() && args.trajectory.is_none() {
         return Ok(());
     }
     let budget = sequence::reuse_budget(args)?;
-    let decided = args.reuse.decide(args.seed == SeedMode::Fixed, args.size, &aov_passes(args), budget);
+    let size = settings.size.value;
+    let decided = args.reuse.decide(args.seed == SeedMode::Fixed, size, &aov_passes(args), budget);
     decided.map(|_| ()).map_err(|e| CliError::Input(format!("--reuse-mib {}: {e}", args.reuse_mib)))
 }
 
@@ -424,8 +457,8 @@ pub(super) fn check_shutter(shutter: Option<f32>) -> Result<(), CliError> {
 /// A sequence: a scene file, maybe with a trajectory of it, or a trajectory alone with the
 /// scene recorded in it; `None` for a still.
 fn sequence_source(args: &RenderArgs) -> Result<Option<SequenceSource>, CliError> {
-    let source =
-        sequence_source_of(args.scene_file.as_deref(), args.trajectory.as_ref(), args.scene.count, args.fps)?;
+    let scene = SceneArgs { file: args.scene_file.as_deref(), assets: args.assets.as_deref(), fps: args.fps };
+    let source = sequence_source_of(scene, args.trajectory.as_ref(), args.scene.count)?;
     match (source, &args.camera) {
         (Some(SequenceSource::Scene { file, options, trajectory }), Some(name)) => {
             let file = file.with_render_camera(name).map_err(|e| CliError::Input(e.to_string()))?;
@@ -435,18 +468,34 @@ fn sequence_source(args: &RenderArgs) -> Result<Option<SequenceSource>, CliError
     }
 }
 
-/// The sequence a SCENE file (with `count` objects; a glTF file sampled at `fps`), a
-/// trajectory, or both give; `None` for neither.
+/// A SCENE argument and the flags that say how to read it: `--assets DIR` (relative asset
+/// paths), `--fps` (a glTF file's animation).
+#[derive(Clone, Copy)]
+pub(super) struct SceneArgs<'a> {
+    pub file: Option<&'a Path>,
+    pub assets: Option<&'a Path>,
+    pub fps: Option<f64>,
+}
+
+impl SceneArgs<'_> {
+    /// The scene file, read and checked; `None` without one.
+    pub fn load(&self) -> Result<Option<SceneFile>, CliError> {
+        self.file
+            .map(|path| SceneFile::load_with_fps(path, self.assets, self.fps))
+            .transpose()
+            .map_err(|e| CliError::Input(e.to_string()))
+    }
+}
+
+/// The sequence a SCENE file (with `count` objects), a trajectory, or both give; `None` for
+/// neither.
 pub(super) fn sequence_source_of(
-    scene_file: Option<&Path>,
+    scene: SceneArgs<'_>,
     trajectory: Option<&PathBuf>,
     count: Option<u32>,
-    fps: Option<f64>,
 ) -> Result<Option<SequenceSource>, CliError> {
-    Ok(match (scene_file, trajectory) {
-        (Some(path), trajectory) => {
-            let file =
-                SceneFile::load_with_fps(path, None, fps).map_err(|e| CliError::Input(e.to_string()))?;
+    Ok(match (scene.load()?, trajectory) {
+        (Some(file), trajectory) => {
             let options = SimulateOptions { count, frames: None };
             Some(SequenceSource::scene(file, options, trajectory.cloned()))
         }
@@ -463,12 +512,13 @@ fn render_still(job: &RenderJob<'_>, output: &mut FrameOutput<'_>) -> Result<Str
     let mut accel = accel::create(job.backend, job.threads).map_err(|e| runtime(&e))?;
     let scene = RenderScene::build(&description, accel.as_mut()).map_err(|e| runtime(&e))?;
     let query = accel.query().map_err(|e| runtime(&e))?;
+    let size = job.settings.size.value;
     let settings = RenderSettings {
-        width: args.size.width,
-        height: args.size.height,
-        spp: args.spp,
+        width: size.width,
+        height: size.height,
+        spp: job.settings.spp.value,
         seed: args.seed_offset,
-        adaptive: adaptive_sampling(args, None)?,
+        adaptive: job.settings.adaptive()?,
         filter: pixel_filter(args)?,
     };
     let (film, stats, aovs) =

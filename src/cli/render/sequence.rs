@@ -7,10 +7,9 @@ use std::path::{Path, PathBuf};
 use indicatif::ProgressBar;
 
 use super::frame_output::{output_error, FrameInFlight, FrameOutput};
+use super::settings::Settings;
 use super::stop::StopSignals;
-use super::{
-    adaptive_sampling, aov_passes, pixel_filter, sequence_error, RenderArgs, RenderJob, RenderMode, Switch,
-};
+use super::{aov_passes, pixel_filter, sequence_error, RenderArgs, RenderJob, RenderMode, Switch};
 use crate::cli::CliError;
 use dormant::accel::Backend;
 use dormant::render::denoise::Denoiser;
@@ -30,13 +29,16 @@ pub(super) fn render_sequence(
     quiet: bool,
 ) -> Result<String, CliError> {
     let args = job.args;
-    let frames = sequence.select(args.frames, args.frame_step).map_err(|e| sequence_error(e, "--frames"))?;
-    let mut manager = scene_manager(args, sequence, &frames, job.backend, job.threads)?;
+    let settings = &job.settings;
+    let frames = sequence
+        .select(args.frames, Some(settings.frame_step.value))
+        .map_err(|e| sequence_error(e, "--frames"))?;
+    let mut manager = scene_manager(args, settings, sequence, &frames, job.backend, job.threads)?;
     let passes = aov_passes(args);
-    let renderer = frame_renderer(job, sequence, &passes)?;
+    let renderer = frame_renderer(job, &passes)?;
     let denoise = output.writer.denoiser.map(Denoiser::label);
-    let info = run_info(args, sequence, job.backend, &frames, &renderer, denoise);
-    let kept = kept_frames(output, &info, &frames)?;
+    let info = run_info(job, sequence, &frames, &renderer, denoise);
+    let kept = kept_frames(args.resume, output, &info, &frames)?;
     output.video_frames = args
         .video
         .then(|| kept.iter().map(|r| output.writer.layout.frame_files(r.frame).remove(0)).collect());
@@ -74,6 +76,10 @@ pub(super) fn render_sequence(
         return Err(stopped);
     }
     crate::report::write_report_png(&run_stats, &args.out.join("report.png")).map_err(|e| runtime(&e))?;
+    if !output.quiet {
+        let dir = args.out.display();
+        println!("wrote {dir}/stats.json, {dir}/stats.csv and {dir}/report.png");
+    }
     if args.video {
         let fps = 1.0 / (f64::from(sequence.trajectory.timestep) * f64::from(frames.step()));
         let frame_paths = output.video_frames.take().unwrap_or_default();
@@ -100,26 +106,23 @@ fn land(
     Ok(())
 }
 
-/// How `job` renders each frame of `sequence`, with the AOV `passes`.
-fn frame_renderer<'a>(
-    job: &RenderJob<'a>,
-    sequence: &Sequence,
-    passes: &'a [Aov],
-) -> Result<FrameRenderer<'a>, CliError> {
+/// How `job` renders each frame, with the AOV `passes`.
+fn frame_renderer<'a>(job: &RenderJob<'a>, passes: &'a [Aov]) -> Result<FrameRenderer<'a>, CliError> {
     let args = job.args;
+    let settings = &job.settings;
     Ok(FrameRenderer {
         integrator: job.integrator,
         aovs: passes,
-        width: args.size.width,
-        height: args.size.height,
-        spp: args.spp,
-        adaptive: adaptive_sampling(args, Some(sequence))?,
+        width: settings.size.value.width,
+        height: settings.size.value.height,
+        spp: settings.spp.value,
+        adaptive: settings.adaptive()?,
         filter: pixel_filter(args)?,
         seed: args.seed,
         seed_offset: args.seed_offset,
         reuse: args.reuse,
         reuse_budget: reuse_budget(args)?,
-        shutter: shutter(args, sequence),
+        shutter: settings.shutter.value,
     })
 }
 
@@ -135,14 +138,15 @@ fn runtime(e: &dyn std::fmt::Display) -> CliError {
     CliError::Runtime(e.to_string())
 }
 
-/// With `--resume`, the records of the frames an earlier run in the output directory
+/// With `--resume` (`resume`), the records of the frames an earlier run in the output directory
 /// finished (and the line saying so); otherwise none.
 fn kept_frames(
+    resume: bool,
     output: &mut FrameOutput<'_>,
     info: &RunInfo,
     frames: &FrameSelection,
 ) -> Result<Vec<FrameRecord>, CliError> {
-    if !output.args.resume {
+    if !resume {
         return Ok(Vec::new());
     }
     let kept = output::kept_frames(output.writer.layout, info, frames).map_err(output_error)?;
@@ -189,27 +193,28 @@ impl RayRate {
     }
 }
 
-/// The scene manager of a sequence's run: the integration flags, and the geometry cache's
-/// budget.
+/// The scene manager of a sequence's run: the integration flags, the geometry cache's
+/// budget and the shutter of `settings`.
 fn scene_manager(
     args: &RenderArgs,
+    settings: &Settings,
     sequence: &Sequence,
     frames: &FrameSelection,
     backend: Backend,
     threads: Option<usize>,
 ) -> Result<SceneManager, CliError> {
-    let settings = IntegrationSettings {
+    let integration = IntegrationSettings {
         policy: args.integration,
         form: args.integrate_as,
         cache: args.cache == Switch::On,
         lookahead: args.lookahead == Switch::On,
     };
-    let mut manager_options = sequence.manager_options(frames, settings);
+    let mut manager_options = sequence.manager_options(frames, integration);
     let cache_bytes = args.cache_mib.checked_mul(1 << 20).ok_or_else(|| {
         CliError::Input(format!("--cache-mib {}: too large for this machine", args.cache_mib))
     })?;
     manager_options.cache_budget = CacheBudget { bytes: cache_bytes, entries: args.cache_entries };
-    manager_options.shutter = shutter(args, sequence);
+    manager_options.shutter = settings.shutter.value;
     sequence.manager(backend, threads, manager_options).map_err(|e| sequence_error(e, "--frames"))
 }
 
@@ -258,34 +263,34 @@ impl LoopError {
 
 /// The header of the run's statistics: every option that decides its images and statistics.
 fn run_info(
-    args: &RenderArgs,
+    job: &RenderJob<'_>,
     sequence: &Sequence,
-    backend: Backend,
     frames: &FrameSelection,
     renderer: &FrameRenderer<'_>,
     denoise: Option<&str>,
 ) -> RunInfo {
+    let (args, settings, backend) = (job.args, &job.settings, job.backend);
     let adaptive = renderer.adaptive;
     RunInfo {
         scene: sequence.template.name.clone(),
         backend: backend.to_string(),
-        mode: json_name(&args.mode),
+        mode: json_name(&settings.mode.value),
         integration: json_name(&args.integration),
         integrate_as: json_name(&args.integrate_as),
         cache_enabled: args.cache == Switch::On,
         lookahead: args.lookahead == Switch::On,
-        width: args.size.width,
-        height: args.size.height,
-        spp: args.spp,
+        width: renderer.width,
+        height: renderer.height,
+        spp: renderer.spp,
         noise_threshold: adaptive.noise_threshold,
-        min_spp: adaptive.is_on().then(|| adaptive.min_spp(args.spp)),
+        min_spp: adaptive.is_on().then(|| adaptive.min_spp(renderer.spp)),
         physics: sequence.physics,
         scene_hash: format!("{:016x}", sequence.trajectory.scene_hash),
         trajectory_frames: sequence.frame_count(),
         frame_start: frames.start(),
         frame_end: frames.end(),
         frame_step: frames.step(),
-        max_depth: (args.mode == RenderMode::Path).then_some(args.max_depth),
+        max_depth: (settings.mode.value == RenderMode::Path).then_some(args.max_depth),
         clamp_indirect: args.clamp_indirect,
         filter: renderer.filter.kind().to_string(),
         filter_width: renderer.filter.width(),
@@ -298,13 +303,9 @@ fn run_info(
         exr: args.exr,
         denoise: denoise.map(str::to_string),
         keep_noisy: args.keep_noisy,
-        shutter: shutter(args, sequence),
+        shutter: settings.shutter.value,
+        settings_from: settings.sources(),
     }
-}
-
-/// The run's shutter: `--shutter`, else the scene's `render.shutter`.
-fn shutter(args: &RenderArgs, sequence: &Sequence) -> f32 {
-    args.shutter.unwrap_or(sequence.shutter)
 }
 
 /// `video.mp4` from the written frames.

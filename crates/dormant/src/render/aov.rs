@@ -28,8 +28,10 @@ named_enum! {
         /// environment grey, each shaded by the facing ratio so shapes stay readable.
         Baked = "baked",
         /// Camera samples the pixel got (the effective spp of adaptive sampling, `--spp`
-        /// everywhere without it), in all three channels. Not an integrator's pass: it is the
-        /// beauty pass's sample counts ([`render_with_aovs`](super::render_with_aovs)).
+        /// everywhere without it), in all three channels.
+        ///
+        /// Not an integrator's pass: it is the beauty pass's sample counts
+        /// ([`render_with_aovs`](super::render_with_aovs)).
         Spp = "spp",
         /// Camera samples traced this frame: the pixel's samples where its block was traced, 0
         /// where exact temporal reuse took it from an earlier frame (every pixel's samples

@@ -27,6 +27,9 @@ impl RenderSettings {
         Self { width, height, spp, seed: 0, adaptive: AdaptiveSampling::OFF, filter: PixelFilter::default() }
     }
 
+    /// The samples per pixel of [`RenderSettings::default`].
+    pub(crate) const DEFAULT_SPP: u32 = 16;
+
     /// Checks the size, the samples per pixel and adaptive sampling.
     pub fn validate(&self) -> Result<(), RenderError> {
         if let Some(problem) = image_size_problem(self.width, self.height) {
@@ -36,6 +39,14 @@ impl RenderSettings {
             return Err(RenderError::InvalidSpp);
         }
         self.adaptive.validate(self.spp)
+    }
+}
+
+/// The built-in default of `dormant render`: 960x540 at 16 samples per pixel (what a run uses
+/// when neither a flag, a preset nor the scene file sets them).
+impl Default for RenderSettings {
+    fn default() -> Self {
+        Self::new(960, 540, Self::DEFAULT_SPP)
     }
 }
 

@@ -11,8 +11,9 @@ named_enum! {
         /// The island's triangles in world space, in the static scene (one incremental insert).
         Baked = "baked",
         /// The island's bodies stay instances, in a resting scene beside the per-frame top level:
-        /// rebuilt on a schedule, traced as a second scene per ray. The default: on the monastery
-        /// with 8,000 ducks it traces 0.98x (Embree) and 0.87-1.0x (BVH) as fast as every body
+        /// rebuilt on a schedule, traced as a second scene per ray.
+        ///
+        /// The default: on the monastery with 8,000 ducks it traces 0.98x (Embree) and 0.87-1.0x (BVH) as fast as every body
         /// instanced in one top level, where baking every body traces 1.7-1.8x slower (`dormant
         /// bench accel`): docs/lab/accelerators.md#2026-12-01-integration-forms-on-the-same-scene-and-the-ratios-table
         #[default]

@@ -51,8 +51,8 @@ pub use source::SequenceSource;
 use crate::accel::{self, Backend};
 use crate::physics::trajectory::{ReplayFrame, Trajectory, TrajectoryError};
 use crate::physics::{self, SimulatedFrame};
-use crate::render::AdaptiveSampling;
 use crate::residency::{IntegrationSettings, Lookahead, ManagerOptions, SceneManager};
+use crate::scene::file::spec::RenderDef;
 use crate::scene::file::SceneFile;
 use crate::scene::{Body, Camera, SceneAssets, SceneDescription};
 use source::recorded_scene;
@@ -66,20 +66,14 @@ pub struct Sequence {
     pub assets: SceneAssets,
     /// The scene without bodies at time 0: the scene managers' template.
     pub template: SceneDescription,
-    /// The scene file's `render.frame_step`: the step when a run names none.
-    pub frame_step: u32,
-    /// The scene file's `render.noise_threshold` and `render.min_spp`: adaptive sampling when
-    /// a run names none.
-    pub adaptive: AdaptiveSampling,
-    /// The scene file's `render.shutter` (motion blur): the shutter when a run names none.
-    pub shutter: f32,
+    /// The scene file's `[render]` settings, `None` where it gives none: a run takes each from
+    /// its flags, else its preset, else the file, else the built-in default.
+    pub render: RenderDef,
     pub physics: PhysicsSource,
     /// Wall-clock ms of each simulated frame's physics step (empty when replayed).
     pub physics_ms: Vec<f64>,
     /// The scene file's text as read (before overrides): the glTF export records it.
     pub(crate) scene_source: String,
-    /// The scene file's `render.width` and `render.height`: the glTF camera's aspect ratio.
-    pub(crate) render_size: (u32, u32),
 }
 
 impl Sequence {
@@ -131,16 +125,10 @@ impl Sequence {
             trajectory,
             assets,
             template,
-            frame_step: file.spec().render.frame_step.max(1),
-            adaptive: AdaptiveSampling {
-                noise_threshold: file.spec().render.noise_threshold,
-                min_spp: file.spec().render.min_spp,
-            },
-            shutter: file.spec().render.shutter,
+            render: file.spec().render.clone(),
             physics,
             physics_ms,
             scene_source: file.source().to_owned(),
-            render_size: (file.spec().render.width, file.spec().render.height),
         })
     }
 
@@ -154,7 +142,7 @@ impl Sequence {
         index as f32 * self.trajectory.timestep
     }
 
-    /// Frames `range` (default: all) every `step` (default: the scene's frame step), checked
+    /// Frames `range` (default: all) every `step` (default: the scene's frame step, else 1), checked
     /// against the trajectory's length.
     pub fn select(
         &self,
@@ -166,7 +154,7 @@ impl Sequence {
         if range.end > total {
             return Err(SequenceError::Range { start: range.start, end: range.end, total });
         }
-        Ok(FrameSelection::stepped(range, step.unwrap_or(self.frame_step).max(1)))
+        Ok(FrameSelection::stepped(range, step.or(self.render.frame_step).unwrap_or(1).max(1)))
     }
 
     /// `count` frames of `range` (clamped to the trajectory), evenly spaced and ending with

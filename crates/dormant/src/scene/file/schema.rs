@@ -271,32 +271,19 @@ pub(super) enum LightTag {
 }
 
 /// `[render]`: the camera by name, the image, the frame step and the shutter (motion blur).
-#[derive(Clone, Debug, Deserialize, PartialEq)]
+/// A key the file does not give is `None`: the run's flags, preset or built-in default
+/// decide it (`dormant render`'s settings rule).
+#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
 #[serde(rename = "RenderSettings", deny_unknown_fields, default)]
 pub(super) struct RenderToml {
-    pub width: u32,
-    pub height: u32,
-    pub(crate) samples_per_pixel: u32,
+    pub width: Option<u32>,
+    pub height: Option<u32>,
+    pub(crate) samples_per_pixel: Option<u32>,
     pub camera: Option<String>,
-    pub frame_step: u32,
-    pub noise_threshold: f32,
+    pub frame_step: Option<u32>,
+    pub noise_threshold: Option<f32>,
     pub min_spp: Option<u32>,
-    pub shutter: f32,
-}
-
-impl Default for RenderToml {
-    fn default() -> Self {
-        Self {
-            width: 640,
-            height: 360,
-            samples_per_pixel: 1,
-            camera: None,
-            frame_step: 1,
-            noise_threshold: 0.0,
-            min_spp: None,
-            shutter: 0.0,
-        }
-    }
+    pub shutter: Option<f32>,
 }
 
 fn one() -> f32 {

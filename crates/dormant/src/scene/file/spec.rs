@@ -473,25 +473,25 @@ pub enum SkyDef {
     Gradient { zenith: Option<[f32; 3]>, horizon: Option<[f32; 3]>, ground: Option<[f32; 3]>, intensity: f32 },
 }
 
-/// `[render]`: output settings for the renderer (sizes and counts at least 1).
-#[derive(Clone, Debug, PartialEq)]
+/// `[render]`: output settings for the renderer (sizes and counts at least 1). Each is `None`
+/// where the file gives none: a run's flag or preset, else the built-in default, decides it.
+#[derive(Clone, Debug, Default, PartialEq)]
 #[non_exhaustive]
 pub struct RenderDef {
-    pub width: u32,
-    pub height: u32,
-    pub(crate) samples_per_pixel: u32,
+    /// `width` and `height` (the file gives both or neither).
+    pub size: Option<(u32, u32)>,
+    pub samples_per_pixel: Option<u32>,
     /// An index into [`SceneSpec::cameras`]; the first camera when absent (see
     /// [`SceneSpec::render_camera`]).
     pub camera: Option<usize>,
     /// Render every n-th simulated frame.
-    pub frame_step: u32,
-    /// Adaptive sampling's noise threshold (0: off), when `render --noise-threshold` gives
-    /// none; at least 0.
-    pub noise_threshold: f32,
-    /// Adaptive sampling's minimum samples per pixel, when `render --min-spp` gives none; at
-    /// least 1 (checked against `--spp` when rendering).
+    pub frame_step: Option<u32>,
+    /// Adaptive sampling's noise threshold (0: off); at least 0.
+    pub noise_threshold: Option<f32>,
+    /// Adaptive sampling's minimum samples per pixel; at least 1 (checked against the run's
+    /// samples per pixel when rendering).
     pub min_spp: Option<u32>,
     /// Motion blur: the shutter as a fraction of the frame interval, centred on the frame
-    /// (0: off, the default).
-    pub shutter: f32,
+    /// (0: off).
+    pub shutter: Option<f32>,
 }

@@ -182,7 +182,9 @@ impl Sequence {
             camera_keys.first().map_or_else(|| nodes::camera_pose(&self.template.camera), |k| k.1);
         nodes.push(nodes::Node::Other(nodes::camera_node(&first_camera)));
         let camera_node = nodes.len() - 1;
-        root.insert("cameras".into(), json!([nodes::perspective(&self.template.camera, self.render_size)]));
+        let default = crate::render::RenderSettings::default();
+        let size = self.render.size.unwrap_or((default.width, default.height));
+        root.insert("cameras".into(), json!([nodes::perspective(&self.template.camera, size)]));
         let (lights, light_nodes) = nodes::lights(&self.template.sun, &self.template.lights);
         nodes.extend(light_nodes.into_iter().map(nodes::Node::Other));
         root.insert("extensions".into(), json!({ "KHR_lights_punctual": { "lights": lights } }));

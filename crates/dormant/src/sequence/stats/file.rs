@@ -122,7 +122,7 @@ impl StatsFile {
             return Err(StatsError::OtherRun { path, differences });
         }
         let earlier = RunInfo::deserialize(&stored.run).ok();
-        if earlier.as_ref() != Some(run) {
+        if !earlier.as_ref().is_some_and(|e| same_run(e, run)) {
             // Through the typed header when it reads, so that both sides print alike.
             let then = earlier.and_then(|r| serde_json::to_value(r).ok()).unwrap_or(stored.run);
             return Err(StatsError::OtherRun { path, differences: differences(&then, run) });
@@ -131,12 +131,18 @@ impl StatsFile {
     }
 }
 
+/// Whether `then` and `now` describe the same run: every field alike but where the settings
+/// came from.
+fn same_run(then: &RunInfo, now: &RunInfo) -> bool {
+    RunInfo { settings_from: now.settings_from.clone(), ..then.clone() } == *now
+}
+
 /// The fields of `now` that `then` (a stats.json's `run`) lacks or holds otherwise, as
-/// `field X there, Y now`.
+/// `field X there, Y now` (where settings came from is not compared).
 fn differences(then: &serde_json::Value, now: &RunInfo) -> String {
     let now = serde_json::to_value(now).expect("run headers serialise");
     let mut out = Vec::new();
-    for (field, value) in now.as_object().into_iter().flatten() {
+    for (field, value) in now.as_object().into_iter().flatten().filter(|(f, _)| *f != "settings_from") {
         match then.get(field) {
             Some(old) if old == value => {}
             Some(old) => out.push(format!("{field} {old} there, {value} now")),
@@ -189,6 +195,7 @@ mod tests {
             denoise: None,
             keep_noisy: false,
             shutter: 0.0,
+            settings_from: Default::default(),
         };
         let mut then = serde_json::to_value(&now).unwrap();
         assert_eq!(differences(&then, &now), "its run header does not read");

@@ -255,6 +255,12 @@ pub struct RunInfo {
     /// before motion blur, which had none.
     #[serde(default)]
     pub shutter: f32,
+    /// Where each of `dormant render`'s settings came from, by setting (`size`, `spp`,
+    /// `mode`, `frame_step`, `noise_threshold`, `min_spp`, `shutter`): `flag`, `preset`,
+    /// `scene` or `default`. Not part of what `--resume` compares: the same values from
+    /// elsewhere make the same images. Absent in runs from before it.
+    #[serde(default)]
+    pub settings_from: std::collections::BTreeMap<String, String>,
 }
 
 /// `clamp_indirect` of runs from before `--clamp-indirect`.
@@ -562,6 +568,7 @@ mod tests {
             denoise: None,
             keep_noisy: false,
             shutter: 0.0,
+            settings_from: Default::default(),
         };
         let stats = RunStats::new(run, frames, CacheStats::default(), CostModelState::default(), None);
         let mut csv = Vec::new();

@@ -179,21 +179,18 @@ fn light_kind(light: &LightToml, at: &dyn Fn(&str) -> String) -> Checked<LightKi
     }
 }
 
-/// Sizes, samples and frame step at least 1; a shutter from 0 to 1; a camera that exists; a
-/// noise threshold not negative.
+/// Sizes, samples and frame step at least 1 (width and height both or neither); a shutter
+/// from 0 to 1; a camera that exists; a noise threshold not negative. Keys the file does not
+/// give stay `None`.
 pub(super) fn render(r: &RenderToml, cameras: &[CameraDef]) -> Checked<RenderDef> {
-    let width = at_least_one("render.width", r.width)?;
-    let height = at_least_one("render.height", r.height)?;
-    if let Some(message) = image_size_problem(width, height) {
-        let field = if height > MAX_IMAGE_SIDE { "render.height" } else { "render.width" };
-        return Err(problem(field, message));
-    }
-    let samples_per_pixel = at_least_one("render.samples_per_pixel", r.samples_per_pixel)?;
-    let samples_per_pixel = at_most("render.samples_per_pixel", samples_per_pixel, MAX_SAMPLES_PER_PIXEL)?;
-    let frame_step = at_least_one("render.frame_step", r.frame_step)?;
-    if let Some(message) = shutter_problem(r.shutter) {
-        return Err(problem("render.shutter", message));
-    }
+    let samples_per_pixel = match r.samples_per_pixel {
+        None => None,
+        Some(n) => Some(at_most(
+            "render.samples_per_pixel",
+            at_least_one("render.samples_per_pixel", n)?,
+            MAX_SAMPLES_PER_PIXEL,
+        )?),
+    };
     let camera = match &r.camera {
         None => None,
         Some(name) => Some(
@@ -203,21 +200,38 @@ pub(super) fn render(r: &RenderToml, cameras: &[CameraDef]) -> Checked<RenderDef
                 .ok_or_else(|| problem("render.camera", format!("no camera named {name:?}")))?,
         ),
     };
-    let noise_threshold = non_negative("render.noise_threshold", r.noise_threshold)?;
     let min_spp = match r.min_spp {
         None => None,
         Some(m) => {
             Some(at_most("render.min_spp", at_least_one("render.min_spp", m)?, MAX_SAMPLES_PER_PIXEL)?)
         }
     };
+    if let Some(message) = r.shutter.and_then(shutter_problem) {
+        return Err(problem("render.shutter", message));
+    }
     Ok(RenderDef {
-        width,
-        height,
+        size: render_size(r)?,
         samples_per_pixel,
         camera,
-        frame_step,
-        noise_threshold,
+        frame_step: r.frame_step.map(|n| at_least_one("render.frame_step", n)).transpose()?,
+        noise_threshold: r.noise_threshold.map(|t| non_negative("render.noise_threshold", t)).transpose()?,
         min_spp,
         shutter: r.shutter,
     })
+}
+
+/// `render.width` and `render.height`: both or neither, each at least 1, within the image
+/// limits.
+fn render_size(r: &RenderToml) -> Checked<Option<(u32, u32)>> {
+    let (width, height) = match (r.width, r.height) {
+        (None, None) => return Ok(None),
+        (Some(w), Some(h)) => (at_least_one("render.width", w)?, at_least_one("render.height", h)?),
+        (Some(_), None) => return Err(problem("render.height", "missing: render.width needs it too")),
+        (None, Some(_)) => return Err(problem("render.width", "missing: render.height needs it too")),
+    };
+    if let Some(message) = image_size_problem(width, height) {
+        let field = if height > MAX_IMAGE_SIDE { "render.height" } else { "render.width" };
+        return Err(problem(field, message));
+    }
+    Ok(Some((width, height)))
 }
