@@ -90,7 +90,7 @@ fn float_noise_below_the_rest_tolerance_still_rests_and_a_tolerance_of_zero_does
 }
 
 #[test]
-fn an_animated_scene_renders_and_a_glb_without_a_frame_rate_needs_fps_on_the_command_line() {
+fn an_animated_scene_renders_and_a_glb_without_a_frame_rate_renders_at_24_fps_unless_fps_says_otherwise() {
     let dir = tempfile::TempDir::new().unwrap();
     let scene = write_scene(dir.path(), &falling_cubes(), "");
     let out = dir.path().join("frames");
@@ -108,13 +108,34 @@ fn an_animated_scene_renders_and_a_glb_without_a_frame_rate_needs_fps_on_the_com
         .collect();
     images.sort();
     assert_eq!(images, ["frame_0016.png", "frame_0017.png", "frame_0018.png"]);
-    let stderr = exits_with(
-        dormant().args(["--quiet", "render"]).arg(dir.path().join("cubes.glb")).args(["--out"]).arg(&out),
-        2,
-    );
-    assert!(stderr.contains("cubes.glb") && stderr.contains("animation.fps"), "{stderr}");
-    // The command line gives the rate a bake from another tool does not record.
+    // A bake from another tool records no rate: 24 fps, said in one line.
     let glb = dir.path().join("cubes.glb");
+    let at_24 = dir.path().join("at-24");
+    let said = dormant()
+        .arg("render")
+        .arg(&glb)
+        .args(["--frames", "17..18", "--size", "32x18", "--spp", "1", "--out"])
+        .arg(&at_24)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&said.stderr);
+    assert!(said.status.success(), "{stderr}");
+    let lines: Vec<&str> = stderr.lines().filter(|l| l.contains("records no frame rate")).collect();
+    assert_eq!(lines.len(), 1, "{stderr}");
+    assert!(
+        lines[0].contains("cubes.glb") && lines[0].contains("24 fps") && lines[0].contains("--fps"),
+        "{stderr}"
+    );
+    assert_eq!(
+        std::fs::read(at_24.join("frame_0017.png")).unwrap(),
+        std::fs::read(out.join("frame_0017.png")).unwrap()
+    );
+    // A scene file states the rate itself.
+    let no_rate = dir.path().join("no-rate.toml");
+    std::fs::write(&no_rate, "[scene]\nname = \"cubes\"\n\n[animation]\ngltf = \"cubes.glb\"\n").unwrap();
+    let stderr = exits_with(dormant().args(["--quiet", "render"]).arg(&no_rate).args(["--out"]).arg(&out), 2);
+    assert!(stderr.contains("no-rate.toml") && stderr.contains("animation.fps"), "{stderr}");
+    // The command line may give the rate too.
     let from_glb = dir.path().join("from-glb");
     succeeds(
         dormant()

@@ -27,13 +27,28 @@ pub(super) fn scene_text_of_gltf(path: &Path, fps: Option<f64>) -> Result<String
     let recorded = scene_extras(path).map_err(asset_error)?;
     let name = path.file_stem().map_or("animation".into(), |s| s.to_string_lossy().into_owned());
     let file_name = path.file_name().map_or(String::new(), |s| s.to_string_lossy().into_owned());
+    let foreign = recorded.is_none();
     let mut text = recorded.unwrap_or_else(|| format!("[scene]\nname = {}\n", toml_string(&name)));
     text.push_str(&format!("\n[animation]\ngltf = {}\n", toml_string(&file_name)));
+    // dormant's own export records its rate; a bake from another tool (Blender's exporter)
+    // records none, and renders at the film rate unless `--fps` says otherwise.
+    let fps = fps.or_else(|| {
+        foreign.then(|| {
+            tracing::warn!(
+                "{}: the file records no frame rate: {DEFAULT_GLTF_FPS} fps (give --fps to change it)",
+                path.display()
+            );
+            DEFAULT_GLTF_FPS
+        })
+    });
     if let Some(fps) = fps {
         text.push_str(&format!("fps = {}\n", toml::Value::Float(fps)));
     }
     Ok(text)
 }
+
+/// The frame rate of a glTF file given as the scene that records none.
+const DEFAULT_GLTF_FPS: f64 = 24.0;
 
 /// `s` as a TOML basic string.
 fn toml_string(s: &str) -> String {
