@@ -314,7 +314,8 @@ fn split(
     }
     if n <= p.max_leaf_size && p.leaf_cost(n) <= p.traversal_cost {
         // Every split costs at least `traversal_cost`, and ties go to the leaf: the same
-        // answer as binning the range, without the bins.
+        // answer as binning the range, without the bins. What it saves, counted:
+        // docs/lab/bvh-build.md#2026-12-07-the-build-ratios-regression-no-commit-added-work
         return None;
     }
     match best_split(ctx, prims, &rb.b, &rb.cb) {
