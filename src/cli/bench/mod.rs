@@ -218,6 +218,12 @@ pub struct AccelArgs {
     /// Repetitions of each build and trace measurement; the best is reported.
     #[arg(long, value_name = "N", default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
     pub runs: u32,
+    /// Only the builds (no traces, inserts or forms): what `make instruction-check` counts.
+    #[arg(long)]
+    pub builds_only: bool,
+    /// Only this backend (default: every compiled one).
+    #[arg(long)]
+    pub backend: Option<dormant::accel::Backend>,
 }
 
 #[derive(Debug, Args)]
@@ -474,6 +480,8 @@ fn accel(args: &AccelArgs, threads: Option<usize>, quiet: bool, json: &JsonOutpu
         height: args.size.height,
         runs: args.runs,
         threads,
+        builds_only: args.builds_only,
+        backend: args.backend,
         ..AccelBenchOptions::default()
     };
     let report = bench::bench_accel(&desc, &opts).map_err(|e| CliError::Runtime(e.to_string()))?;

@@ -45,11 +45,23 @@ pub struct AccelBenchOptions {
     /// Repetitions of each build and trace measurement (the best is kept).
     pub runs: u32,
     pub threads: Option<usize>,
+    /// Only the builds: no rays, traces, inserts or forms (a build's instruction count).
+    pub builds_only: bool,
+    /// Only this backend's variants (default: every compiled one).
+    pub backend: Option<Backend>,
 }
 
 impl Default for AccelBenchOptions {
     fn default() -> Self {
-        Self { width: 1280, height: 720, island_fraction: 0.01, runs: 3, threads: None }
+        Self {
+            width: 1280,
+            height: 720,
+            island_fraction: 0.01,
+            runs: 3,
+            threads: None,
+            builds_only: false,
+            backend: None,
+        }
     }
 }
 
@@ -65,6 +77,8 @@ pub struct BuildTiming {
     pub ms: f64,
     /// Every build, in order (the first in a process that had not built this scene yet).
     pub runs_ms: Vec<f64>,
+    /// The static tree's SAH cost (the BVH's; `None` for Embree).
+    pub static_sah_cost: Option<f32>,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -313,6 +327,7 @@ struct BuildsAndTraces {
 
 /// Builds the scene with every variant and traces the primary and bounce rays through each.
 /// The bounce rays are made once, from the first variant's primary hits.
+/// With no primary rays (`--builds-only`), only the builds.
 fn build_and_trace(
     desc: &SceneDescription,
     primary: &[Ray],
@@ -326,7 +341,11 @@ fn build_and_trace(
         let (a, runs_ms) = best_build(desc, make, runs)?;
         let ms = runs_ms.iter().copied().fold(f64::INFINITY, f64::min);
         tracing::info!("{backend}/{quality}: built in {ms:.1} ms (best of {runs_ms:?})");
-        build.push(BuildTiming { backend: *backend, quality: quality.clone(), ms, runs_ms });
+        let static_sah_cost = a.static_sah_cost();
+        build.push(BuildTiming { backend: *backend, quality: quality.clone(), ms, runs_ms, static_sah_cost });
+        if primary.is_empty() {
+            continue;
+        }
         let query = a.query()?;
         let bounce = bounce.get_or_insert_with(|| bounce_rays(query, primary));
         let primary_ms = best_trace(query, primary, runs);
@@ -437,11 +456,19 @@ pub fn bench_accel(
     opts: &AccelBenchOptions,
 ) -> Result<AccelBenchReport, AccelError> {
     let threads = opts.threads;
-    let primary = camera_rays(desc, opts.width, opts.height);
+    let primary = if opts.builds_only { Vec::new() } else { camera_rays(desc, opts.width, opts.height) };
     let bvh: Variant = (Backend::Bvh, "sah".into(), Box::new(move || accel::create(Backend::Bvh, threads)));
-    let variants: Vec<Variant> = embree_variants(threads).into_iter().chain([bvh]).collect();
+    let variants: Vec<Variant> = embree_variants(threads)
+        .into_iter()
+        .chain([bvh])
+        .filter(|(backend, _, _)| opts.backend.is_none_or(|b| b == *backend))
+        .collect();
     let BuildsAndTraces { build, trace, bounce } = build_and_trace(desc, &primary, &variants, opts.runs)?;
-    let (insert, forms) = insert_and_forms(desc, opts, (&primary, &bounce))?;
+    let (insert, forms) = if opts.builds_only {
+        (Vec::new(), Vec::new())
+    } else {
+        insert_and_forms(desc, opts, (&primary, &bounce))?
+    };
     Ok(AccelBenchReport {
         scene: desc.name.clone(),
         static_triangles: desc.statics.iter().map(|s| s.mesh.triangle_count()).sum(),

@@ -312,6 +312,12 @@ fn split(
         let mid = median_split(prims, &rb.cb);
         return Some(split_at(prims, mid));
     }
+    if n <= p.max_leaf_size && p.leaf_cost(n) <= p.traversal_cost {
+        // Every split costs at least `traversal_cost`, and ties go to the leaf: the same
+        // answer as binning the range, without the bins. What it saves, counted:
+        // docs/lab/bvh-build.md#2026-12-07-the-build-ratios-regression-no-commit-added-work
+        return None;
+    }
     match best_split(ctx, prims, &rb.b, &rb.cb) {
         Some((cost, _, _, _)) if n <= p.max_leaf_size && p.leaf_cost(n) <= cost => None,
         Some((_, axis, bin, binning)) => Some(binning.partition(prims, axis, bin)),
@@ -339,7 +345,8 @@ fn best_split(ctx: &Ctx, prims: &[PrimRef], b: &Box3, cb: &Box3) -> Option<(f32,
         return best_split_pair(ctx, prims, b, cb);
     }
     match nb {
-        0..=8 => best_split_n::<8>(ctx, prims, b, cb, nb),
+        0..=4 => best_split_n::<4>(ctx, prims, b, cb, nb),
+        5..=8 => best_split_n::<8>(ctx, prims, b, cb, nb),
         9..=16 => best_split_n::<16>(ctx, prims, b, cb, nb),
         17..=32 => best_split_n::<32>(ctx, prims, b, cb, nb),
         _ => best_split_n::<64>(ctx, prims, b, cb, nb),
