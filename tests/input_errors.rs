@@ -524,3 +524,13 @@ fn the_error_table_names_every_test() {
         }
     }
 }
+
+#[test]
+fn a_truncated_glb_given_as_the_scene_says_truncated_and_names_the_file_once() {
+    let dir = TempDir::new().unwrap();
+    let whole = common::animated::falling_cubes().glb();
+    let glb = dir.path().join("cut.glb");
+    std::fs::write(&glb, &whole[..whole.len() / 2]).unwrap();
+    let stderr = expect_exit(&mut render_scene(dir.path(), &glb), 2, &["cut.glb", "truncated"], None);
+    assert_eq!(stderr.matches("cut.glb").count(), 1, "the file named once: {stderr}");
+}

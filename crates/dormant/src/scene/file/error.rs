@@ -21,8 +21,9 @@ pub enum SceneError {
     /// reference, a missing asset file).
     #[error("{}: {field}: {message}", location(.file, *.line))]
     Invalid { file: PathBuf, line: Option<usize>, field: String, message: String },
-    /// An asset referenced by a field failed to load.
-    #[error("{}: {field}: {source}", location(.file, *.line))]
+    /// An asset referenced by a field failed to load. A glTF file given as the scene is both
+    /// the scene and the asset: its error names it once.
+    #[error("{}", asset_message(.file, *.line, .field, .source))]
     Asset {
         file: PathBuf,
         line: Option<usize>,
@@ -50,6 +51,14 @@ impl SceneError {
             SceneError::Syntax { line, .. } => Some(*line),
             SceneError::Invalid { line, .. } | SceneError::Asset { line, .. } => *line,
         }
+    }
+}
+
+fn asset_message(file: &std::path::Path, line: Option<usize>, field: &str, source: &GltfError) -> String {
+    if line.is_none() && source.file == file {
+        source.to_string()
+    } else {
+        format!("{}: {field}: {source}", location(file, line))
     }
 }
 

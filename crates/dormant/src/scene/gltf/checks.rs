@@ -18,6 +18,13 @@ pub(super) fn check_glb_length(path: &Path, bytes: &[u8]) -> Result<(), GltfErro
             let message = format!("GLB header declares {length} bytes, less than its own {HEADER_LEN}");
             return Err(GltfError::new(path, "(header)", message));
         }
+        if length as usize > bytes.len() {
+            let message = format!(
+                "the file is truncated: its GLB header declares {length} bytes, the file has {}",
+                bytes.len()
+            );
+            return Err(GltfError::new(path, "(header)", message));
+        }
     }
     Ok(())
 }
