@@ -111,21 +111,15 @@ fn an_animated_scene_renders_and_a_glb_without_a_frame_rate_renders_at_24_fps_un
     // A bake from another tool records no rate: 24 fps, said in one line.
     let glb = dir.path().join("cubes.glb");
     let at_24 = dir.path().join("at-24");
-    let said = dormant()
-        .arg("render")
-        .arg(&glb)
-        .args(["--frames", "17..18", "--size", "32x18", "--spp", "1", "--out"])
-        .arg(&at_24)
-        .output()
-        .unwrap();
-    let stderr = String::from_utf8_lossy(&said.stderr);
-    assert!(said.status.success(), "{stderr}");
-    let lines: Vec<&str> = stderr.lines().filter(|l| l.contains("records no frame rate")).collect();
-    assert_eq!(lines.len(), 1, "{stderr}");
-    assert!(
-        lines[0].contains("cubes.glb") && lines[0].contains("24 fps") && lines[0].contains("--fps"),
-        "{stderr}"
+    let line = succeeds_saying_once(
+        dormant()
+            .arg("render")
+            .arg(&glb)
+            .args(["--frames", "17..18", "--size", "32x18", "--spp", "1", "--out"])
+            .arg(&at_24),
+        "records no frame rate",
     );
+    assert!(line.contains("cubes.glb") && line.contains("24 fps") && line.contains("--fps"), "{line}");
     assert_eq!(
         std::fs::read(at_24.join("frame_0017.png")).unwrap(),
         std::fs::read(out.join("frame_0017.png")).unwrap()
@@ -281,15 +275,23 @@ fn a_bake_without_lights_is_lit_by_the_default_sky_and_sun_and_says_so() {
     // The one line, from the binary.
     let dir = tempfile::TempDir::new().unwrap();
     let scene = write_scene(dir.path(), &falling_cubes(), "");
-    let out = dormant()
-        .arg("render")
-        .arg(&scene)
-        .args(["--frames", "0..1", "--size", "32x18", "--spp", "1", "--mode", "shaded", "--out"])
-        .arg(dir.path().join("out"))
-        .output()
-        .unwrap();
+    succeeds_saying_once(
+        dormant()
+            .arg("render")
+            .arg(&scene)
+            .args(["--frames", "0..1", "--size", "32x18", "--spp", "1", "--mode", "shaded", "--out"])
+            .arg(dir.path().join("out")),
+        "no lights in the file",
+    );
+}
+
+/// Runs `cmd`, which must succeed and print exactly one stderr line containing `needle`;
+/// returns that line.
+fn succeeds_saying_once(cmd: &mut std::process::Command, needle: &str) -> String {
+    let out = cmd.output().unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "{stderr}");
-    let said: Vec<&str> = stderr.lines().filter(|l| l.contains("no lights in the file")).collect();
-    assert_eq!(said.len(), 1, "{stderr}");
+    assert!(out.status.success(), "{cmd:?}: {stderr}");
+    let lines: Vec<&str> = stderr.lines().filter(|l| l.contains(needle)).collect();
+    assert_eq!(lines.len(), 1, "{cmd:?}: one line with {needle:?} in: {stderr}");
+    lines[0].to_string()
 }
