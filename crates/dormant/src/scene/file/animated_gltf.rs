@@ -21,7 +21,7 @@ pub(super) fn scene_text_of_gltf(path: &Path, fps: Option<f64>) -> Result<String
     let asset_error = |source| SceneError::Asset {
         file: path.to_path_buf(),
         line: None,
-        field: "(glTF file)".into(),
+        field: "scene".into(),
         source: Box::new(source),
     };
     let recorded = scene_extras(path).map_err(asset_error)?;

@@ -21,8 +21,8 @@ pub enum SceneError {
     /// reference, a missing asset file).
     #[error("{}: {field}: {message}", location(.file, *.line))]
     Invalid { file: PathBuf, line: Option<usize>, field: String, message: String },
-    /// An asset referenced by a field failed to load. A glTF file given as the scene is both
-    /// the scene and the asset: its error names it once.
+    /// An asset referenced by a field failed to load. Where the asset is the file itself (a
+    /// glTF file given as the scene, a `--env` file), its error names it once.
     #[error("{}", asset_message(.file, *.line, .field, .source))]
     Asset {
         file: PathBuf,
@@ -56,7 +56,7 @@ impl SceneError {
 
 fn asset_message(file: &std::path::Path, line: Option<usize>, field: &str, source: &GltfError) -> String {
     if line.is_none() && source.file == file {
-        source.to_string()
+        format!("{field}: {source}")
     } else {
         format!("{}: {field}: {source}", location(file, line))
     }
