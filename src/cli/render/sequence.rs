@@ -16,7 +16,7 @@ use dormant::render::denoise::Denoiser;
 use dormant::render::{Aov, RenderStats};
 use dormant::residency::{CacheBudget, IntegrationSettings, SceneManager};
 use dormant::sequence::output;
-use dormant::sequence::stats::{FrameRecord, RunInfo, StatsFile};
+use dormant::sequence::stats::{FrameRecord, RunInfo, RunStats, StatsFile};
 use dormant::sequence::{FrameRenderer, FrameSelection, ReuseMode, Sequence, SequenceError};
 
 /// The selected frames of `sequence` through one scene manager, with `stats.json` and
@@ -75,7 +75,21 @@ pub(super) fn render_sequence(
     if let Some(stopped) = stopped {
         return Err(stopped);
     }
-    crate::report::write_report_png(&run_stats, &args.out.join("report.png")).map_err(|e| runtime(&e))?;
+    write_run_outputs(job, sequence, &frames, output, &run_stats)?;
+    Ok(sequence.template.name.clone())
+}
+
+/// What a finished run writes besides its frames and statistics: report.png, the line saying
+/// where they went, and the video.
+fn write_run_outputs(
+    job: &RenderJob<'_>,
+    sequence: &Sequence,
+    frames: &FrameSelection,
+    output: &mut FrameOutput<'_>,
+    run_stats: &RunStats,
+) -> Result<(), CliError> {
+    let args = job.args;
+    crate::report::write_report_png(run_stats, &args.out.join("report.png")).map_err(|e| runtime(&e))?;
     if !output.quiet {
         let dir = args.out.display();
         println!("wrote {dir}/stats.json, {dir}/stats.csv and {dir}/report.png");
@@ -85,7 +99,7 @@ pub(super) fn render_sequence(
         let frame_paths = output.video_frames.take().unwrap_or_default();
         encode_video(args, &frame_paths, fps, output.quiet)?;
     }
-    Ok(sequence.template.name.clone())
+    Ok(())
 }
 
 /// A frame whose files are being written, and its statistics record.
