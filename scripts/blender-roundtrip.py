@@ -7,11 +7,15 @@ installs, and a few minutes).
            (boxes, spheres, cylinders) dropped from a grid, and one box lying on the ground
            from the start (it rests for most of the run); bakes the simulation to keyframes
            and exports it with Blender's own glTF exporter (one animation per object);
-  images   dormant renders the two last frames of that file (settled), Cycles the same two
-           frames in the same session, each at SPP samples with independent seeds; the
-           images are compared as `make compare-cycles` does, with thresholds: mean
-           luminance within 1%, the mean of each 16x16 tile within 3% in at least 99% of
-           tiles. The materials are Lambertian by default (Specular IOR Level 0, which the
+  images   dormant renders the two last frames of that file (settled) as a user would, the
+           file alone given as the scene (`dormant render rigid.glb`: its camera, its sun,
+           24 fps, dormant's default sky); Cycles renders the same two frames in the same
+           session with Blender's own sun and dormant's sky (read from `dormant export`),
+           each at SPP samples with independent seeds; the images are compared as `make
+           compare-cycles` does, with thresholds: mean luminance within 1%, the mean of each
+           16x16 tile within 3% in at least 99% of tiles. The sun reaches dormant through
+           the exporter's photometric units (a strength of 3 W/m^2 written as 2049 lux);
+           the check is that it arrives at Blender's strength. The materials are Lambertian by default (Specular IOR Level 0, which the
            exporter writes as KHR_materials_specular); `--specular 0.5` gives them glTF's
            specular layer (F0 0.04), which both renderers layer as Principled v2 does
            (mean luminance 1.0021 on 2026-12-07; 2.5% apart before dormant's base took that
@@ -21,8 +25,9 @@ installs, and a few minutes).
            transform at several frames is compared with dormant's own poses: within 1e-4 of
            the scene's size.
 
-Blender's exporter writes no world: both renderers get the sky and the sun stated in SKY and
-SUN below. The camera is Blender's, exported in the file (dormant uses a file's first camera).
+Blender's exporter writes no world: Cycles gets the sky dormant uses for a file without one.
+The sun (SUN below) and the camera are Blender's, exported in the file (dormant uses a
+file's first directional light as its sun, and its first camera).
 Writes out/blender-roundtrip/report.json; exits 1 when a check fails.
 """
 
@@ -50,9 +55,10 @@ _spec = importlib.util.spec_from_file_location("compare_cycles", ROOT / "scripts
 cc = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(cc)
 
-FPS = 24
-SKY = (0.35, 0.45, 0.6)  # constant radiance from every direction no geometry blocks
-SUN = {"direction": (-0.4, -1.0, -0.3), "irradiance": 3.0}  # dormant's Y-up direction light travels
+FPS = 24  # also the rate dormant gives a glTF file that records none
+# dormant's Y-up direction the light travels; W/m^2 on a surface facing it (Blender's
+# strength); a disc of 2 degrees across, as dormant gives a file's directional light.
+SUN = {"direction": (-0.4, -1.0, -0.3), "irradiance": 3.0, "angle_deg": 2.0}
 SHAPES = ("box", "sphere", "cylinder")
 COLORS = ((0.8, 0.25, 0.18), (0.2, 0.45, 0.8), (0.85, 0.7, 0.25))
 
@@ -125,6 +131,8 @@ def build_scene(count, frames, seed):
     camera.rotation_euler = (math.radians(62), 0.0, 0.0)
     cam_data.sensor_fit, cam_data.angle_y = "VERTICAL", math.radians(40)
     scene.camera = camera
+    sun = cc.add_light("sun", "SUN", [SUN["irradiance"]] * 3, direction=SUN["direction"])
+    sun.angle = math.radians(SUN["angle_deg"])
     return bodies
 
 
@@ -156,7 +164,7 @@ def bake_and_export(bodies, frames, glb):
             o.keyframe_insert("rotation_quaternion", frame=f)
     bpy.ops.export_scene.gltf(
         filepath=str(glb), export_format="GLB", export_animations=True, export_cameras=True,
-        export_lights=False, export_yup=True,
+        export_lights=True, export_yup=True,
     )
 
 
@@ -172,26 +180,12 @@ def first_key_time(glb):
 # --- images -----------------------------------------------------------------------------------
 
 
-def scene_toml(glb):
-    d = SUN["direction"]
-    return (
-        f'[scene]\nname = "blender-roundtrip"\n\n[animation]\ngltf = "{glb.name}"\nfps = {FPS}\n\n'
-        f"[sky]\ncolor = {list(SKY)}\n\n"
-        f'[[lights]]\nkind = "directional"\ndirection = {list(d)}\ncolor = [1.0, 1.0, 1.0]\n'
-        f'intensity = {SUN["irradiance"]}\n'
-    )
-
-
-def cycles_world():
-    world = bpy.data.worlds.new("sky")
-    bpy.context.scene.world = world
-    world.use_nodes = True
-    bg = world.node_tree.nodes["Background"]
-    bg.inputs["Color"].default_value = (*SKY, 1.0)
-    bg.inputs["Strength"].default_value = 1.0
-    # dormant's sun: a disc of 1 degree radius giving the irradiance on a surface facing it.
-    data = cc.add_light("sun", "SUN", [SUN["irradiance"]] * 3, direction=SUN["direction"])
-    data.angle = math.radians(2.0)
+def dormant_sky(args, glb, out):
+    """The sky dormant renders the file under (`dormant export`'s, the default daylight)."""
+    path = out / "rigid-export.json"
+    subprocess.run([str(args.dormant), "--quiet", "export", str(glb), "--frames", "0..1", "--out", str(path)],
+                   check=True)
+    return json.loads(path.read_text())["sky"]
 
 
 def images(args, out, glb, frames):
@@ -199,11 +193,11 @@ def images(args, out, glb, frames):
     pair = [frames - 1 - offset - 1, frames - 1 - offset]
     half = args.spp
     for i in pair:
-        subprocess.run([str(args.dormant), "--quiet", "--threads", str(args.threads), "render", str(out / "scene.toml"),
+        subprocess.run([str(args.dormant), "--quiet", "--threads", str(args.threads), "render", str(glb),
                         "--frames", f"{i}..{i + 1}", "--spp", str(half), "--size", args.size, "--max-depth",
                         str(args.max_depth), "--seed", "per-frame", "--reuse", "off", "--exr", "--out",
                         str(out / "dormant"), *cc.MATCHING_FLAGS], check=True)
-    cycles_world()
+    cc.build_world(dormant_sky(args, glb, out))
     cc.match_materials()
     scene = bpy.context.scene
     for k, i in enumerate(pair):
@@ -305,17 +299,12 @@ def from_blender(args):
     bodies = build_scene(args.count, args.frames, args.seed)
     bake_and_export(bodies, args.frames, glb)
     log(f"exported {glb} ({glb.stat().st_size} bytes, {len(bodies)} bodies, {args.frames} frames)")
-    simulated = subprocess.run([str(args.dormant), "simulate", str(write_scene(args.out, glb)), "--out",
-                                str(args.out / "rigid.traj")], check=True, capture_output=True, text=True)
+    simulated = subprocess.run([str(args.dormant), "simulate", str(glb), "--out", str(args.out / "rigid.traj")],
+                               check=True, capture_output=True, text=True)
     result = images(args, args.out, glb, args.frames)
     result.update({"glb_bytes": glb.stat().st_size, "rests": simulated.stdout.strip().splitlines()[-1]})
     return result
 
-
-def write_scene(out, glb):
-    path = out / "scene.toml"
-    path.write_text(scene_toml(glb))
-    return path
 
 
 if __name__ == "__main__":
