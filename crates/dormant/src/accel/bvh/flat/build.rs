@@ -221,13 +221,15 @@ impl Binning {
         (self.scaled(b)[axis] as usize).min(self.bins - 1)
     }
 
-    /// Partitions `prims` into those whose bin on `axis` is below `bin` (`1..bins`) and the
-    /// rest ([`partition`]). The test is `scaled < bin` rather than `bin_on < bin`: the same,
-    /// since `trunc(x) < bin` exactly when `x < bin` for `x >= 0`, without the conversion.
-    fn partition(&self, prims: &mut [PrimRef], axis: usize, bin: usize) -> (usize, RangeBounds, RangeBounds) {
-        debug_assert!(bin >= 1 && bin < self.bins);
-        let at = bin as f32;
-        partition(prims, |b| self.scaled(b)[axis] < at)
+    /// Partitions `prims` by `plane` (of this binning) into those whose bin on its axis is
+    /// below its bin (`1..bins`) and the rest ([`partition`]); the sides' boxes are the
+    /// plane's, from the bins. The test is `scaled < bin` rather than `bin_on < bin`: the
+    /// same, since `trunc(x) < bin` exactly when `x < bin` for `x >= 0`, without the conversion.
+    fn partition(&self, prims: &mut [PrimRef], plane: &Plane) -> (usize, RangeBounds, RangeBounds) {
+        debug_assert!(plane.bin >= 1 && plane.bin < self.bins);
+        let (axis, at) = (plane.axis, plane.bin as f32);
+        let (k, left_cb, right_cb) = partition(prims, |b| self.scaled(b)[axis] < at);
+        (k, RangeBounds { b: plane.left, cb: left_cb }, RangeBounds { b: plane.right, cb: right_cb })
     }
 
     /// The bin of `b` on each axis: clamped to the last bin, then truncated.
@@ -319,8 +321,8 @@ fn split(
         return None;
     }
     match best_split(ctx, prims, &rb.b, &rb.cb) {
-        Some((cost, _, _, _)) if n <= p.max_leaf_size && p.leaf_cost(n) <= cost => None,
-        Some((_, axis, bin, binning)) => Some(binning.partition(prims, axis, bin)),
+        Some((plane, _)) if n <= p.max_leaf_size && p.leaf_cost(n) <= plane.cost => None,
+        Some((plane, binning)) => Some(binning.partition(prims, &plane)),
         None if n <= p.max_leaf_size => None,
         None => Some(split_at(prims, n / 2)),
     }
@@ -332,9 +334,20 @@ fn split_at(prims: &[PrimRef], mid: usize) -> (usize, RangeBounds, RangeBounds) 
     (mid, RangeBounds::of(&prims[..mid]), RangeBounds::of(&prims[mid..]))
 }
 
-/// Best (cost, axis, first bin of the right side, binning) over all axes, or `None` when
-/// every centroid coincides. All three axes are binned in one pass over the range.
-fn best_split(ctx: &Ctx, prims: &[PrimRef], b: &Box3, cb: &Box3) -> Option<(f32, usize, usize, Binning)> {
+/// A split plane: its SAH cost, its axis, the first bin of its right side, and the boxes of
+/// both sides, unions of the bins' boxes (exact: the same as the boxes of the primitives
+/// each side gets, so the partition need not compute them).
+struct Plane {
+    cost: f32,
+    axis: usize,
+    bin: usize,
+    left: Box3,
+    right: Box3,
+}
+
+/// The best plane over all axes and the binning it refers to, or `None` when every centroid
+/// coincides. All three axes are binned in one pass over the range.
+fn best_split(ctx: &Ctx, prims: &[PrimRef], b: &Box3, cb: &Box3) -> Option<(Plane, Binning)> {
     // Small ranges need few bins: clearing and sweeping them would cost more than binning.
     // Embree's rule, 4 + n / 20 (up to `bins`), built fastest for the same trace; other
     // divisors and 4 bins everywhere did not pay:
@@ -357,12 +370,7 @@ fn best_split(ctx: &Ctx, prims: &[PrimRef], b: &Box3, cb: &Box3) -> Option<(f32,
 /// would cost: the same answer (docs/lab/bvh-build.md#2026-12-02-the-binned-sah-builder-reworked-first-pass). However many bins, the two centroids fall in the first and
 /// last bin of every axis where they differ, every plane costs the same, and the first axis
 /// and plane win.
-fn best_split_pair(
-    ctx: &Ctx,
-    prims: &[PrimRef],
-    b: &Box3,
-    cb: &Box3,
-) -> Option<(f32, usize, usize, Binning)> {
+fn best_split_pair(ctx: &Ctx, prims: &[PrimRef], b: &Box3, cb: &Box3) -> Option<(Plane, Binning)> {
     let binning = Binning::new(cb, 4);
     let axis = (0..3).find(|&a| binning.scale[a] != 0.0)?;
     let (p0, p1) = (prims[0].bounds(), prims[1].bounds());
@@ -371,7 +379,8 @@ fn best_split_pair(
     // The sweep's `area * count` with counts of 1, exactly.
     let x = lo.area() + hi.area();
     let area = b.area().max(f32::MIN_POSITIVE);
-    Some((ctx.p.traversal_cost + ctx.p.intersection_cost * x / area, axis, 1, binning))
+    let cost = ctx.p.traversal_cost + ctx.p.intersection_cost * x / area;
+    Some((Plane { cost, axis, bin: 1, left: lo, right: hi }, binning))
 }
 
 /// [`best_split`] with `nb <= N` bins in arrays of `N`.
@@ -381,7 +390,7 @@ fn best_split_n<const N: usize>(
     b: &Box3,
     cb: &Box3,
     nb: usize,
-) -> Option<(f32, usize, usize, Binning)> {
+) -> Option<(Plane, Binning)> {
     debug_assert!(nb <= N);
     let p = &ctx.p;
     let binning = Binning::new(cb, nb);
@@ -425,7 +434,10 @@ fn best_split_n<const N: usize>(
             pick = Some((c, axis, k));
         }
     }
-    pick.map(|(c, a, k)| (p.traversal_cost + p.intersection_cost * c / area, a, k, binning))
+    let (c, axis, bin) = pick?;
+    let union = |bins: &[Box3]| bins.iter().fold(Box3::EMPTY, |acc, &b| acc.union(b));
+    let (left, right) = (union(&boxes[axis][..bin]), union(&boxes[axis][bin..nb]));
+    Some((Plane { cost: p.traversal_cost + p.intersection_cost * c / area, axis, bin, left, right }, binning))
 }
 
 /// Ranges at least twice this long are binned in two halves at once (exact: bins merge by
@@ -489,27 +501,29 @@ fn median_split(prims: &mut [PrimRef], cb: &Box3) -> usize {
     mid
 }
 
-/// In-place partition; returns how many elements satisfy `left` and the bounds of both sides
-/// (every element is tested once, and counted on its side then). Branch-free (Lomuto: each
-/// element swaps with the first right one, which moves on when it went left): which side an
-/// element goes is close to random, so a branch on it could not be predicted.
+/// In-place partition; returns how many elements satisfy `left` and the bounds of both sides'
+/// (doubled) centroids (every element is tested once, and counted on its side then; the
+/// sides' boxes come from the bins). Branch-free (Lomuto: each element swaps with the first
+/// right one, which moves on when it went left): which side an element goes is close to
+/// random, so a branch on it could not be predicted.
 /// Both sides' bounds are indexed by the side: kept in registers and updated through selects
 /// instead, they doubled the min/max work and built slower:
 /// docs/lab/bvh-build.md#2026-12-02-embrees-bin-count-one-sse2-conversion-triangles-stored-once
-fn partition(prims: &mut [PrimRef], left: impl Fn(&Box3) -> bool) -> (usize, RangeBounds, RangeBounds) {
-    let mut sides = [RangeBounds::EMPTY; 2];
+fn partition(prims: &mut [PrimRef], left: impl Fn(&Box3) -> bool) -> (usize, Box3, Box3) {
+    let mut sides = [Box3::EMPTY; 2];
     let mut k = 0;
     for i in 0..prims.len() {
         let p = prims[i];
         let b = p.bounds();
         let l = left(&b);
-        sides[usize::from(!l)].add(b);
+        let (side, c) = (&mut sides[usize::from(!l)], b.center2());
+        *side = Box3 { min: side.min.min(c), max: side.max.max(c) };
         prims[i] = prims[k];
         prims[k] = p;
         k += usize::from(l);
     }
-    let [lb, rb] = sides;
-    (k, lb, rb)
+    let [left_cb, right_cb] = sides;
+    (k, left_cb, right_cb)
 }
 
 #[cfg(test)]
