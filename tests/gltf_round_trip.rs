@@ -69,11 +69,22 @@ fn an_exported_simulation_read_back_from_its_gltf_places_every_body_bit_for_bit_
     assert_eq!(events_of(&read_back), events_of(&original));
 }
 
+/// The backends this build can render with.
+fn backends() -> Vec<&'static str> {
+    let mut backends = vec!["bvh"];
+    if cfg!(feature = "embree") {
+        backends.push("embree");
+    }
+    backends
+}
+
+/// The same images, and the same bits in every pass a render writes as EXR (radiance and the
+/// shading normal, whose last bits the 8-bit PNGs hide), on both backends.
 #[test]
-fn an_exported_simulation_renders_the_same_images_from_its_gltf() {
+fn an_exported_simulation_renders_the_same_bits_from_its_gltf_on_both_backends() {
     let dir = tempfile::TempDir::new().unwrap();
     let (_, glb) = export_tiny(dir.path());
-    let render = |source: &[&std::ffi::OsStr], out: &Path| {
+    let render = |source: &[&std::ffi::OsStr], backend: &str, out: &Path| {
         let args = [
             "--frames",
             "200..480",
@@ -85,20 +96,29 @@ fn an_exported_simulation_renders_the_same_images_from_its_gltf() {
             "2",
             "--integration",
             "always",
+            "--exr",
+            "--aov",
+            "albedo,normal,depth",
+            "--backend",
+            backend,
         ];
         succeeds(dormant().args(["--quiet", "render"]).args(source).args(args).arg("--out").arg(out));
     };
     let traj = dir.path().join("tiny.traj");
-    render(&["--trajectory".as_ref(), traj.as_os_str()], &dir.path().join("a"));
-    render(&[glb.as_os_str()], &dir.path().join("b"));
-    for frame in [210, 280, 350, 420] {
-        let name = format!("frame_{frame:04}.png");
-        let (a, b) = (dir.path().join("a").join(&name), dir.path().join("b").join(&name));
-        assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap(), "{name}");
+    for backend in backends() {
+        let (a, b) = (dir.path().join(format!("{backend}-a")), dir.path().join(format!("{backend}-b")));
+        render(&["--trajectory".as_ref(), traj.as_os_str()], backend, &a);
+        render(&[glb.as_os_str()], backend, &b);
+        for frame in [210, 280, 350, 420] {
+            for pass in ["png", "exr", "albedo.exr", "normal.exr", "depth.exr"] {
+                let name = format!("frame_{frame:04}.{pass}");
+                let same = std::fs::read(a.join(&name)).unwrap() == std::fs::read(b.join(&name)).unwrap();
+                assert!(same, "{backend}: {name} differs between the trajectory and its glTF");
+            }
+        }
     }
 }
 
-/// `glb` with its JSON chunk changed by `edit`.
 fn with_json(glb: &[u8], edit: impl FnOnce(&mut serde_json::Value)) -> Vec<u8> {
     let length = u32::from_le_bytes(glb[12..16].try_into().unwrap()) as usize;
     let mut json: serde_json::Value = serde_json::from_slice(&glb[20..20 + length]).unwrap();

@@ -96,16 +96,43 @@ impl TriangleMesh {
 
     /// A copy with positions and normals moved by `xf` (used to bake instances into world space).
     pub fn transformed(&self, xf: &Affine3A) -> Self {
-        let normal_matrix = glam::Mat3::from(xf.matrix3).inverse().transpose();
+        let turn = NormalTurn::of(xf);
         Self {
             positions: self.positions.iter().map(|&p| xf.transform_point3(p)).collect(),
             indices: self.indices.clone(),
-            normals: self
-                .normals
-                .as_ref()
-                .map(|ns| ns.iter().map(|&n| (normal_matrix * n).normalize_or_zero()).collect()),
+            normals: self.normals.as_ref().map(|ns| ns.iter().map(|&n| turn.apply(n)).collect()),
             uvs: self.uvs.clone(),
             material_ids: self.material_ids.clone(),
+        }
+    }
+}
+
+/// How a transform turns vertex normals: by its normal matrix (the inverse transpose of its
+/// linear part), then to unit length. Turning is idempotent on unit normals: the identity
+/// leaves a normal's bits alone, and a normal of unit length already (within rounding) is not
+/// normalised again, so a mesh that dormant's export writes and its importer reads back
+/// shades to the same bits as the mesh it was.
+pub(crate) struct NormalTurn {
+    /// `None` for the identity.
+    matrix: Option<glam::Mat3>,
+}
+
+impl NormalTurn {
+    /// Squared lengths this close to 1 count as unit: a normalised f32 vector's squared length
+    /// is within a few ulps of 1.
+    const UNIT_TOLERANCE: f32 = 8.0 * f32::EPSILON;
+
+    pub(crate) fn of(xf: &Affine3A) -> Self {
+        let linear = glam::Mat3::from(xf.matrix3);
+        Self { matrix: (linear != glam::Mat3::IDENTITY).then(|| linear.inverse().transpose()) }
+    }
+
+    pub(crate) fn apply(&self, n: Vec3) -> Vec3 {
+        let turned = self.matrix.map_or(n, |m| m * n);
+        if (turned.length_squared() - 1.0).abs() <= Self::UNIT_TOLERANCE {
+            turned
+        } else {
+            turned.normalize_or_zero()
         }
     }
 }

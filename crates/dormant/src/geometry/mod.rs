@@ -9,6 +9,7 @@ pub mod primitives;
 mod ray;
 
 pub use aabb::Aabb;
+pub(crate) use mesh::NormalTurn;
 pub use mesh::{MeshError, TriangleMesh};
 pub use motion::{InstanceMotion, RigidTransform};
 pub use ray::{offset_origin, Ray};

@@ -7,7 +7,7 @@ use glam::{Affine3A, Mat4, Vec2, Vec3};
 
 use super::checks::{check_attributes, unreadable, warn_textures_without_uvs};
 use super::GltfError;
-use crate::geometry::TriangleMesh;
+use crate::geometry::{NormalTurn, TriangleMesh};
 
 /// The triangle primitives of a file gathered so far, in the file's space: per-vertex normals
 /// and UVs (zeros where a primitive has none) and a glTF material slot per triangle.
@@ -82,13 +82,13 @@ impl Triangles {
         Ok(())
     }
 
-    /// The primitive's normals, turned by `xf`'s normal matrix; zeros when it has none.
+    /// The primitive's normals, turned by `xf` ([`NormalTurn`]); zeros when it has none.
     fn add_normals(&mut self, source: &Primitive<'_>, xf: &Affine3A) -> Result<(), GltfError> {
-        let normal_matrix = glam::Mat3::from(xf.matrix3).inverse().transpose();
+        let turn = NormalTurn::of(xf);
         match source.reader().read_normals() {
             Some(ns) => {
                 self.any_normals = true;
-                self.normals.extend(ns.map(|v| (normal_matrix * Vec3::from_array(v)).normalize_or_zero()));
+                self.normals.extend(ns.map(|v| turn.apply(Vec3::from_array(v))));
                 Ok(())
             }
             None if source.prim.get(&gltf::Semantic::Normals).is_some() => {
