@@ -108,6 +108,7 @@ const FRAME: &[(&str, &str)] = &[
     ("samples_reused", "integer"),
     ("pixels_traced", "integer"),
     ("horizon_ms", "number"),
+    ("neighbour_rays", "integer"),
     ("reuse_store_bytes", "integer"),
     ("full_frame", "string|null"),
     ("reuse_granularity", "string|null"),
@@ -163,6 +164,7 @@ const TOTALS: &[(&str, &str)] = &[
     ("samples_traced", "integer"),
     ("samples_reused", "integer"),
     ("horizon_ms", "number"),
+    ("neighbour_rays", "integer"),
 ];
 
 const MEDIAN: &[(&str, &str)] = &[

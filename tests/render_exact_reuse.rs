@@ -187,6 +187,28 @@ fn a_reuse_budget_of_zero_or_too_small_is_an_input_error_and_writes_nothing() {
 }
 
 #[test]
+fn camera_rays_traced_only_as_packet_neighbours_of_due_samples_are_counted_apart() {
+    let flags = ["--size", "64x36", "--frames", "0..48", "--spp", "4"];
+    let dir = tempfile::tempdir().unwrap();
+    let neighbours = |out: &Path| {
+        let frames = read_stats(out)["frames"].as_array().unwrap().clone();
+        for f in &frames {
+            assert!(f["neighbour_rays"].as_u64().unwrap() <= f["rays"].as_u64().unwrap(), "{f}");
+            if !f["full_frame"].is_null() {
+                assert_eq!(f["neighbour_rays"], 0, "a frame traced in full has no neighbours: {f}");
+            }
+        }
+        let total: u64 = frames.iter().map(|f| f["neighbour_rays"].as_u64().unwrap()).sum();
+        assert_eq!(read_stats(out)["summary"]["totals"]["neighbour_rays"], total);
+        total
+    };
+    let exact = render(dir.path(), "tiny", "exact", &scenes::shipped("tiny"), &flags);
+    assert!(neighbours(&exact) > 0, "later frames trace some packets with lanes that are not due");
+    let off = render(dir.path(), "tiny", "off", &scenes::shipped("tiny"), &flags);
+    assert_eq!(neighbours(&off), 0);
+}
+
+#[test]
 fn a_camera_that_moves_every_frame_traces_every_frame_without_horizon_queries() {
     // forest-walk's "follow" camera is key-framed: every frame is traced in full, and since
     // the next frame is always full, no sample's horizon is worth finding.

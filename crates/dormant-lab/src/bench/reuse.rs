@@ -52,6 +52,9 @@ pub struct ReuseFrame {
     pub trace_ms: f64,
     pub samples_traced: u64,
     pub samples_reused: u64,
+    /// Rays traced, and of them camera rays traced only as packet neighbours of due samples.
+    pub rays: u64,
+    pub neighbour_rays: u64,
     pub horizon_ms: f64,
     pub store_bytes: u64,
     /// Seconds the denoiser took, within `frame_ms`.
@@ -117,6 +120,8 @@ pub struct ReuseBenchReport {
     /// the threads), in the frames after the first: what deciding costs against what it
     /// decides about.
     pub horizon_share: f64,
+    /// What the traced samples cost in rays, in the frames after the first.
+    pub rays: RayCosts,
     pub store_bytes: u64,
     /// Every run's frames were the same bits with and without reuse.
     pub identical: bool,
@@ -135,8 +140,37 @@ pub struct FrameComparison {
     /// Of which the denoiser's, with one.
     pub off_denoise_ms: f64,
     pub exact_denoise_ms: f64,
+    /// Rays the exact run traced, and of them camera rays of packet neighbours.
+    pub exact_rays: u64,
+    pub neighbour_rays: u64,
     /// The image and AOVs are the same bits in both modes.
     pub identical: bool,
+}
+
+/// Rays per camera sample in the frames after the first: a traced sample's under exact
+/// reuse (its own rays, the neighbours' camera rays apart) against a sample's in a full frame.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct RayCosts {
+    /// The exact run's rays but the neighbours', over its samples traced.
+    pub per_traced_sample: f64,
+    /// The run without reuse's rays over its samples.
+    pub per_sample_off: f64,
+    /// The neighbours' camera rays, of all the exact run's rays.
+    pub neighbour_share: f64,
+}
+
+impl RayCosts {
+    fn of(off: &[ReuseFrame], exact: &[ReuseFrame]) -> Self {
+        let sum = |frames: &[ReuseFrame], f: fn(&ReuseFrame) -> u64| frames.iter().map(f).sum::<u64>() as f64;
+        let (off, exact) = (off.get(1..).unwrap_or_default(), exact.get(1..).unwrap_or_default());
+        let (rays, neighbours) = (sum(exact, |f| f.rays), sum(exact, |f| f.neighbour_rays));
+        let samples_off = sum(off, |f| f.samples_traced + f.samples_reused);
+        RayCosts {
+            per_traced_sample: (rays - neighbours) / sum(exact, |f| f.samples_traced).max(1.0),
+            per_sample_off: sum(off, |f| f.rays) / samples_off.max(1.0),
+            neighbour_share: neighbours / rays.max(1.0),
+        }
+    }
 }
 
 /// See the module docs. `progress` gets (run, mode, frames done) as frames finish.
@@ -209,6 +243,8 @@ fn render_mode(
             trace_ms: f.render.seconds * 1e3,
             samples_traced: reuse.samples_traced,
             samples_reused: reuse.samples_reused,
+            rays: f.render.rays,
+            neighbour_rays: reuse.neighbour_rays,
             horizon_ms: reuse.horizon_ms,
             store_bytes: reuse.reuse_store_bytes,
             denoise_ms,
@@ -281,6 +317,8 @@ fn report(
             exact_ms: e.frame_ms,
             off_denoise_ms: o.denoise_ms,
             exact_denoise_ms: e.denoise_ms,
+            exact_rays: e.rays,
+            neighbour_rays: e.neighbour_rays,
             identical: o.digest == e.digest,
         })
         .collect();
@@ -302,6 +340,7 @@ fn report(
         traced_share,
         speedup,
         horizon_share: if trace_cpu > horizon { horizon / (trace_cpu - horizon) } else { f64::NAN },
+        rays: RayCosts::of(off, exact),
         store_bytes: exact.iter().map(|f| f.store_bytes).max().unwrap_or(0),
         per_frame,
         denoise: options.denoiser.as_ref().map(Denoiser::label),

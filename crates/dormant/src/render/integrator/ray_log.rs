@@ -15,13 +15,16 @@ use crate::render::RenderScene;
 pub struct RayLog<'a> {
     /// Rays traced (camera, bounce, shadow).
     pub rays: u64,
+    /// Of `rays`, camera rays traced only because a due sample shared their packet (exact
+    /// reuse): their samples are taken from the store.
+    pub neighbour_rays: u64,
     horizon: Option<HorizonProbe<'a>>,
 }
 
 impl<'a> RayLog<'a> {
     /// A log that only counts rays.
     pub(crate) fn counting() -> Self {
-        Self { rays: 0, horizon: None }
+        Self { rays: 0, neighbour_rays: 0, horizon: None }
     }
 
     /// A log that also finds the horizon of rays traced at ordinal `traced_at` in `scene`,
@@ -33,7 +36,7 @@ impl<'a> RayLog<'a> {
         traced_at: u32,
         until: u32,
     ) -> Self {
-        Self { rays: 0, horizon: Some(HorizonProbe::new(index, scene, traced_at, until)) }
+        Self { rays: 0, neighbour_rays: 0, horizon: Some(HorizonProbe::new(index, scene, traced_at, until)) }
     }
 
     /// Records a closest-hit ray and its hit (`None`: it escaped).
@@ -63,11 +66,13 @@ impl<'a> RayLog<'a> {
     /// keeps the packet as a full frame has it).
     pub(crate) fn count_untraced(&mut self) {
         self.rays += 1;
+        self.neighbour_rays += 1;
     }
 
     /// Adds the rays and horizon queries of `other` (a sample's log) to this one's counts.
     pub(crate) fn absorb(&mut self, other: &RayLog) {
         self.rays += other.rays;
+        self.neighbour_rays += other.neighbour_rays;
         if let (Some(probe), Some(theirs)) = (&mut self.horizon, &other.horizon) {
             probe.absorb_cost(theirs);
         }

@@ -79,6 +79,8 @@ pub(crate) struct PlannedFrame {
     /// frame's (8.3 M at 960x540, 16 spp) would be copied into ever larger buffers to join.
     pub samples: Vec<Vec<TracedSample>>,
     pub rays: u64,
+    /// Of `rays`, the camera rays of packet lanes whose samples were not due.
+    pub neighbour_rays: u64,
     pub seconds: f64,
     pub horizon_queries: u64,
     pub horizon_seconds: f64,

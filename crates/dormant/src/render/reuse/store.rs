@@ -94,6 +94,9 @@ pub struct ReuseStats {
     /// and their time, estimated from a sample of them.
     pub horizon_queries: u64,
     pub horizon_ms: f64,
+    /// Of the frame's rays, the camera rays traced only because a due sample shared their
+    /// packet (a full frame traces them as its packets have them).
+    pub neighbour_rays: u64,
     /// Bytes the store holds.
     pub store_bytes: u64,
 }
@@ -238,6 +241,7 @@ impl ReuseStore {
             pixels: traced.len() as u64,
             horizon_queries: beauty.horizon_queries,
             horizon_ms: beauty.horizon_seconds * 1e3,
+            neighbour_rays: beauty.neighbour_rays,
             store_bytes: self.memory_bytes() as u64,
         }
     }

@@ -101,6 +101,7 @@ fn render_planned(
         camera_horizons: if plan.keeps_camera_horizons() { vec![0; (w * h) as usize] } else { Vec::new() },
         samples: Vec::new(),
         rays: 0,
+        neighbour_rays: 0,
         seconds: 0.0,
         horizon_queries: 0,
         horizon_seconds: 0.0,

@@ -30,6 +30,7 @@ pub(super) struct Tile {
     /// With [`Due::Samples`], the samples traced.
     traced: Vec<TracedSample>,
     rays: u64,
+    neighbour_rays: u64,
     horizon_queries: u64,
     horizon_seconds: f64,
 }
@@ -56,6 +57,7 @@ impl Tile {
             frame.samples.push(self.traced);
         }
         frame.rays += self.rays;
+        frame.neighbour_rays += self.neighbour_rays;
         frame.horizon_queries += self.horizon_queries;
         frame.horizon_seconds += self.horizon_seconds;
     }
@@ -92,6 +94,7 @@ impl TileRenderer<'_> {
             camera_horizons: Vec::new(),
             traced: Vec::new(),
             rays: 0,
+            neighbour_rays: 0,
             horizon_queries: 0,
             horizon_seconds: 0.0,
         };
@@ -110,6 +113,7 @@ impl TileRenderer<'_> {
                 }
                 for (cell, log) in cells.cells[..cells.len].iter().zip(&logs) {
                     tile.rays += log.rays;
+                    tile.neighbour_rays += log.neighbour_rays;
                     let (queries, seconds) = log.query_cost();
                     tile.horizon_queries += u64::from(queries);
                     tile.horizon_seconds += seconds;

@@ -71,6 +71,11 @@ pub struct ReuseRecord {
     /// Time of the horizon queries, ms (exact reuse).
     #[serde(default)]
     pub horizon_ms: f64,
+    /// Of the frame's `rays`, camera rays traced only because a due sample shared their
+    /// packet, their own samples taken from the store; the rest are the traced samples' rays
+    /// (exact reuse).
+    #[serde(default)]
+    pub neighbour_rays: u64,
     /// Bytes the reuse store holds (exact reuse).
     #[serde(default)]
     pub reuse_store_bytes: u64,
@@ -94,6 +99,7 @@ impl ReuseRecord {
                 samples_reused: s.samples_reused,
                 pixels_traced: s.pixels_traced,
                 horizon_ms: s.horizon_ms,
+                neighbour_rays: s.neighbour_rays,
                 reuse_store_bytes: s.store_bytes,
                 full_frame: exact.full,
                 reuse_granularity: Some(s.granularity),
@@ -306,6 +312,8 @@ pub(crate) struct Totals {
     pub samples_reused: u64,
     /// Horizon queries of exact reuse, ms.
     pub horizon_ms: f64,
+    /// Of `rays`, camera rays traced only as packet neighbours of due samples (exact reuse).
+    pub neighbour_rays: u64,
     pub cache_full: u64,
     pub cache_partial: u64,
     pub cache_miss: u64,
@@ -418,6 +426,7 @@ fn csv_columns() -> Vec<(&'static str, Cell)> {
         ("traced_share", Cell::Text(|f| format!("{:.5}", f.reuse.traced_share()))),
         ("pixels_traced", Cell::Text(|f| f.reuse.pixels_traced.to_string())),
         ("horizon_ms", Cell::Text(|f| format!("{:.4}", f.reuse.horizon_ms))),
+        ("neighbour_rays", Cell::Text(|f| f.reuse.neighbour_rays.to_string())),
         ("reuse_store_bytes", Cell::Text(|f| f.reuse.reuse_store_bytes.to_string())),
         ("full_frame", Cell::Text(|f| f.reuse.full_frame.map(|r| r.name()).unwrap_or_default().to_string())),
         (
@@ -452,6 +461,7 @@ impl RunStats {
             totals.samples_traced += f.reuse.samples_traced;
             totals.samples_reused += f.reuse.samples_reused;
             totals.horizon_ms += f.reuse.horizon_ms;
+            totals.neighbour_rays += f.reuse.neighbour_rays;
             totals.cache_full += f.cache_full;
             totals.cache_partial += f.cache_partial;
             totals.cache_miss += f.cache_miss;
