@@ -67,8 +67,15 @@ fn without_timings(value: &Value) -> Value {
 /// there, in the totals, and in the frames after it: a blocked shadow ray's horizon follows
 /// the blocker the tracer meets first, which depends on the frame it was traced in (a ray may
 /// gain blockers while its result stays) and on how the scene was built.
-const TRACED_COUNTS: [&str; 6] =
-    ["rays", "samples_traced", "samples_reused", "pixels_traced", "full_frame", "traced_share"];
+const TRACED_COUNTS: [&str; 7] = [
+    "rays",
+    "neighbour_rays",
+    "samples_traced",
+    "samples_reused",
+    "pixels_traced",
+    "full_frame",
+    "traced_share",
+];
 
 /// stats.csv without its timing columns, and without what was traced from frame
 /// `first_resumed` on.

@@ -587,7 +587,7 @@ mod tests {
         let lines: Vec<&str> = csv.lines().collect();
         assert_eq!(lines.len(), 4);
         let n = csv_columns().len();
-        assert_eq!(n, 40);
+        assert_eq!(n, 41);
         assert_eq!(lines[0].split(',').count(), n);
         assert!(lines[1..].iter().all(|l| l.split(',').count() == n));
         assert_eq!(stats.summary.totals.stages.trace_ms, 3.0);
