@@ -274,7 +274,8 @@ if frames(whole) != frames(joined):
 # only where the whole run reused the frame. The first slice starts where the whole run does.
 starts = sorted(int(read(p)[1][0]) for p in parts if len(read(p)) > 1)
 traced_may_differ = {w[0] for w in whole[1:] if any(s <= int(w[0]) for s in starts[1:])} | {str(s) for s in starts}
-first_frame_columns = {"rays", "samples_traced", "samples_reused", "traced_share", "pixels_traced", "full_frame"}
+first_frame_columns = {"rays", "neighbour_rays", "samples_traced", "samples_reused", "traced_share", "pixels_traced",
+                       "full_frame"}
 compared = [c for c in header if c not in timing | integration]
 differ, informational = [], {}
 for w, j in zip(whole[1:], joined[1:]):
