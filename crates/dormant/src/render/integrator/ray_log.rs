@@ -63,8 +63,8 @@ impl<'a> RayLog<'a> {
     }
 
     /// Counts a camera ray traced in a packet for a sample that is not traced (its lane only
-    /// keeps the packet as a full frame has it).
-    pub(crate) fn count_untraced(&mut self) {
+    /// keeps the packet as a full frame has it): a ray, and a neighbour's.
+    pub(crate) fn count_neighbour(&mut self) {
         self.rays += 1;
         self.neighbour_rays += 1;
     }

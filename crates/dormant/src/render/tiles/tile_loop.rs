@@ -229,7 +229,7 @@ impl TileRenderer<'_> {
                     let li = self.integrator.li_from_hit(ray, packet.hits[k], &cell.sampler, i, log);
                     done[c] = acc.add(cell, li, self.stopping.as_ref());
                 } else {
-                    log.count_untraced();
+                    log.count_neighbour();
                 }
             }
         }
@@ -265,7 +265,7 @@ impl TileRenderer<'_> {
                 let cell = &block[c];
                 let due = any_due && self.sample_due(cell, i);
                 if any_due && !due {
-                    logs[c].count_untraced();
+                    logs[c].count_neighbour();
                 }
                 if !cell.traced {
                     continue;
